@@ -1,0 +1,201 @@
+//! Timing-related analysis of a planned interval: the worst ZMP fluctuation (eq. 17).
+//!
+//! # Eq. 17
+//! In the first interval of a window the ZMP is the quartic `p(τ) = Σ a_i τ^i`. When its velocity
+//! is zero at both ends (`a_1 = 0` and `ṗ(D) = 0`, the via-point convention of the planner),
+//! `ṗ(τ) = τ (2a_2 + 3a_3 τ + 4a_4 τ²)` and `ṗ(D) = 0` gives `4a_4 D² = −(2a_2 + 3a_3 D)`. The
+//! quadratic factor then has the roots `D` and
+//!
+//! ```text
+//! τ_max = −2 a_2 D / (2 a_2 + 3 a_3 D)                                         (eq. 17)
+//! ```
+//!
+//! (the paper writes `T_max = T_0 + τ_max`), the one interior extremum of the ZMP: the largest
+//! fluctuation. [`eq17_tau`] is that formula; [`worst_deviation`] is the general version for any
+//! polynomial of order ≤ 4 and any reference (end velocities not zero), which finds every
+//! critical point in `[0, D]` by bracketing: the roots of `p''` split the interval into pieces on
+//! which `ṗ` is monotone, so each piece holds at most one root of `ṗ`, found by a fixed number
+//! of bisection steps (deterministic run time, no iteration limit to tune).
+
+use crate::lipm::{poly_eval, Poly, Segment};
+use crate::real::Real;
+
+/// Bisection steps per bracket: enough to reach the resolution of `f64` on `[0, 1]`.
+const BISECTION_STEPS: usize = 56;
+
+/// The time and value of the largest ZMP deviation in an interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Extremum<T> {
+    /// Local time of the extremum in the interval \[s\].
+    pub tau: T,
+    /// ZMP at that time \[m\].
+    pub zmp: T,
+    /// `zmp − reference` \[m\] (signed).
+    pub deviation: T,
+}
+
+/// Eq. 17: local time of the interior ZMP extremum of a quartic with zero velocity at both ends,
+/// or `None` when the formula has no extremum strictly inside `(0, D)` (zero denominator, or the
+/// ZMP is monotone).
+pub fn eq17_tau<T: Real>(a2: T, a3: T, duration: T) -> Option<T> {
+    let den = T::of(2.0) * a2 + T::of(3.0) * a3 * duration;
+    if den == T::ZERO {
+        return None;
+    }
+    let tau = -T::of(2.0) * a2 * duration / den;
+    if tau.is_finite() && tau > T::ZERO && tau < duration {
+        Some(tau)
+    } else {
+        None
+    }
+}
+
+/// The largest `|p(τ) − reference|` over `τ ∈ [0, D]` for the ZMP polynomial `zmp`.
+pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Extremum<T> {
+    let eval = |tau: T| poly_eval(zmp, tau);
+    let mut best = Extremum {
+        tau: T::ZERO,
+        zmp: zmp[0],
+        deviation: zmp[0] - reference,
+    };
+    let mut consider = |tau: T| {
+        let (p, _, _) = eval(tau);
+        let dev = p - reference;
+        if dev.abs() > best.deviation.abs() {
+            best = Extremum {
+                tau,
+                zmp: p,
+                deviation: dev,
+            };
+        }
+    };
+    consider(duration);
+    // Split [0, D] at the roots of p'' = 2a2 + 6a3 τ + 12a4 τ².
+    let mut cuts = [T::ZERO, duration, duration, duration];
+    let mut n = 1;
+    let (c0, c1, c2) = (
+        T::of(2.0) * zmp[2],
+        T::of(6.0) * zmp[3],
+        T::of(12.0) * zmp[4],
+    );
+    let mut push = |r: T| {
+        if r.is_finite() && r > T::ZERO && r < duration {
+            cuts[n] = r;
+            n += 1;
+        }
+    };
+    if c2 != T::ZERO {
+        let disc = c1 * c1 - T::of(4.0) * c2 * c0;
+        if disc >= T::ZERO {
+            // Numerically stable pair of roots.
+            let sq = disc.sqrt();
+            let qd = if c1 >= T::ZERO {
+                -T::of(0.5) * (c1 + sq)
+            } else {
+                -T::of(0.5) * (c1 - sq)
+            };
+            if qd != T::ZERO {
+                push(qd / c2);
+                push(c0 / qd);
+            }
+        }
+    } else if c1 != T::ZERO {
+        push(-c0 / c1);
+    }
+    cuts[n] = duration;
+    // Sort the (at most 2) interior cuts.
+    if n == 3 && cuts[2] < cuts[1] {
+        cuts.swap(1, 2);
+    }
+    for piece in 0..n {
+        let (mut lo, mut hi) = (cuts[piece], cuts[piece + 1]);
+        let (_, vlo, _) = eval(lo);
+        let (_, vhi, _) = eval(hi);
+        if vlo == T::ZERO {
+            consider(lo);
+        }
+        if (vlo < T::ZERO) == (vhi < T::ZERO) || vhi == T::ZERO {
+            if vhi == T::ZERO {
+                consider(hi);
+            }
+            continue;
+        }
+        let lo_negative = vlo < T::ZERO;
+        for _ in 0..BISECTION_STEPS {
+            let mid = T::of(0.5) * (lo + hi);
+            let (_, v, _) = eval(mid);
+            if (v < T::ZERO) == lo_negative {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        consider(T::of(0.5) * (lo + hi));
+    }
+    best
+}
+
+/// [`worst_deviation`] of a planned segment's ZMP from `reference` (typically the via point at
+/// the end of the interval: the centre of the support foot in single support).
+pub fn worst_zmp_deviation<T: Real>(seg: &Segment<T>, reference: T) -> Extremum<T> {
+    worst_deviation(&seg.zmp, seg.duration, reference)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brute force: the largest deviation on a fine grid.
+    fn grid_max(zmp: &Poly<f64>, d: f64, r: f64) -> (f64, f64) {
+        let mut best = (0.0, 0.0);
+        for i in 0..=200_000 {
+            let t = d * i as f64 / 200_000.0;
+            let dev = poly_eval(zmp, t).0 - r;
+            if dev.abs() > best.1.abs() {
+                best = (t, dev);
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn eq17_matches_brute_force_for_zero_end_velocities() {
+        let d = 0.7;
+        // a0 = 0, a1 = 0; choose a2, a3 and a4 from ṗ(D) = 0.
+        for &(a2, a3) in &[(0.3, -0.2), (-0.5, 0.4), (0.1, 0.5), (2.0, -3.0)] {
+            let a4 = -(2.0 * a2 + 3.0 * a3 * d) / (4.0 * d * d);
+            let zmp = [0.0, 0.0, a2, a3, a4];
+            let (_, v_end, _) = poly_eval(&zmp, d);
+            assert!(v_end.abs() < 1e-12);
+            let p_end = poly_eval(&zmp, d).0;
+            let (t_grid, dev_grid) = grid_max(&zmp, d, p_end);
+            let e = worst_deviation(&zmp, d, p_end);
+            assert!((e.deviation - dev_grid).abs() < 1e-9, "{e:?} vs {dev_grid}");
+            if let Some(t17) = eq17_tau(a2, a3, d) {
+                let dev17 = poly_eval(&zmp, t17).0 - p_end;
+                // When the extremum is interior, eq. 17 finds it.
+                if t_grid > 1e-6 && t_grid < d - 1e-6 {
+                    assert!((t17 - t_grid).abs() < 1e-4, "{t17} vs {t_grid}");
+                    assert!((dev17 - dev_grid).abs() < 1e-9);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn general_quartics_match_brute_force() {
+        let cases: [Poly<f64>; 4] = [
+            [0.1, 0.3, -1.0, 0.4, 0.9],
+            [0.0, -0.2, 0.0, 0.0, 0.0],
+            [0.05, 0.0, 0.0, 1.0, -1.5],
+            [0.0, 0.0, 0.0, 0.0, 0.0],
+        ];
+        for zmp in &cases {
+            for &r in &[0.0, 0.05, -0.1] {
+                let e = worst_deviation(zmp, 0.8, r);
+                let (_, g) = grid_max(zmp, 0.8, r);
+                assert!((e.deviation.abs() - g.abs()).abs() < 1e-9, "{zmp:?} r={r}");
+            }
+        }
+    }
+}

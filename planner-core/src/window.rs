@@ -1,0 +1,608 @@
+//! The plan window: m = 7 intervals, one 20×20 boundary-value system for both planes.
+//!
+//! # Unknowns and conditions (the reduced form of the paper, section V)
+//! Interval `j = 1..7` has duration `D_j`, ZMP polynomial `a^{(j)}` and COG
+//! `x^{(j)}(τ) = P_j e^{−ωτ} + Q_j e^{−ω(D_j−τ)} + Σ A_i^{(j)} τ^i` (see [`crate::lipm`]).
+//!
+//! * The ZMP passes through given **via points** `(p_j, ṗ_j)` at the ends `T_1 … T_7` of the
+//!   intervals, starting from the current ZMP `(p_0, ṗ_0)` at `T_0`.
+//! * Interior intervals 2…6 are cubic Hermite polynomials, fully fixed by the via points.
+//! * Intervals 1 and 7 are quartics: `a_0, a_1` come from the ZMP at their start, and the
+//!   unknowns are `β_k = a_k D^k`, `k = 2, 3, 4` (scaled so that they are in metres).
+//!
+//! That leaves 20 unknowns per plane, ordered so that the matrix is banded:
+//!
+//! ```text
+//! y = [β_2¹ β_3¹ β_4¹ | P_1 Q_1 | P_2 Q_2 | … | P_7 Q_7 | β_2⁷ β_3⁷ β_4⁷]
+//! ```
+//!
+//! and 20 conditions, every velocity row divided by ω and every quartic ZMP velocity row
+//! multiplied by `D` so that all rows are in metres:
+//!
+//! | rows   | condition                                                     |
+//! |--------|---------------------------------------------------------------|
+//! | 0, 1   | ZMP position and velocity at the end of interval 1 = via 1   |
+//! | 2, 3   | COG position and velocity at `T_0` = initial COG state       |
+//! | 4…15   | COG position and velocity continuous at `T_1 … T_6`           |
+//! | 16, 17 | COG position and velocity at `T_7` = terminal COG state      |
+//! | 18, 19 | ZMP position and velocity at the end of interval 7 = via 7   |
+//!
+//! The matrix `Z` holds only `E_j = e^{−ωD_j}` and functions of `u_j = 1/(ωD_j)`: it depends on
+//! the timing alone, so one factorisation serves the x and the y plane (two right-hand sides).
+//! Its lower and upper bandwidths are both 5; the LU with partial pivoting below works inside
+//! the band (fill-in of U up to 10 above the diagonal), about 3× fewer operations than a
+//! dense 20×20 LU.
+//!
+//! # Conditioning
+//! In the paper's basis `V cosh + W sinh` the columns of an interval grow like `cosh ωD` and
+//! nearly coincide for long intervals; `P e^{−ωτ} + Q e^{−ω(D−τ)}` keeps every entry of `Z` in
+//! `[−1, 1]` for the homogeneous columns. Both bases are available ([`Basis`]) so the tests
+//! can measure the difference; [`Basis::Exponential`] is the one used by the planner.
+//! Positions are solved relative to the initial ZMP (the LIPM is translation invariant), so
+//! the world-frame offset never enters the factorised system.
+
+use nalgebra::SMatrix;
+
+use crate::lipm::{hermite, monomial_end, monomial_start, Poly, Sample, Segment, State};
+use crate::real::Real;
+
+/// Number of intervals in a window.
+pub const M: usize = 7;
+/// Number of unknowns (and conditions) per plane.
+pub const N: usize = 20;
+/// Shortest interval accepted \[s\] (one control cycle).
+pub const MIN_DURATION: f64 = 0.005;
+/// Longest interval accepted \[s\].
+pub const MAX_DURATION: f64 = 10.0;
+
+/// Why a window could not be planned. The planner keeps its previous plan on any of these.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum PlanError {
+    /// Interval `index` (0-based) is shorter than [`MIN_DURATION`], longer than
+    /// [`MAX_DURATION`], or not a finite number.
+    BadDuration {
+        /// 0-based interval index.
+        index: u8,
+    },
+    /// ω is not finite and positive.
+    BadOmega,
+    /// A boundary value (COG state, via point) is not finite.
+    NonFinite,
+    /// The boundary-value matrix is numerically singular.
+    Singular,
+}
+
+/// Which homogeneous basis the matrix is built in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Basis {
+    /// `P e^{−ωτ} + Q e^{−ω(D−τ)}`: bounded columns, the planner's choice.
+    Exponential,
+    /// The paper's `V cosh ωτ + W sinh ωτ` (kept to measure the conditioning it costs).
+    Hyperbolic,
+}
+
+/// The timing of a window: ω and the durations of the 7 intervals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timing<T> {
+    /// ω = √(g/z_c) \[1/s\].
+    pub omega: T,
+    /// Durations `D_1 … D_7` \[s\].
+    pub durations: [T; M],
+}
+
+impl<T: Real> Timing<T> {
+    /// Checks ω and the durations.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        if !(self.omega.is_finite() && self.omega > T::ZERO) {
+            return Err(PlanError::BadOmega);
+        }
+        for (i, &d) in self.durations.iter().enumerate() {
+            if !(d.is_finite() && d >= T::of(MIN_DURATION) && d <= T::of(MAX_DURATION)) {
+                return Err(PlanError::BadDuration { index: i as u8 });
+            }
+        }
+        Ok(())
+    }
+
+    /// Start time of every interval and the end of the window, relative to the window start.
+    pub fn boundaries(&self) -> [T; M + 1] {
+        let mut t = [T::ZERO; M + 1];
+        for j in 0..M {
+            t[j + 1] = t[j] + self.durations[j];
+        }
+        t
+    }
+
+    /// Total duration of the window \[s\].
+    pub fn total(&self) -> T {
+        let mut s = T::ZERO;
+        for &d in &self.durations {
+            s += d;
+        }
+        s
+    }
+}
+
+/// The boundary values of one plane.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PlaneBoundary<T> {
+    /// COG position and velocity at the start of the window.
+    pub cog_start: State<T>,
+    /// ZMP position and velocity at the start of the window.
+    pub zmp_start: State<T>,
+    /// ZMP via points at the end of each interval (`T_1 … T_7`).
+    pub via: [State<T>; M],
+    /// COG position and velocity required at the end of the window.
+    pub cog_end: State<T>,
+}
+
+impl<T: Real> PlaneBoundary<T> {
+    fn all_finite(&self) -> bool {
+        let mut ok = self.cog_start.pos.is_finite()
+            && self.cog_start.vel.is_finite()
+            && self.zmp_start.pos.is_finite()
+            && self.zmp_start.vel.is_finite()
+            && self.cog_end.pos.is_finite()
+            && self.cog_end.vel.is_finite();
+        for v in &self.via {
+            ok &= v.pos.is_finite() && v.vel.is_finite();
+        }
+        ok
+    }
+}
+
+/// The solved window in one plane: 7 segments.
+pub type PlanePlan<T> = [Segment<T>; M];
+
+/// The solved window: timing and both planes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plan<T> {
+    /// The timing the plan was solved for.
+    pub timing: Timing<T>,
+    /// Sagittal plane (x).
+    pub x: PlanePlan<T>,
+    /// Frontal plane (y).
+    pub y: PlanePlan<T>,
+}
+
+impl<T: Real> Plan<T> {
+    /// An empty plan (all zero) for the given timing, to be filled by [`Factorized::solve`].
+    pub fn zeroed(timing: Timing<T>) -> Self {
+        Self {
+            timing,
+            x: [Segment::default(); M],
+            y: [Segment::default(); M],
+        }
+    }
+
+    /// The interval containing window time `t` and the local time in it (`t` is clamped to
+    /// the window).
+    pub fn locate(&self, t: T) -> (usize, T) {
+        let mut start = T::ZERO;
+        let mut t = t.max(T::ZERO);
+        for j in 0..M {
+            let d = self.timing.durations[j];
+            if t < start + d || j == M - 1 {
+                if t > start + d {
+                    t = start + d;
+                }
+                return (j, t - start);
+            }
+            start += d;
+        }
+        (M - 1, self.timing.durations[M - 1])
+    }
+
+    /// Both planes at window time `t` (seconds since the window start, clamped to the window).
+    pub fn sample(&self, t: T) -> (Sample<T>, Sample<T>) {
+        let (j, tau) = self.locate(t);
+        (self.x[j].sample(tau), self.y[j].sample(tau))
+    }
+}
+
+/// `Z` built for one timing and factorised in place (banded LU with partial pivoting).
+#[derive(Clone, Debug)]
+pub struct Factorized<T: Real> {
+    timing: Timing<T>,
+    basis: Basis,
+    lu: SMatrix<T, N, N>,
+    pivots: [u8; N],
+    kl: usize,
+    ku: usize,
+}
+
+/// First column of the homogeneous pair of interval `j` (0-based).
+#[inline]
+const fn hcol(j: usize) -> usize {
+    3 + 2 * j
+}
+/// First column of the quartic unknowns of the last interval.
+const LAST_BETA: usize = 3 + 2 * M;
+
+/// Rows of the 2×2 block that maps the homogeneous pair of an interval to COG position and
+/// scaled velocity at its start (`at_end = false`) or end.
+#[inline]
+fn basis_block<T: Real>(basis: Basis, omega: T, d: T, at_end: bool) -> [[T; 2]; 2] {
+    let e = (-omega * d).exp();
+    match (basis, at_end) {
+        (Basis::Exponential, false) => [[T::ONE, e], [-T::ONE, e]],
+        (Basis::Exponential, true) => [[e, T::ONE], [-e, T::ONE]],
+        (Basis::Hyperbolic, false) => [[T::ONE, T::ZERO], [T::ZERO, T::ONE]],
+        (Basis::Hyperbolic, true) => {
+            let inv = T::ONE / e;
+            let half = T::of(0.5);
+            let c = half * (inv + e);
+            let s = half * (inv - e);
+            [[c, s], [s, c]]
+        }
+    }
+}
+
+/// Builds `Z` for a timing into `z` (no allocation; `z` is overwritten).
+pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, N>) {
+    z.fill(T::ZERO);
+    let w = timing.omega;
+    let d = &timing.durations;
+    let u_first = T::ONE / (w * d[0]);
+    let u_last = T::ONE / (w * d[M - 1]);
+    // Rows 0, 1: ZMP at the end of interval 1 (β2 + β3 + β4; 2β2 + 3β3 + 4β4).
+    // Rows 18, 19: the same for interval 7.
+    for k in 0..3 {
+        let kk = T::of((k + 2) as f64);
+        z[(0, k)] = T::ONE;
+        z[(1, k)] = kk;
+        z[(18, LAST_BETA + k)] = T::ONE;
+        z[(19, LAST_BETA + k)] = kk;
+    }
+    // Rows 2, 3: initial COG state.
+    let b = basis_block(basis, w, d[0], false);
+    for r in 0..2 {
+        z[(2 + r, hcol(0))] = b[r][0];
+        z[(2 + r, hcol(0) + 1)] = b[r][1];
+    }
+    for k in 0..3 {
+        let (p, v) = monomial_start(k + 2, u_first);
+        z[(2, k)] = p;
+        z[(3, k)] = v;
+    }
+    // Rows 4..15: continuity at the end of interval j (0-based j = 0..5).
+    for j in 0..M - 1 {
+        let row = 4 + 2 * j;
+        let end = basis_block(basis, w, d[j], true);
+        let start = basis_block(basis, w, d[j + 1], false);
+        for r in 0..2 {
+            z[(row + r, hcol(j))] = end[r][0];
+            z[(row + r, hcol(j) + 1)] = end[r][1];
+            z[(row + r, hcol(j + 1))] = -start[r][0];
+            z[(row + r, hcol(j + 1) + 1)] = -start[r][1];
+        }
+        if j == 0 {
+            for k in 0..3 {
+                let (p, v) = monomial_end(k + 2, u_first);
+                z[(row, k)] = p;
+                z[(row + 1, k)] = v;
+            }
+        }
+        if j + 1 == M - 1 {
+            for k in 0..3 {
+                let (p, v) = monomial_start(k + 2, u_last);
+                z[(row, LAST_BETA + k)] = -p;
+                z[(row + 1, LAST_BETA + k)] = -v;
+            }
+        }
+    }
+    // Rows 16, 17: terminal COG state.
+    let b = basis_block(basis, w, d[M - 1], true);
+    for r in 0..2 {
+        z[(16 + r, hcol(M - 1))] = b[r][0];
+        z[(16 + r, hcol(M - 1) + 1)] = b[r][1];
+    }
+    for k in 0..3 {
+        let (p, v) = monomial_end(k + 2, u_last);
+        z[(16, LAST_BETA + k)] = p;
+        z[(17, LAST_BETA + k)] = v;
+    }
+}
+
+/// The known part of the ZMP polynomial of every interval (the quartic unknowns set to zero),
+/// relative to `origin`.
+fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [Poly<T>; M] {
+    let rel = |s: State<T>| State::new(s.pos - origin, s.vel);
+    let mut polys = [[T::ZERO; 5]; M];
+    let z0 = rel(b.zmp_start);
+    polys[0] = [z0.pos, z0.vel, T::ZERO, T::ZERO, T::ZERO];
+    for j in 1..M - 1 {
+        polys[j] = hermite(rel(b.via[j - 1]), rel(b.via[j]), timing.durations[j]);
+    }
+    let zl = rel(b.via[M - 2]);
+    polys[M - 1] = [zl.pos, zl.vel, T::ZERO, T::ZERO, T::ZERO];
+    polys
+}
+
+/// The right-hand side `w` of one plane, relative to `origin`, and the known ZMP polynomials.
+fn build_rhs<T: Real>(
+    timing: &Timing<T>,
+    b: &PlaneBoundary<T>,
+    origin: T,
+) -> ([T; N], [Poly<T>; M]) {
+    let w = timing.omega;
+    let d = &timing.durations;
+    let polys = known_zmp(timing, b, origin);
+    // Known particular COG (position, velocity/ω) at the start and end of every interval.
+    let mut starts = [State::default(); M];
+    let mut ends = [State::default(); M];
+    for j in 0..M {
+        let seg = Segment::from_pq(w, d[j], polys[j], T::ZERO, T::ZERO);
+        let s = seg.cog;
+        starts[j] = State::new(s[0], s[1] / w);
+        let (xe, ve, _) = crate::lipm::poly_eval(&s, d[j]);
+        ends[j] = State::new(xe, ve / w);
+    }
+    let mut r = [T::ZERO; N];
+    let (a0, a1) = (polys[0][0], polys[0][1]);
+    r[0] = b.via[0].pos - origin - a0 - a1 * d[0];
+    r[1] = (b.via[0].vel - a1) * d[0];
+    r[2] = b.cog_start.pos - origin - starts[0].pos;
+    r[3] = b.cog_start.vel / w - starts[0].vel;
+    for j in 0..M - 1 {
+        r[4 + 2 * j] = starts[j + 1].pos - ends[j].pos;
+        r[5 + 2 * j] = starts[j + 1].vel - ends[j].vel;
+    }
+    r[16] = b.cog_end.pos - origin - ends[M - 1].pos;
+    r[17] = b.cog_end.vel / w - ends[M - 1].vel;
+    let (l0, l1) = (polys[M - 1][0], polys[M - 1][1]);
+    r[18] = b.via[M - 1].pos - origin - l0 - l1 * d[M - 1];
+    r[19] = (b.via[M - 1].vel - l1) * d[M - 1];
+    (r, polys)
+}
+
+impl<T: Real> Factorized<T> {
+    /// Builds and factorises `Z` for a timing in the planner's basis.
+    pub fn new(timing: &Timing<T>) -> Result<Self, PlanError> {
+        Self::with_basis(timing, Basis::Exponential)
+    }
+
+    /// Builds and factorises `Z` in the given basis.
+    pub fn with_basis(timing: &Timing<T>, basis: Basis) -> Result<Self, PlanError> {
+        timing.validate()?;
+        let mut lu = SMatrix::<T, N, N>::from_element(T::ZERO);
+        build_z(timing, basis, &mut lu);
+        let (kl, ku) = bandwidths(&lu);
+        let pivots = factor_banded(&mut lu, kl, ku)?;
+        Ok(Self {
+            timing: *timing,
+            basis,
+            lu,
+            pivots,
+            kl,
+            ku,
+        })
+    }
+
+    /// The timing this factorisation was built for.
+    pub fn timing(&self) -> &Timing<T> {
+        &self.timing
+    }
+
+    /// Lower and upper bandwidth of `Z` as built.
+    pub fn bandwidths(&self) -> (usize, usize) {
+        (self.kl, self.ku)
+    }
+
+    /// Solves `Z y = w` in place for one right-hand side.
+    pub fn solve_vector(&self, rhs: &mut [T; N]) {
+        solve_banded(&self.lu, &self.pivots, self.kl, self.ku, rhs);
+    }
+
+    /// Solves both planes into `out` (which must not alias anything else). On error `out` is
+    /// left untouched.
+    pub fn solve(
+        &self,
+        x: &PlaneBoundary<T>,
+        y: &PlaneBoundary<T>,
+        out: &mut Plan<T>,
+    ) -> Result<(), PlanError> {
+        if !(x.all_finite() && y.all_finite()) {
+            return Err(PlanError::NonFinite);
+        }
+        let px = self.solve_plane(x)?;
+        let py = self.solve_plane(y)?;
+        out.timing = self.timing;
+        out.x = px;
+        out.y = py;
+        Ok(())
+    }
+
+    /// Solves one plane.
+    pub fn solve_plane(&self, b: &PlaneBoundary<T>) -> Result<PlanePlan<T>, PlanError> {
+        let origin = b.zmp_start.pos;
+        let (mut rhs, mut polys) = build_rhs(&self.timing, b, origin);
+        self.solve_vector(&mut rhs);
+        let w = self.timing.omega;
+        let d = &self.timing.durations;
+        // Unscale the quartic unknowns: a_k = β_k / D^k.
+        for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
+            let mut dk = d[j] * d[j];
+            for k in 0..3 {
+                polys[j][k + 2] = rhs[col + k] / dk;
+                dk *= d[j];
+            }
+        }
+        let mut plan = [Segment::default(); M];
+        for j in 0..M {
+            let (c0, c1) = (rhs[hcol(j)], rhs[hcol(j) + 1]);
+            let (p, q) = match self.basis {
+                Basis::Exponential => (c0, c1),
+                Basis::Hyperbolic => {
+                    // V = P + QE, W = −P + QE.
+                    let half = T::of(0.5);
+                    let e = (-w * d[j]).exp();
+                    (half * (c0 - c1), half * (c0 + c1) / e)
+                }
+            };
+            plan[j] = Segment::from_pq(w, d[j], polys[j], p, q).shifted(origin);
+            if !(p.is_finite() && q.is_finite()) {
+                return Err(PlanError::NonFinite);
+            }
+        }
+        Ok(plan)
+    }
+}
+
+/// Lower and upper bandwidth of a matrix (largest `i − j` and `j − i` of a non-zero entry).
+pub fn bandwidths<T: Real>(z: &SMatrix<T, N, N>) -> (usize, usize) {
+    let (mut kl, mut ku) = (0, 0);
+    for i in 0..N {
+        for j in 0..N {
+            if z[(i, j)] != T::ZERO {
+                if i > j {
+                    kl = kl.max(i - j);
+                } else {
+                    ku = ku.max(j - i);
+                }
+            }
+        }
+    }
+    (kl, ku)
+}
+
+/// In-place LU with partial pivoting inside the band (LINPACK style: row interchanges are
+/// recorded in `pivots` and applied to the right-hand side during the solve; the multipliers
+/// of earlier columns are not permuted). `U` has upper bandwidth `kl + ku`.
+fn factor_banded<T: Real>(
+    a: &mut SMatrix<T, N, N>,
+    kl: usize,
+    ku: usize,
+) -> Result<[u8; N], PlanError> {
+    let mut scale = T::ZERO;
+    for v in a.iter() {
+        scale = scale.max(v.abs());
+    }
+    if !scale.is_finite() || scale == T::ZERO {
+        return Err(PlanError::Singular);
+    }
+    let tol = scale * T::EPSILON * T::of(N as f64);
+    let mut pivots = [0u8; N];
+    for k in 0..N {
+        let last = (k + kl).min(N - 1);
+        let mut p = k;
+        let mut best = a[(k, k)].abs();
+        for i in k + 1..=last {
+            let v = a[(i, k)].abs();
+            if v > best {
+                best = v;
+                p = i;
+            }
+        }
+        if !(best > tol) {
+            return Err(PlanError::Singular);
+        }
+        pivots[k] = p as u8;
+        let right = (k + kl + ku).min(N - 1);
+        if p != k {
+            for j in k..=right {
+                a.swap((k, j), (p, j));
+            }
+        }
+        let piv = a[(k, k)];
+        for i in k + 1..=last {
+            let l = a[(i, k)] / piv;
+            a[(i, k)] = l;
+            if l != T::ZERO {
+                for j in k + 1..=right {
+                    let u = a[(k, j)];
+                    a[(i, j)] -= l * u;
+                }
+            }
+        }
+    }
+    Ok(pivots)
+}
+
+/// Solves with the factors of [`factor_banded`].
+fn solve_banded<T: Real>(
+    lu: &SMatrix<T, N, N>,
+    pivots: &[u8; N],
+    kl: usize,
+    ku: usize,
+    b: &mut [T; N],
+) {
+    for k in 0..N {
+        let p = pivots[k] as usize;
+        if p != k {
+            b.swap(k, p);
+        }
+        let bk = b[k];
+        let last = (k + kl).min(N - 1);
+        for i in k + 1..=last {
+            b[i] -= lu[(i, k)] * bk;
+        }
+    }
+    let bw = kl + ku;
+    let mut k = N;
+    while k > 0 {
+        k -= 1;
+        let mut s = b[k];
+        let right = (k + bw).min(N - 1);
+        for j in k + 1..=right {
+            s -= lu[(k, j)] * b[j];
+        }
+        b[k] = s / lu[(k, k)];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn timing() -> Timing<f64> {
+        Timing {
+            omega: libm::sqrt(9.8 / 0.814),
+            durations: [0.7, 0.1, 0.7, 0.1, 0.7, 0.1, 0.7],
+        }
+    }
+
+    #[test]
+    fn z_is_banded_as_documented() {
+        let f = Factorized::new(&timing()).unwrap();
+        assert_eq!(f.bandwidths(), (5, 5));
+    }
+
+    #[test]
+    fn banded_lu_solves_a_dense_check() {
+        let t = timing();
+        let mut z = SMatrix::<f64, N, N>::from_element(0.0);
+        build_z(&t, Basis::Exponential, &mut z);
+        let f = Factorized::new(&t).unwrap();
+        let mut b = [0.0; N];
+        for (i, v) in b.iter_mut().enumerate() {
+            *v = libm::sin(i as f64 + 0.3);
+        }
+        let mut y = b;
+        f.solve_vector(&mut y);
+        for i in 0..N {
+            let mut s = 0.0;
+            for j in 0..N {
+                s += z[(i, j)] * y[j];
+            }
+            assert!((s - b[i]).abs() < 1e-12, "row {i}: {s} vs {}", b[i]);
+        }
+    }
+
+    #[test]
+    fn bad_timing_is_an_error() {
+        let mut t = timing();
+        t.durations[3] = 0.0;
+        assert_eq!(
+            Factorized::new(&t).unwrap_err(),
+            PlanError::BadDuration { index: 3 }
+        );
+        t.durations[3] = f64::NAN;
+        assert!(Factorized::new(&t).is_err());
+        let mut t = timing();
+        t.omega = -1.0;
+        assert_eq!(Factorized::new(&t).unwrap_err(), PlanError::BadOmega);
+    }
+}
