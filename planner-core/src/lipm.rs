@@ -29,15 +29,29 @@
 //! (`A_N = a_N`, `A_{N−1} = a_{N−1}`, then downwards). Equivalently, the ZMP monomial `τ^k`
 //! produces the COG polynomial `m_k(τ) = Σ_l k!/(k−2l)! ω^{−2l} τ^{k−2l}`.
 //!
-//! # The homogeneous part, and why it is not stored as `V, W`
-//! `V cosh ωτ + W sinh ωτ` is stored as `P e^{−ωτ} + Q e^{−ω(D−τ)}`: a mode that decays from
-//! the start of the interval and one that decays backwards from its end. Both are bounded by 1
-//! on `[0, D]`, which keeps the boundary-value system of the window well conditioned (see
-//! `window.rs`); the paper's coefficients follow from `E = e^{−ωD}`:
+//! # The representation used here, and why
+//! Time inside an interval is normalised, `s = τ/D ∈ [0, 1]`, `λ = ωD`, and the ZMP is stored as
+//! `p = Σ c_k s^k` (`c_k = a_k D^k`, all in metres). The COG is
 //!
 //! ```text
-//! V = P + Q E,      W = −P + Q E.
+//! x(τ) = P e^{−ωτ} + Q e^{−ω(D−τ)} + G(s),        G a particular solution, a polynomial in s.
 //! ```
+//!
+//! * The homogeneous part `V cosh ωτ + W sinh ωτ` is stored as `P e^{−ωτ} + Q e^{−ω(D−τ)}`: a
+//!   mode that decays from the start and one that decays backwards from the end, both bounded
+//!   by 1 on the interval, so no column of the window's matrix grows like `cosh ωD`.
+//! * The particular solution is not always the paper's polynomial `Σ A_i τ^i`. For the ZMP term
+//!   `s^k` that polynomial is `m_k(s) = Σ_l k!/(k−2l)! λ^{−2l} s^{k−2l}`, whose constant term
+//!   `k!/λ^k` is huge for a short interval (`24/λ⁴ ≈ 1600` for a 0.1 s interval), so the COG
+//!   would come out as the small difference of large homogeneous and particular parts: in
+//!   `f32` that lost 1.5 mm of COG on a window starting with a 0.1 s interval. For `λ < 1` the
+//!   planner uses instead the particular solution that starts at rest,
+//!   `g_k(s) = −Σ_{n≥1} λ^{2n} k!/(k+2n)! s^{k+2n}` (bounded by `cosh λ − 1 < 0.55`), truncated
+//!   after [`SERIES_TERMS`] terms (remainder below 1e-18). For `λ ≥ 1` it uses `m_k`, whose
+//!   coefficients are then at most 24. Any particular solution is exact; `P, Q` absorb the
+//!   difference.
+//! * The paper's coefficients are recovered exactly: `a_i = c_i / D^i`, `A_i` from the recursion
+//!   above, and `V = x(0) − A_0`, `W = (ẋ(0) − A_1)/ω` ([`Segment::vw`]).
 //!
 //! # The paper's typos
 //! At `τ = 0`: `x = V + A_0`, `ẋ = ωW + A_1` (eq. 5 omits ω), `p = A_0 − 2A_2/ω²` (eq. 10 has 1
@@ -49,9 +63,17 @@ use crate::real::Real;
 pub const MAX_ORDER: usize = 4;
 /// Number of polynomial coefficients stored per interval (`MAX_ORDER + 1`).
 pub const N_COEFFS: usize = MAX_ORDER + 1;
+/// Terms of the at-rest particular solution used for `λ = ωD < 1`.
+pub const SERIES_TERMS: usize = 10;
+/// Length of the particular-solution polynomial (degree `MAX_ORDER + 2·SERIES_TERMS`).
+pub const PARTICULAR_LEN: usize = MAX_ORDER + 2 * SERIES_TERMS + 1;
+/// `λ = ωD` below which the at-rest particular solution is used.
+pub const SHORT_LAMBDA: f64 = 1.0;
 
-/// A polynomial of order ≤ 4 in local time: `c[0] + c[1] τ + … + c[4] τ⁴`.
+/// A polynomial of order ≤ 4: `c[0] + c[1] s + … + c[4] s⁴`.
 pub type Poly<T> = [T; N_COEFFS];
+/// The particular COG solution `G(s)` of an interval, in normalised time.
+pub type Particular<T> = [T; PARTICULAR_LEN];
 
 /// Position and velocity of one coordinate (COG or ZMP).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -90,21 +112,19 @@ pub struct Sample<T> {
 
 /// Evaluates a polynomial and its first two derivatives at `t` (Horner).
 #[inline]
-pub fn poly_eval<T: Real>(c: &Poly<T>, t: T) -> (T, T, T) {
-    let mut v = c[MAX_ORDER];
+pub fn poly_eval<T: Real, const L: usize>(c: &[T; L], t: T) -> (T, T, T) {
+    let mut v = T::ZERO;
     let mut d = T::ZERO;
     let mut dd = T::ZERO;
-    let mut i = MAX_ORDER;
-    while i > 0 {
-        i -= 1;
+    for &ci in c.iter().rev() {
         dd = dd * t + d + d;
         d = d * t + v;
-        v = v * t + c[i];
+        v = v * t + ci;
     }
     (v, d, dd)
 }
 
-/// The COG polynomial `A` of the particular solution for the ZMP polynomial `a` (eq. 3).
+/// The paper's COG polynomial `A` for the ZMP polynomial `a` (both in local time τ, eq. 3).
 #[inline]
 pub fn cog_poly<T: Real>(a: &Poly<T>, omega: T) -> Poly<T> {
     let w2 = omega * omega;
@@ -131,48 +151,57 @@ pub fn zmp_poly<T: Real>(big: &Poly<T>, omega: T) -> Poly<T> {
     a
 }
 
-/// `m_k(D) / D^k` and `m_k'(D) / (ω D^k)`: the COG position and scaled velocity produced at
-/// the end of an interval by the ZMP term `β (τ/D)^k` per unit `β`, as functions of
-/// `u = 1/(ωD)`. These are the dimensionless columns of the window's unknown quartic
-/// coefficients.
+/// Adds `c ×` (the particular solution for the ZMP term `s^k`) to `g`, for `λ = ωD`.
 #[inline]
-pub fn monomial_end<T: Real>(k: usize, u: T) -> (T, T) {
-    // m_k(τ)/D^k at τ = D: Σ_l k!/(k−2l)! u^{2l};  derivative: Σ_l k!/(k−2l−1)! u^{2l+1}.
-    let mut pos = T::ZERO;
-    let mut vel = T::ZERO;
-    let mut coef = 1.0_f64; // k!/(k−j)! for the current power j of u
-    let mut upow = T::ONE;
-    for j in 0..=k {
-        if j % 2 == 0 {
-            pos += T::of(coef) * upow;
-        } else {
-            vel += T::of(coef) * upow;
-        }
-        coef *= (k - j) as f64;
-        upow *= u;
+pub fn add_particular<T: Real>(g: &mut Particular<T>, k: usize, c: T, lambda: T) {
+    if c == T::ZERO {
+        return;
     }
-    (pos, vel)
+    if lambda < T::of(SHORT_LAMBDA) {
+        // At rest at s = 0: g_k = −Σ_{n≥1} λ^{2n} k!/(k+2n)! s^{k+2n}.
+        let l2 = lambda * lambda;
+        let mut term = T::ONE;
+        for n in 1..=SERIES_TERMS {
+            let hi = (k + 2 * n) as f64;
+            term = term * l2 / T::of(hi * (hi - 1.0));
+            g[k + 2 * n] -= c * term;
+        }
+    } else {
+        // The polynomial m_k = Σ_l k!/(k−2l)! λ^{−2l} s^{k−2l}.
+        let inv2 = T::ONE / (lambda * lambda);
+        let mut term = T::ONE;
+        let mut j = k;
+        loop {
+            g[j] += c * term;
+            if j < 2 {
+                break;
+            }
+            term = term * T::of((j * (j - 1)) as f64) * inv2;
+            j -= 2;
+        }
+    }
 }
 
-/// `m_k(0) / D^k` and `m_k'(0) / (ω D^k)`: as [`monomial_end`] at the start of the interval
-/// (only the constant, respectively linear, term of `m_k` survives).
+/// The particular solution for the normalised ZMP polynomial `c` over an interval with `λ = ωD`.
 #[inline]
-pub fn monomial_start<T: Real>(k: usize, u: T) -> (T, T) {
-    let mut fact = 1.0_f64;
-    let mut upow = T::ONE;
-    for j in 1..=k {
-        fact *= j as f64;
-        upow *= u;
+pub fn particular<T: Real>(c: &Poly<T>, lambda: T) -> Particular<T> {
+    let mut g = [T::ZERO; PARTICULAR_LEN];
+    for (k, &ck) in c.iter().enumerate() {
+        add_particular(&mut g, k, ck, lambda);
     }
-    if k % 2 == 0 {
-        (T::of(fact) * upow, T::ZERO)
-    } else {
-        (T::ZERO, T::of(fact) * upow)
-    }
+    g
+}
+
+/// Position and scaled velocity `ẋ/ω` of a particular solution at the start and the end of the
+/// interval: `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)`.
+#[inline]
+pub fn particular_ends<T: Real>(g: &Particular<T>, lambda: T) -> (T, T, T, T) {
+    let (x1, v1, _) = poly_eval(g, T::ONE);
+    (g[0], g[1] / lambda, x1, v1 / lambda)
 }
 
 /// One interval of the plan in one plane: the ZMP polynomial and the closed-form COG.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<T> {
     /// ω = √(g/z_c) \[1/s\].
     pub omega: T,
@@ -182,68 +211,98 @@ pub struct Segment<T> {
     pub p: T,
     /// Coefficient of `e^{−ω(D−τ)}` (the mode that decays backwards from the end) \[m\].
     pub q: T,
-    /// ZMP polynomial `a_i` (eq. 2) \[m/s^i\].
+    /// ZMP polynomial in normalised time, `p = Σ c_k s^k`, `s = τ/D` \[m\].
     pub zmp: Poly<T>,
-    /// COG particular-solution polynomial `A_i` (eq. 3) \[m/s^i\].
-    pub cog: Poly<T>,
+    /// The particular COG solution `G(s)` \[m\].
+    pub particular: Particular<T>,
+}
+
+impl<T: Real> Default for Segment<T> {
+    fn default() -> Self {
+        Self {
+            omega: T::ONE,
+            duration: T::ONE,
+            p: T::ZERO,
+            q: T::ZERO,
+            zmp: [T::ZERO; N_COEFFS],
+            particular: [T::ZERO; PARTICULAR_LEN],
+        }
+    }
 }
 
 impl<T: Real> Segment<T> {
-    /// A segment from its ZMP polynomial and homogeneous coefficients `P, Q`.
-    pub fn from_pq(omega: T, duration: T, zmp: Poly<T>, p: T, q: T) -> Self {
+    /// A segment from its normalised ZMP polynomial `zmp` and homogeneous coefficients `P, Q`.
+    pub fn new(omega: T, duration: T, zmp: Poly<T>, p: T, q: T) -> Self {
         Self {
             omega,
             duration,
             p,
             q,
             zmp,
-            cog: cog_poly(&zmp, omega),
+            particular: particular(&zmp, omega * duration),
         }
     }
 
-    /// The segment that starts from the COG state `start` under the ZMP polynomial `zmp`
-    /// (an initial-value problem: used by the tests and by forward simulation).
+    /// The segment that starts from the COG state `start` under the normalised ZMP polynomial
+    /// `zmp` (an initial-value problem).
     pub fn from_start(omega: T, duration: T, zmp: Poly<T>, start: State<T>) -> Self {
-        let cog = cog_poly(&zmp, omega);
-        let e = (-omega * duration).exp();
-        let dx = start.pos - cog[0];
-        let dv = (start.vel - cog[1]) / omega;
+        let lambda = omega * duration;
+        let g = particular(&zmp, lambda);
+        let (x0, v0, _, _) = particular_ends(&g, lambda);
+        let e = (-lambda).exp();
+        let dx = start.pos - x0;
+        let dv = start.vel / omega - v0;
         let half = T::of(0.5);
         // x(0) = P + QE, ẋ(0)/ω = −P + QE.
-        let p = half * (dx - dv);
-        let q = half * (dx + dv) / e;
         Self {
             omega,
             duration,
-            p,
-            q,
+            p: half * (dx - dv),
+            q: half * (dx + dv) / e,
             zmp,
-            cog,
+            particular: g,
         }
     }
 
-    /// The paper's homogeneous coefficients `(V, W)` of `V cosh ωτ + W sinh ωτ`.
+    /// The paper's ZMP coefficients `a_i` in local time τ (eq. 2).
+    pub fn zmp_tau(&self) -> Poly<T> {
+        let mut a = self.zmp;
+        let mut dk = T::ONE;
+        for ai in a.iter_mut() {
+            *ai /= dk;
+            dk *= self.duration;
+        }
+        a
+    }
+
+    /// The paper's COG polynomial `A_i` in local time τ (eq. 3).
+    pub fn cog_tau(&self) -> Poly<T> {
+        cog_poly(&self.zmp_tau(), self.omega)
+    }
+
+    /// The paper's homogeneous coefficients `(V, W)` of `V cosh ωτ + W sinh ωτ + Σ A_i τ^i`.
     pub fn vw(&self) -> (T, T) {
-        let qe = self.q * (-self.omega * self.duration).exp();
-        (self.p + qe, qe - self.p)
+        let start = self.start_state();
+        let big = self.cog_tau();
+        (start.pos - big[0], (start.vel - big[1]) / self.omega)
     }
 
     /// COG and ZMP at local time `tau` (clamped to `[0, D]`).
     pub fn sample(&self, tau: T) -> Sample<T> {
         let tau = tau.max(T::ZERO).min(self.duration);
         let w = self.omega;
-        let e_start = (-w * tau).exp();
-        let e_end = (-w * (self.duration - tau)).exp();
-        let hp = self.p * e_start;
-        let hq = self.q * e_end;
-        let (xp, vp, ap) = poly_eval(&self.cog, tau);
-        let (z, zv, _) = poly_eval(&self.zmp, tau);
+        let inv_d = T::ONE / self.duration;
+        let s = tau * inv_d;
+        let hp = self.p * (-w * tau).exp();
+        let hq = self.q * (-w * (self.duration - tau)).exp();
+        let (xp, vp, ap) = poly_eval(&self.particular, s);
+        let (z, zv, _) = poly_eval(&self.zmp, s);
         Sample {
             cog: hp + hq + xp,
-            cog_vel: w * (hq - hp) + vp,
-            cog_acc: w * w * (hp + hq) + ap,
+            cog_vel: w * (hq - hp) + vp * inv_d,
+            cog_acc: w * w * (hp + hq) + ap * inv_d * inv_d,
             zmp: z,
-            zmp_vel: zv,
+            zmp_vel: zv * inv_d,
         }
     }
 
@@ -259,24 +318,30 @@ impl<T: Real> Segment<T> {
         State::new(s.cog, s.cog_vel)
     }
 
-    /// The same segment with every position shifted by `d` (the LIPM is translation invariant).
+    /// The same segment with every position shifted by `d` (the LIPM is translation invariant:
+    /// a constant added to a particular solution is a particular solution for the shifted ZMP).
     pub fn shifted(mut self, d: T) -> Self {
         self.zmp[0] += d;
-        self.cog[0] += d;
+        self.particular[0] += d;
         self
     }
 }
 
-/// The cubic Hermite ZMP polynomial from `(p0, v0)` at τ = 0 to `(p1, v1)` at τ = D.
+/// The cubic Hermite ZMP polynomial, in normalised time, from `(p0, v0)` at the start to
+/// `(p1, v1)` at the end of an interval of duration `D`.
 #[inline]
 pub fn hermite<T: Real>(p0: State<T>, p1: State<T>, duration: T) -> Poly<T> {
-    let d = duration;
     let dp = p1.pos - p0.pos;
+    let (v0, v1) = (p0.vel * duration, p1.vel * duration);
     let three = T::of(3.0);
     let two = T::of(2.0);
-    let a2 = (three * dp - (two * p0.vel + p1.vel) * d) / (d * d);
-    let a3 = (-two * dp + (p0.vel + p1.vel) * d) / (d * d * d);
-    [p0.pos, p0.vel, a2, a3, T::ZERO]
+    [
+        p0.pos,
+        v0,
+        three * dp - two * v0 - v1,
+        -two * dp + v0 + v1,
+        T::ZERO,
+    ]
 }
 
 #[cfg(test)]
@@ -293,59 +358,66 @@ mod tests {
         for i in 0..N_COEFFS {
             assert!((a[i] - back[i]).abs() < 1e-14, "{i}");
         }
-        // Direct check of the recursion for the quartic term: A_0 = a0 + 2a2/ω² + 24a4/ω⁴.
+        // Direct check of the recursion: A_0 = a0 + 2a2/ω² + 24a4/ω⁴.
         let expect = a[0] + 2.0 * a[2] / (W * W) + 24.0 * a[4] / (W * W * W * W);
         assert!((big[0] - expect).abs() < 1e-14);
     }
 
     #[test]
+    fn both_particular_regimes_satisfy_the_pendulum_equation() {
+        // G''/λ² − G = −Σ c_k s^k (the ODE in normalised time), for λ on both sides of 1.
+        let c = [0.05, 0.1, -0.3, 0.2, 0.1];
+        for &lambda in &[0.02, 0.35, 0.99, 1.0, 2.4, 3.6] {
+            let g = particular(&c, lambda);
+            for i in 0..=20 {
+                let s = i as f64 / 20.0;
+                let (x, _, a) = poly_eval(&g, s);
+                let (p, _, _) = poly_eval(&c, s);
+                let r = a / (lambda * lambda) - x + p;
+                assert!(r.abs() < 1e-12, "λ={lambda} s={s}: residual {r}");
+            }
+        }
+    }
+
+    #[test]
     fn sample_satisfies_the_pendulum_equation() {
-        let seg = Segment::from_start(W, 0.7, [0.05, 0.1, -0.3, 0.2, 0.1], State::new(0.02, -0.1));
-        for i in 0..=20 {
-            let s = seg.sample(0.7 * i as f64 / 20.0);
-            assert!((s.cog_acc - W * W * (s.cog - s.zmp)).abs() < 1e-12);
-        }
-        let s0 = seg.start_state();
-        assert!((s0.pos - 0.02).abs() < 1e-14 && (s0.vel + 0.1).abs() < 1e-14);
-    }
-
-    #[test]
-    fn vw_matches_the_hyperbolic_form() {
-        let seg = Segment::from_pq(W, 0.8, [0.0; 5], 0.3, -0.2);
-        let (v, w) = seg.vw();
-        for i in 0..=8 {
-            let t = 0.1 * i as f64;
-            let s = seg.sample(t);
-            let hyp = v * libm::cosh(W * t) + w * libm::sinh(W * t);
-            assert!((s.cog - hyp).abs() < 1e-12);
+        for &d in &[0.1, 0.7] {
+            let seg =
+                Segment::from_start(W, d, [0.05, 0.1, -0.3, 0.2, 0.1], State::new(0.02, -0.1));
+            for i in 0..=20 {
+                let s = seg.sample(d * i as f64 / 20.0);
+                assert!((s.cog_acc - W * W * (s.cog - s.zmp)).abs() < 1e-11);
+            }
+            let s0 = seg.start_state();
+            assert!((s0.pos - 0.02).abs() < 1e-14 && (s0.vel + 0.1).abs() < 1e-13);
         }
     }
 
     #[test]
-    fn monomial_columns_match_direct_evaluation() {
-        let d = 0.6;
-        let u = 1.0 / (W * d);
-        for k in 0..=4 {
-            let mut a = [0.0; 5];
-            a[k] = 1.0 / libm::pow(d, k as f64); // β = 1
-            let big = cog_poly(&a, W);
-            let (xe, ve, _) = poly_eval(&big, d);
-            let (xs, vs, _) = poly_eval(&big, 0.0);
-            let (pe, pve) = monomial_end(k, u);
-            let (ps, pvs) = monomial_start(k, u);
-            assert!((xe - pe).abs() < 1e-12, "end pos k={k}");
-            assert!((ve / W - pve).abs() < 1e-12, "end vel k={k}");
-            assert!((xs - ps).abs() < 1e-12, "start pos k={k}");
-            assert!((vs / W - pvs).abs() < 1e-12, "start vel k={k}");
+    fn vw_and_big_a_give_the_paper_form() {
+        for &d in &[0.1, 0.8] {
+            let seg = Segment::new(W, d, [0.01, 0.02, 0.03, -0.04, 0.05], 0.3, -0.2);
+            let (v, w) = seg.vw();
+            let big = seg.cog_tau();
+            for i in 0..=8 {
+                let t = d * i as f64 / 8.0;
+                let s = seg.sample(t);
+                let (poly, _, _) = poly_eval(&big, t);
+                let paper = v * libm::cosh(W * t) + w * libm::sinh(W * t) + poly;
+                assert!((s.cog - paper).abs() < 1e-11, "d={d} t={t}");
+                let (zmp, _, _) = poly_eval(&seg.zmp_tau(), t);
+                assert!((s.zmp - zmp).abs() < 1e-12);
+            }
         }
     }
 
     #[test]
     fn hermite_meets_its_ends() {
-        let c = hermite(State::new(0.1, 0.2), State::new(-0.3, 0.5), 0.4);
+        let d = 0.4;
+        let c = hermite(State::new(0.1, 0.2), State::new(-0.3, 0.5), d);
         let (p0, v0, _) = poly_eval(&c, 0.0);
-        let (p1, v1, _) = poly_eval(&c, 0.4);
-        assert!((p0 - 0.1).abs() < 1e-14 && (v0 - 0.2).abs() < 1e-14);
-        assert!((p1 + 0.3).abs() < 1e-14 && (v1 - 0.5).abs() < 1e-13);
+        let (p1, v1, _) = poly_eval(&c, 1.0);
+        assert!((p0 - 0.1).abs() < 1e-14 && (v0 / d - 0.2).abs() < 1e-14);
+        assert!((p1 + 0.3).abs() < 1e-14 && (v1 / d - 0.5).abs() < 1e-13);
     }
 }

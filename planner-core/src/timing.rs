@@ -138,7 +138,10 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
 /// [`worst_deviation`] of a planned segment's ZMP from `reference` (typically the via point at
 /// the end of the interval: the centre of the support foot in single support).
 pub fn worst_zmp_deviation<T: Real>(seg: &Segment<T>, reference: T) -> Extremum<T> {
-    worst_deviation(&seg.zmp, seg.duration, reference)
+    // The segment stores its ZMP in normalised time s = τ/D: search on [0, 1], then rescale.
+    let mut e = worst_deviation(&seg.zmp, T::ONE, reference);
+    e.tau *= seg.duration;
+    e
 }
 
 #[cfg(test)]

@@ -8,7 +8,8 @@
 //!   intervals, starting from the current ZMP `(p_0, ṗ_0)` at `T_0`.
 //! * Interior intervals 2…6 are cubic Hermite polynomials, fully fixed by the via points.
 //! * Intervals 1 and 7 are quartics: `a_0, a_1` come from the ZMP at their start, and the
-//!   unknowns are `β_k = a_k D^k`, `k = 2, 3, 4` (scaled so that they are in metres).
+//!   unknowns are `β_k = a_k D^k`, `k = 2, 3, 4`: the coefficients of the ZMP in normalised
+//!   time `s = τ/D`, in metres.
 //!
 //! That leaves 20 unknowns per plane, ordered so that the matrix is banded:
 //!
@@ -27,7 +28,7 @@
 //! | 16, 17 | COG position and velocity at `T_7` = terminal COG state      |
 //! | 18, 19 | ZMP position and velocity at the end of interval 7 = via 7   |
 //!
-//! The matrix `Z` holds only `E_j = e^{−ωD_j}` and functions of `u_j = 1/(ωD_j)`: it depends on
+//! The matrix `Z` holds only `E_j = e^{−ωD_j}` and functions of `λ_j = ωD_j`: it depends on
 //! the timing alone, so one factorisation serves the x and the y plane (two right-hand sides).
 //! Its lower and upper bandwidths are both 5; the LU with partial pivoting below works inside
 //! the band (fill-in of U up to 10 above the diagonal), about 3× fewer operations than a
@@ -36,14 +37,19 @@
 //! # Conditioning
 //! In the paper's basis `V cosh + W sinh` the columns of an interval grow like `cosh ωD` and
 //! nearly coincide for long intervals; `P e^{−ωτ} + Q e^{−ω(D−τ)}` keeps every entry of `Z` in
-//! `[−1, 1]` for the homogeneous columns. Both bases are available ([`Basis`]) so the tests
-//! can measure the difference; [`Basis::Exponential`] is the one used by the planner.
+//! `[−1, 1]` for the homogeneous columns, and the particular solutions of [`crate::lipm`] keep
+//! the quartic columns small for short intervals. Both homogeneous bases are available
+//! ([`Basis`]) so the tests can measure the difference; [`Basis::Exponential`] is the one used
+//! by the planner.
 //! Positions are solved relative to the initial ZMP (the LIPM is translation invariant), so
 //! the world-frame offset never enters the factorised system.
 
 use nalgebra::SMatrix;
 
-use crate::lipm::{hermite, monomial_end, monomial_start, Poly, Sample, Segment, State};
+use crate::lipm::{
+    add_particular, hermite, particular, particular_ends, Particular, Poly, Sample, Segment, State,
+    PARTICULAR_LEN,
+};
 use crate::real::Real;
 
 /// Number of intervals in a window.
@@ -209,6 +215,8 @@ pub struct Factorized<T: Real> {
     basis: Basis,
     lu: SMatrix<T, N, N>,
     pivots: [u8; N],
+    /// Column equilibration: the solution of the scaled system times this is `y`.
+    col_scale: [T; N],
     kl: usize,
     ku: usize,
 }
@@ -240,13 +248,21 @@ fn basis_block<T: Real>(basis: Basis, omega: T, d: T, at_end: bool) -> [[T; 2]; 
     }
 }
 
+/// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP term `s^k`.
+#[inline]
+fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
+    let mut g: Particular<T> = [T::ZERO; PARTICULAR_LEN];
+    add_particular(&mut g, k, T::ONE, lambda);
+    particular_ends(&g, lambda)
+}
+
 /// Builds `Z` for a timing into `z` (no allocation; `z` is overwritten).
 pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, N>) {
     z.fill(T::ZERO);
     let w = timing.omega;
     let d = &timing.durations;
-    let u_first = T::ONE / (w * d[0]);
-    let u_last = T::ONE / (w * d[M - 1]);
+    let l_first = w * d[0];
+    let l_last = w * d[M - 1];
     // Rows 0, 1: ZMP at the end of interval 1 (β2 + β3 + β4; 2β2 + 3β3 + 4β4).
     // Rows 18, 19: the same for interval 7.
     for k in 0..3 {
@@ -263,11 +279,20 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         z[(2 + r, hcol(0) + 1)] = b[r][1];
     }
     for k in 0..3 {
-        let (p, v) = monomial_start(k + 2, u_first);
-        z[(2, k)] = p;
-        z[(3, k)] = v;
+        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_first);
+        z[(2, k)] = x0;
+        z[(3, k)] = v0;
+        // Continuity at the end of interval 1 (rows 4, 5).
+        z[(4, k)] = x1;
+        z[(5, k)] = v1;
+        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_last);
+        // Continuity at the start of interval 7 (rows 14, 15) and terminal state (16, 17).
+        z[(14, LAST_BETA + k)] = -x0;
+        z[(15, LAST_BETA + k)] = -v0;
+        z[(16, LAST_BETA + k)] = x1;
+        z[(17, LAST_BETA + k)] = v1;
     }
-    // Rows 4..15: continuity at the end of interval j (0-based j = 0..5).
+    // Rows 4..15: continuity of the homogeneous parts at the end of interval j (0-based 0..5).
     for j in 0..M - 1 {
         let row = 4 + 2 * j;
         let end = basis_block(basis, w, d[j], true);
@@ -278,20 +303,6 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
             z[(row + r, hcol(j + 1))] = -start[r][0];
             z[(row + r, hcol(j + 1) + 1)] = -start[r][1];
         }
-        if j == 0 {
-            for k in 0..3 {
-                let (p, v) = monomial_end(k + 2, u_first);
-                z[(row, k)] = p;
-                z[(row + 1, k)] = v;
-            }
-        }
-        if j + 1 == M - 1 {
-            for k in 0..3 {
-                let (p, v) = monomial_start(k + 2, u_last);
-                z[(row, LAST_BETA + k)] = -p;
-                z[(row + 1, LAST_BETA + k)] = -v;
-            }
-        }
     }
     // Rows 16, 17: terminal COG state.
     let b = basis_block(basis, w, d[M - 1], true);
@@ -299,25 +310,21 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         z[(16 + r, hcol(M - 1))] = b[r][0];
         z[(16 + r, hcol(M - 1) + 1)] = b[r][1];
     }
-    for k in 0..3 {
-        let (p, v) = monomial_end(k + 2, u_last);
-        z[(16, LAST_BETA + k)] = p;
-        z[(17, LAST_BETA + k)] = v;
-    }
 }
 
-/// The known part of the ZMP polynomial of every interval (the quartic unknowns set to zero),
-/// relative to `origin`.
+/// The known part of the normalised ZMP polynomial of every interval (the quartic unknowns
+/// set to zero), relative to `origin`.
 fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [Poly<T>; M] {
     let rel = |s: State<T>| State::new(s.pos - origin, s.vel);
+    let d = &timing.durations;
     let mut polys = [[T::ZERO; 5]; M];
     let z0 = rel(b.zmp_start);
-    polys[0] = [z0.pos, z0.vel, T::ZERO, T::ZERO, T::ZERO];
+    polys[0] = [z0.pos, z0.vel * d[0], T::ZERO, T::ZERO, T::ZERO];
     for j in 1..M - 1 {
-        polys[j] = hermite(rel(b.via[j - 1]), rel(b.via[j]), timing.durations[j]);
+        polys[j] = hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j]);
     }
     let zl = rel(b.via[M - 2]);
-    polys[M - 1] = [zl.pos, zl.vel, T::ZERO, T::ZERO, T::ZERO];
+    polys[M - 1] = [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO];
     polys
 }
 
@@ -334,16 +341,15 @@ fn build_rhs<T: Real>(
     let mut starts = [State::default(); M];
     let mut ends = [State::default(); M];
     for j in 0..M {
-        let seg = Segment::from_pq(w, d[j], polys[j], T::ZERO, T::ZERO);
-        let s = seg.cog;
-        starts[j] = State::new(s[0], s[1] / w);
-        let (xe, ve, _) = crate::lipm::poly_eval(&s, d[j]);
-        ends[j] = State::new(xe, ve / w);
+        let lambda = w * d[j];
+        let (x0, v0, x1, v1) = particular_ends(&particular(&polys[j], lambda), lambda);
+        starts[j] = State::new(x0, v0);
+        ends[j] = State::new(x1, v1);
     }
     let mut r = [T::ZERO; N];
-    let (a0, a1) = (polys[0][0], polys[0][1]);
-    r[0] = b.via[0].pos - origin - a0 - a1 * d[0];
-    r[1] = (b.via[0].vel - a1) * d[0];
+    let (c0, c1) = (polys[0][0], polys[0][1]);
+    r[0] = b.via[0].pos - origin - c0 - c1;
+    r[1] = b.via[0].vel * d[0] - c1;
     r[2] = b.cog_start.pos - origin - starts[0].pos;
     r[3] = b.cog_start.vel / w - starts[0].vel;
     for j in 0..M - 1 {
@@ -353,8 +359,8 @@ fn build_rhs<T: Real>(
     r[16] = b.cog_end.pos - origin - ends[M - 1].pos;
     r[17] = b.cog_end.vel / w - ends[M - 1].vel;
     let (l0, l1) = (polys[M - 1][0], polys[M - 1][1]);
-    r[18] = b.via[M - 1].pos - origin - l0 - l1 * d[M - 1];
-    r[19] = (b.via[M - 1].vel - l1) * d[M - 1];
+    r[18] = b.via[M - 1].pos - origin - l0 - l1;
+    r[19] = b.via[M - 1].vel * d[M - 1] - l1;
     (r, polys)
 }
 
@@ -370,12 +376,29 @@ impl<T: Real> Factorized<T> {
         let mut lu = SMatrix::<T, N, N>::from_element(T::ZERO);
         build_z(timing, basis, &mut lu);
         let (kl, ku) = bandwidths(&lu);
+        // Equilibrate the columns (largest entry 1): the quartic columns of a short interval
+        // carry 24/(ωD)⁴, which would otherwise dominate the singularity threshold.
+        let mut col_scale = [T::ONE; N];
+        for (j, s) in col_scale.iter_mut().enumerate() {
+            let mut m = T::ZERO;
+            for i in 0..N {
+                m = m.max(lu[(i, j)].abs());
+            }
+            if !(m.is_finite() && m > T::ZERO) {
+                return Err(PlanError::Singular);
+            }
+            *s = T::ONE / m;
+            for i in 0..N {
+                lu[(i, j)] *= *s;
+            }
+        }
         let pivots = factor_banded(&mut lu, kl, ku)?;
         Ok(Self {
             timing: *timing,
             basis,
             lu,
             pivots,
+            col_scale,
             kl,
             ku,
         })
@@ -394,6 +417,9 @@ impl<T: Real> Factorized<T> {
     /// Solves `Z y = w` in place for one right-hand side.
     pub fn solve_vector(&self, rhs: &mut [T; N]) {
         solve_banded(&self.lu, &self.pivots, self.kl, self.ku, rhs);
+        for (v, s) in rhs.iter_mut().zip(self.col_scale.iter()) {
+            *v *= *s;
+        }
     }
 
     /// Solves both planes into `out` (which must not alias anything else). On error `out` is
@@ -422,12 +448,10 @@ impl<T: Real> Factorized<T> {
         self.solve_vector(&mut rhs);
         let w = self.timing.omega;
         let d = &self.timing.durations;
-        // Unscale the quartic unknowns: a_k = β_k / D^k.
+        // The quartic unknowns are the normalised coefficients c_2, c_3, c_4.
         for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
-            let mut dk = d[j] * d[j];
             for k in 0..3 {
-                polys[j][k + 2] = rhs[col + k] / dk;
-                dk *= d[j];
+                polys[j][k + 2] = rhs[col + k];
             }
         }
         let mut plan = [Segment::default(); M];
@@ -442,7 +466,7 @@ impl<T: Real> Factorized<T> {
                     (half * (c0 - c1), half * (c0 + c1) / e)
                 }
             };
-            plan[j] = Segment::from_pq(w, d[j], polys[j], p, q).shifted(origin);
+            plan[j] = Segment::new(w, d[j], polys[j], p, q).shifted(origin);
             if !(p.is_finite() && q.is_finite()) {
                 return Err(PlanError::NonFinite);
             }
