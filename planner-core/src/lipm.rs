@@ -151,6 +151,17 @@ pub fn zmp_poly<T: Real>(big: &Poly<T>, omega: T) -> Poly<T> {
     a
 }
 
+/// `1 / (m (m − 1))` for `m < PARTICULAR_LEN` (multiplications instead of divisions in the series).
+const INV_PAIR: [f64; PARTICULAR_LEN] = {
+    let mut t = [0.0; PARTICULAR_LEN];
+    let mut m = 2;
+    while m < PARTICULAR_LEN {
+        t[m] = 1.0 / ((m * (m - 1)) as f64);
+        m += 1;
+    }
+    t
+};
+
 /// Adds `c ×` (the particular solution for the ZMP term `s^k`) to `g`, for `λ = ωD`.
 #[inline]
 pub fn add_particular<T: Real>(g: &mut Particular<T>, k: usize, c: T, lambda: T) {
@@ -160,11 +171,10 @@ pub fn add_particular<T: Real>(g: &mut Particular<T>, k: usize, c: T, lambda: T)
     if lambda < T::of(SHORT_LAMBDA) {
         // At rest at s = 0: g_k = −Σ_{n≥1} λ^{2n} k!/(k+2n)! s^{k+2n}.
         let l2 = lambda * lambda;
-        let mut term = T::ONE;
+        let mut term = c;
         for n in 1..=SERIES_TERMS {
-            let hi = (k + 2 * n) as f64;
-            term = term * l2 / T::of(hi * (hi - 1.0));
-            g[k + 2 * n] -= c * term;
+            term = term * l2 * T::of(INV_PAIR[k + 2 * n]);
+            g[k + 2 * n] -= term;
         }
     } else {
         // The polynomial m_k = Σ_l k!/(k−2l)! λ^{−2l} s^{k−2l}.
@@ -240,6 +250,26 @@ impl<T: Real> Segment<T> {
             q,
             zmp,
             particular: particular(&zmp, omega * duration),
+        }
+    }
+
+    /// A segment from its parts, with the particular solution already computed (it must be
+    /// `particular(&zmp, omega * duration)` up to a constant, see [`Segment::shifted`]).
+    pub fn from_parts(
+        omega: T,
+        duration: T,
+        zmp: Poly<T>,
+        particular: Particular<T>,
+        p: T,
+        q: T,
+    ) -> Self {
+        Self {
+            omega,
+            duration,
+            p,
+            q,
+            zmp,
+            particular,
         }
     }
 

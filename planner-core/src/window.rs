@@ -333,6 +333,7 @@ fn build_rhs<T: Real>(
     timing: &Timing<T>,
     b: &PlaneBoundary<T>,
     origin: T,
+    parts: &mut [Particular<T>; M],
 ) -> ([T; N], [Poly<T>; M]) {
     let w = timing.omega;
     let d = &timing.durations;
@@ -342,7 +343,8 @@ fn build_rhs<T: Real>(
     let mut ends = [State::default(); M];
     for j in 0..M {
         let lambda = w * d[j];
-        let (x0, v0, x1, v1) = particular_ends(&particular(&polys[j], lambda), lambda);
+        parts[j] = particular(&polys[j], lambda);
+        let (x0, v0, x1, v1) = particular_ends(&parts[j], lambda);
         starts[j] = State::new(x0, v0);
         ends[j] = State::new(x1, v1);
     }
@@ -444,14 +446,17 @@ impl<T: Real> Factorized<T> {
     /// Solves one plane.
     pub fn solve_plane(&self, b: &PlaneBoundary<T>) -> Result<PlanePlan<T>, PlanError> {
         let origin = b.zmp_start.pos;
-        let (mut rhs, mut polys) = build_rhs(&self.timing, b, origin);
+        let mut parts = [[T::ZERO; PARTICULAR_LEN]; M];
+        let (mut rhs, mut polys) = build_rhs(&self.timing, b, origin, &mut parts);
         self.solve_vector(&mut rhs);
         let w = self.timing.omega;
         let d = &self.timing.durations;
-        // The quartic unknowns are the normalised coefficients c_2, c_3, c_4.
+        // The quartic unknowns are the normalised coefficients c_2, c_3, c_4; their particular
+        // solutions are added to the known ones (linearity).
         for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
             for k in 0..3 {
                 polys[j][k + 2] = rhs[col + k];
+                add_particular(&mut parts[j], k + 2, rhs[col + k], w * d[j]);
             }
         }
         let mut plan = [Segment::default(); M];
@@ -466,7 +471,7 @@ impl<T: Real> Factorized<T> {
                     (half * (c0 - c1), half * (c0 + c1) / e)
                 }
             };
-            plan[j] = Segment::new(w, d[j], polys[j], p, q).shifted(origin);
+            plan[j] = Segment::from_parts(w, d[j], polys[j], parts[j], p, q).shifted(origin);
             if !(p.is_finite() && q.is_finite()) {
                 return Err(PlanError::NonFinite);
             }
