@@ -52,6 +52,17 @@ fn bench(c: &mut Criterion) {
             black_box(&plan);
         })
     });
+    let mut z = nalgebra::SMatrix::<f64, 20, 20>::from_element(0.0);
+    c.bench_function("build_z", |b| {
+        b.iter(|| {
+            planner_core::window::build_z(
+                black_box(&timing),
+                planner_core::Basis::Exponential,
+                &mut z,
+            );
+            black_box(&z);
+        })
+    });
     let f = Factorized::new(&timing).unwrap();
     c.bench_function("solve_both_planes", |b| {
         b.iter(|| {

@@ -113,6 +113,12 @@ pub struct Sample<T> {
 /// Evaluates a polynomial and its first two derivatives at `t` (Horner).
 #[inline]
 pub fn poly_eval<T: Real, const L: usize>(c: &[T; L], t: T) -> (T, T, T) {
+    poly_eval_slice(c, t)
+}
+
+/// [`poly_eval`] on a slice of coefficients (lowest order first).
+#[inline]
+pub fn poly_eval_slice<T: Real>(c: &[T], t: T) -> (T, T, T) {
     let mut v = T::ZERO;
     let mut d = T::ZERO;
     let mut dd = T::ZERO;
@@ -202,11 +208,28 @@ pub fn particular<T: Real>(c: &Poly<T>, lambda: T) -> Particular<T> {
     g
 }
 
+/// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.
+#[inline]
+pub fn particular_len<T: Real>(lambda: T) -> usize {
+    if lambda < T::of(SHORT_LAMBDA) {
+        PARTICULAR_LEN
+    } else {
+        N_COEFFS
+    }
+}
+
 /// Position and scaled velocity `ẋ/ω` of a particular solution at the start and the end of the
 /// interval: `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)`.
 #[inline]
 pub fn particular_ends<T: Real>(g: &Particular<T>, lambda: T) -> (T, T, T, T) {
-    let (x1, v1, _) = poly_eval(g, T::ONE);
+    let len = particular_len(lambda);
+    let (mut x1, mut v1) = (T::ZERO, T::ZERO);
+    let mut i = T::ZERO;
+    for &gi in g.iter().take(len) {
+        x1 += gi;
+        v1 += i * gi;
+        i += T::ONE;
+    }
     (g[0], g[1] / lambda, x1, v1 / lambda)
 }
 
@@ -325,7 +348,8 @@ impl<T: Real> Segment<T> {
         let s = tau * inv_d;
         let hp = self.p * (-w * tau).exp();
         let hq = self.q * (-w * (self.duration - tau)).exp();
-        let (xp, vp, ap) = poly_eval(&self.particular, s);
+        let len = particular_len(w * self.duration);
+        let (xp, vp, ap) = poly_eval_slice(&self.particular[..len], s);
         let (z, zv, _) = poly_eval(&self.zmp, s);
         Sample {
             cog: hp + hq + xp,

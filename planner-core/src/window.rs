@@ -47,7 +47,7 @@
 use nalgebra::SMatrix;
 
 use crate::lipm::{
-    add_particular, hermite, particular, particular_ends, Particular, Poly, Sample, Segment, State,
+    add_particular, hermite, particular_ends, Particular, Poly, Sample, Segment, State,
     PARTICULAR_LEN,
 };
 use crate::real::Real;
@@ -226,14 +226,17 @@ pub struct Factorized<T: Real> {
 const fn hcol(j: usize) -> usize {
     3 + 2 * j
 }
+/// Lower and upper bandwidth of `Z` in the ordering above (checked by a test against
+/// [`bandwidths`] of the built matrix).
+pub const BANDWIDTH: usize = 5;
+
 /// First column of the quartic unknowns of the last interval.
 const LAST_BETA: usize = 3 + 2 * M;
 
-/// Rows of the 2×2 block that maps the homogeneous pair of an interval to COG position and
-/// scaled velocity at its start (`at_end = false`) or end.
+/// Rows of the 2×2 block that maps the homogeneous pair of an interval (with `E = e^{−ωD}`)
+/// to COG position and scaled velocity at its start (`at_end = false`) or end.
 #[inline]
-fn basis_block<T: Real>(basis: Basis, omega: T, d: T, at_end: bool) -> [[T; 2]; 2] {
-    let e = (-omega * d).exp();
+fn basis_block<T: Real>(basis: Basis, e: T, at_end: bool) -> [[T; 2]; 2] {
     match (basis, at_end) {
         (Basis::Exponential, false) => [[T::ONE, e], [-T::ONE, e]],
         (Basis::Exponential, true) => [[e, T::ONE], [-e, T::ONE]],
@@ -261,6 +264,11 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
     z.fill(T::ZERO);
     let w = timing.omega;
     let d = &timing.durations;
+    // E_j = e^{−ωD_j}, once per interval.
+    let mut e = [T::ZERO; M];
+    for (ej, &dj) in e.iter_mut().zip(d.iter()) {
+        *ej = (-w * dj).exp();
+    }
     let l_first = w * d[0];
     let l_last = w * d[M - 1];
     // Rows 0, 1: ZMP at the end of interval 1 (β2 + β3 + β4; 2β2 + 3β3 + 4β4).
@@ -273,7 +281,7 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         z[(19, LAST_BETA + k)] = kk;
     }
     // Rows 2, 3: initial COG state.
-    let b = basis_block(basis, w, d[0], false);
+    let b = basis_block(basis, e[0], false);
     for r in 0..2 {
         z[(2 + r, hcol(0))] = b[r][0];
         z[(2 + r, hcol(0) + 1)] = b[r][1];
@@ -295,8 +303,8 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
     // Rows 4..15: continuity of the homogeneous parts at the end of interval j (0-based 0..5).
     for j in 0..M - 1 {
         let row = 4 + 2 * j;
-        let end = basis_block(basis, w, d[j], true);
-        let start = basis_block(basis, w, d[j + 1], false);
+        let end = basis_block(basis, e[j], true);
+        let start = basis_block(basis, e[j + 1], false);
         for r in 0..2 {
             z[(row + r, hcol(j))] = end[r][0];
             z[(row + r, hcol(j) + 1)] = end[r][1];
@@ -305,7 +313,7 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         }
     }
     // Rows 16, 17: terminal COG state.
-    let b = basis_block(basis, w, d[M - 1], true);
+    let b = basis_block(basis, e[M - 1], true);
     for r in 0..2 {
         z[(16 + r, hcol(M - 1))] = b[r][0];
         z[(16 + r, hcol(M - 1) + 1)] = b[r][1];
@@ -328,12 +336,13 @@ fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [P
     polys
 }
 
-/// The right-hand side `w` of one plane, relative to `origin`, and the known ZMP polynomials.
+/// The right-hand side `w` of one plane, relative to `origin`, and the known ZMP polynomials;
+/// the particular solutions of the known parts are written into `segs`.
 fn build_rhs<T: Real>(
     timing: &Timing<T>,
     b: &PlaneBoundary<T>,
     origin: T,
-    parts: &mut [Particular<T>; M],
+    segs: &mut PlanePlan<T>,
 ) -> ([T; N], [Poly<T>; M]) {
     let w = timing.omega;
     let d = &timing.durations;
@@ -343,8 +352,12 @@ fn build_rhs<T: Real>(
     let mut ends = [State::default(); M];
     for j in 0..M {
         let lambda = w * d[j];
-        parts[j] = particular(&polys[j], lambda);
-        let (x0, v0, x1, v1) = particular_ends(&parts[j], lambda);
+        let g = &mut segs[j].particular;
+        *g = [T::ZERO; PARTICULAR_LEN];
+        for (k, &ck) in polys[j].iter().enumerate() {
+            add_particular(g, k, ck, lambda);
+        }
+        let (x0, v0, x1, v1) = particular_ends(g, lambda);
         starts[j] = State::new(x0, v0);
         ends[j] = State::new(x1, v1);
     }
@@ -377,20 +390,21 @@ impl<T: Real> Factorized<T> {
         timing.validate()?;
         let mut lu = SMatrix::<T, N, N>::from_element(T::ZERO);
         build_z(timing, basis, &mut lu);
-        let (kl, ku) = bandwidths(&lu);
+        let (kl, ku) = (BANDWIDTH, BANDWIDTH);
         // Equilibrate the columns (largest entry 1): the quartic columns of a short interval
         // carry 24/(ωD)⁴, which would otherwise dominate the singularity threshold.
         let mut col_scale = [T::ONE; N];
         for (j, s) in col_scale.iter_mut().enumerate() {
+            let rows = j.saturating_sub(ku)..(j + kl + 1).min(N);
             let mut m = T::ZERO;
-            for i in 0..N {
+            for i in rows.clone() {
                 m = m.max(lu[(i, j)].abs());
             }
             if !(m.is_finite() && m > T::ZERO) {
                 return Err(PlanError::Singular);
             }
             *s = T::ONE / m;
-            for i in 0..N {
+            for i in rows {
                 lu[(i, j)] *= *s;
             }
         }
@@ -424,8 +438,10 @@ impl<T: Real> Factorized<T> {
         }
     }
 
-    /// Solves both planes into `out` (which must not alias anything else). On error `out` is
-    /// left untouched.
+    /// Solves both planes into `out`, in place (no copies of the plan). Non-finite boundary
+    /// values are rejected before `out` is touched; if the solution itself overflows (only
+    /// possible for absurd magnitudes) `Err(NonFinite)` is returned and `out` is partly
+    /// overwritten, so a caller that must keep a valid plan solves into a spare buffer.
     pub fn solve(
         &self,
         x: &PlaneBoundary<T>,
@@ -435,32 +451,36 @@ impl<T: Real> Factorized<T> {
         if !(x.all_finite() && y.all_finite()) {
             return Err(PlanError::NonFinite);
         }
-        let px = self.solve_plane(x)?;
-        let py = self.solve_plane(y)?;
         out.timing = self.timing;
-        out.x = px;
-        out.y = py;
-        Ok(())
+        self.solve_plane_into(x, &mut out.x)?;
+        self.solve_plane_into(y, &mut out.y)
     }
 
-    /// Solves one plane.
+    /// Solves one plane and returns it (a convenience for tests and tools).
     pub fn solve_plane(&self, b: &PlaneBoundary<T>) -> Result<PlanePlan<T>, PlanError> {
-        let origin = b.zmp_start.pos;
-        let mut parts = [[T::ZERO; PARTICULAR_LEN]; M];
-        let (mut rhs, mut polys) = build_rhs(&self.timing, b, origin, &mut parts);
-        self.solve_vector(&mut rhs);
-        let w = self.timing.omega;
-        let d = &self.timing.durations;
-        // The quartic unknowns are the normalised coefficients c_2, c_3, c_4; their particular
-        // solutions are added to the known ones (linearity).
-        for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
-            for k in 0..3 {
-                polys[j][k + 2] = rhs[col + k];
-                add_particular(&mut parts[j], k + 2, rhs[col + k], w * d[j]);
-            }
+        if !b.all_finite() {
+            return Err(PlanError::NonFinite);
         }
         let mut plan = [Segment::default(); M];
-        for j in 0..M {
+        self.solve_plane_into(b, &mut plan)?;
+        Ok(plan)
+    }
+
+    /// Solves one plane into `out` (boundary values assumed finite).
+    fn solve_plane_into(
+        &self,
+        b: &PlaneBoundary<T>,
+        out: &mut PlanePlan<T>,
+    ) -> Result<(), PlanError> {
+        let origin = b.zmp_start.pos;
+        let (mut rhs, polys) = build_rhs(&self.timing, b, origin, out);
+        self.solve_vector(&mut rhs);
+        if !rhs.iter().all(|v| v.is_finite()) {
+            return Err(PlanError::NonFinite);
+        }
+        let w = self.timing.omega;
+        let d = &self.timing.durations;
+        for (j, seg) in out.iter_mut().enumerate() {
             let (c0, c1) = (rhs[hcol(j)], rhs[hcol(j) + 1]);
             let (p, q) = match self.basis {
                 Basis::Exponential => (c0, c1),
@@ -471,12 +491,25 @@ impl<T: Real> Factorized<T> {
                     (half * (c0 - c1), half * (c0 + c1) / e)
                 }
             };
-            plan[j] = Segment::from_parts(w, d[j], polys[j], parts[j], p, q).shifted(origin);
-            if !(p.is_finite() && q.is_finite()) {
-                return Err(PlanError::NonFinite);
+            seg.omega = w;
+            seg.duration = d[j];
+            seg.p = p;
+            seg.q = q;
+            seg.zmp = polys[j];
+        }
+        // The quartic unknowns are the normalised coefficients c_2, c_3, c_4; their particular
+        // solutions are added to the known ones (linearity).
+        for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
+            for k in 0..3 {
+                out[j].zmp[k + 2] = rhs[col + k];
+                add_particular(&mut out[j].particular, k + 2, rhs[col + k], w * d[j]);
             }
         }
-        Ok(plan)
+        for seg in out.iter_mut() {
+            seg.zmp[0] += origin;
+            seg.particular[0] += origin;
+        }
+        Ok(())
     }
 }
 
@@ -497,7 +530,8 @@ pub fn bandwidths<T: Real>(z: &SMatrix<T, N, N>) -> (usize, usize) {
     (kl, ku)
 }
 
-/// In-place LU with partial pivoting inside the band (LINPACK style: row interchanges are
+/// In-place LU with partial pivoting inside the band, for a matrix whose columns have been
+/// equilibrated to a largest entry of 1 (LINPACK style: row interchanges are
 /// recorded in `pivots` and applied to the right-hand side during the solve; the multipliers
 /// of earlier columns are not permuted). `U` has upper bandwidth `kl + ku`.
 fn factor_banded<T: Real>(
@@ -505,23 +539,22 @@ fn factor_banded<T: Real>(
     kl: usize,
     ku: usize,
 ) -> Result<[u8; N], PlanError> {
-    let mut scale = T::ZERO;
-    for v in a.iter() {
-        scale = scale.max(v.abs());
-    }
-    if !scale.is_finite() || scale == T::ZERO {
-        return Err(PlanError::Singular);
-    }
-    let tol = scale * T::EPSILON * T::of(N as f64);
+    // The columns are equilibrated (largest entry 1), so the threshold is absolute.
+    let tol = T::EPSILON * T::of(N as f64);
     let mut pivots = [0u8; N];
+    // Column-major storage: column j is data[j*N .. j*N + N], so every inner loop below runs
+    // down one contiguous column.
+    let data = a.as_mut_slice();
     for k in 0..N {
         let last = (k + kl).min(N - 1);
+        let right = (k + kl + ku).min(N - 1);
+        let (before, rest) = data.split_at_mut((k + 1) * N);
+        let colk = &mut before[k * N..];
         let mut p = k;
-        let mut best = a[(k, k)].abs();
-        for i in k + 1..=last {
-            let v = a[(i, k)].abs();
-            if v > best {
-                best = v;
+        let mut best = colk[k].abs();
+        for (i, v) in colk.iter().enumerate().take(last + 1).skip(k + 1) {
+            if v.abs() > best {
+                best = v.abs();
                 p = i;
             }
         }
@@ -529,20 +562,18 @@ fn factor_banded<T: Real>(
             return Err(PlanError::Singular);
         }
         pivots[k] = p as u8;
-        let right = (k + kl + ku).min(N - 1);
-        if p != k {
-            for j in k..=right {
-                a.swap((k, j), (p, j));
-            }
+        colk.swap(k, p);
+        let inv = T::ONE / colk[k];
+        for v in &mut colk[k + 1..=last] {
+            *v *= inv;
         }
-        let piv = a[(k, k)];
-        for i in k + 1..=last {
-            let l = a[(i, k)] / piv;
-            a[(i, k)] = l;
-            if l != T::ZERO {
-                for j in k + 1..=right {
-                    let u = a[(k, j)];
-                    a[(i, j)] -= l * u;
+        let mults = &colk[k + 1..=last];
+        for colj in rest.chunks_exact_mut(N).take(right - k) {
+            colj.swap(k, p);
+            let ukj = colj[k];
+            if ukj != T::ZERO {
+                for (v, &l) in colj[k + 1..=last].iter_mut().zip(mults) {
+                    *v -= l * ukj;
                 }
             }
         }
@@ -558,27 +589,25 @@ fn solve_banded<T: Real>(
     ku: usize,
     b: &mut [T; N],
 ) {
-    for k in 0..N {
+    let data = lu.as_slice();
+    for (k, col) in data.chunks_exact(N).enumerate() {
         let p = pivots[k] as usize;
-        if p != k {
-            b.swap(k, p);
-        }
+        b.swap(k, p);
         let bk = b[k];
         let last = (k + kl).min(N - 1);
-        for i in k + 1..=last {
-            b[i] -= lu[(i, k)] * bk;
+        for (v, &l) in b[k + 1..=last].iter_mut().zip(&col[k + 1..=last]) {
+            *v -= l * bk;
         }
     }
+    // Column-oriented back substitution: U has upper bandwidth kl + ku.
     let bw = kl + ku;
-    let mut k = N;
-    while k > 0 {
-        k -= 1;
-        let mut s = b[k];
-        let right = (k + bw).min(N - 1);
-        for j in k + 1..=right {
-            s -= lu[(k, j)] * b[j];
+    for (k, col) in data.chunks_exact(N).enumerate().rev() {
+        let bk = b[k] / col[k];
+        b[k] = bk;
+        let first = k.saturating_sub(bw);
+        for (v, &u) in b[first..k].iter_mut().zip(&col[first..k]) {
+            *v -= u * bk;
         }
-        b[k] = s / lu[(k, k)];
     }
 }
 
@@ -595,8 +624,11 @@ mod tests {
 
     #[test]
     fn z_is_banded_as_documented() {
-        let f = Factorized::new(&timing()).unwrap();
-        assert_eq!(f.bandwidths(), (5, 5));
+        for basis in [Basis::Exponential, Basis::Hyperbolic] {
+            let mut z = SMatrix::<f64, N, N>::from_element(0.0);
+            build_z(&timing(), basis, &mut z);
+            assert_eq!(bandwidths(&z), (BANDWIDTH, BANDWIDTH));
+        }
     }
 
     #[test]
