@@ -55,6 +55,14 @@ pub trait Real:
     fn abs(self) -> Self;
     /// Neither infinite nor NaN.
     fn is_finite(self) -> bool;
+    /// `true` when `self` is NaN or `self <= other`.
+    #[inline]
+    fn is_nan_or_le(self, other: Self) -> bool {
+        !matches!(
+            self.partial_cmp(&other),
+            Some(core::cmp::Ordering::Greater)
+        )
+    }
     /// The larger of two values (NaN-free inputs assumed).
     #[inline]
     fn max(self, other: Self) -> Self {

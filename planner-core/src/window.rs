@@ -558,7 +558,8 @@ fn factor_banded<T: Real>(
                 p = i;
             }
         }
-        if !(best > tol) {
+        // Written so that a NaN pivot is rejected too.
+        if best.is_nan_or_le(tol) {
             return Err(PlanError::Singular);
         }
         pivots[k] = p as u8;

@@ -92,22 +92,18 @@ fn cases() -> [Case; 5] {
 
 fn to32(b: &PlaneBoundary<f64>) -> PlaneBoundary<f32> {
     let s = |s: State<f64>| State::new(s.pos as f32, s.vel as f32);
-    let mut via = [State::default(); M];
-    for j in 0..M {
-        via[j] = s(b.via[j]);
-    }
     PlaneBoundary {
         cog_start: s(b.cog_start),
         zmp_start: s(b.zmp_start),
-        via,
+        via: b.via.map(s),
         cog_end: s(b.cog_end),
     }
 }
 
 /// Largest COG-position difference of an f32 plan from the f64 reference over 2000 samples.
-fn max_cog_error<T: Real>(case: &Case, basis: Basis, reference: &Plan<f64>) -> f64
+fn max_cog_error<T>(case: &Case, basis: Basis, reference: &Plan<f64>) -> f64
 where
-    T: From<f32>,
+    T: Real + From<f32>,
 {
     let timing = Timing {
         omega: T::of(libm::sqrt(9.8 / 0.814)),
