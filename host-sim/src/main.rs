@@ -69,7 +69,11 @@ fn main() -> Result<(), Box<dyn Error>> {
         let t = i as f64 * DT;
         let (sx, sy) = plan.sample(t);
         let (interval, _) = plan.locate(t);
-        let phase = if interval % 2 == 0 { "single" } else { "double" };
+        let phase = if interval % 2 == 0 {
+            "single"
+        } else {
+            "double"
+        };
         if interval == 0 {
             max_dev = max_dev.max((sx.zmp - xv[0].pos).abs());
         }
