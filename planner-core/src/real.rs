@@ -58,10 +58,7 @@ pub trait Real:
     /// `true` when `self` is NaN or `self <= other`.
     #[inline]
     fn is_nan_or_le(self, other: Self) -> bool {
-        !matches!(
-            self.partial_cmp(&other),
-            Some(core::cmp::Ordering::Greater)
-        )
+        !matches!(self.partial_cmp(&other), Some(core::cmp::Ordering::Greater))
     }
     /// The larger of two values (NaN-free inputs assumed).
     #[inline]
