@@ -39,11 +39,14 @@ done
 rustc --version
 cargo --version
 
-section "host workspace: cargo test --workspace --all-targets"
-cargo test --workspace --all-targets
+LOG="$(mktemp)"
+trap 'rm -f "$LOG"' EXIT
 
 section "host workspace: doctests"
-cargo test --workspace --doc
+cargo test --workspace --doc 2>&1 | tee -a "$LOG"
+
+section "host workspace: cargo test --workspace --all-targets"
+cargo test --workspace --all-targets 2>&1 | tee -a "$LOG"
 
 section "planner-core for $TARGET (no_std)"
 cargo build -p planner-core --target "$TARGET"
@@ -64,3 +67,6 @@ section "firmware (release image)"
 )
 
 section "all tests passed"
+# One closing line for the whole run (cargo prints one "test result" line per test binary).
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($i ~ /^passed;?$/) p += $(i-1); if ($i ~ /^failed;?$/) f += $(i-1) } }
+     END { printf "%d passed, %d failed\n", p, f }' "$LOG"

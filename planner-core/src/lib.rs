@@ -17,6 +17,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod gait;
 pub mod lipm;
 pub mod real;
 pub mod timing;

@@ -1,0 +1,1114 @@
+//! The gait: footstep queue, phases, re-planning at every start of single support, and the
+//! immediate modification of the next landing with the single-support adjustment of eq. 18.
+//!
+//! # Windows
+//! The gait re-plans a 7-interval [window](crate::window) at every start of single support
+//! (Fig. 2 of the paper): with `S₀` the support foot and `L₁, L₂, L₃` the next three landings,
+//!
+//! ```text
+//! SS on S₀ (T_ss + ΔT) | DS → L₁ | SS on L₁ | DS → L₂ | SS on L₂ | DS → L₃ | tail
+//! ```
+//!
+//! The ZMP via points are the foot centres: the support-foot centre in single support, the
+//! next foot's centre at the end of double support, zero ZMP velocity at every via point.
+//! Steps not given yet have zero length (the swing foot lands beside the support foot at the
+//! nominal step width, the paper's rule), and the window ends with the COG at rest over its
+//! last via point. The *tail* is a settling interval that brings the ZMP to the midpoint of the
+//! last two footholds ([`Tail::Settle`], the default) or a single support on `L₃`
+//! ([`Tail::Single`]); which of the two the paper used is not stated, and the Table II test
+//! measures both.
+//!
+//! Walking starts from standing with a start window whose first interval is a double support
+//! that shifts the ZMP from between the feet to the first support foot; it stops with a stop
+//! window (the last landing, a settle to the midpoint of the feet, then standing intervals).
+//! Only the first interval(s) of every window are executed: the next re-plan replaces the rest.
+//!
+//! # Immediate modification (section IV.A, eq. 18)
+//! A queued footstep may be modified until its swing starts (the swing foot lifts off at the
+//! start of single support); the step being swung and executed steps are refused with a reason.
+//! When the swing target `L₁` was modified after the current window was planned, the re-plan
+//! compares, at that instant, the executed pattern (`x_i`, the present reference state) with the
+//! pattern that the previous re-plan would have produced had it known the footsteps as they are
+//! now (`x_f`: the previous window solved again from its own initial state with the current
+//! footsteps), through their divergent components `d = ω(x − p) + (ẋ − ṗ)`:
+//!
+//! ```text
+//! r = d_f / d_i,     ΔT = ln(r) / ω  clamped to [ΔT_min, ΔT_max] and rounded to the 5 ms grid.
+//! ```
+//!
+//! Choices where the paper is silent (each measured in the Table II test):
+//! * the plane that decides is the one in which the modification moves the divergent component
+//!   most (`|d_f − d_i|` larger); the other plane keeps the shaped fluctuation;
+//! * a vanishing denominator (`|d_i|` below 1 mm/s·ω: the COG is not moving in that plane, e.g.
+//!   walking in place) gives `ΔT = 0`: there is no motion to slow down or speed up (Table II's
+//!   "before 0" column is all zeros);
+//! * `r ≤ 0` (the modification reverses the motion) gives `ΔT_max` as eq. 18 says, except when
+//!   `|d_f|` is itself below the threshold: the target pattern is at rest, `r → 0⁺`, and
+//!   `ln r → −∞` gives `ΔT_min` (Table II's "after 0" row).
+//!
+//! # Feasibility (eq. 17)
+//! A modification of the next swing target is checked when it arrives: the re-plan it would
+//! cause is computed and the worst ZMP excursion of the first interval, in the support foot's
+//! frame (the ZMP polynomials rotated into the foot frame are quartics, so
+//! [`worst_deviation`] gives their exact extrema), must stay inside the sole. Otherwise the
+//! modification is refused with [`GaitError::Infeasible`] and the queue is unchanged.
+
+use heapless::Deque;
+
+use crate::lipm::{Sample, State};
+use crate::real::Real;
+use crate::timing::worst_deviation;
+use crate::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M};
+
+/// Left or right foot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Side {
+    /// Left foot (+y of the walking line at zero yaw).
+    Left,
+    /// Right foot.
+    Right,
+}
+
+impl Side {
+    /// The other foot.
+    pub fn other(self) -> Side {
+        match self {
+            Side::Left => Side::Right,
+            Side::Right => Side::Left,
+        }
+    }
+    fn index(self) -> usize {
+        match self {
+            Side::Left => 0,
+            Side::Right => 1,
+        }
+    }
+    /// +1 for the left foot, −1 for the right foot.
+    fn sign(self) -> f64 {
+        match self {
+            Side::Left => 1.0,
+            Side::Right => -1.0,
+        }
+    }
+}
+
+/// A footstep: which foot, and where its sole centre lands in the world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Footstep<T> {
+    /// The foot that lands.
+    pub side: Side,
+    /// Sole centre x \[m\].
+    pub x: T,
+    /// Sole centre y \[m\].
+    pub y: T,
+    /// Heading \[rad\].
+    pub yaw: T,
+}
+
+impl<T: Real> Footstep<T> {
+    /// A footstep.
+    pub fn new(side: Side, x: T, y: T, yaw: T) -> Self {
+        Self { side, x, y, yaw }
+    }
+    fn is_finite(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.yaw.is_finite()
+    }
+    fn centre(&self) -> [T; 2] {
+        [self.x, self.y]
+    }
+    /// The zero-length step of the other foot: it lands beside this one, `width` apart.
+    pub fn beside(&self, width: T) -> Self {
+        let side = self.side.other();
+        let (s, c) = sin_cos(self.yaw);
+        let off = width * T::of(side.sign());
+        Self {
+            side,
+            x: self.x - s * off,
+            y: self.y + c * off,
+            yaw: self.yaw,
+        }
+    }
+}
+
+fn sin_cos<T: Real>(a: T) -> (T, T) {
+    let v = a.f64();
+    (T::of(libm::sin(v)), T::of(libm::cos(v)))
+}
+
+fn midpoint<T: Real>(a: [T; 2], b: [T; 2]) -> [T; 2] {
+    let h = T::of(0.5);
+    [h * (a[0] + b[0]), h * (a[1] + b[1])]
+}
+
+/// How a window ends (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tail {
+    /// The ZMP settles to the midpoint of the last two footholds.
+    Settle,
+    /// A single support on the last landing, ending over its centre.
+    Single,
+}
+
+/// Gait parameters. Durations are in control ticks, so every phase is on the control grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaitParams<T> {
+    /// ω = √(g/z_c) \[1/s\].
+    pub omega: T,
+    /// Control period \[s\].
+    pub dt: T,
+    /// Single support \[ticks\].
+    pub single_ticks: u32,
+    /// Double support \[ticks\].
+    pub double_ticks: u32,
+    /// The double support that starts walking from standing \[ticks\].
+    pub start_ticks: u32,
+    /// The settling interval of a stop \[ticks\].
+    pub settle_ticks: u32,
+    /// Each standing interval at the end of a stop \[ticks\].
+    pub stand_ticks: u32,
+    /// Shortest single-support adjustment `ΔT_min` \[ticks\] (negative).
+    pub adjust_min_ticks: i32,
+    /// Longest single-support adjustment `ΔT_max` \[ticks\].
+    pub adjust_max_ticks: i32,
+    /// Distance between the foot centres of a zero-length step \[m\].
+    pub step_width: T,
+    /// Half the sole length (x in the foot frame) \[m\].
+    pub sole_half_length: T,
+    /// Half the sole width (y in the foot frame) \[m\].
+    pub sole_half_width: T,
+    /// Swing-foot height at mid-swing \[m\].
+    pub step_height: T,
+    /// How a window ends.
+    pub tail: Tail,
+}
+
+impl<T: Real> GaitParams<T> {
+    /// The HRP-2 defaults: z_c 0.814 m, g 9.8 m/s², 5 ms cycle, single support 0.7 s, double
+    /// support 0.1 s, start 0.8 s, adjustments −0.2 … +0.35 s, feet 0.2 m apart, sole
+    /// 0.24 × 0.14 m, step height 0.05 m.
+    pub fn hrp2() -> Self {
+        Self {
+            omega: T::of(libm::sqrt(crate::GRAVITY / crate::HRP2_COG_HEIGHT)),
+            dt: T::of(0.005),
+            single_ticks: 140,
+            double_ticks: 20,
+            start_ticks: 160,
+            settle_ticks: 140,
+            stand_ticks: 20,
+            adjust_min_ticks: -40,
+            adjust_max_ticks: 70,
+            step_width: T::of(0.2),
+            sole_half_length: T::of(0.12),
+            sole_half_width: T::of(0.07),
+            step_height: T::of(0.05),
+            tail: Tail::Settle,
+        }
+    }
+
+    fn seconds(&self, ticks: u32) -> T {
+        T::of(ticks as f64) * self.dt
+    }
+}
+
+/// Why the gait refused a command. The gait's plan is unchanged after any of these.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum GaitError {
+    /// The footstep queue is full.
+    QueueFull,
+    /// A coordinate is not finite.
+    NonFinite,
+    /// Steps must alternate feet: this one has the same side as the step before it.
+    SideOrder,
+    /// No queued step has this id (never queued, or already executed).
+    UnknownStep,
+    /// The step is being swung: its foot has lifted off.
+    LiftedOff,
+    /// Even with the adjusted single support, the ZMP would leave the support foot.
+    Infeasible,
+    /// The command is not valid in the present state (e.g. start while walking).
+    WrongState,
+    /// The window could not be planned.
+    Plan(PlanError),
+}
+
+impl From<PlanError> for GaitError {
+    fn from(e: PlanError) -> Self {
+        GaitError::Plan(e)
+    }
+}
+
+/// The phase of the gait at the present tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Standing still in double support.
+    Standing,
+    /// Double support (both feet on the ground) while walking, starting or stopping.
+    Double,
+    /// Single support on the given foot; the other one swings.
+    Single(Side),
+}
+
+/// Pose of one foot.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootPose<T> {
+    /// Sole centre x \[m\].
+    pub x: T,
+    /// Sole centre y \[m\].
+    pub y: T,
+    /// Sole height above the floor \[m\].
+    pub z: T,
+    /// Heading \[rad\].
+    pub yaw: T,
+}
+
+/// The reference of one control tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reference<T> {
+    /// Sagittal (x) COG and ZMP.
+    pub x: Sample<T>,
+    /// Frontal (y) COG and ZMP.
+    pub y: Sample<T>,
+    /// Phase.
+    pub phase: Phase,
+    /// Left and right foot poses.
+    pub feet: [FootPose<T>; 2],
+}
+
+/// What the last re-plan did (for reports and tests).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReplanInfo<T> {
+    /// Tick (since the gait was created) of the re-plan.
+    pub tick: u64,
+    /// Single-support adjustment applied \[ticks\].
+    pub adjust_ticks: i32,
+    /// `r` of eq. 18 (1 when no modification was pending).
+    pub ratio: T,
+    /// Plane that decided the adjustment (0 = x, 1 = y).
+    pub plane: u8,
+    /// Worst ZMP excursion of the first interval in the support-foot frame (x, y) \[m\].
+    pub worst_zmp: [T; 2],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Start,
+    Single,
+    Double,
+    Settle,
+    Stand,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum WindowKind {
+    Start,
+    Walk,
+    Stop,
+}
+
+/// Everything needed to build a window, kept so that eq. 18 can solve it again.
+#[derive(Clone, Copy, Debug)]
+struct Inputs<T> {
+    kind: WindowKind,
+    /// Support foot of the first single support.
+    support: Footstep<T>,
+    /// The other foot where it stands (start and stop windows).
+    other: Footstep<T>,
+    /// Landings (only the first `n_land` are used).
+    land: [Footstep<T>; 3],
+    n_land: usize,
+    /// Duration of the first interval \[ticks\].
+    first_ticks: u32,
+}
+
+/// A window's intervals.
+#[derive(Clone, Copy, Debug)]
+struct Spec<T> {
+    ticks: [u32; M],
+    kinds: [Kind; M],
+    support: [Option<Side>; M],
+    via: [[T; 2]; M],
+    /// Interval at whose start the next re-plan happens.
+    replan: Option<usize>,
+}
+
+fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
+    let mut spec = Spec {
+        ticks: [p.stand_ticks; M],
+        kinds: [Kind::Stand; M],
+        support: [None; M],
+        via: [[T::ZERO; 2]; M],
+        replan: None,
+    };
+    let mut n = 0;
+    fn push<T: Copy>(
+        spec: &mut Spec<T>,
+        n: &mut usize,
+        kind: Kind,
+        ticks: u32,
+        via: [T; 2],
+        sup: Option<Side>,
+    ) {
+        if *n < M {
+            spec.kinds[*n] = kind;
+            spec.ticks[*n] = ticks;
+            spec.via[*n] = via;
+            spec.support[*n] = sup;
+            *n += 1;
+        }
+    }
+    let s0 = inp.support;
+    // Footholds before the landings: (previous, last) for the settle midpoint.
+    let (mut prev, mut last) = (inp.other.centre(), s0.centre());
+    match inp.kind {
+        WindowKind::Stop => {
+            push(
+                &mut spec,
+                &mut n,
+                Kind::Settle,
+                inp.first_ticks,
+                midpoint(prev, last),
+                None,
+            );
+        }
+        WindowKind::Start | WindowKind::Walk => {
+            if inp.kind == WindowKind::Start {
+                push(&mut spec, &mut n, Kind::Start, inp.first_ticks, last, None);
+                push(
+                    &mut spec,
+                    &mut n,
+                    Kind::Single,
+                    p.single_ticks,
+                    last,
+                    Some(s0.side),
+                );
+            } else {
+                push(
+                    &mut spec,
+                    &mut n,
+                    Kind::Single,
+                    inp.first_ticks,
+                    last,
+                    Some(s0.side),
+                );
+            }
+            let mut last_side = s0.side;
+            for (i, l) in inp.land.iter().take(inp.n_land).enumerate() {
+                if n >= M - 1 {
+                    break;
+                }
+                push(
+                    &mut spec,
+                    &mut n,
+                    Kind::Double,
+                    p.double_ticks,
+                    l.centre(),
+                    None,
+                );
+                prev = last;
+                last = l.centre();
+                last_side = l.side;
+                // The last landing of a walking window is followed by the tail.
+                if n >= M - 1 {
+                    break;
+                }
+                let more = i + 1 < inp.n_land;
+                if more {
+                    push(
+                        &mut spec,
+                        &mut n,
+                        Kind::Single,
+                        p.single_ticks,
+                        last,
+                        Some(l.side),
+                    );
+                } else {
+                    break;
+                }
+            }
+            let walking_on = inp.n_land == 3 && n == M - 1;
+            if walking_on && p.tail == Tail::Single {
+                push(
+                    &mut spec,
+                    &mut n,
+                    Kind::Single,
+                    p.single_ticks,
+                    last,
+                    Some(last_side),
+                );
+            } else {
+                push(
+                    &mut spec,
+                    &mut n,
+                    Kind::Settle,
+                    p.settle_ticks,
+                    midpoint(prev, last),
+                    None,
+                );
+            }
+        }
+    }
+    // Fill with standing intervals at the last via point.
+    let rest = spec.via[n - 1];
+    while n < M {
+        push(&mut spec, &mut n, Kind::Stand, p.stand_ticks, rest, None);
+    }
+    spec.replan = (1..M).find(|&j| spec.kinds[j] == Kind::Single);
+    spec
+}
+
+/// Timing and boundary values of a window from its spec and the initial state.
+fn boundaries<T: Real>(
+    p: &GaitParams<T>,
+    spec: &Spec<T>,
+    cog: [State<T>; 2],
+    zmp: [State<T>; 2],
+) -> (Timing<T>, [PlaneBoundary<T>; 2]) {
+    let mut durations = [T::ZERO; M];
+    for (d, &t) in durations.iter_mut().zip(spec.ticks.iter()) {
+        *d = p.seconds(t);
+    }
+    let timing = Timing {
+        omega: p.omega,
+        durations,
+    };
+    let plane = |k: usize| {
+        let mut via = [State::default(); M];
+        for (v, pt) in via.iter_mut().zip(spec.via.iter()) {
+            *v = State::at_rest(pt[k]);
+        }
+        PlaneBoundary {
+            cog_start: cog[k],
+            zmp_start: zmp[k],
+            via,
+            cog_end: State::at_rest(spec.via[M - 1][k]),
+        }
+    };
+    (timing, [plane(0), plane(1)])
+}
+
+/// The window being executed.
+#[derive(Clone, Debug)]
+struct Active<T: Real> {
+    inputs: Inputs<T>,
+    spec: Spec<T>,
+    bounds: [PlaneBoundary<T>; 2],
+    factor: Factorized<T>,
+    plan: Plan<T>,
+    /// Ticks since the window started.
+    tick: u32,
+    /// Window tick of every interval start, and the window end.
+    starts: [u32; M + 1],
+}
+
+impl<T: Real> Active<T> {
+    fn plan(
+        p: &GaitParams<T>,
+        inputs: Inputs<T>,
+        cog: [State<T>; 2],
+        zmp: [State<T>; 2],
+    ) -> Result<Self, PlanError> {
+        let spec = build_spec(p, &inputs);
+        let (timing, bounds) = boundaries(p, &spec, cog, zmp);
+        let factor = Factorized::new(&timing)?;
+        let mut plan = Plan::zeroed(timing);
+        factor.solve(&bounds[0], &bounds[1], &mut plan)?;
+        let mut starts = [0u32; M + 1];
+        for j in 0..M {
+            starts[j + 1] = starts[j] + spec.ticks[j];
+        }
+        Ok(Self {
+            inputs,
+            spec,
+            bounds,
+            factor,
+            plan,
+            tick: 0,
+            starts,
+        })
+    }
+
+    fn interval(&self, tick: u32) -> usize {
+        (0..M).rev().find(|&j| tick >= self.starts[j]).unwrap_or(0)
+    }
+
+    fn sample(&self, p: &GaitParams<T>, tick: u32) -> (Sample<T>, Sample<T>) {
+        let j = self.interval(tick);
+        let tau = p.seconds(tick - self.starts[j]);
+        (self.plan.x[j].sample(tau), self.plan.y[j].sample(tau))
+    }
+
+    /// Worst ZMP excursion of interval 0 in the frame of its support foot (or of the via point
+    /// when the interval is not a single support): `(along the foot, across the foot)`.
+    fn worst_first(&self) -> [T; 2] {
+        let (s, c) = match self.inputs.kind {
+            WindowKind::Walk => sin_cos(self.inputs.support.yaw),
+            _ => (T::ZERO, T::ONE),
+        };
+        let centre = self.spec.via[0];
+        let (px, py) = (&self.plan.x[0].zmp, &self.plan.y[0].zmp);
+        let mut along = [T::ZERO; 5];
+        let mut across = [T::ZERO; 5];
+        for i in 0..5 {
+            along[i] = c * px[i] + s * py[i];
+            across[i] = -s * px[i] + c * py[i];
+        }
+        let ca = c * centre[0] + s * centre[1];
+        let cb = -s * centre[0] + c * centre[1];
+        let a = worst_deviation(&along, T::ONE, ca);
+        let b = worst_deviation(&across, T::ONE, cb);
+        [a.deviation, b.deviation]
+    }
+}
+
+/// A queued footstep.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Queued<T> {
+    id: u16,
+    step: Footstep<T>,
+    /// Modified after the current window was planned.
+    modified: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Standing,
+    Walking,
+}
+
+/// The gait generator: a footstep queue of capacity `Q` and the window being executed.
+#[derive(Clone, Debug)]
+pub struct Gait<T: Real, const Q: usize> {
+    params: GaitParams<T>,
+    queue: Deque<Queued<T>, Q>,
+    /// Where each foot stands (the swing foot: where it lifted off).
+    feet: [Footstep<T>; 2],
+    /// The step being swung, with its id.
+    swing: Option<Queued<T>>,
+    mode: Mode,
+    stop_requested: bool,
+    win: Option<Active<T>>,
+    tick: u64,
+    last: Reference<T>,
+    info: Option<ReplanInfo<T>>,
+}
+
+impl<T: Real, const Q: usize> Gait<T, Q> {
+    /// A robot standing on `left` and `right`, its COG at rest above their midpoint.
+    pub fn new(params: GaitParams<T>, left: Footstep<T>, right: Footstep<T>) -> Self {
+        let mut left = left;
+        let mut right = right;
+        left.side = Side::Left;
+        right.side = Side::Right;
+        let mid = midpoint(left.centre(), right.centre());
+        let at = |v: T| Sample {
+            cog: v,
+            zmp: v,
+            ..Sample::default()
+        };
+        let mut g = Self {
+            params,
+            queue: Deque::new(),
+            feet: [left, right],
+            swing: None,
+            mode: Mode::Standing,
+            stop_requested: false,
+            win: None,
+            tick: 0,
+            last: Reference {
+                x: at(mid[0]),
+                y: at(mid[1]),
+                phase: Phase::Standing,
+                feet: [FootPose::default(); 2],
+            },
+            info: None,
+        };
+        g.last.feet = g.ground_poses();
+        g
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &GaitParams<T> {
+        &self.params
+    }
+
+    /// The reference of the last tick.
+    pub fn last(&self) -> &Reference<T> {
+        &self.last
+    }
+
+    /// What the last re-plan did.
+    pub fn last_replan(&self) -> Option<&ReplanInfo<T>> {
+        self.info.as_ref()
+    }
+
+    /// Number of queued steps (not counting the one being swung).
+    pub fn queued(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// `true` while standing still.
+    pub fn is_standing(&self) -> bool {
+        self.mode == Mode::Standing
+    }
+
+    /// Ticks since the gait was created.
+    pub fn ticks(&self) -> u64 {
+        self.tick
+    }
+
+    /// The side that must land next.
+    fn next_side(&self) -> Option<Side> {
+        if let Some(b) = self.queue.back() {
+            return Some(b.step.side.other());
+        }
+        self.swing.map(|s| s.step.side.other())
+    }
+
+    /// Appends a footstep. A full queue hands the step back.
+    pub fn push(&mut self, id: u16, step: Footstep<T>) -> Result<(), (GaitError, Footstep<T>)> {
+        if !step.is_finite() {
+            return Err((GaitError::NonFinite, step));
+        }
+        if let Some(side) = self.next_side() {
+            if side != step.side {
+                return Err((GaitError::SideOrder, step));
+            }
+        }
+        self.queue
+            .push_back(Queued {
+                id,
+                step,
+                modified: false,
+            })
+            .map_err(|q| (GaitError::QueueFull, q.step))
+    }
+
+    /// Starts walking (from standing) with the queued steps.
+    pub fn start(&mut self) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        let Some(first) = self.queue.front() else {
+            return Err(GaitError::WrongState);
+        };
+        let support = self.feet[first.step.side.other().index()];
+        let other = self.feet[first.step.side.index()];
+        let (land, n) = self.landings(&support, 0);
+        let inputs = Inputs {
+            kind: WindowKind::Start,
+            support,
+            other,
+            land,
+            n_land: n,
+            first_ticks: self.params.start_ticks,
+        };
+        let (cog, zmp) = self.state();
+        let win = Active::plan(&self.params, inputs, cog, zmp)?;
+        self.win = Some(win);
+        self.mode = Mode::Walking;
+        self.stop_requested = false;
+        for q in self.queue.iter_mut() {
+            q.modified = false;
+        }
+        Ok(())
+    }
+
+    /// Requests a stop: the queued steps are walked, then the robot settles between its feet.
+    /// Steps that are not given are no longer padded with steps in place.
+    pub fn stop(&mut self) {
+        self.stop_requested = true;
+    }
+
+    /// Drops every queued step (not the one being swung) and stops after the present swing.
+    pub fn clear_and_stop(&mut self) {
+        self.queue.clear();
+        self.stop_requested = true;
+    }
+
+    /// Modifies the queued step `id`. Refused when its foot has lifted off, when it is unknown,
+    /// or when the re-plan it would cause is infeasible (eq. 17); the queue is unchanged then.
+    pub fn modify(&mut self, id: u16, step: Footstep<T>) -> Result<(), GaitError> {
+        if !step.is_finite() {
+            return Err(GaitError::NonFinite);
+        }
+        if self.swing.map(|s| s.id) == Some(id) {
+            return Err(GaitError::LiftedOff);
+        }
+        let Some(pos) = self.queue.iter().position(|q| q.id == id) else {
+            return Err(GaitError::UnknownStep);
+        };
+        if self.queue.get(pos).map(|q| q.step.side) != Some(step.side) {
+            return Err(GaitError::SideOrder);
+        }
+        let old = self.queue.get(pos).copied();
+        if let Some(q) = self.queue.get_mut(pos) {
+            q.step = step;
+            q.modified = true;
+        }
+        if pos == 0 && self.mode == Mode::Walking {
+            // This is the next swing target: check the re-plan it will cause.
+            match self.predict_replan() {
+                Ok(Some(worst)) if !self.inside_sole(worst) => {
+                    if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
+                        *q = o;
+                    }
+                    return Err(GaitError::Infeasible);
+                }
+                Err(e) => {
+                    if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
+                        *q = o;
+                    }
+                    return Err(e);
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn inside_sole(&self, worst: [T; 2]) -> bool {
+        worst[0].abs() <= self.params.sole_half_length
+            && worst[1].abs() <= self.params.sole_half_width
+    }
+
+    /// The first `n ≤ 3` landings from queue position `skip`, padded with steps in place unless
+    /// a stop was requested.
+    fn landings(&self, support: &Footstep<T>, skip: usize) -> ([Footstep<T>; 3], usize) {
+        let mut land = [*support; 3];
+        let mut n = 0;
+        for q in self.queue.iter().skip(skip).take(3) {
+            land[n] = q.step;
+            n += 1;
+        }
+        if !self.stop_requested {
+            while n < 3 {
+                let prev = if n == 0 { *support } else { land[n - 1] };
+                land[n] = prev.beside(self.params.step_width);
+                n += 1;
+            }
+        }
+        (land, n)
+    }
+
+    /// The present reference state (what the next window starts from).
+    fn state(&self) -> ([State<T>; 2], [State<T>; 2]) {
+        let r = &self.last;
+        (
+            [
+                State::new(r.x.cog, r.x.cog_vel),
+                State::new(r.y.cog, r.y.cog_vel),
+            ],
+            [
+                State::new(r.x.zmp, r.x.zmp_vel),
+                State::new(r.y.zmp, r.y.zmp_vel),
+            ],
+        )
+    }
+
+    /// The re-plan that will happen at the next start of single support if nothing else
+    /// changes: returns the worst first-interval ZMP excursion, or `None` if no re-plan is due.
+    fn predict_replan(&self) -> Result<Option<[T; 2]>, GaitError> {
+        let Some(win) = self.win.as_ref() else {
+            return Ok(None);
+        };
+        let Some(j) = win.spec.replan else {
+            return Ok(None);
+        };
+        let at = win.starts[j];
+        let (sx, sy) = win.sample(&self.params, at);
+        let cog = [
+            State::new(sx.cog, sx.cog_vel),
+            State::new(sy.cog, sy.cog_vel),
+        ];
+        let zmp = [
+            State::new(sx.zmp, sx.zmp_vel),
+            State::new(sy.zmp, sy.zmp_vel),
+        ];
+        let Some(next) = self.next_walk_inputs(win, j) else {
+            return Ok(None);
+        };
+        let (adjust, _, _) = self.adjustment(win, at, cog, zmp)?;
+        let mut inputs = next;
+        inputs.first_ticks = adjusted(self.params.single_ticks, adjust);
+        let w = Active::plan(&self.params, inputs, cog, zmp)?;
+        Ok(Some(w.worst_first()))
+    }
+
+    /// Inputs of the walking window that starts at interval `j` of `win` (a single support),
+    /// with the footsteps as they are now.
+    fn next_walk_inputs(&self, win: &Active<T>, j: usize) -> Option<Inputs<T>> {
+        let side = win.spec.support[j]?;
+        let front = self.queue.front();
+        // The support foot: where it landed (in the window's plan) or stands.
+        let support = if win.inputs.kind == WindowKind::Start && j == 1 {
+            win.inputs.support
+        } else {
+            let mut f = self.feet[side.index()];
+            if let Some(s) = self.swing {
+                if s.step.side == side {
+                    f = s.step;
+                }
+            }
+            f
+        };
+        if front.is_none() && self.stop_requested {
+            return None;
+        }
+        let (land, n) = self.landings(&support, 0);
+        Some(Inputs {
+            kind: WindowKind::Walk,
+            support,
+            other: self.feet[side.other().index()],
+            land,
+            n_land: n,
+            first_ticks: self.params.single_ticks,
+        })
+    }
+
+    /// Eq. 18 at window tick `at` of `win`: the adjustment in ticks, `r`, and the deciding plane.
+    fn adjustment(
+        &self,
+        win: &Active<T>,
+        at: u32,
+        cog: [State<T>; 2],
+        zmp: [State<T>; 2],
+    ) -> Result<(i32, T, u8), GaitError> {
+        let pending = self.queue.front().map(|q| q.modified).unwrap_or(false);
+        if !pending {
+            return Ok((0, T::ONE, 0));
+        }
+        // x_f: the present window solved again from its own start with today's footsteps.
+        let mut inputs = win.inputs;
+        // The first landing of a walking window was its swing target: fixed since lift-off.
+        let mut land = inputs.land;
+        let mut n = match inputs.kind {
+            WindowKind::Walk => 1,
+            _ => 0,
+        };
+        for q in self.queue.iter().take(3 - n) {
+            land[n] = q.step;
+            n += 1;
+        }
+        if !self.stop_requested {
+            while n < 3 {
+                let prev = if n == 0 { inputs.support } else { land[n - 1] };
+                land[n] = prev.beside(self.params.step_width);
+                n += 1;
+            }
+        }
+        inputs.land = land;
+        inputs.n_land = n;
+        let spec = build_spec(&self.params, &inputs);
+        let (_, bounds) = boundaries(
+            &self.params,
+            &spec,
+            [win.bounds[0].cog_start, win.bounds[1].cog_start],
+            [win.bounds[0].zmp_start, win.bounds[1].zmp_start],
+        );
+        let mut target = Plan::zeroed(*win.factor.timing());
+        win.factor.solve(&bounds[0], &bounds[1], &mut target)?;
+        let j = win.interval(at);
+        let tau = self.params.seconds(at - win.starts[j]);
+        let f = [target.x[j].sample(tau), target.y[j].sample(tau)];
+        let w = self.params.omega;
+        let mut d_i = [T::ZERO; 2];
+        let mut d_f = [T::ZERO; 2];
+        for k in 0..2 {
+            d_i[k] = w * (cog[k].pos - zmp[k].pos) + (cog[k].vel - zmp[k].vel);
+            d_f[k] = w * (f[k].cog - f[k].zmp) + (f[k].cog_vel - f[k].zmp_vel);
+        }
+        let plane = if (d_f[1] - d_i[1]).abs() > (d_f[0] - d_i[0]).abs() {
+            1
+        } else {
+            0
+        };
+        let eps = T::of(1e-3) * w;
+        let (di, df) = (d_i[plane], d_f[plane]);
+        let p = &self.params;
+        let ticks = if di.abs() < eps {
+            0
+        } else if df.abs() < eps {
+            p.adjust_min_ticks
+        } else {
+            let r = df / di;
+            if r <= T::ZERO {
+                p.adjust_max_ticks
+            } else {
+                let dt = r.ln() / w;
+                let t = libm::round((dt / p.dt).f64());
+                (t.max(p.adjust_min_ticks as f64)
+                    .min(p.adjust_max_ticks as f64)) as i32
+            }
+        };
+        let r = if di.abs() < eps { T::ONE } else { df / di };
+        Ok((ticks, r, plane as u8))
+    }
+
+    /// Advances one control period and returns its reference.
+    pub fn tick(&mut self) -> Reference<T> {
+        self.tick += 1;
+        let Some(mut win) = self.win.take() else {
+            self.last.phase = Phase::Standing;
+            self.last.feet = self.ground_poses();
+            return self.last;
+        };
+        win.tick += 1;
+        if let Some(j) = win.spec.replan {
+            if win.tick == win.starts[j] {
+                // The state at this instant, from the window being left.
+                let (sx, sy) = win.sample(&self.params, win.tick);
+                let cog = [
+                    State::new(sx.cog, sx.cog_vel),
+                    State::new(sy.cog, sy.cog_vel),
+                ];
+                let zmp = [
+                    State::new(sx.zmp, sx.zmp_vel),
+                    State::new(sy.zmp, sy.zmp_vel),
+                ];
+                win = self.replan(win, j, cog, zmp);
+            }
+        }
+        let end = win.starts[M];
+        if win.tick >= end && win.spec.replan.is_none() {
+            // The stop window has ended: standing.
+            let (sx, sy) = win.sample(&self.params, end);
+            self.last.x = sx;
+            self.last.y = sy;
+            self.mode = Mode::Standing;
+            self.stop_requested = false;
+            self.last.phase = Phase::Standing;
+            self.last.feet = self.ground_poses();
+            self.win = None;
+            return self.last;
+        }
+        let t = win.tick.min(end);
+        let (sx, sy) = win.sample(&self.params, t);
+        let j = win.interval(t);
+        let phase = match win.spec.support[j] {
+            Some(s) if win.spec.kinds[j] == Kind::Single => Phase::Single(s),
+            _ => Phase::Double,
+        };
+        self.last = Reference {
+            x: sx,
+            y: sy,
+            phase,
+            feet: self.foot_poses(&win, j, t),
+        };
+        // The swing ends with the double support that follows it.
+        if let Some(s) = self.swing {
+            if phase == Phase::Double && win.spec.kinds[j] == Kind::Double {
+                self.feet[s.step.side.index()] = s.step;
+                self.swing = None;
+            }
+        }
+        self.win = Some(win);
+        self.last
+    }
+
+    /// Re-plans at the start of the single support `j` of `win`. On failure the old window
+    /// goes on (it already contains that single support).
+    fn replan(
+        &mut self,
+        win: Active<T>,
+        j: usize,
+        cog: [State<T>; 2],
+        zmp: [State<T>; 2],
+    ) -> Active<T> {
+        // Land the swing that just ended (the double support before this single support).
+        if let Some(s) = self.swing.take() {
+            self.feet[s.step.side.index()] = s.step;
+        }
+        let Some(mut inputs) = self.next_walk_inputs(&win, j) else {
+            // Stopping with nothing left to swing: settle.
+            let support = self.feet[win.spec.support[j].map(|s| s.index()).unwrap_or(0)];
+            let other = self.feet[support.side.other().index()];
+            let inputs = Inputs {
+                kind: WindowKind::Stop,
+                support,
+                other,
+                land: [support; 3],
+                n_land: 0,
+                first_ticks: self.params.settle_ticks,
+            };
+            return match Active::plan(&self.params, inputs, cog, zmp) {
+                Ok(w) => w,
+                Err(_) => win,
+            };
+        };
+        let (adjust, ratio, plane) = match self.adjustment(&win, win.tick, cog, zmp) {
+            Ok(a) => a,
+            Err(_) => (0, T::ONE, 0),
+        };
+        inputs.first_ticks = adjusted(self.params.single_ticks, adjust);
+        // The swing target is the queue front; if there is none (walking in place), the
+        // padded zero-length step.
+        let swing = match self.queue.pop_front() {
+            Some(q) => q,
+            None => Queued {
+                id: u16::MAX,
+                step: inputs.land[0],
+                modified: false,
+            },
+        };
+        let new = match Active::plan(&self.params, inputs, cog, zmp) {
+            Ok(w) => w,
+            Err(_) => {
+                // Keep the old window; the step goes back to the queue.
+                if swing.id != u16::MAX {
+                    let _ = self.queue.push_front(swing);
+                }
+                return win;
+            }
+        };
+        self.swing = Some(swing);
+        for q in self.queue.iter_mut() {
+            q.modified = false;
+        }
+        self.info = Some(ReplanInfo {
+            tick: self.tick,
+            adjust_ticks: adjust,
+            ratio,
+            plane,
+            worst_zmp: new.worst_first(),
+        });
+        new
+    }
+
+    fn ground_poses(&self) -> [FootPose<T>; 2] {
+        let pose = |f: &Footstep<T>| FootPose {
+            x: f.x,
+            y: f.y,
+            z: T::ZERO,
+            yaw: f.yaw,
+        };
+        [pose(&self.feet[0]), pose(&self.feet[1])]
+    }
+
+    fn foot_poses(&self, win: &Active<T>, j: usize, t: u32) -> [FootPose<T>; 2] {
+        let mut poses = self.ground_poses();
+        if let (Some(s), Kind::Single) = (self.swing, win.spec.kinds[j]) {
+            let from = self.feet[s.step.side.index()];
+            let to = s.step;
+            let len = win.spec.ticks[j].max(1);
+            let sn = T::of((t - win.starts[j]) as f64 / len as f64);
+            // Quintic smoothstep: zero velocity and acceleration at lift-off and touch-down.
+            let b = sn * sn * sn * (T::of(10.0) + sn * (T::of(-15.0) + T::of(6.0) * sn));
+            let lift = T::of(0.5) * (T::ONE - (T::of(2.0 * core::f64::consts::PI) * sn).cos());
+            poses[s.step.side.index()] = FootPose {
+                x: from.x + b * (to.x - from.x),
+                y: from.y + b * (to.y - from.y),
+                z: self.params.step_height * lift,
+                yaw: from.yaw + b * (to.yaw - from.yaw),
+            };
+        }
+        poses
+    }
+}
+
+fn adjusted(single: u32, adjust: i32) -> u32 {
+    (single as i64 + adjust as i64).max(1) as u32
+}

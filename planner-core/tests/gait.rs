@@ -1,0 +1,274 @@
+//! The gait end to end through its public API (the one the node and the firmware call):
+//! straight walk, turn, stop, the modification rule, and C¹ continuity across re-plans.
+//!
+//! Continuity is checked from the outputs alone, tick to tick (dt = 5 ms), with the trapezoid
+//! rule: a jump of COG position, COG velocity or ZMP at a re-plan shows as a residual of its
+//! size, while the smooth trajectory leaves at most `dt³/12 · max|third derivative|`:
+//! * COG position: `|x₁ − x₀ − dt(v₀+v₁)/2| ≤ 1e-6 m` (COG jerk ≤ ω²(|v|+|ṗ|) ≈ 40 m/s³
+//!   gives 4e-7 m);
+//! * COG velocity: `|v₁ − v₀ − dt(a₀+a₁)/2| ≤ 1e-4 m/s` (a'' = ω²(a − p̈), p̈ up to ~150 m/s² in
+//!   a 0.1 s double support, gives 2e-5 m/s);
+//! * ZMP: `|p₁ − p₀ − dt(ṗ₀+ṗ₁)/2| ≤ 1e-4 m` (p''' of a 0.1 s cubic up to ~2500 m/s³).
+
+use planner_core::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side};
+
+type G = Gait<f64, 32>;
+
+const DT: f64 = 0.005;
+
+fn standing() -> G {
+    Gait::new(
+        GaitParams::hrp2(),
+        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+    )
+}
+
+/// Checks the continuity of one tick to the next (see the module docs).
+fn check_continuity(r0: &Reference<f64>, r1: &Reference<f64>, tick: u64) {
+    for (a, b, plane) in [(&r0.x, &r1.x, "x"), (&r0.y, &r1.y, "y")] {
+        let dx = b.cog - a.cog - DT * (a.cog_vel + b.cog_vel) / 2.0;
+        let dv = b.cog_vel - a.cog_vel - DT * (a.cog_acc + b.cog_acc) / 2.0;
+        let dp = b.zmp - a.zmp - DT * (a.zmp_vel + b.zmp_vel) / 2.0;
+        assert!(dx.abs() < 1e-6, "COG {plane} jumps by {dx} at tick {tick}");
+        assert!(
+            dv.abs() < 1e-4,
+            "COG velocity {plane} jumps by {dv} at tick {tick}"
+        );
+        assert!(dp.abs() < 1e-4, "ZMP {plane} jumps by {dp} at tick {tick}");
+        assert!(b.cog.is_finite() && b.zmp.is_finite());
+    }
+}
+
+/// Is the ZMP inside the support: the support sole in single support, the convex hull of both
+/// soles (approximated by the band of half-width 0.07 m around the segment between the
+/// centres, plus the soles) in double support.
+fn zmp_supported(r: &Reference<f64>, margin: f64) -> bool {
+    let inside_sole = |f: usize| {
+        let foot = &r.feet[f];
+        let (s, c) = (libm::sin(foot.yaw), libm::cos(foot.yaw));
+        let (dx, dy) = (r.x.zmp - foot.x, r.y.zmp - foot.y);
+        let along = c * dx + s * dy;
+        let across = -s * dx + c * dy;
+        along.abs() <= 0.12 + margin && across.abs() <= 0.07 + margin
+    };
+    match r.phase {
+        Phase::Single(side) => inside_sole(if side == Side::Left { 0 } else { 1 }),
+        _ => {
+            let (a, b) = (&r.feet[0], &r.feet[1]);
+            let (ux, uy) = (b.x - a.x, b.y - a.y);
+            let len2 = ux * ux + uy * uy;
+            let t = (((r.x.zmp - a.x) * ux + (r.y.zmp - a.y) * uy) / len2).clamp(0.0, 1.0);
+            let (px, py) = (a.x + t * ux, a.y + t * uy);
+            let d = libm::hypot(r.x.zmp - px, r.y.zmp - py);
+            inside_sole(0) || inside_sole(1) || d <= 0.07 + margin
+        }
+    }
+}
+
+/// Runs until standing (or `max` ticks), checking continuity and support at every tick.
+fn run_to_stand(g: &mut G, max: u64) -> Vec<Reference<f64>> {
+    let mut out = vec![*g.last()];
+    for _ in 0..max {
+        let r = g.tick();
+        check_continuity(out.last().unwrap(), &r, g.ticks());
+        assert!(
+            zmp_supported(&r, 0.005),
+            "ZMP ({:.4}, {:.4}) outside the support at tick {} ({:?}, feet {:?})",
+            r.x.zmp,
+            r.y.zmp,
+            g.ticks(),
+            r.phase,
+            r.feet
+        );
+        out.push(r);
+        if g.is_standing() {
+            break;
+        }
+    }
+    assert!(g.is_standing(), "did not come to a stop in {max} ticks");
+    out
+}
+
+fn push_straight(g: &mut G, n: u16, step: f64) {
+    let mut side = Side::Right;
+    for i in 0..n {
+        let y = if side == Side::Left { 0.1 } else { -0.1 };
+        g.push(i, Footstep::new(side, step * (i + 1) as f64, y, 0.0))
+            .unwrap();
+        side = side.other();
+    }
+    // A closing step: the last foot lands beside the other one.
+    let y = if side == Side::Left { 0.1 } else { -0.1 };
+    g.push(n, Footstep::new(side, step * n as f64, y, 0.0))
+        .unwrap();
+}
+
+#[test]
+fn straight_walk_starts_walks_and_stops_at_rest_between_the_feet() {
+    let mut g = standing();
+    push_straight(&mut g, 8, 0.2);
+    g.start().unwrap();
+    g.stop();
+    let refs = run_to_stand(&mut g, 4000);
+    let end = refs.last().unwrap();
+    // At rest between the final feet (x = 1.6 m, y = 0).
+    assert!((end.x.cog - 1.6).abs() < 1e-6, "{}", end.x.cog);
+    assert!(end.y.cog.abs() < 1e-6, "{}", end.y.cog);
+    assert!(end.x.cog_vel.abs() < 1e-6 && end.y.cog_vel.abs() < 1e-6);
+    // Every step was single support on alternating feet.
+    let mut supports = vec![];
+    for r in &refs {
+        if let Phase::Single(s) = r.phase {
+            if supports.last() != Some(&s) {
+                supports.push(s);
+            }
+        }
+    }
+    assert_eq!(supports.len(), 9);
+    for w in supports.windows(2) {
+        assert_ne!(w[0], w[1]);
+    }
+    // The swing foot rises and lands.
+    let max_z = refs
+        .iter()
+        .flat_map(|r| r.feet.iter().map(|f| f.z))
+        .fold(0.0, f64::max);
+    assert!((max_z - 0.05).abs() < 1e-3, "{max_z}");
+}
+
+#[test]
+fn turning_walk_follows_the_yawed_feet() {
+    let mut g = standing();
+    // A quarter turn to the left in 8 steps around a centre at (0, 1): the feet stay 0.2 m
+    // apart across the heading.
+    let mut side = Side::Right;
+    let n = 8;
+    for i in 0..=n {
+        let yaw = core::f64::consts::FRAC_PI_2 * (i.min(n - 1) + 1) as f64 / n as f64;
+        let radius = if side == Side::Left { 0.9 } else { 1.1 };
+        let (x, y) = (radius * libm::sin(yaw), 1.0 - radius * libm::cos(yaw));
+        g.push(i as u16, Footstep::new(side, x, y, yaw)).unwrap();
+        side = side.other();
+    }
+    g.start().unwrap();
+    g.stop();
+    let refs = run_to_stand(&mut g, 4000);
+    let end = refs.last().unwrap();
+    let (l, r) = (&end.feet[0], &end.feet[1]);
+    assert!((end.x.cog - (l.x + r.x) / 2.0).abs() < 1e-6);
+    assert!((end.y.cog - (l.y + r.y) / 2.0).abs() < 1e-6);
+    assert!((l.yaw - core::f64::consts::FRAC_PI_2).abs() < 1e-9);
+}
+
+#[test]
+fn walking_in_place_when_no_step_is_given_then_stopping() {
+    let mut g = standing();
+    g.push(0, Footstep::new(Side::Right, 0.0, -0.1, 0.0))
+        .unwrap();
+    g.start().unwrap();
+    // Run 5 s with an empty queue: the gait steps in place (the paper's rule).
+    let mut prev = *g.last();
+    let mut singles = 0;
+    for _ in 0..1000 {
+        let r = g.tick();
+        check_continuity(&prev, &r, g.ticks());
+        assert!(zmp_supported(&r, 0.005));
+        if matches!(r.phase, Phase::Single(_)) && !matches!(prev.phase, Phase::Single(_)) {
+            singles += 1;
+        }
+        prev = r;
+    }
+    assert!(singles >= 5, "{singles}");
+    assert!(!g.is_standing());
+    assert!(prev.x.cog.abs() < 0.01);
+    g.stop();
+    let refs = run_to_stand(&mut g, 2000);
+    assert!(refs.last().unwrap().x.cog_vel.abs() < 1e-6);
+}
+
+#[test]
+fn the_modification_rule() {
+    let mut g = standing();
+    push_straight(&mut g, 6, 0.2);
+    // Not walking yet: commands in the wrong state.
+    assert_eq!(
+        g.modify(99, Footstep::new(Side::Right, 0.1, -0.1, 0.0)),
+        Err(GaitError::UnknownStep)
+    );
+    g.start().unwrap();
+    assert_eq!(g.start(), Err(GaitError::WrongState));
+    // The first step may be modified before its lift-off (during the start double support).
+    assert_eq!(
+        g.modify(0, Footstep::new(Side::Right, 0.25, -0.1, 0.0)),
+        Ok(())
+    );
+    // The side cannot change.
+    assert_eq!(
+        g.modify(1, Footstep::new(Side::Right, 0.4, -0.1, 0.0)),
+        Err(GaitError::SideOrder)
+    );
+    // Walk into the first single support: step 0 has lifted off.
+    while !matches!(g.last().phase, Phase::Single(_)) {
+        g.tick();
+    }
+    assert_eq!(
+        g.modify(0, Footstep::new(Side::Right, 0.3, -0.1, 0.0)),
+        Err(GaitError::LiftedOff)
+    );
+    // The next step can still be changed, and a wild one is refused by eq. 17.
+    assert_eq!(
+        g.modify(1, Footstep::new(Side::Left, 0.45, 0.1, 0.0)),
+        Ok(())
+    );
+    // (eq. 17 alone lets a 2.8 m step through: with ΔT = +0.35 s the first single support
+    // fluctuates by only 0.11 m; step-length limits belong to the reachability checks.)
+    assert_eq!(
+        g.modify(1, Footstep::new(Side::Left, 5.0, 0.1, 0.0)),
+        Err(GaitError::Infeasible)
+    );
+    assert_eq!(
+        g.modify(1, Footstep::new(Side::Left, f64::NAN, 0.1, 0.0)),
+        Err(GaitError::NonFinite)
+    );
+    // Pushing out of order and into a full queue hands the step back.
+    // push_straight(6) queued R L R L R L and a closing R: the next must be a left step.
+    let bad = Footstep::new(Side::Right, 2.0, -0.1, 0.0);
+    assert_eq!(g.push(50, bad), Err((GaitError::SideOrder, bad)));
+    assert_eq!(g.push(51, Footstep::new(Side::Left, 1.4, 0.1, 0.0)), Ok(()));
+    let mut small: Gait<f64, 2> = Gait::new(
+        GaitParams::hrp2(),
+        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+    );
+    small
+        .push(0, Footstep::new(Side::Right, 0.1, -0.1, 0.0))
+        .unwrap();
+    small
+        .push(1, Footstep::new(Side::Left, 0.2, 0.1, 0.0))
+        .unwrap();
+    let extra = Footstep::new(Side::Right, 0.3, -0.1, 0.0);
+    assert_eq!(small.push(2, extra), Err((GaitError::QueueFull, extra)));
+}
+
+#[test]
+fn a_refused_modification_changes_nothing() {
+    let run = |modify: bool| {
+        let mut g = standing();
+        push_straight(&mut g, 6, 0.2);
+        g.start().unwrap();
+        g.stop();
+        let mut out = vec![];
+        for k in 0..2500 {
+            if modify && k == 300 {
+                assert_eq!(
+                    g.modify(1, Footstep::new(Side::Left, 5.0, 0.1, 0.0)),
+                    Err(GaitError::Infeasible)
+                );
+            }
+            out.push(g.tick());
+        }
+        out
+    };
+    assert_eq!(run(false), run(true));
+}
