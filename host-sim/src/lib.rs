@@ -1,0 +1,5 @@
+//! host-sim: the HRP-2 simulation around the planner (the project's main job).
+//!
+//! * [`paper`]: the paper's modification experiments (Fig. 4, Tables I and II) through the gait
+//!   API.
+pub mod paper;

@@ -1,0 +1,188 @@
+//! The paper's modification experiments (section IV, Fig. 4, Tables I and II), run through the
+//! same gait API as the firmware.
+//!
+//! Scenario: HRP-2 walks straight with steps of length `before` (step cycle 0.8 s: single
+//! support 0.7 s, double support 0.1 s), after standing 0.8 s and a 0.8 s start double
+//! support, so that a single support begins at 4.0 s with the swing target at `4·before`. Just
+//! before that lift-off (one control cycle earlier) the swing target is moved so that this step
+//! has length `after`; the following steps keep the length `before` (the reading of Table II
+//! that the design notes point out). The re-plan at 4.0 s applies eq. 18.
+
+use planner_core::gait::{Footstep, Gait, GaitParams, Phase, Reference, Side};
+
+/// The step lengths of Tables I and II \[m\].
+pub const STEP_LENGTHS: [f64; 7] = [-0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3];
+
+/// Table II of the paper: adjustment times \[s\]; rows = length after the modification,
+/// columns = length before.
+pub const PAPER_ADJUST_S: [[f64; 7]; 7] = [
+    [0.0, 0.11, 0.305, 0.0, 0.35, 0.35, 0.35],
+    [-0.11, 0.0, 0.19, 0.0, 0.35, 0.35, 0.35],
+    [-0.2, -0.2, 0.0, 0.0, 0.35, 0.35, 0.35],
+    [-0.2, -0.2, -0.2, 0.0, -0.2, -0.2, -0.2],
+    [0.35, 0.35, 0.35, 0.0, 0.0, -0.19, -0.2],
+    [0.35, 0.35, 0.35, 0.0, 0.19, 0.0, -0.11],
+    [0.35, 0.35, 0.305, 0.0, 0.305, 0.11, 0.0],
+];
+
+/// Table I of the paper: maximum multi-body ZMP error without any adjustment \[m\].
+pub const PAPER_ERROR_WITHOUT_M: [[f64; 7]; 7] = [
+    [0.034, 0.036, 0.046, 0.055, 0.065, 0.075, 0.089],
+    [0.033, 0.021, 0.029, 0.039, 0.049, 0.062, 0.077],
+    [0.037, 0.023, 0.014, 0.024, 0.035, 0.050, 0.067],
+    [0.047, 0.031, 0.017, 0.012, 0.023, 0.039, 0.057],
+    [0.061, 0.044, 0.028, 0.014, 0.011, 0.026, 0.047],
+    [0.075, 0.058, 0.041, 0.026, 0.022, 0.026, 0.036],
+    [0.089, 0.072, 0.056, 0.039, 0.030, 0.033, 0.040],
+];
+
+/// Table II of the paper: maximum multi-body ZMP error with the proposed method \[m\].
+pub const PAPER_ERROR_WITH_M: [[f64; 7]; 7] = [
+    [0.034, 0.031, 0.032, 0.053, 0.033, 0.041, 0.049],
+    [0.029, 0.021, 0.024, 0.035, 0.030, 0.037, 0.046],
+    [0.034, 0.028, 0.014, 0.019, 0.027, 0.034, 0.042],
+    [0.056, 0.040, 0.031, 0.012, 0.029, 0.033, 0.042],
+    [0.045, 0.036, 0.028, 0.022, 0.011, 0.037, 0.045],
+    [0.049, 0.039, 0.030, 0.039, 0.023, 0.026, 0.042],
+    [0.053, 0.042, 0.033, 0.057, 0.028, 0.028, 0.040],
+];
+
+/// Tick of the single support in which the modification takes effect (4.0 s).
+pub const MODIFICATION_TICK: u64 = 800;
+
+/// The outcome of one modification run.
+#[derive(Clone, Debug)]
+pub struct Modification {
+    /// Step length before \[m\].
+    pub before: f64,
+    /// Step length after \[m\].
+    pub after: f64,
+    /// Single-support adjustment applied \[s\].
+    pub adjust_s: f64,
+    /// `r` of eq. 18.
+    pub ratio: f64,
+    /// Largest sagittal ZMP deviation from the support-foot centre during the modified single
+    /// support, sampled every tick (signed) \[m\].
+    pub sagittal_m: f64,
+    /// The same in the frontal plane \[m\].
+    pub frontal_m: f64,
+    /// RMS of the frontal deviation over that single support \[m\].
+    pub frontal_rms_m: f64,
+    /// Every reference of the run, one per 5 ms tick.
+    pub trajectory: Vec<Reference<f64>>,
+    /// The footsteps as walked (after the modification).
+    pub footsteps: Vec<Footstep<f64>>,
+}
+
+/// The footsteps of the scenario (`shift` added from the 4th step on).
+fn footsteps(before: f64, shift: f64, n: u16) -> Vec<Footstep<f64>> {
+    (0..n)
+        .map(|i| {
+            let side = if i % 2 == 0 { Side::Right } else { Side::Left };
+            let y = if side == Side::Left { 0.1 } else { -0.1 };
+            let s = if i >= 3 { shift } else { 0.0 };
+            Footstep::new(side, before * f64::from(i + 1) + s, y, 0.0)
+        })
+        .collect()
+}
+
+/// Runs the scenario with the given parameters (set `adjust_min_ticks = adjust_max_ticks = 0`
+/// for "without adjustment").
+pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modification {
+    let n = 12;
+    let mut g: Gait<f64, 16> = Gait::new(
+        params,
+        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+    );
+    for (i, s) in footsteps(before, 0.0, n).into_iter().enumerate() {
+        g.push(i as u16, s).expect("queue holds the scenario");
+    }
+    let mut trajectory = vec![*g.last()];
+    for _ in 0..160 {
+        trajectory.push(g.tick());
+    }
+    g.start().expect("standing with steps queued");
+    while g.ticks() < MODIFICATION_TICK - 1 {
+        trajectory.push(g.tick());
+    }
+    let modified = footsteps(before, after - before, n);
+    // The later steps first, then the swing target (the one checked by eq. 17).
+    for i in (3..n).rev() {
+        // A refusal (eq. 17) leaves the step as it was; the figures then show that.
+        let _ = g.modify(i, modified[usize::from(i)]);
+    }
+    trajectory.push(g.tick());
+    let info = *g.last_replan().expect("a re-plan at 4.0 s");
+    assert_eq!(info.tick, MODIFICATION_TICK, "scenario timing");
+    // The swing target is step 3 (left foot); the support is step 2 (right foot).
+    let support = (before * 3.0, -0.1);
+    let (mut sag, mut fro, mut sq, mut cnt) = (0.0_f64, 0.0_f64, 0.0, 0.0);
+    loop {
+        let r = *trajectory.last().expect("non-empty");
+        if r.phase != Phase::Single(Side::Right) {
+            break;
+        }
+        let (dx, dy) = (r.x.zmp - support.0, r.y.zmp - support.1);
+        if dx.abs() > sag.abs() {
+            sag = dx;
+        }
+        if dy.abs() > fro.abs() {
+            fro = dy;
+        }
+        sq += dy * dy;
+        cnt += 1.0;
+        trajectory.push(g.tick());
+    }
+    for _ in 0..400 {
+        trajectory.push(g.tick());
+    }
+    Modification {
+        before,
+        after,
+        adjust_s: f64::from(info.adjust_ticks) * params.dt,
+        ratio: info.ratio,
+        sagittal_m: sag,
+        frontal_m: fro,
+        frontal_rms_m: if cnt > 0.0 { (sq / cnt).sqrt() } else { 0.0 },
+        trajectory,
+        footsteps: modified,
+    }
+}
+
+/// Parameters with the single-support adjustment switched off.
+pub fn without_adjustment(mut params: GaitParams<f64>) -> GaitParams<f64> {
+    params.adjust_min_ticks = 0;
+    params.adjust_max_ticks = 0;
+    params
+}
+
+/// The 7×7 grid of Table II (rows: after, columns: before).
+pub fn table(params: GaitParams<f64>) -> Vec<Vec<Modification>> {
+    STEP_LENGTHS
+        .iter()
+        .map(|&after| {
+            STEP_LENGTHS
+                .iter()
+                .map(|&before| {
+                    let mut m = modification(params, before, after);
+                    m.trajectory = Vec::new();
+                    m
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// How many cells of an adjustment grid agree with Table II within `cycles` control cycles.
+pub fn cells_within(grid: &[Vec<Modification>], dt: f64, cycles: f64) -> usize {
+    let mut n = 0;
+    for (r, row) in grid.iter().enumerate() {
+        for (c, m) in row.iter().enumerate() {
+            if (m.adjust_s - PAPER_ADJUST_S[r][c]).abs() <= cycles * dt + 1e-9 {
+                n += 1;
+            }
+        }
+    }
+    n
+}
