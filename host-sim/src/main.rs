@@ -1,99 +1,263 @@
-//! host-sim: the HRP-2 simulation around the planner (main job of the project).
+//! `host-sim`: the HRP-2 simulation around the planner (the project's main job).
 //!
-//! This first version plans one 7-interval window for an HRP-2 straight walk with the
-//! planner-core window solver and writes the reference trajectory, sampled every 5 ms, to
-//! `out/demo/trajectory.csv`. The virtual CAN link, the node, the multi-body model and the
-//! scenarios come with the host-sim issue; the command stays the same.
+//! ```text
+//! host-sim                         the default demo (the `straight` scenario into out/demo)
+//! host-sim list                    the built-in scenarios
+//! host-sim run <scenario> [--out DIR]
+//! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
+//! ```
 
 use std::error::Error;
 use std::fs;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use planner_core::window::{Factorized, Plan, PlaneBoundary, Timing, M};
-use planner_core::{omega, State, GRAVITY, HRP2_COG_HEIGHT};
+use host_sim::paper::{
+    self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
+    PAPER_ERROR_WITH_M, STEP_LENGTHS,
+};
+use host_sim::scenario::{self, Run, BUILT_IN};
+use planner_core::gait::{GaitParams, Phase};
+use serde_json::json;
 
-/// Control period \[s\].
-const DT: f64 = 0.005;
-
-fn main() -> Result<(), Box<dyn Error>> {
-    let out = std::env::args()
-        .skip_while(|a| a != "--out")
-        .nth(1)
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("out/demo"));
-    fs::create_dir_all(&out)?;
-
-    // HRP-2 defaults: single support 0.7 s, double support 0.1 s; the window starts at the
-    // beginning of a single support on the right foot, the COG above the left/right midpoint
-    // moving forward, and plans three 0.2 m steps ending at rest over the last foot.
-    let timing = Timing {
-        omega: omega(GRAVITY, HRP2_COG_HEIGHT),
-        durations: [0.7, 0.1, 0.7, 0.1, 0.7, 0.1, 0.7],
-    };
-    let (step, half_width) = (0.2, 0.1);
-    let mut xv = [State::default(); M];
-    let mut yv = [State::default(); M];
-    let (mut foot_x, mut foot_y) = (0.0, -half_width);
-    for j in 0..M {
-        if j % 2 == 1 {
-            foot_x += step;
-            foot_y = -foot_y;
-        }
-        xv[j] = State::at_rest(foot_x);
-        yv[j] = State::at_rest(foot_y);
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if let Err(e) = dispatch(&args) {
+        eprintln!("host-sim: {e}");
+        std::process::exit(2);
     }
-    let x = PlaneBoundary {
-        cog_start: State::new(-0.05, 0.3),
-        zmp_start: State::at_rest(0.0),
-        via: xv,
-        cog_end: State::at_rest(foot_x),
-    };
-    let y = PlaneBoundary {
-        cog_start: State::new(-0.03, -0.15),
-        zmp_start: State::at_rest(-half_width),
-        via: yv,
-        cog_end: State::at_rest(foot_y),
-    };
-    let f = Factorized::new(&timing).map_err(|e| format!("planning failed: {e:?}"))?;
-    let mut plan = Plan::zeroed(timing);
-    f.solve(&x, &y, &mut plan)
-        .map_err(|e| format!("planning failed: {e:?}"))?;
+}
 
-    let path = out.join("trajectory.csv");
-    let mut csv = std::io::BufWriter::new(fs::File::create(&path)?);
-    writeln!(csv, "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,phase")?;
-    let n = (timing.total() / DT).round() as usize;
-    let mut max_dev: f64 = 0.0;
-    for i in 0..=n {
-        let t = i as f64 * DT;
-        let (sx, sy) = plan.sample(t);
-        let (interval, _) = plan.locate(t);
-        let phase = if interval % 2 == 0 {
-            "single"
-        } else {
-            "double"
-        };
-        if interval == 0 {
-            max_dev = max_dev.max((sx.zmp - xv[0].pos).abs());
+fn out_dir(args: &[String], default: &str) -> PathBuf {
+    args.iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(default))
+}
+
+fn dispatch(args: &[String]) -> Result<(), Box<dyn Error>> {
+    match args.first().map(String::as_str) {
+        None => run_scenario("straight", &out_dir(args, "out/demo")),
+        Some("list") => {
+            for name in BUILT_IN {
+                let s = scenario::built_in(name).ok_or("missing built-in")?;
+                println!("{name:<10} {}", s.about);
+            }
+            Ok(())
         }
+        Some("run") => {
+            let name = args
+                .get(1)
+                .ok_or("usage: host-sim run <scenario> [--out DIR]")?;
+            let default = format!("out/{name}");
+            run_scenario(name, &out_dir(args, &default))
+        }
+        Some("tables") => tables(&out_dir(args, "out/tables")),
+        Some("-h" | "--help" | "help") => {
+            println!("usage: host-sim [list | run <scenario> [--out DIR] | tables [--out DIR]]");
+            Ok(())
+        }
+        Some(other) => Err(format!("unknown command {other:?} (try: list, run, tables)").into()),
+    }
+}
+
+fn phase_name(p: Phase) -> &'static str {
+    match p {
+        Phase::Standing => "standing",
+        Phase::Double => "double",
+        Phase::Single(planner_core::gait::Side::Left) => "single_left",
+        Phase::Single(planner_core::gait::Side::Right) => "single_right",
+    }
+}
+
+fn write_trajectory(path: &Path, run: &Run, dt: f64) -> Result<(), Box<dyn Error>> {
+    let mut csv = std::io::BufWriter::new(fs::File::create(path)?);
+    writeln!(
+        csv,
+        "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,phase,left_x,left_y,left_z,left_yaw,right_x,right_y,right_z,right_yaw"
+    )?;
+    for (k, r) in run.trajectory.iter().enumerate() {
+        let (l, rt) = (&r.feet[0], &r.feet[1]);
         writeln!(
             csv,
-            "{t:.3},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{phase}",
-            sx.cog, sy.cog, sx.cog_vel, sy.cog_vel, sx.zmp, sy.zmp
+            "{:.3},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            k as f64 * dt,
+            r.x.cog,
+            r.y.cog,
+            r.x.cog_vel,
+            r.y.cog_vel,
+            r.x.zmp,
+            r.y.zmp,
+            phase_name(r.phase),
+            l.x,
+            l.y,
+            l.z,
+            l.yaw,
+            rt.x,
+            rt.y,
+            rt.z,
+            rt.yaw
         )?;
     }
     csv.flush()?;
+    Ok(())
+}
+
+/// Largest ZMP deviation from the support-foot centre during single support, in the support
+/// foot's frame (along, across) \[m\].
+fn max_fluctuation(run: &Run) -> (f64, f64) {
+    let (mut along, mut across) = (0.0_f64, 0.0_f64);
+    for r in &run.trajectory {
+        if let Phase::Single(side) = r.phase {
+            let f = &r.feet[if side == planner_core::gait::Side::Left {
+                0
+            } else {
+                1
+            }];
+            let (s, c) = f.yaw.sin_cos();
+            let (dx, dy) = (r.x.zmp - f.x, r.y.zmp - f.y);
+            along = along.max((c * dx + s * dy).abs());
+            across = across.max((-s * dx + c * dy).abs());
+        }
+    }
+    (along, across)
+}
+
+fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
+    let s = scenario::built_in(name).ok_or_else(|| {
+        format!(
+            "unknown scenario {name:?}; built-in: {}",
+            BUILT_IN.join(", ")
+        )
+    })?;
+    let params = GaitParams::<f64>::hrp2();
+    let run = scenario::run(&s, params);
+    fs::create_dir_all(out)?;
+    let traj = out.join("trajectory.csv");
+    write_trajectory(&traj, &run, params.dt)?;
+    let (along, across) = max_fluctuation(&run);
+    let refused: Vec<_> = run
+        .events
+        .iter()
+        .filter_map(|e| {
+            e.result
+                .err()
+                .map(|err| json!({"tick": e.tick, "error": format!("{err:?}")}))
+        })
+        .collect();
+    let summary = json!({
+        "scenario": name,
+        "about": s.about,
+        "duration_s": (run.trajectory.len() - 1) as f64 * params.dt,
+        "adjust_s": run.adjustments.iter().map(|a| a.adjust_s).collect::<Vec<_>>(),
+        "adjustments": run.adjustments.iter().map(|a| json!({
+            "t_s": a.tick as f64 * params.dt, "adjust_s": a.adjust_s, "ratio": a.ratio,
+            "plane": if a.plane == 0 { "x" } else { "y" }})).collect::<Vec<_>>(),
+        "max_zmp_fluctuation_m": along.max(across),
+        "max_zmp_fluctuation_along_m": along,
+        "max_zmp_fluctuation_across_m": across,
+        "refused_commands": refused,
+    });
+    fs::write(
+        out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    println!("{name}: {}", s.about);
     println!(
-        "HRP-2 straight walk: {} samples every {:.0} ms over {:.2} s",
-        n + 1,
-        DT * 1e3,
-        timing.total()
+        "  {:.2} s simulated in {} ticks of 5 ms",
+        (run.trajectory.len() - 1) as f64 * params.dt,
+        run.trajectory.len() - 1
+    );
+    for a in &run.adjustments {
+        println!(
+            "  re-plan at {:.3} s: single support adjusted by {:+.3} s (r = {:.3}, plane {})",
+            a.tick as f64 * params.dt,
+            a.adjust_s,
+            a.ratio,
+            if a.plane == 0 { "x" } else { "y" }
+        );
+    }
+    println!(
+        "  largest ZMP fluctuation in single support: {:.1} mm along the foot, {:.1} mm across",
+        along * 1e3,
+        across * 1e3
     );
     println!(
-        "largest sagittal ZMP fluctuation in the first single support: {:.1} mm",
-        max_dev * 1e3
+        "  results: {} and {}",
+        traj.display(),
+        out.join("summary.json").display()
     );
-    println!("results: {}", path.display());
+    Ok(())
+}
+
+fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
+    let params = GaitParams::<f64>::hrp2();
+    fs::create_dir_all(out)?;
+    let n = STEP_LENGTHS.len();
+    let mut adjust = vec![vec![0.0; n]; n];
+    let mut with = vec![vec![0.0; n]; n];
+    let mut without = vec![vec![0.0; n]; n];
+    let mut grid = Vec::new();
+    for (r, &after) in STEP_LENGTHS.iter().enumerate() {
+        let mut row = Vec::new();
+        for (c, &before) in STEP_LENGTHS.iter().enumerate() {
+            eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
+            let m = paper::modification(params, before, after);
+            let w = paper::modification(without_adjustment(params), before, after);
+            adjust[r][c] = m.adjust_s;
+            with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
+            without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
+            let mut m = m;
+            m.trajectory.clear();
+            row.push(m);
+        }
+        grid.push(row);
+    }
+    eprintln!();
+    let within = cells_within(&grid, params.dt, 1.0);
+    let json = json!({
+        "step_lengths_m": STEP_LENGTHS,
+        "rows": "length after the modification",
+        "columns": "length before the modification",
+        "adjust_s": adjust,
+        "paper_adjust_s": PAPER_ADJUST_S,
+        "cells_within_one_cycle": within,
+        "zmp_error_model": "linear inverted pendulum (planned ZMP vs support-foot centre); the multi-body model comes with the host-sim issue",
+        "max_zmp_error_without_m": without,
+        "max_zmp_error_with_m": with,
+        "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
+        "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
+    });
+    fs::write(
+        out.join("tables.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let mut md = String::new();
+    md += "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)\n\n";
+    md += "| after \\ before |";
+    for b in STEP_LENGTHS {
+        md += &format!(" {b:+.1} |");
+    }
+    md += "\n|---|";
+    for _ in 0..n {
+        md += "---|";
+    }
+    md += "\n";
+    for (r, row) in adjust.iter().enumerate() {
+        md += &format!("| {:+.1} |", STEP_LENGTHS[r]);
+        for (c, v) in row.iter().enumerate() {
+            md += &format!(" {v:.3} / {:.3} |", PAPER_ADJUST_S[r][c]);
+        }
+        md += "\n";
+    }
+    md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
+    fs::write(out.join("tables.md"), &md)?;
+    println!("{md}");
+    println!(
+        "results: {} and {}",
+        out.join("tables.json").display(),
+        out.join("tables.md").display()
+    );
     Ok(())
 }
