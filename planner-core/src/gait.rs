@@ -165,8 +165,10 @@ pub struct GaitParams<T> {
     pub start_ticks: u32,
     /// The settling interval of a stop \[ticks\].
     pub settle_ticks: u32,
-    /// Each standing interval at the end of a stop \[ticks\].
+    /// Each padding interval of a stop window (a window always has 7 intervals) \[ticks\].
     pub stand_ticks: u32,
+    /// The final resting interval of a stop window \[ticks\].
+    pub rest_ticks: u32,
     /// Shortest single-support adjustment `ΔT_min` \[ticks\] (negative).
     pub adjust_min_ticks: i32,
     /// Longest single-support adjustment `ΔT_max` \[ticks\].
@@ -185,7 +187,8 @@ pub struct GaitParams<T> {
 
 impl<T: Real> GaitParams<T> {
     /// The HRP-2 defaults: z_c 0.814 m, g 9.8 m/s², 5 ms cycle, single support 0.7 s, double
-    /// support 0.1 s, start 0.8 s, adjustments −0.2 … +0.35 s, feet 0.2 m apart, sole
+    /// support 0.1 s, start 0.8 s, stop: settle 0.7 s and rest 0.5 s, adjustments
+    /// −0.2 … +0.35 s, feet 0.2 m apart, sole
     /// 0.24 × 0.14 m, step height 0.05 m.
     pub fn hrp2() -> Self {
         Self {
@@ -195,7 +198,8 @@ impl<T: Real> GaitParams<T> {
             double_ticks: 20,
             start_ticks: 160,
             settle_ticks: 140,
-            stand_ticks: 20,
+            stand_ticks: 1,
+            rest_ticks: 100,
             adjust_min_ticks: -40,
             adjust_max_ticks: 70,
             step_width: T::of(0.2),
@@ -451,10 +455,14 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
             }
         }
     }
-    // Fill with standing intervals at the last via point.
+    // Fill with one-tick standing intervals at the last via point, and end with a resting
+    // interval long enough for the final quartic to bring the COG to rest gently.
     let rest = spec.via[n - 1];
-    while n < M {
+    while n < M - 1 {
         push(&mut spec, &mut n, Kind::Stand, p.stand_ticks, rest, None);
+    }
+    if n < M {
+        push(&mut spec, &mut n, Kind::Stand, p.rest_ticks, rest, None);
     }
     spec.replan = (1..M).find(|&j| spec.kinds[j] == Kind::Single);
     spec
