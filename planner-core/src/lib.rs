@@ -20,6 +20,7 @@
 pub mod gait;
 pub mod lipm;
 pub mod real;
+pub mod shaping;
 pub mod timing;
 pub mod window;
 
