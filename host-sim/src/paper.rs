@@ -94,7 +94,8 @@ pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modific
         params,
         Footstep::new(Side::Left, 0.0, 0.1, 0.0),
         Footstep::new(Side::Right, 0.0, -0.1, 0.0),
-    );
+    )
+    .expect("valid gait parameters");
     for (i, s) in footsteps(before, 0.0, n).into_iter().enumerate() {
         g.push(i as u16, s).expect("queue holds the scenario");
     }

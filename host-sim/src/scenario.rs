@@ -76,7 +76,8 @@ pub struct Run {
 
 /// Plays a scenario against a gait with the given parameters.
 pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
-    let mut g: Gait<f64, 64> = Gait::new(params, s.feet[0], s.feet[1]);
+    let mut g: Gait<f64, 64> =
+        Gait::new(params, s.feet[0], s.feet[1]).expect("valid gait parameters");
     let mut trajectory = vec![*g.last()];
     let mut events = Vec::new();
     let mut adjustments = Vec::new();

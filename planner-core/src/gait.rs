@@ -55,8 +55,9 @@
 
 use heapless::Deque;
 
-use crate::lipm::{Sample, State};
+use crate::lipm::{Poly, Sample, State};
 use crate::real::Real;
+use crate::shaping::{CartTable, Compensator, GainError, Law, Piece, PreviewConfig, PreviewGains};
 use crate::timing::worst_deviation;
 use crate::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M};
 
@@ -183,6 +184,13 @@ pub struct GaitParams<T> {
     pub step_height: T,
     /// How a window ends.
     pub tail: Tail,
+    /// Shape the ZMP fluctuation of the first interval of every window with preview control
+    /// (section IV.B).
+    pub shaping: bool,
+    /// COG height for the preview controller's cart-table model \[m\].
+    pub cog_height: f64,
+    /// Gravity \[m/s²\].
+    pub gravity: f64,
 }
 
 impl<T: Real> GaitParams<T> {
@@ -207,6 +215,9 @@ impl<T: Real> GaitParams<T> {
             sole_half_width: T::of(0.07),
             step_height: T::of(0.05),
             tail: Tail::Settle,
+            shaping: true,
+            cog_height: crate::HRP2_COG_HEIGHT,
+            gravity: crate::GRAVITY,
         }
     }
 
@@ -236,6 +247,8 @@ pub enum GaitError {
     WrongState,
     /// The window could not be planned.
     Plan(PlanError),
+    /// The preview-control gains could not be computed.
+    Gains(GainError),
 }
 
 impl From<PlanError> for GaitError {
@@ -602,11 +615,45 @@ pub struct Gait<T: Real, const Q: usize> {
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
+    /// Preview-control gains (shared by both planes) and the two compensators.
+    gains: PreviewGains<T, PREVIEW>,
+    comp: [Compensator<T>; 2],
+}
+
+/// Preview length of the shaping compensator \[ticks\] (1.6 s at 5 ms).
+pub const PREVIEW: usize = 320;
+
+/// `p − c`, sample by sample.
+fn minus<T: Real>(p: Sample<T>, c: Sample<T>) -> Sample<T> {
+    Sample {
+        cog: p.cog - c.cog,
+        cog_vel: p.cog_vel - c.cog_vel,
+        cog_acc: p.cog_acc - c.cog_acc,
+        zmp: p.zmp - c.zmp,
+        zmp_vel: p.zmp_vel - c.zmp_vel,
+    }
+}
+
+/// The ZMP fluctuation of a quartic interval: its difference from the cubic Hermite with the
+/// same end positions and velocities (normalised time).
+fn fluctuation<T: Real>(c: &Poly<T>) -> Poly<T> {
+    let (two, three) = (T::of(2.0), T::of(3.0));
+    let p1 = c[0] + c[1] + c[2] + c[3] + c[4];
+    let v1 = c[1] + two * c[2] + three * c[3] + T::of(4.0) * c[4];
+    let dp = p1 - c[0];
+    let h2 = three * dp - two * c[1] - v1;
+    let h3 = -two * dp + c[1] + v1;
+    [T::ZERO, T::ZERO, c[2] - h2, c[3] - h3, c[4]]
 }
 
 impl<T: Real, const Q: usize> Gait<T, Q> {
-    /// A robot standing on `left` and `right`, its COG at rest above their midpoint.
-    pub fn new(params: GaitParams<T>, left: Footstep<T>, right: Footstep<T>) -> Self {
+    /// A robot standing on `left` and `right`, its COG at rest above their midpoint. Computes
+    /// the preview-control gains (once; about 1100 Riccati iterations).
+    pub fn new(
+        params: GaitParams<T>,
+        left: Footstep<T>,
+        right: Footstep<T>,
+    ) -> Result<Self, GaitError> {
         let mut left = left;
         let mut right = right;
         left.side = Side::Left;
@@ -633,9 +680,27 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 feet: [FootPose::default(); 2],
             },
             info: None,
+            gains: PreviewGains::zeroed(),
+            comp: [Compensator::new(), Compensator::new()],
         };
         g.last.feet = g.ground_poses();
-        g
+        if !(left.is_finite() && right.is_finite()) {
+            return Err(GaitError::NonFinite);
+        }
+        if params.shaping {
+            let config = PreviewConfig {
+                model: CartTable {
+                    dt: params.dt.f64(),
+                    z_c: params.cog_height,
+                    g: params.gravity,
+                },
+                ..PreviewConfig::default()
+            };
+            g.gains
+                .compute(&config, Law::FromRest)
+                .map_err(GaitError::Gains)?;
+        }
+        Ok(g)
     }
 
     /// The parameters.
@@ -716,6 +781,12 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         };
         let (cog, zmp) = self.state();
         let win = Active::plan(&self.params, inputs, cog, zmp)?;
+        self.start_shaping(&win);
+        // The reference of this instant becomes the window's tick 0 (the same position, with
+        // the velocities the pattern starts with), and the compensators take their tick 0.
+        let (sx, sy) = self.shaped(&win, 0);
+        self.last.x = sx;
+        self.last.y = sy;
         self.win = Some(win);
         self.mode = Mode::Walking;
         self.stop_requested = false;
@@ -965,10 +1036,11 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             return self.last;
         };
         win.tick += 1;
+        let mut kept = None;
         if let Some(j) = win.spec.replan {
             if win.tick == win.starts[j] {
-                // The state at this instant, from the window being left.
-                let (sx, sy) = win.sample(&self.params, win.tick);
+                // The state at this instant, from the window being left (shaped).
+                let (sx, sy) = self.shaped(&win, win.tick);
                 let cog = [
                     State::new(sx.cog, sx.cog_vel),
                     State::new(sy.cog, sy.cog_vel),
@@ -977,12 +1049,19 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                     State::new(sx.zmp, sx.zmp_vel),
                     State::new(sy.zmp, sy.zmp_vel),
                 ];
-                win = self.replan(win, j, cog, zmp);
+                let (next, replanned) = self.replan(win, j, cog, zmp);
+                win = next;
+                if replanned {
+                    self.start_shaping(&win);
+                } else {
+                    kept = Some((sx, sy));
+                }
             }
         }
         let end = win.starts[M];
         if win.tick >= end && win.spec.replan.is_none() {
-            // The stop window has ended: standing.
+            // The stop window has ended: standing (the compensation has died out long before:
+            // the last window is at least a settle and a rest long).
             let (sx, sy) = win.sample(&self.params, end);
             self.last.x = sx;
             self.last.y = sy;
@@ -994,7 +1073,10 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             return self.last;
         }
         let t = win.tick.min(end);
-        let (sx, sy) = win.sample(&self.params, t);
+        let (sx, sy) = match kept {
+            Some(k) => k,
+            None => self.shaped(&win, t),
+        };
         let j = win.interval(t);
         let phase = match win.spec.support[j] {
             Some(s) if win.spec.kinds[j] == Kind::Single => Phase::Single(s),
@@ -1025,7 +1107,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         j: usize,
         cog: [State<T>; 2],
         zmp: [State<T>; 2],
-    ) -> Active<T> {
+    ) -> (Active<T>, bool) {
         // Land the swing that just ended (the double support before this single support).
         if let Some(s) = self.swing.take() {
             self.feet[s.step.side.index()] = s.step;
@@ -1043,8 +1125,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 first_ticks: self.params.settle_ticks,
             };
             return match Active::plan(&self.params, inputs, cog, zmp) {
-                Ok(w) => w,
-                Err(_) => win,
+                Ok(w) => (w, true),
+                Err(_) => (win, false),
             };
         };
         let (adjust, ratio, plane) = match self.adjustment(&win, win.tick, cog, zmp) {
@@ -1069,7 +1151,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 if swing.id != u16::MAX {
                     let _ = self.queue.push_front(swing);
                 }
-                return win;
+                return (win, false);
             }
         };
         self.swing = Some(swing);
@@ -1083,7 +1165,46 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             plane,
             worst_zmp: new.worst_first(),
         });
-        new
+        (new, true)
+    }
+
+    /// The analytic plan at window tick `t` minus the compensation of this tick (the
+    /// compensators advance by one tick: call once per tick).
+    fn shaped(&mut self, win: &Active<T>, t: u32) -> (Sample<T>, Sample<T>) {
+        let (sx, sy) = win.sample(&self.params, t);
+        if !self.params.shaping {
+            return (sx, sy);
+        }
+        let zf = self.gains.zmp_factor();
+        let cx = self.comp[0].step(&self.gains).sample(zf);
+        let cy = self.comp[1].step(&self.gains).sample(zf);
+        (minus(sx, cx), minus(sy, cy))
+    }
+
+    /// Restarts the compensators from rest with the fluctuation of the first interval of a new
+    /// window as their reference.
+    fn start_shaping(&mut self, win: &Active<T>) {
+        for (k, comp) in self.comp.iter_mut().enumerate() {
+            comp.reset();
+            // Only a window that is followed by a re-plan is shaped: the re-plan starts from
+            // the shaped state and so absorbs what is left of the compensation, while the last
+            // window must end exactly at rest.
+            // The start and stop windows begin with a double support, where the fluctuation
+            // is harmless (the polygon spans both feet) and shaping would only carry it into
+            // the following single support: they are not shaped.
+            let walking = win.inputs.kind == WindowKind::Walk;
+            if self.params.shaping && walking && win.spec.replan.is_some() {
+                let seg = if k == 0 {
+                    &win.plan.x[0]
+                } else {
+                    &win.plan.y[0]
+                };
+                let piece = Piece::new(0, win.spec.ticks[0], fluctuation(&seg.zmp));
+                // A non-finite fluctuation cannot come from a solved plan; without shaping the
+                // analytic pattern is still exact.
+                let _ = comp.set_pieces(&[piece]);
+            }
+        }
     }
 
     fn ground_poses(&self) -> [FootPose<T>; 2] {
