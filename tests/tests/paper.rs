@@ -11,16 +11,24 @@ use planner_core::gait::{GaitParams, Tail};
 fn fig4_adjustment_removes_the_backward_fluctuation() {
     let p = GaitParams::<f64>::hrp2();
     let without = modification(without_adjustment(p), 0.1, 0.3);
+    let mut bare = without_adjustment(p);
+    bare.shaping = false;
+    let bare = modification(bare, 0.1, 0.3);
     let with = modification(p, 0.1, 0.3);
     eprintln!(
-        "Fig. 4 (0.1 -> 0.3 m at 4.0 s): without adjustment {:.1} mm (paper: 26 mm backward); \
-         with dT = {:+.3} s (paper: +0.31 s) {:.2} mm (paper: about 1 mm)",
+        "Fig. 4 (0.1 -> 0.3 m at 4.0 s): without adjustment {:.1} mm, and {:.1} mm without shaping \
+         either (paper: 26 mm backward); with dT = {:+.3} s (paper: +0.31 s) {:.2} mm (paper: about 1 mm)",
         without.sagittal_m * 1e3,
+        bare.sagittal_m * 1e3,
         with.adjust_s,
         with.sagittal_m * 1e3
     );
     // Backward (negative) and large without adjustment, as in the paper.
     assert!(without.sagittal_m < -0.02, "{}", without.sagittal_m);
+    assert!(
+        bare.sagittal_m < without.sagittal_m,
+        "shaping should reduce it"
+    );
     // The paper's 0.31 s within two control cycles.
     assert!(
         (with.adjust_s - 0.31).abs() <= 0.010 + 1e-9,
