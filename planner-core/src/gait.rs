@@ -718,6 +718,39 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.info.as_ref()
     }
 
+    /// Where the foot of the other side than `side` will be just before a step of `side` is
+    /// taken: the last such step queued before the step `before` (or before the end of the
+    /// queue), else the one being swung, else where that foot stands. Used to check reach.
+    pub fn previous_other(&self, side: Side, before: Option<u16>) -> Footstep<T> {
+        let other = side.other();
+        let end = before
+            .and_then(|id| self.queue.iter().position(|q| q.id == id))
+            .unwrap_or(self.queue.len());
+        if let Some(q) = self
+            .queue
+            .iter()
+            .take(end)
+            .filter(|q| q.step.side == other)
+            .last()
+        {
+            return q.step;
+        }
+        match self.swing {
+            Some(s) if s.step.side == other => s.step,
+            _ => self.feet[other.index()],
+        }
+    }
+
+    /// `true` if the step `id` is queued (not yet swung).
+    pub fn is_queued(&self, id: u16) -> bool {
+        self.queue.iter().any(|q| q.id == id)
+    }
+
+    /// The id of the step being swung, if any.
+    pub fn swinging(&self) -> Option<u16> {
+        self.swing.map(|s| s.id)
+    }
+
     /// Number of queued steps (not counting the one being swung).
     pub fn queued(&self) -> usize {
         self.queue.len()
@@ -1082,19 +1115,20 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             Some(s) if win.spec.kinds[j] == Kind::Single => Phase::Single(s),
             _ => Phase::Double,
         };
-        self.last = Reference {
-            x: sx,
-            y: sy,
-            phase,
-            feet: self.foot_poses(&win, j, t),
-        };
-        // The swing ends with the double support that follows it.
+        // The swing ends with the double support that follows it: land it before the poses
+        // of this tick are taken.
         if let Some(s) = self.swing {
             if phase == Phase::Double && win.spec.kinds[j] == Kind::Double {
                 self.feet[s.step.side.index()] = s.step;
                 self.swing = None;
             }
         }
+        self.last = Reference {
+            x: sx,
+            y: sy,
+            phase,
+            feet: self.foot_poses(&win, j, t),
+        };
         self.win = Some(win);
         self.last
     }
@@ -1226,7 +1260,10 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             let sn = T::of((t - win.starts[j]) as f64 / len as f64);
             // Quintic smoothstep: zero velocity and acceleration at lift-off and touch-down.
             let b = sn * sn * sn * (T::of(10.0) + sn * (T::of(-15.0) + T::of(6.0) * sn));
-            let lift = T::of(0.5) * (T::ONE - (T::of(2.0 * core::f64::consts::PI) * sn).cos());
+            // Height 64 s³(1−s)³: peak 1 at mid-swing, zero velocity and acceleration at
+            // lift-off and touch-down (no jerk into the multi-body ZMP).
+            let q = sn * (T::ONE - sn);
+            let lift = T::of(64.0) * q * q * q;
             poses[s.step.side.index()] = FootPose {
                 x: from.x + b * (to.x - from.x),
                 y: from.y + b * (to.y - from.y),

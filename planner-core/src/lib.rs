@@ -19,10 +19,12 @@
 
 pub mod gait;
 pub mod lipm;
+pub mod node;
 pub mod real;
 pub mod shaping;
 pub mod timing;
 pub mod window;
+pub mod wire;
 
 pub use lipm::{Sample, Segment, State};
 pub use real::Real;

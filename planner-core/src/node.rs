@@ -1,0 +1,489 @@
+//! The hardware-free node: one call of [`Node::poll`] is one 5 ms control cycle.
+//!
+//! Time is passed in (`now_ms`, a free-running millisecond counter that may wrap) and the bus
+//! is behind the `embedded-can` non-blocking trait, as smoltcp's `poll(timestamp, device)`:
+//! the same code runs in the firmware (FDCAN), in host-sim (a virtual bus) and in tests.
+//!
+//! Per cycle, with bounded work:
+//! 1. receive at most [`NodeConfig::max_rx`] frames; each is validated once
+//!    ([`Command::decode`]), checked against the state (sequence, reach, side order, emergency
+//!    stop) and applied to the [`Gait`], and answered with an `ACK` frame that carries the
+//!    reason code when refused. A refused command changes nothing;
+//! 2. advance the gait by one tick;
+//! 3. publish the reference (5 frames) and, every 20 cycles, the status (the node's heartbeat);
+//!    frames that cannot be sent now wait in a transmit backlog of [`TX_BACKLOG`] frames; an
+//!    unsent reference is replaced by the next one rather than sent late.
+//!
+//! Safety rules: a controller that falls silent for [`NodeConfig::heartbeat_timeout_ms`] while
+//! the robot walks makes the node drop the queue and stop (the steps already started are
+//! finished, then the robot settles between its feet); an emergency stop does the same at once
+//! and refuses every motion command until a `Reset` once standing.
+//!
+//! Reach limits (HRP-2, in the frame of the previous foot of the other side): forward
+//! −0.30 … +0.40 m, across 0.15 … 0.40 m on the foot's own side (a step to the other side of
+//! the support foot is `Crossing`), heading change at most 0.6 rad.
+
+use heapless::Deque;
+
+use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side};
+use crate::wire::{Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep};
+
+/// Frames that can wait to be sent.
+pub const TX_BACKLOG: usize = 32;
+
+/// Leg reach limits (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// Largest forward step \[m\].
+    pub max_forward: f64,
+    /// Largest backward step \[m\].
+    pub max_backward: f64,
+    /// Smallest distance across the heading between the feet \[m\].
+    pub min_width: f64,
+    /// Largest distance across the heading between the feet \[m\].
+    pub max_width: f64,
+    /// Largest heading change \[rad\].
+    pub max_yaw: f64,
+}
+
+impl Default for Reach {
+    fn default() -> Self {
+        Self {
+            max_forward: 0.40,
+            max_backward: 0.30,
+            min_width: 0.15,
+            max_width: 0.40,
+            max_yaw: 0.6,
+        }
+    }
+}
+
+/// Node configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeConfig {
+    /// Gait parameters.
+    pub params: GaitParams<f64>,
+    /// Where the left foot stands at start-up.
+    pub left: Footstep<f64>,
+    /// Where the right foot stands at start-up.
+    pub right: Footstep<f64>,
+    /// Silence of the controller after which a walking robot stops \[ms\].
+    pub heartbeat_timeout_ms: u32,
+    /// Frames handled per cycle at most (the rest wait in the controller's mailbox).
+    pub max_rx: usize,
+    /// Reach limits.
+    pub reach: Reach,
+}
+
+impl NodeConfig {
+    /// HRP-2 defaults: feet 0.2 m apart at the origin, 500 ms heartbeat timeout, 16 frames per
+    /// cycle.
+    pub fn hrp2() -> Self {
+        Self {
+            params: GaitParams::hrp2(),
+            left: Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+            right: Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+            heartbeat_timeout_ms: 500,
+            max_rx: 16,
+            reach: Reach::default(),
+        }
+    }
+}
+
+/// What one cycle did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PollReport {
+    /// The reference of this cycle.
+    pub reference: Reference<f64>,
+    /// Frames received.
+    pub received: u8,
+    /// Commands refused.
+    pub refused: u8,
+    /// Frames handed to the bus.
+    pub sent: u8,
+}
+
+/// Counters kept by the node (all saturating).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Commands refused, total.
+    pub refused: u16,
+    /// Refusals per reason code (index = code).
+    pub by_reason: [u16; 16],
+    /// Frames dropped because the transmit backlog was full.
+    pub tx_dropped: u16,
+    /// Cycles reported late by the firmware.
+    pub overruns: u16,
+    /// Bus errors on receive or transmit.
+    pub bus_errors: u16,
+}
+
+/// The node.
+#[derive(Clone, Debug)]
+pub struct Node<const Q: usize> {
+    cfg: NodeConfig,
+    gait: Gait<f64, Q>,
+    tx: Deque<RawFrame, TX_BACKLOG>,
+    last_append: Option<u8>,
+    last_control: Option<u8>,
+    last_estop: Option<u8>,
+    estopped: bool,
+    lost: bool,
+    last_heard: Option<u32>,
+    counters: Counters,
+    cycle: u32,
+    replan_failed: bool,
+}
+
+fn reason_of(e: GaitError) -> Reason {
+    match e {
+        GaitError::QueueFull => Reason::QueueFull,
+        GaitError::NonFinite => Reason::OutOfRange,
+        GaitError::SideOrder => Reason::SideOrder,
+        GaitError::UnknownStep => Reason::UnknownStep,
+        GaitError::LiftedOff => Reason::LiftedOff,
+        GaitError::Infeasible => Reason::Infeasible,
+        GaitError::WrongState => Reason::WrongState,
+        _ => Reason::PlanFailed,
+    }
+}
+
+impl<const Q: usize> Node<Q> {
+    /// A node standing still (computes the preview gains).
+    pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
+        Ok(Self {
+            gait: Gait::new(cfg.params, cfg.left, cfg.right)?,
+            cfg,
+            tx: Deque::new(),
+            last_append: None,
+            last_control: None,
+            last_estop: None,
+            estopped: false,
+            lost: false,
+            last_heard: None,
+            counters: Counters::default(),
+            cycle: 0,
+            replan_failed: false,
+        })
+    }
+
+    /// The gait.
+    pub fn gait(&self) -> &Gait<f64, Q> {
+        &self.gait
+    }
+
+    /// The counters.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// Cycles run.
+    pub fn cycles(&self) -> u32 {
+        self.cycle
+    }
+
+    /// Tells the node that the last cycle overran its time budget (counted and published).
+    pub fn note_overrun(&mut self) {
+        self.counters.overruns = self.counters.overruns.saturating_add(1);
+    }
+
+    /// The status as published.
+    pub fn status(&self) -> Status {
+        let state = if self.estopped {
+            2
+        } else if self.lost {
+            3
+        } else if self.gait.is_standing() {
+            0
+        } else {
+            1
+        };
+        let adjust = self
+            .gait
+            .last_replan()
+            .map(|i| i.adjust_ticks.clamp(-128, 127) as i8)
+            .unwrap_or(0);
+        let mut flags = 0;
+        if self.gait.params().shaping {
+            flags |= 1;
+        }
+        if self.replan_failed {
+            flags |= 2;
+        }
+        if self.counters.tx_dropped > 0 {
+            flags |= 4;
+        }
+        Status {
+            state,
+            queue: self.gait.queued().min(255) as u8,
+            rejected: self.counters.refused,
+            overruns: self.counters.overruns,
+            last_adjust: adjust,
+            flags,
+        }
+    }
+
+    fn refuse(&mut self, reason: Reason) {
+        self.counters.refused = self.counters.refused.saturating_add(1);
+        let i = usize::from(reason.code()) & 15;
+        self.counters.by_reason[i] = self.counters.by_reason[i].saturating_add(1);
+    }
+
+    /// Reach and crossing check of a footstep against the other foot before it.
+    fn check_reach(&self, step: &Footstep<f64>, before: Option<u16>) -> Result<(), Reason> {
+        let prev = self.gait.previous_other(step.side, before);
+        let (s, c) = (libm::sin(prev.yaw), libm::cos(prev.yaw));
+        let (dx, dy) = (step.x - prev.x, step.y - prev.y);
+        let forward = c * dx + s * dy;
+        let mut across = -s * dx + c * dy;
+        if step.side == Side::Right {
+            across = -across;
+        }
+        let r = &self.cfg.reach;
+        if across < 0.0 {
+            return Err(Reason::Crossing);
+        }
+        let dyaw = libm::remainder(step.yaw - prev.yaw, core::f64::consts::TAU);
+        if forward > r.max_forward
+            || forward < -r.max_backward
+            || across < r.min_width
+            || across > r.max_width
+            || libm::fabs(dyaw) > r.max_yaw
+        {
+            return Err(Reason::Reach);
+        }
+        Ok(())
+    }
+
+    fn footstep(s: &WireStep) -> Footstep<f64> {
+        let (x, y, yaw) = s.si();
+        let side = if s.left { Side::Left } else { Side::Right };
+        Footstep::new(side, x, y, yaw)
+    }
+
+    /// Handles one frame from the bus (validation, state checks, application) and returns the
+    /// answer to send.
+    pub fn handle(&mut self, frame: &RawFrame, now_ms: u32) -> Ack {
+        let queue = |n: &Self| n.gait.queued().min(255) as u8;
+        let cmd = match Command::decode(frame) {
+            Ok(c) => c,
+            Err((reason, seq)) => {
+                self.refuse(reason);
+                return Ack {
+                    command: (frame.id & 0xFF) as u8,
+                    seq,
+                    reason: Some(reason),
+                    queue: queue(self),
+                };
+            }
+        };
+        // Anything valid from the controller proves it is alive.
+        self.last_heard = Some(now_ms);
+        let (seq, result) = match cmd {
+            Command::EmergencyStop { seq } => {
+                let r = if self.last_estop == Some(seq) && self.estopped {
+                    Err(Reason::Duplicate)
+                } else {
+                    self.last_estop = Some(seq);
+                    self.estopped = true;
+                    self.gait.clear_and_stop();
+                    Ok(())
+                };
+                (seq, r)
+            }
+            Command::Control { seq, op } => {
+                let r = if op != ControlOp::Heartbeat && self.last_control == Some(seq) {
+                    Err(Reason::Duplicate)
+                } else {
+                    if op != ControlOp::Heartbeat {
+                        self.last_control = Some(seq);
+                    }
+                    self.control(op)
+                };
+                (seq, r)
+            }
+            Command::Append(s) => (s.id, self.append(&s)),
+            Command::Modify(s) => (s.id, self.modify(&s)),
+        };
+        if let Err(reason) = result {
+            self.refuse(reason);
+        }
+        Ack {
+            command: cmd.code(),
+            seq,
+            reason: result.err(),
+            queue: queue(self),
+        }
+    }
+
+    fn control(&mut self, op: ControlOp) -> Result<(), Reason> {
+        match op {
+            ControlOp::Heartbeat => Ok(()),
+            ControlOp::Start => {
+                if self.estopped {
+                    return Err(Reason::EmergencyStopped);
+                }
+                self.lost = false;
+                self.gait.start().map_err(reason_of)
+            }
+            ControlOp::Stop => {
+                self.gait.stop();
+                Ok(())
+            }
+            ControlOp::StopNow => {
+                self.gait.clear_and_stop();
+                Ok(())
+            }
+            ControlOp::Reset => {
+                if !self.gait.is_standing() {
+                    return Err(Reason::WrongState);
+                }
+                self.estopped = false;
+                self.lost = false;
+                Ok(())
+            }
+        }
+    }
+
+    fn append(&mut self, s: &WireStep) -> Result<(), Reason> {
+        if self.estopped {
+            return Err(Reason::EmergencyStopped);
+        }
+        if let Some(last) = self.last_append {
+            if s.id == last {
+                return Err(Reason::Duplicate);
+            }
+            if s.id != last.wrapping_add(1) {
+                return Err(Reason::SequenceGap);
+            }
+        }
+        let step = Self::footstep(s);
+        self.check_reach(&step, None)?;
+        self.gait
+            .push(u16::from(s.id), step)
+            .map_err(|(e, _)| reason_of(e))?;
+        self.last_append = Some(s.id);
+        Ok(())
+    }
+
+    fn modify(&mut self, s: &WireStep) -> Result<(), Reason> {
+        if self.estopped {
+            return Err(Reason::EmergencyStopped);
+        }
+        if self.gait.is_standing() && self.gait.queued() == 0 {
+            return Err(Reason::WrongState);
+        }
+        let id = u16::from(s.id);
+        if self.gait.swinging() == Some(id) {
+            return Err(Reason::LiftedOff);
+        }
+        if !self.gait.is_queued(id) {
+            return Err(Reason::UnknownStep);
+        }
+        let step = Self::footstep(s);
+        self.check_reach(&step, Some(id))?;
+        self.gait.modify(id, step).map_err(reason_of)
+    }
+
+    fn stream(&self, r: &Reference<f64>) -> Stream {
+        let phase = match r.phase {
+            Phase::Standing => 0,
+            Phase::Double => 1,
+            Phase::Single(Side::Left) => 2,
+            Phase::Single(Side::Right) => 3,
+        };
+        let f = |k: usize| [r.feet[k].x, r.feet[k].y, r.feet[k].z, r.feet[k].yaw];
+        Stream {
+            cog: [r.x.cog, r.y.cog],
+            cog_vel: [r.x.cog_vel, r.y.cog_vel],
+            zmp: [r.x.zmp, r.y.zmp],
+            phase,
+            tick: (self.cycle & 0xFF) as u8,
+            feet: [f(0), f(1)],
+        }
+    }
+
+    fn enqueue(&mut self, f: RawFrame) {
+        if self.tx.push_back(f).is_err() {
+            self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
+        }
+    }
+
+    /// One control cycle (see the module docs).
+    pub fn poll<C>(&mut self, now_ms: u32, can: &mut C) -> PollReport
+    where
+        C: embedded_can::nb::Can,
+    {
+        self.cycle = self.cycle.wrapping_add(1);
+        let (mut received, mut refused) = (0u8, 0u8);
+        for _ in 0..self.cfg.max_rx {
+            match can.receive() {
+                Ok(f) => {
+                    received = received.saturating_add(1);
+                    let Some(raw) = RawFrame::from_frame(&f) else {
+                        continue; // extended or remote frames are not ours
+                    };
+                    let ack = self.handle(&raw, now_ms);
+                    if ack.reason.is_some() {
+                        refused = refused.saturating_add(1);
+                    }
+                    self.enqueue(ack.encode());
+                }
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    break;
+                }
+            }
+        }
+        // The controller's silence while walking: stop safely.
+        if let Some(heard) = self.last_heard {
+            let silent = now_ms.wrapping_sub(heard);
+            if silent > self.cfg.heartbeat_timeout_ms && !self.gait.is_standing() && !self.lost {
+                self.lost = true;
+                self.gait.clear_and_stop();
+            }
+        }
+        let reference = self.gait.tick();
+        // A stale reference in the backlog is dropped: the new one supersedes it.
+        self.tx
+            .retain(|f| f.id < crate::wire::ids::COG || f.id == crate::wire::ids::STATUS);
+        for f in self.stream(&reference).encode() {
+            self.enqueue(f);
+        }
+        if self.cycle % 20 == 0 {
+            let s = self.status().encode();
+            self.enqueue(s);
+        }
+        let mut sent = 0u8;
+        while let Some(raw) = self.tx.pop_front() {
+            let Some(frame) = raw.to_frame::<C::Frame>() else {
+                continue;
+            };
+            match can.transmit(&frame) {
+                Ok(displaced) => {
+                    sent = sent.saturating_add(1);
+                    if let Some(d) = displaced.as_ref().and_then(RawFrame::from_frame) {
+                        let _ = self.tx.push_front(d);
+                        break;
+                    }
+                }
+                Err(nb::Error::WouldBlock) => {
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+            }
+        }
+        PollReport {
+            reference,
+            received,
+            refused,
+            sent,
+        }
+    }
+}

@@ -1,0 +1,685 @@
+//! The CAN message set (classic CAN: 11-bit identifiers, at most 8 data bytes, 1 Mbit/s).
+//!
+//! Every frame from the bus is validated once, here, by [`Command::decode`]: identifier, length,
+//! and every field's range. What passes is a [`Command`] whose accessors cannot fail; what does
+//! not is a [`Reason`] that the node sends back in an [`ids::ACK`] frame. The same message set
+//! is described for CAN tools in `host-sim/can/walking.dbc` (a test checks that they agree).
+//!
+//! # Units (fixed point, little-endian, two's complement)
+//! | quantity | unit | range |
+//! |---|---|---|
+//! | footstep x, y | 0.1 mm (20 bits) | ±52.4 m |
+//! | footstep yaw | 2π/4096 rad ≈ 1.53 mrad (12 bits) | ±π |
+//! | COG, ZMP position | 1 µm (32 bits) | ±2147 m |
+//! | COG velocity | 0.1 mm/s (16 bits) | ±3.27 m/s |
+//! | foot x, y | 0.1 mm (20 bits) | ±52.4 m |
+//! | foot height | 0.5 mm (8 bits) | 0 … 127.5 mm |
+//! | foot yaw | 1e-4 rad (16 bits) | ±3.27 rad |
+//!
+//! The paper's figures are given to 1 mm (positions) and 5 ms (times): footsteps travel at
+//! 0.1 mm and the published references at 1 µm, far below what the robot can follow.
+//!
+//! # Frames
+//! Lower identifiers win arbitration, so commands come first, then answers, then the stream.
+//!
+//! | id | name | dir | dlc | layout |
+//! |---|---|---|---|---|
+//! | 0x010 | `ESTOP` | in | 1 | seq u8 |
+//! | 0x020 | `CONTROL` | in | 2 | seq u8, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset) |
+//! | 0x100 | `STEP_APPEND` | in | 8 | step id u8, flags u4 (bit 0: 1 = left), x i20, y i20, yaw i12 |
+//! | 0x101 | `STEP_MODIFY` | in | 8 | as `STEP_APPEND` (the id names the step to change) |
+//! | 0x080 | `ACK` | out | 4 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8 |
+//! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
+//! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
+//! | 0x202 | `COG_VEL` | out | 6 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u8 |
+//! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
+//! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
+//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 |
+//!
+//! Bits of a 64-bit field group are packed from the least significant bit of byte 0 upwards.
+
+/// The identifiers of the message set.
+pub mod ids {
+    /// Emergency stop (controller → node).
+    pub const ESTOP: u16 = 0x010;
+    /// Start, stop, heartbeat, reset (controller → node).
+    pub const CONTROL: u16 = 0x020;
+    /// Acknowledge or reject a command (node → controller).
+    pub const ACK: u16 = 0x080;
+    /// Append a footstep (controller → node).
+    pub const STEP_APPEND: u16 = 0x100;
+    /// Modify a queued footstep (controller → node).
+    pub const STEP_MODIFY: u16 = 0x101;
+    /// COG position reference, every 5 ms.
+    pub const COG: u16 = 0x200;
+    /// ZMP reference, every 5 ms.
+    pub const ZMP: u16 = 0x201;
+    /// COG velocity, phase and tick counter, every 5 ms.
+    pub const COG_VEL: u16 = 0x202;
+    /// Left foot pose, every 5 ms.
+    pub const FOOT_LEFT: u16 = 0x210;
+    /// Right foot pose, every 5 ms.
+    pub const FOOT_RIGHT: u16 = 0x211;
+    /// Node status (also the node's heartbeat), every 100 ms.
+    pub const STATUS: u16 = 0x300;
+}
+
+/// A classic CAN data frame with a standard identifier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RawFrame {
+    /// 11-bit identifier.
+    pub id: u16,
+    /// Data length (0 … 8).
+    pub len: u8,
+    /// Data; bytes past `len` are zero.
+    pub data: [u8; 8],
+}
+
+impl RawFrame {
+    /// A frame from an identifier and up to 8 bytes; `None` if either is out of range.
+    pub fn new(id: u16, data: &[u8]) -> Option<Self> {
+        if id > 0x7FF || data.len() > 8 {
+            return None;
+        }
+        let mut d = [0u8; 8];
+        d[..data.len()].copy_from_slice(data);
+        Some(Self {
+            id,
+            len: data.len() as u8,
+            data: d,
+        })
+    }
+
+    /// The data bytes.
+    pub fn bytes(&self) -> &[u8] {
+        &self.data[..usize::from(self.len.min(8))]
+    }
+
+    /// From any `embedded-can` frame: `None` for extended or remote frames.
+    pub fn from_frame<F: embedded_can::Frame>(f: &F) -> Option<Self> {
+        match f.id() {
+            embedded_can::Id::Standard(id) if f.is_data_frame() => Self::new(id.as_raw(), f.data()),
+            _ => None,
+        }
+    }
+
+    /// Into any `embedded-can` frame type.
+    pub fn to_frame<F: embedded_can::Frame>(&self) -> Option<F> {
+        let id = embedded_can::StandardId::new(self.id)?;
+        F::new(id, self.bytes())
+    }
+
+    /// Worst-case length on the wire in bits, with bit stuffing (classic CAN, standard id):
+    /// `47 + 8n` bits of frame plus at most `⌊(34 + 8n − 1)/4⌋` stuff bits.
+    pub fn wire_bits(&self) -> u32 {
+        let n = u32::from(self.len);
+        47 + 8 * n + (34 + 8 * n - 1) / 4
+    }
+}
+
+/// Why a command was refused. `0` on the wire means accepted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Reason {
+    /// The identifier is not a command of this node.
+    UnknownId = 1,
+    /// The data length does not match the message.
+    BadLength = 2,
+    /// A field has a value outside its range (e.g. an unknown control operation, reserved bits
+    /// set).
+    OutOfRange = 3,
+    /// The footstep queue is full.
+    QueueFull = 4,
+    /// The footstep has the same side as the one before it.
+    SideOrder = 5,
+    /// No queued step has this id (never queued, or already executed).
+    UnknownStep = 6,
+    /// The step is being swung: its foot has lifted off.
+    LiftedOff = 7,
+    /// The modification would put the ZMP outside the support foot even after adjustment.
+    Infeasible = 8,
+    /// The command is not valid in the present state.
+    WrongState = 9,
+    /// The step id is not the one after the last appended id.
+    SequenceGap = 10,
+    /// The command repeats the last one (same sequence number): ignored.
+    Duplicate = 11,
+    /// The footstep is out of the leg's reach from the previous one.
+    Reach = 12,
+    /// The footstep crosses the other foot.
+    Crossing = 13,
+    /// Emergency-stopped: only a reset is accepted once standing.
+    EmergencyStopped = 14,
+    /// The planner could not plan (numerically); the previous plan goes on.
+    PlanFailed = 15,
+}
+
+impl Reason {
+    /// Every reason, in code order.
+    pub const ALL: [Reason; 15] = [
+        Reason::UnknownId,
+        Reason::BadLength,
+        Reason::OutOfRange,
+        Reason::QueueFull,
+        Reason::SideOrder,
+        Reason::UnknownStep,
+        Reason::LiftedOff,
+        Reason::Infeasible,
+        Reason::WrongState,
+        Reason::SequenceGap,
+        Reason::Duplicate,
+        Reason::Reach,
+        Reason::Crossing,
+        Reason::EmergencyStopped,
+        Reason::PlanFailed,
+    ];
+
+    /// The wire code.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// From a wire code (`None` for 0 = accepted, and unknown codes).
+    pub fn from_code(c: u8) -> Option<Self> {
+        Self::ALL.iter().copied().find(|r| r.code() == c)
+    }
+}
+
+/// Control operations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ControlOp {
+    /// Keep-alive: the controller is there.
+    Heartbeat,
+    /// Start walking with the queued steps.
+    Start,
+    /// Walk the queued steps, then stop.
+    Stop,
+    /// Drop the queue and stop as soon as possible.
+    StopNow,
+    /// Leave the emergency-stopped state (only when standing).
+    Reset,
+}
+
+impl ControlOp {
+    fn code(self) -> u8 {
+        match self {
+            ControlOp::Heartbeat => 0,
+            ControlOp::Start => 1,
+            ControlOp::Stop => 2,
+            ControlOp::StopNow => 3,
+            ControlOp::Reset => 4,
+        }
+    }
+    fn from_code(c: u8) -> Option<Self> {
+        Some(match c {
+            0 => ControlOp::Heartbeat,
+            1 => ControlOp::Start,
+            2 => ControlOp::Stop,
+            3 => ControlOp::StopNow,
+            4 => ControlOp::Reset,
+            _ => return None,
+        })
+    }
+}
+
+/// A footstep as carried on the bus (fixed point, see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireStep {
+    /// Step id.
+    pub id: u8,
+    /// `true` for the left foot.
+    pub left: bool,
+    /// x in 0.1 mm.
+    pub x: i32,
+    /// y in 0.1 mm.
+    pub y: i32,
+    /// yaw in 2π/4096 rad.
+    pub yaw: i16,
+}
+
+/// Largest magnitude of a 20-bit field.
+const I20_MAX: i32 = (1 << 19) - 1;
+/// Largest magnitude of a 12-bit field.
+const I12_MAX: i32 = (1 << 11) - 1;
+/// Footstep yaw unit \[rad\].
+pub const YAW_UNIT: f64 = core::f64::consts::TAU / 4096.0;
+/// Footstep and foot position unit \[m\].
+pub const STEP_UNIT: f64 = 1e-4;
+
+impl WireStep {
+    /// A footstep in SI units, rounded to the wire units; `None` if out of range or not finite.
+    pub fn from_si(id: u8, left: bool, x: f64, y: f64, yaw: f64) -> Option<Self> {
+        let q = |v: f64, unit: f64, max: i32| -> Option<i32> {
+            let r = libm::round(v / unit);
+            (v.is_finite() && libm::fabs(r) <= f64::from(max)).then_some(r as i32)
+        };
+        // Wrap the yaw into [−π, π).
+        let mut yaw = libm::fmod(yaw + core::f64::consts::PI, core::f64::consts::TAU);
+        if yaw < 0.0 {
+            yaw += core::f64::consts::TAU;
+        }
+        let yaw = yaw - core::f64::consts::PI;
+        Some(Self {
+            id,
+            left,
+            x: q(x, STEP_UNIT, I20_MAX)?,
+            y: q(y, STEP_UNIT, I20_MAX)?,
+            yaw: q(yaw, YAW_UNIT, I12_MAX)? as i16,
+        })
+    }
+
+    /// x, y \[m\] and yaw \[rad\].
+    pub fn si(&self) -> (f64, f64, f64) {
+        (
+            f64::from(self.x) * STEP_UNIT,
+            f64::from(self.y) * STEP_UNIT,
+            f64::from(self.yaw) * YAW_UNIT,
+        )
+    }
+
+    fn pack(&self) -> [u8; 8] {
+        let mut bits: u64 = u64::from(self.id);
+        bits |= u64::from(self.left as u8) << 8;
+        bits |= (self.x as u64 & 0xF_FFFF) << 12;
+        bits |= (self.y as u64 & 0xF_FFFF) << 32;
+        bits |= (self.yaw as u64 & 0xFFF) << 52;
+        bits.to_le_bytes()
+    }
+
+    fn unpack(data: &[u8; 8]) -> Result<Self, Reason> {
+        let bits = u64::from_le_bytes(*data);
+        if (bits >> 9) & 0x7 != 0 {
+            return Err(Reason::OutOfRange);
+        }
+        let sx = |v: u64, n: u32| -> i32 { ((v << (64 - n)) as i64 >> (64 - n)) as i32 };
+        Ok(Self {
+            id: (bits & 0xFF) as u8,
+            left: (bits >> 8) & 1 == 1,
+            x: sx((bits >> 12) & 0xF_FFFF, 20),
+            y: sx((bits >> 32) & 0xF_FFFF, 20),
+            yaw: sx((bits >> 52) & 0xFFF, 12) as i16,
+        })
+    }
+}
+
+/// A validated command from the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// Emergency stop with its sequence number.
+    EmergencyStop {
+        /// Sequence number.
+        seq: u8,
+    },
+    /// A control operation with its sequence number.
+    Control {
+        /// Sequence number.
+        seq: u8,
+        /// Operation.
+        op: ControlOp,
+    },
+    /// Append a footstep.
+    Append(WireStep),
+    /// Modify a queued footstep.
+    Modify(WireStep),
+}
+
+impl Command {
+    /// Validates a frame. On error, the reason and the sequence number or step id to answer
+    /// with (0 when the frame is too short to carry one).
+    pub fn decode(f: &RawFrame) -> Result<Self, (Reason, u8)> {
+        let b = f.bytes();
+        let first = b.first().copied().unwrap_or(0);
+        let need = |n: usize| {
+            if b.len() == n {
+                Ok(())
+            } else {
+                Err((Reason::BadLength, first))
+            }
+        };
+        match f.id {
+            ids::ESTOP => {
+                need(1)?;
+                Ok(Command::EmergencyStop { seq: first })
+            }
+            ids::CONTROL => {
+                need(2)?;
+                let op = ControlOp::from_code(b[1]).ok_or((Reason::OutOfRange, first))?;
+                Ok(Command::Control { seq: first, op })
+            }
+            ids::STEP_APPEND | ids::STEP_MODIFY => {
+                need(8)?;
+                let mut d = [0u8; 8];
+                d.copy_from_slice(b);
+                let s = WireStep::unpack(&d).map_err(|r| (r, first))?;
+                Ok(if f.id == ids::STEP_APPEND {
+                    Command::Append(s)
+                } else {
+                    Command::Modify(s)
+                })
+            }
+            _ => Err((Reason::UnknownId, 0)),
+        }
+    }
+
+    /// The frame that carries this command.
+    pub fn encode(&self) -> RawFrame {
+        let (id, data, n) = match self {
+            Command::EmergencyStop { seq } => (ids::ESTOP, [*seq, 0, 0, 0, 0, 0, 0, 0], 1),
+            Command::Control { seq, op } => (ids::CONTROL, [*seq, op.code(), 0, 0, 0, 0, 0, 0], 2),
+            Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
+            Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
+        };
+        RawFrame {
+            id,
+            len: n,
+            data: {
+                let mut d = [0u8; 8];
+                d[..usize::from(n)].copy_from_slice(&data[..usize::from(n)]);
+                d
+            },
+        }
+    }
+
+    /// The code of the command in `ACK` frames (the low byte of its identifier).
+    pub fn code(&self) -> u8 {
+        (self.encode().id & 0xFF) as u8
+    }
+}
+
+/// An `ACK` frame: the answer to a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Ack {
+    /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0x00 append,
+    /// 0x01 modify; the unknown identifier's low byte for `UnknownId`).
+    pub command: u8,
+    /// Sequence number or step id of the command.
+    pub seq: u8,
+    /// `None` when accepted.
+    pub reason: Option<Reason>,
+    /// Queued steps after the command.
+    pub queue: u8,
+}
+
+impl Ack {
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let r = self.reason.map(Reason::code).unwrap_or(0);
+        RawFrame {
+            id: ids::ACK,
+            len: 4,
+            data: [self.command, self.seq, r, self.queue, 0, 0, 0, 0],
+        }
+    }
+    /// Decodes an `ACK` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::ACK || f.len != 4 {
+            return None;
+        }
+        let reason = match f.data[2] {
+            0 => None,
+            c => Some(Reason::from_code(c)?),
+        };
+        Some(Self {
+            command: f.data[0],
+            seq: f.data[1],
+            reason,
+            queue: f.data[3],
+        })
+    }
+}
+
+/// The node's published state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// 0 standing, 1 walking, 2 emergency-stopped, 3 controller lost (stopping).
+    pub state: u8,
+    /// Queued steps.
+    pub queue: u8,
+    /// Commands rejected since start-up (saturating).
+    pub rejected: u16,
+    /// Control cycles that overran their budget (saturating; reported by the firmware).
+    pub overruns: u16,
+    /// Last single-support adjustment \[5 ms\].
+    pub last_adjust: i8,
+    /// Bit 0: shaping active; bit 1: last re-plan failed; bit 2: transmit backlog overflowed.
+    pub flags: u8,
+}
+
+impl Status {
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let r = self.rejected.to_le_bytes();
+        let o = self.overruns.to_le_bytes();
+        RawFrame {
+            id: ids::STATUS,
+            len: 8,
+            data: [
+                self.state,
+                self.queue,
+                r[0],
+                r[1],
+                o[0],
+                o[1],
+                self.last_adjust as u8,
+                self.flags,
+            ],
+        }
+    }
+    /// Decodes a `STATUS` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::STATUS || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            state: d[0],
+            queue: d[1],
+            rejected: u16::from_le_bytes([d[2], d[3]]),
+            overruns: u16::from_le_bytes([d[4], d[5]]),
+            last_adjust: d[6] as i8,
+            flags: d[7],
+        })
+    }
+}
+
+/// Saturating conversion to a fixed-point integer of `unit`.
+fn fixed(v: f64, unit: f64, min: i64, max: i64) -> i64 {
+    if !v.is_finite() {
+        return 0;
+    }
+    let r = libm::round(v / unit);
+    if r < min as f64 {
+        min
+    } else if r > max as f64 {
+        max
+    } else {
+        r as i64
+    }
+}
+
+/// The 5 ms reference stream (what the node publishes every control cycle).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stream {
+    /// COG x, y \[m\].
+    pub cog: [f64; 2],
+    /// COG velocity \[m/s\].
+    pub cog_vel: [f64; 2],
+    /// ZMP x, y \[m\].
+    pub zmp: [f64; 2],
+    /// Phase: 0 standing, 1 double support, 2 single support on the left foot, 3 on the right.
+    pub phase: u8,
+    /// Low byte of the tick counter.
+    pub tick: u8,
+    /// Left and right foot: x, y, z \[m\], yaw \[rad\].
+    pub feet: [[f64; 4]; 2],
+}
+
+impl Stream {
+    /// The five frames of one cycle, in identifier order.
+    pub fn encode(&self) -> [RawFrame; 5] {
+        let um = |v: f64| fixed(v, 1e-6, i32::MIN as i64, i32::MAX as i64) as i32;
+        let pos = |id: u16, p: [f64; 2]| {
+            let (a, b) = (um(p[0]).to_le_bytes(), um(p[1]).to_le_bytes());
+            RawFrame {
+                id,
+                len: 8,
+                data: [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]],
+            }
+        };
+        let vel = |v: f64| fixed(v, 1e-4, i16::MIN as i64, i16::MAX as i64) as i16;
+        let (vx, vy) = (
+            vel(self.cog_vel[0]).to_le_bytes(),
+            vel(self.cog_vel[1]).to_le_bytes(),
+        );
+        let foot = |id: u16, f: [f64; 4]| {
+            let x = fixed(f[0], STEP_UNIT, -(I20_MAX as i64), I20_MAX as i64) as u64;
+            let y = fixed(f[1], STEP_UNIT, -(I20_MAX as i64), I20_MAX as i64) as u64;
+            let z = fixed(f[2], 5e-4, 0, 255) as u64;
+            let yaw = fixed(f[3], 1e-4, i16::MIN as i64, i16::MAX as i64) as u64;
+            let bits =
+                (x & 0xF_FFFF) | (y & 0xF_FFFF) << 20 | (z & 0xFF) << 40 | (yaw & 0xFFFF) << 48;
+            RawFrame {
+                id,
+                len: 8,
+                data: bits.to_le_bytes(),
+            }
+        };
+        [
+            pos(ids::COG, self.cog),
+            pos(ids::ZMP, self.zmp),
+            RawFrame {
+                id: ids::COG_VEL,
+                len: 6,
+                data: [vx[0], vx[1], vy[0], vy[1], self.phase, self.tick, 0, 0],
+            },
+            foot(ids::FOOT_LEFT, self.feet[0]),
+            foot(ids::FOOT_RIGHT, self.feet[1]),
+        ]
+    }
+
+    /// Updates the fields carried by one stream frame; `false` if it is not a stream frame.
+    pub fn decode_into(&mut self, f: &RawFrame) -> bool {
+        let d = &f.data;
+        let i32at = |i: usize| i32::from_le_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]]);
+        match (f.id, f.len) {
+            (ids::COG, 8) => self.cog = [f64::from(i32at(0)) * 1e-6, f64::from(i32at(4)) * 1e-6],
+            (ids::ZMP, 8) => self.zmp = [f64::from(i32at(0)) * 1e-6, f64::from(i32at(4)) * 1e-6],
+            (ids::COG_VEL, 6) => {
+                self.cog_vel = [
+                    f64::from(i16::from_le_bytes([d[0], d[1]])) * 1e-4,
+                    f64::from(i16::from_le_bytes([d[2], d[3]])) * 1e-4,
+                ];
+                self.phase = d[4];
+                self.tick = d[5];
+            }
+            (ids::FOOT_LEFT | ids::FOOT_RIGHT, 8) => {
+                let bits = u64::from_le_bytes(*d);
+                let sx = |v: u64, n: u32| -> i64 { (v << (64 - n)) as i64 >> (64 - n) };
+                let k = usize::from(f.id == ids::FOOT_RIGHT);
+                self.feet[k] = [
+                    sx(bits & 0xF_FFFF, 20) as f64 * STEP_UNIT,
+                    sx((bits >> 20) & 0xF_FFFF, 20) as f64 * STEP_UNIT,
+                    ((bits >> 40) & 0xFF) as f64 * 5e-4,
+                    sx((bits >> 48) & 0xFFFF, 16) as f64 * 1e-4,
+                ];
+            }
+            _ => return false,
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_round_trip_at_wire_precision() {
+        for &(x, y, yaw) in &[
+            (0.0, 0.0, 0.0),
+            (1.2345, -0.1, 0.3),
+            (-52.0, 52.0, -3.1),
+            (0.00004, 0.00006, 3.1),
+        ] {
+            let s = WireStep::from_si(7, true, x, y, yaw).unwrap();
+            let f = Command::Append(s).encode();
+            let Command::Append(back) = Command::decode(&f).unwrap() else {
+                panic!("not an append")
+            };
+            assert_eq!(back, s);
+            let (bx, by, byaw) = back.si();
+            assert!((bx - x).abs() <= 0.5e-4 + 1e-12 && (by - y).abs() <= 0.5e-4 + 1e-12);
+            let dyaw = libm::remainder(byaw - yaw, core::f64::consts::TAU);
+            assert!(dyaw.abs() <= YAW_UNIT / 2.0 + 1e-12, "{yaw} -> {byaw}");
+        }
+        assert!(WireStep::from_si(0, false, 60.0, 0.0, 0.0).is_none());
+        assert!(WireStep::from_si(0, false, f64::NAN, 0.0, 0.0).is_none());
+    }
+
+    #[test]
+    fn bad_frames_are_rejected_with_a_reason() {
+        let f = RawFrame::new(ids::CONTROL, &[3, 9]).unwrap();
+        assert_eq!(Command::decode(&f), Err((Reason::OutOfRange, 3)));
+        let f = RawFrame::new(ids::CONTROL, &[3]).unwrap();
+        assert_eq!(Command::decode(&f), Err((Reason::BadLength, 3)));
+        let f = RawFrame::new(0x123, &[]).unwrap();
+        assert_eq!(Command::decode(&f), Err((Reason::UnknownId, 0)));
+        let mut d = Command::Append(WireStep::from_si(1, false, 0.1, -0.1, 0.0).unwrap())
+            .encode()
+            .data;
+        d[1] |= 0x02; // a reserved flag bit
+        let f = RawFrame::new(ids::STEP_APPEND, &d).unwrap();
+        assert_eq!(Command::decode(&f), Err((Reason::OutOfRange, 1)));
+    }
+
+    #[test]
+    fn acks_status_and_stream_round_trip() {
+        for r in [None, Some(Reason::Infeasible), Some(Reason::PlanFailed)] {
+            let a = Ack {
+                command: 0x01,
+                seq: 42,
+                reason: r,
+                queue: 3,
+            };
+            assert_eq!(Ack::decode(&a.encode()), Some(a));
+        }
+        let s = Status {
+            state: 1,
+            queue: 4,
+            rejected: 300,
+            overruns: 2,
+            last_adjust: -40,
+            flags: 5,
+        };
+        assert_eq!(Status::decode(&s.encode()), Some(s));
+        let st = Stream {
+            cog: [12.345678, -0.1],
+            cog_vel: [0.3, -0.25],
+            zmp: [12.3, -0.09],
+            phase: 2,
+            tick: 77,
+            feet: [[12.4, 0.1, 0.0321, 0.5], [12.2, -0.1, 0.0, -0.25]],
+        };
+        let mut back = Stream::default();
+        for f in st.encode() {
+            assert!(back.decode_into(&f));
+        }
+        for k in 0..2 {
+            assert!((back.cog[k] - st.cog[k]).abs() <= 0.5e-6 + 1e-12);
+            assert!((back.zmp[k] - st.zmp[k]).abs() <= 0.5e-6 + 1e-12);
+            assert!((back.cog_vel[k] - st.cog_vel[k]).abs() <= 0.5e-4 + 1e-12);
+            for i in 0..4 {
+                let unit = [1e-4, 1e-4, 5e-4, 1e-4][i];
+                assert!((back.feet[k][i] - st.feet[k][i]).abs() <= unit / 2.0 + 1e-12);
+            }
+        }
+        assert_eq!((back.phase, back.tick), (2, 77));
+    }
+}
