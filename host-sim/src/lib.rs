@@ -3,6 +3,10 @@
 //! * [`paper`]: the paper's modification experiments (Fig. 4, Tables I and II) through the gait
 //!   API.
 //! * [`scenario`]: timelines of footstep commands and the built-in HRP-2 scenarios.
+pub mod bus;
 pub mod multibody;
 pub mod paper;
+pub mod plot;
 pub mod scenario;
+pub mod sim;
+pub mod toml_scenario;

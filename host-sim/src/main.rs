@@ -3,7 +3,7 @@
 //! ```text
 //! host-sim                         the default demo (the `straight` scenario into out/demo)
 //! host-sim list                    the built-in scenarios
-//! host-sim run <scenario> [--out DIR]
+//! host-sim run <scenario|file.toml> [--out DIR]
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
 //! ```
 
@@ -12,12 +12,15 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use host_sim::multibody::{evaluate, max_zmp_error, Hrp2, MbSample};
 use host_sim::paper::{
     self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
     PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
 use host_sim::scenario::{self, Run, BUILT_IN};
-use planner_core::gait::{GaitParams, Phase};
+use host_sim::sim::{simulate, SimConfig};
+use host_sim::{plot, toml_scenario};
+use planner_core::gait::{Footstep, GaitParams, Phase, Side};
 use serde_json::json;
 
 fn main() {
@@ -71,17 +74,26 @@ fn phase_name(p: Phase) -> &'static str {
     }
 }
 
-fn write_trajectory(path: &Path, run: &Run, dt: f64) -> Result<(), Box<dyn Error>> {
+fn write_trajectory(
+    path: &Path,
+    run: &Run,
+    mb: &[MbSample],
+    dt: f64,
+) -> Result<(), Box<dyn Error>> {
     let mut csv = std::io::BufWriter::new(fs::File::create(path)?);
     writeln!(
         csv,
-        "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,phase,left_x,left_y,left_z,left_yaw,right_x,right_y,right_z,right_yaw"
+        "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,mb_zmp_x,mb_zmp_y,phase,left_x,left_y,left_z,left_yaw,right_x,right_y,right_z,right_yaw"
     )?;
     for (k, r) in run.trajectory.iter().enumerate() {
         let (l, rt) = (&r.feet[0], &r.feet[1]);
+        let (mx, my) = mb
+            .get(k)
+            .map(|m| (format!("{:.6}", m.mb_zmp_x), format!("{:.6}", m.mb_zmp_y)))
+            .unwrap_or_default();
         writeln!(
             csv,
-            "{:.3},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            "{:.3},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{mx},{my},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
             k as f64 * dt,
             r.x.cog,
             r.y.cog,
@@ -124,55 +136,94 @@ fn max_fluctuation(run: &Run) -> (f64, f64) {
     (along, across)
 }
 
+/// The footprints actually stood on: every new ground pose of a foot in the trajectory.
+fn footprints(run: &Run) -> Vec<Footstep<f64>> {
+    let mut out: Vec<Footstep<f64>> = Vec::new();
+    let mut last: [Option<(f64, f64, f64)>; 2] = [None, None];
+    for r in &run.trajectory {
+        for (k, f) in r.feet.iter().enumerate() {
+            if f.z != 0.0 {
+                continue;
+            }
+            let pose = (f.x, f.y, f.yaw);
+            if last[k] != Some(pose) {
+                last[k] = Some(pose);
+                let side = if k == 0 { Side::Left } else { Side::Right };
+                out.push(Footstep::new(side, f.x, f.y, f.yaw));
+            }
+        }
+    }
+    out
+}
+
 fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
-    let s = scenario::built_in(name).ok_or_else(|| {
-        format!(
-            "unknown scenario {name:?}; built-in: {}",
-            BUILT_IN.join(", ")
-        )
-    })?;
-    let params = GaitParams::<f64>::hrp2();
-    let run = scenario::run(&s, params);
+    let s = if name.ends_with(".toml") {
+        toml_scenario::load(Path::new(name))?
+    } else {
+        scenario::built_in(name).ok_or_else(|| {
+            format!(
+                "unknown scenario {name:?}; built-in: {} (or a .toml file)",
+                BUILT_IN.join(", ")
+            )
+        })?
+    };
+    let name = s.name.as_str();
+    let cfg = SimConfig::default();
+    let dt = cfg.node.params.dt;
+    let sim = simulate(&s, &cfg)?;
+    let run = &sim.run;
+    let mb = evaluate(&Hrp2::default(), &run.trajectory, dt)
+        .map_err(|e| format!("multi-body model: {e:?}"))?;
+    let mb_error = max_zmp_error(&run.trajectory, &mb);
     fs::create_dir_all(out)?;
     let traj = out.join("trajectory.csv");
-    write_trajectory(&traj, &run, params.dt)?;
-    let (along, across) = max_fluctuation(&run);
+    write_trajectory(&traj, run, &mb, dt)?;
+    fs::write(out.join("can.log"), sim.can_log.join("\n") + "\n")?;
+    let (along, across) = max_fluctuation(run);
     let refused: Vec<_> = run
         .events
         .iter()
         .filter_map(|e| {
             e.result
+                .as_ref()
                 .err()
-                .map(|err| json!({"tick": e.tick, "error": format!("{err:?}")}))
+                .map(|err| json!({"t_s": e.tick as f64 * dt, "error": err}))
         })
         .collect();
     let summary = json!({
         "scenario": name,
         "about": s.about,
-        "duration_s": (run.trajectory.len() - 1) as f64 * params.dt,
+        "duration_s": (run.trajectory.len() - 1) as f64 * dt,
         "adjust_s": run.adjustments.iter().map(|a| a.adjust_s).collect::<Vec<_>>(),
         "adjustments": run.adjustments.iter().map(|a| json!({
-            "t_s": a.tick as f64 * params.dt, "adjust_s": a.adjust_s, "ratio": a.ratio,
+            "t_s": a.tick as f64 * dt, "adjust_s": a.adjust_s, "ratio": a.ratio,
             "plane": if a.plane == 0 { "x" } else { "y" }})).collect::<Vec<_>>(),
         "max_zmp_fluctuation_m": along.max(across),
         "max_zmp_fluctuation_along_m": along,
         "max_zmp_fluctuation_across_m": across,
+        "max_mb_zmp_error_m": mb_error,
+        "bus_load": sim.bus_load,
+        "bus_bitrate": cfg.bitrate,
+        "frames_sent": sim.bus.sent,
         "refused_commands": refused,
     });
     fs::write(
         out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
+    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))?;
     println!("{name}: {}", s.about);
     println!(
-        "  {:.2} s simulated in {} ticks of 5 ms",
-        (run.trajectory.len() - 1) as f64 * params.dt,
-        run.trajectory.len() - 1
+        "  {:.2} s simulated in {} ticks of 5 ms, over a virtual CAN bus at {} kbit/s (load {:.1} %)",
+        (run.trajectory.len() - 1) as f64 * dt,
+        run.trajectory.len() - 1,
+        cfg.bitrate / 1000,
+        sim.bus_load * 100.0
     );
     for a in &run.adjustments {
         println!(
             "  re-plan at {:.3} s: single support adjusted by {:+.3} s (r = {:.3}, plane {})",
-            a.tick as f64 * params.dt,
+            a.tick as f64 * dt,
             a.adjust_s,
             a.ratio,
             if a.plane == 0 { "x" } else { "y" }
@@ -184,9 +235,14 @@ fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
         across * 1e3
     );
     println!(
-        "  results: {} and {}",
+        "  largest multi-body ZMP error (HRP-2 model): {:.1} mm",
+        mb_error * 1e3
+    );
+    println!(
+        "  results: {}, summary.json, can.log and {} plots in {}",
         traj.display(),
-        out.join("summary.json").display()
+        plots.len(),
+        out.display()
     );
     Ok(())
 }

@@ -38,14 +38,14 @@ pub struct Scenario {
 }
 
 /// What happened to a command.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Event {
     /// Tick at which the command was applied.
     pub tick: u64,
     /// The command.
     pub command: Command,
-    /// The gait's answer.
-    pub result: Result<(), GaitError>,
+    /// The answer: accepted, or the reason of the refusal.
+    pub result: Result<(), String>,
 }
 
 /// A re-plan that changed the single-support time.
@@ -84,7 +84,6 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
     let mut footsteps: Vec<(u16, Footstep<f64>)> = Vec::new();
     let mut next = 0;
     let mut last_replan = None;
-    let mut pending_modification = false;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
     while g.ticks() < s.max_ticks {
         while next < s.timeline.len() && s.timeline[next].0 <= g.ticks() {
@@ -109,16 +108,14 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
                     } else {
                         footsteps.push((id, f));
                     }
-                    if matches!(command, Command::Modify(..)) {
-                        pending_modification = true;
-                    }
+                    if matches!(command, Command::Modify(..)) {}
                 }
                 _ => {}
             }
             events.push(Event {
                 tick: g.ticks(),
                 command,
-                result,
+                result: result.map_err(|e: GaitError| format!("{e:?}")),
             });
             next += 1;
         }
@@ -126,7 +123,7 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
         if let Some(info) = g.last_replan() {
             if last_replan != Some(info.tick) {
                 last_replan = Some(info.tick);
-                if info.adjust_ticks != 0 || pending_modification {
+                if info.adjust_ticks != 0 || info.ratio != 1.0 {
                     adjustments.push(Adjustment {
                         tick: info.tick,
                         adjust_s: f64::from(info.adjust_ticks) * params.dt,
@@ -134,7 +131,6 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
                         plane: info.plane,
                     });
                 }
-                pending_modification = false;
             }
         }
         if g.is_standing() && g.ticks() > last_command && next >= s.timeline.len() {

@@ -1,0 +1,439 @@
+//! An in-process CAN bus: ports that speak `embedded-can`, arbitration by identifier, the
+//! bit time of the configured bitrate, a fault layer, and a candump-format log.
+//!
+//! * Each [`Port`] has a transmit mailbox (capacity [`MAILBOX`]; full → `WouldBlock`) and a
+//!   receive FIFO (capacity [`RX_FIFO`]; a full FIFO loses the newest frame and counts it, as a
+//!   controller's overrun does).
+//! * [`Bus::advance`] runs the bus to a given time: whenever it is idle, the pending frame with
+//!   the lowest identifier over all mailboxes wins arbitration, occupies the bus for its
+//!   worst-case stuffed length ([`RawFrame::wire_bits`]) at the bitrate, and is then delivered
+//!   to every other port. The busy time is accumulated for the bus load.
+//! * The fault layer acts on the frames sent by one port (or all): it can drop, duplicate,
+//!   corrupt (flip one data bit: a frame that a faulty gateway would pass on with a valid CRC),
+//!   delay (deliver late, after frames sent later) or silence a port (bus-off: it neither sends
+//!   nor receives for a while). Faults are drawn from a seeded generator, so runs repeat.
+//! * Every delivered frame can be logged as `(seconds) can0 ID#DATA`, the format of
+//!   `candump -L`, for the usual CAN tools.
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::rc::Rc;
+
+use embedded_can::{Frame, Id, StandardId};
+use planner_core::wire::RawFrame;
+
+/// Transmit mailbox capacity of a port.
+pub const MAILBOX: usize = 64;
+/// Receive FIFO capacity of a port.
+pub const RX_FIFO: usize = 64;
+
+/// A frame on the virtual bus (standard identifier, data frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VFrame(pub RawFrame);
+
+impl Frame for VFrame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        match id.into() {
+            Id::Standard(s) => RawFrame::new(s.as_raw(), data).map(VFrame),
+            Id::Extended(_) => None,
+        }
+    }
+    fn new_remote(_: impl Into<Id>, _: usize) -> Option<Self> {
+        None
+    }
+    fn is_extended(&self) -> bool {
+        false
+    }
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+    fn id(&self) -> Id {
+        Id::Standard(StandardId::new(self.0.id).unwrap_or(StandardId::ZERO))
+    }
+    fn dlc(&self) -> usize {
+        usize::from(self.0.len)
+    }
+    fn data(&self) -> &[u8] {
+        self.0.bytes()
+    }
+}
+
+/// Bus errors seen by a port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BusError {
+    /// The port is bus-off (silenced by the fault layer).
+    BusOff,
+}
+
+impl embedded_can::Error for BusError {
+    fn kind(&self) -> embedded_can::ErrorKind {
+        embedded_can::ErrorKind::Other
+    }
+}
+
+/// Fault rates and windows (probabilities per frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Faults {
+    /// Only frames sent by this port are affected (`None`: every port).
+    pub from_port: Option<usize>,
+    /// Probability that a frame is lost.
+    pub drop: f64,
+    /// Probability that a frame is delivered twice.
+    pub duplicate: f64,
+    /// Probability that one data bit is flipped.
+    pub corrupt: f64,
+    /// Probability that a frame is delivered late.
+    pub delay: f64,
+    /// The extra latency of a delayed frame \[ns\].
+    pub delay_ns: u64,
+    /// Silence window `[from, to)` \[ns\] of the affected port (bus-off or a dead controller).
+    pub silence_ns: Option<(u64, u64)>,
+}
+
+/// Counters of the bus.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BusStats {
+    /// Frames that won arbitration and were sent.
+    pub sent: u64,
+    /// Frames dropped by the fault layer.
+    pub dropped: u64,
+    /// Frames duplicated.
+    pub duplicated: u64,
+    /// Frames corrupted.
+    pub corrupted: u64,
+    /// Frames delayed.
+    pub delayed: u64,
+    /// Frames lost because a receive FIFO was full.
+    pub rx_overflow: u64,
+    /// Time the bus was busy \[ns\].
+    pub busy_ns: u64,
+}
+
+struct PortState {
+    mailbox: Vec<RawFrame>,
+    rx: VecDeque<RawFrame>,
+}
+
+struct Inner {
+    bit_ns: u64,
+    now_ns: u64,
+    /// The bus is busy until then.
+    busy_until: u64,
+    ports: Vec<PortState>,
+    /// Frames on their way: (delivery time, sender, frame).
+    in_flight: Vec<(u64, usize, RawFrame)>,
+    faults: Faults,
+    rng: u64,
+    stats: BusStats,
+    log: Option<Vec<String>>,
+}
+
+impl Inner {
+    fn rand(&mut self) -> f64 {
+        // xorshift64*: deterministic, good enough for fault injection.
+        let mut x = self.rng;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.rng = x;
+        (x.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn affected(&self, port: usize) -> bool {
+        self.faults.from_port.is_none_or(|p| p == port)
+    }
+
+    fn silenced(&self, port: usize, t: u64) -> bool {
+        self.affected(port) && self.faults.silence_ns.is_some_and(|(a, b)| t >= a && t < b)
+    }
+
+    fn deliver(&mut self, t: u64, from: usize, f: RawFrame) {
+        if let Some(log) = self.log.as_mut() {
+            let data: String = f.bytes().iter().map(|b| format!("{b:02X}")).collect();
+            log.push(format!(
+                "({}.{:06}) can0 {:03X}#{}",
+                t / 1_000_000_000,
+                (t % 1_000_000_000) / 1000,
+                f.id,
+                data
+            ));
+        }
+        for i in 0..self.ports.len() {
+            if i == from || self.silenced(i, t) {
+                continue;
+            }
+            if self.ports[i].rx.len() >= RX_FIFO {
+                self.stats.rx_overflow += 1;
+            } else {
+                self.ports[i].rx.push_back(f);
+            }
+        }
+    }
+
+    /// Runs the bus until `t`.
+    fn advance(&mut self, t: u64) {
+        loop {
+            // Deliver what has arrived by the time the bus is next free (or by t).
+            let horizon = self.busy_until.max(self.now_ns).min(t);
+            self.in_flight.sort_by_key(|e| e.0);
+            while let Some(&(at, from, f)) = self.in_flight.first() {
+                if at > horizon {
+                    break;
+                }
+                self.in_flight.remove(0);
+                self.deliver(at, from, f);
+            }
+            let start = self.busy_until.max(self.now_ns);
+            if start >= t {
+                self.now_ns = t;
+                break;
+            }
+            // Arbitration: the lowest identifier among the mailboxes of active ports.
+            let mut best: Option<(usize, usize)> = None;
+            for (p, port) in self.ports.iter().enumerate() {
+                if self.silenced(p, start) {
+                    continue;
+                }
+                for (k, f) in port.mailbox.iter().enumerate() {
+                    let better = match best {
+                        None => true,
+                        Some((bp, bk)) => f.id < self.ports[bp].mailbox[bk].id,
+                    };
+                    if better {
+                        best = Some((p, k));
+                    }
+                }
+            }
+            let Some((p, k)) = best else {
+                // Idle until t, or until the next delivery.
+                let next = self.in_flight.first().map(|e| e.0).unwrap_or(t).min(t);
+                self.now_ns = next.max(start);
+                if self.now_ns >= t {
+                    break;
+                }
+                continue;
+            };
+            let f = self.ports[p].mailbox.remove(k);
+            let dur = u64::from(f.wire_bits()) * self.bit_ns;
+            let end = start + dur;
+            self.busy_until = end;
+            self.now_ns = start;
+            self.stats.sent += 1;
+            self.stats.busy_ns += dur;
+            if self.affected(p) {
+                if self.rand() < self.faults.drop {
+                    self.stats.dropped += 1;
+                    continue;
+                }
+                let mut f = f;
+                if f.len > 0 && self.rand() < self.faults.corrupt {
+                    let bit = (self.rand() * f64::from(f.len) * 8.0) as usize;
+                    let bit = bit.min(usize::from(f.len) * 8 - 1);
+                    f.data[bit / 8] ^= 1 << (bit % 8);
+                    self.stats.corrupted += 1;
+                }
+                let mut at = end;
+                if self.rand() < self.faults.delay {
+                    at += self.faults.delay_ns;
+                    self.stats.delayed += 1;
+                }
+                self.in_flight.push((at, p, f));
+                if self.rand() < self.faults.duplicate {
+                    self.stats.duplicated += 1;
+                    self.in_flight.push((at + dur, p, f));
+                }
+            } else {
+                self.in_flight.push((end, p, f));
+            }
+        }
+    }
+}
+
+/// The bus.
+#[derive(Clone)]
+pub struct Bus(Rc<RefCell<Inner>>);
+
+/// One node's connection to the bus.
+#[derive(Clone)]
+pub struct Port {
+    bus: Rc<RefCell<Inner>>,
+    index: usize,
+}
+
+impl Bus {
+    /// A bus at `bitrate` bit/s with `ports` ports, faults drawn from `seed`.
+    pub fn new(bitrate: u32, ports: usize, faults: Faults, seed: u64) -> Self {
+        let inner = Inner {
+            bit_ns: 1_000_000_000 / u64::from(bitrate.max(1)),
+            now_ns: 0,
+            busy_until: 0,
+            ports: (0..ports)
+                .map(|_| PortState {
+                    mailbox: Vec::new(),
+                    rx: VecDeque::new(),
+                })
+                .collect(),
+            in_flight: Vec::new(),
+            faults,
+            rng: seed | 1,
+            stats: BusStats::default(),
+            log: None,
+        };
+        Bus(Rc::new(RefCell::new(inner)))
+    }
+
+    /// Starts recording a candump log.
+    pub fn record(&self) {
+        self.0.borrow_mut().log = Some(Vec::new());
+    }
+
+    /// The candump log so far.
+    pub fn log(&self) -> Vec<String> {
+        self.0.borrow().log.clone().unwrap_or_default()
+    }
+
+    /// Port `i`.
+    pub fn port(&self, index: usize) -> Port {
+        Port {
+            bus: self.0.clone(),
+            index,
+        }
+    }
+
+    /// Runs the bus until `t_ns`.
+    pub fn advance(&self, t_ns: u64) {
+        self.0.borrow_mut().advance(t_ns);
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> BusStats {
+        self.0.borrow().stats
+    }
+
+    /// Fraction of the time the bus was busy, up to now.
+    pub fn load(&self) -> f64 {
+        let i = self.0.borrow();
+        if i.now_ns == 0 {
+            0.0
+        } else {
+            i.stats.busy_ns as f64 / i.now_ns as f64
+        }
+    }
+}
+
+impl embedded_can::nb::Can for Port {
+    type Frame = VFrame;
+    type Error = BusError;
+
+    fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
+        let mut b = self.bus.borrow_mut();
+        let t = b.now_ns;
+        if b.silenced(self.index, t) {
+            return Err(nb::Error::Other(BusError::BusOff));
+        }
+        let port = &mut b.ports[self.index];
+        if port.mailbox.len() >= MAILBOX {
+            return Err(nb::Error::WouldBlock);
+        }
+        port.mailbox.push(frame.0);
+        Ok(None)
+    }
+
+    fn receive(&mut self) -> nb::Result<VFrame, BusError> {
+        let mut b = self.bus.borrow_mut();
+        b.ports[self.index]
+            .rx
+            .pop_front()
+            .map(VFrame)
+            .ok_or(nb::Error::WouldBlock)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_can::nb::Can;
+
+    fn frame(id: u16, data: &[u8]) -> VFrame {
+        VFrame(RawFrame::new(id, data).unwrap())
+    }
+
+    #[test]
+    fn lower_identifiers_win_and_take_their_bit_time() {
+        let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
+        bus.record();
+        let (mut a, mut b) = (bus.port(0), bus.port(1));
+        a.transmit(&frame(0x300, &[1; 8])).unwrap();
+        a.transmit(&frame(0x100, &[2; 8])).unwrap();
+        a.transmit(&frame(0x200, &[3; 2])).unwrap();
+        // One 8-byte frame: 47 + 64 + 24 stuff bits = 135 µs at 1 Mbit/s.
+        bus.advance(134_000);
+        assert!(b.receive().is_err());
+        bus.advance(135_000);
+        assert_eq!(b.receive().unwrap().0.id, 0x100);
+        bus.advance(1_000_000);
+        assert_eq!(b.receive().unwrap().0.id, 0x200);
+        assert_eq!(b.receive().unwrap().0.id, 0x300);
+        assert!(a.receive().is_err(), "a sender does not hear itself");
+        let log = bus.log();
+        assert_eq!(log[0], "(0.000135) can0 100#0202020202020202");
+        let busy = 135 + (47 + 16 + (34 + 16 - 1) / 4) + 135;
+        assert_eq!(bus.stats().busy_ns, busy * 1000);
+    }
+
+    #[test]
+    fn faults_drop_duplicate_corrupt_delay_and_silence() {
+        let all = |f: Faults| {
+            let bus = Bus::new(1_000_000, 2, f, 7);
+            let (mut a, mut b) = (bus.port(0), bus.port(1));
+            let mut got = vec![];
+            for i in 0..200u32 {
+                let _ = a.transmit(&frame(0x100, &i.to_le_bytes()));
+                bus.advance(u64::from(i + 1) * 1_000_000);
+                while let Ok(f) = b.receive() {
+                    got.push(f.0);
+                }
+            }
+            bus.advance(1_000_000_000);
+            while let Ok(f) = b.receive() {
+                got.push(f.0);
+            }
+            (got, bus.stats())
+        };
+        let (clean, _) = all(Faults::default());
+        assert_eq!(clean.len(), 200);
+        let (got, s) = all(Faults {
+            drop: 0.2,
+            ..Faults::default()
+        });
+        assert_eq!(got.len() as u64, 200 - s.dropped);
+        assert!(s.dropped > 20 && s.dropped < 60, "{s:?}");
+        let (got, s) = all(Faults {
+            duplicate: 0.1,
+            ..Faults::default()
+        });
+        assert_eq!(got.len() as u64, 200 + s.duplicated);
+        let (got, s) = all(Faults {
+            corrupt: 0.1,
+            ..Faults::default()
+        });
+        let changed = got.iter().zip(&clean).filter(|(a, b)| a != b).count() as u64;
+        assert_eq!(changed, s.corrupted);
+        let (got, s) = all(Faults {
+            delay: 0.1,
+            delay_ns: 3_000_000,
+            ..Faults::default()
+        });
+        assert_eq!(got.len(), 200);
+        let out_of_order = got
+            .windows(2)
+            .filter(|w| w[0].data[0] > w[1].data[0])
+            .count();
+        assert!(s.delayed > 0 && out_of_order > 0);
+        let (got, _) = all(Faults {
+            silence_ns: Some((50_000_000, 150_000_000)),
+            ..Faults::default()
+        });
+        assert!(got.len() <= 101 && got.len() >= 99, "{}", got.len());
+    }
+}

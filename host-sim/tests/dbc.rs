@@ -1,0 +1,171 @@
+//! The DBC file (`host-sim/can/walking.dbc`) and the Rust codec (`planner_core::wire`) agree:
+//! every message of the DBC exists in the codec with the same identifier and length, and every
+//! signal decoded with the DBC's own definition (start bit, size, sign, factor, offset) from a
+//! frame built by the Rust encoder gives back the value that was encoded (to half a unit).
+
+use std::collections::HashMap;
+
+use can_dbc::{ByteOrder, Dbc, MessageId, ValueType};
+use planner_core::wire::{
+    ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
+};
+
+fn dbc() -> Dbc {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/can/walking.dbc"))
+        .expect("the DBC file is in the repository");
+    Dbc::try_from(text.as_str()).expect("the DBC file parses")
+}
+
+/// Decodes every signal of `frame` with the DBC's definition.
+fn decode(dbc: &Dbc, frame: &RawFrame) -> HashMap<String, f64> {
+    let msg = dbc
+        .messages
+        .iter()
+        .find(|m| m.id == MessageId::Standard(frame.id))
+        .unwrap_or_else(|| panic!("id {:#x} not in the DBC", frame.id));
+    assert_eq!(msg.size, u64::from(frame.len), "{}: length", msg.name);
+    let bits = u64::from_le_bytes(frame.data);
+    msg.signals
+        .iter()
+        .map(|s| {
+            assert_eq!(s.byte_order, ByteOrder::LittleEndian, "{}", s.name);
+            let raw = (bits >> s.start_bit)
+                & if s.size == 64 {
+                    u64::MAX
+                } else {
+                    (1 << s.size) - 1
+                };
+            let v = match s.value_type {
+                ValueType::Signed => ((raw << (64 - s.size)) as i64 >> (64 - s.size)) as f64,
+                ValueType::Unsigned => raw as f64,
+            };
+            (s.name.clone(), v * s.factor + s.offset)
+        })
+        .collect()
+}
+
+fn close(got: f64, want: f64, unit: f64, what: &str) {
+    assert!(
+        (got - want).abs() <= unit / 2.0 + 1e-12,
+        "{what}: DBC gives {got}, encoded {want}"
+    );
+}
+
+#[test]
+fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
+    let d = dbc();
+    let mut dbc_ids: Vec<u32> = d.messages.iter().map(|m| m.id.raw()).collect();
+    dbc_ids.sort();
+    let mut ours: Vec<u32> = [
+        ids::ESTOP,
+        ids::CONTROL,
+        ids::ACK,
+        ids::STEP_APPEND,
+        ids::STEP_MODIFY,
+        ids::COG,
+        ids::ZMP,
+        ids::COG_VEL,
+        ids::FOOT_LEFT,
+        ids::FOOT_RIGHT,
+        ids::STATUS,
+    ]
+    .iter()
+    .map(|&i| u32::from(i))
+    .collect();
+    ours.sort();
+    assert_eq!(dbc_ids, ours);
+}
+
+#[test]
+fn commands_decode_the_same_with_the_dbc() {
+    let d = dbc();
+    for &(id, left, x, y, yaw) in &[
+        (7u8, true, 0.4, 0.1, 0.0),
+        (200, false, -12.3456, 51.0, -3.0),
+        (0, true, 0.0001, -0.0001, 3.1),
+    ] {
+        let w = WireStep::from_si(id, left, x, y, yaw).unwrap();
+        for c in [Command::Append(w), Command::Modify(w)] {
+            let s = decode(&d, &c.encode());
+            assert_eq!(s["step_id"], f64::from(id));
+            assert_eq!(s["left"], f64::from(u8::from(left)));
+            close(s["x"], x, 1e-4, "x");
+            close(s["y"], y, 1e-4, "y");
+            close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
+        }
+    }
+    let s = decode(&d, &Command::EmergencyStop { seq: 9 }.encode());
+    assert_eq!(s["seq"], 9.0);
+    let s = decode(
+        &d,
+        &Command::Control {
+            seq: 3,
+            op: ControlOp::StopNow,
+        }
+        .encode(),
+    );
+    assert_eq!((s["seq"], s["op"]), (3.0, 3.0));
+}
+
+#[test]
+fn answers_status_and_stream_decode_the_same_with_the_dbc() {
+    let d = dbc();
+    let a = Ack {
+        command: 0x01,
+        seq: 17,
+        reason: Some(Reason::LiftedOff),
+        queue: 5,
+    };
+    let s = decode(&d, &a.encode());
+    assert_eq!(
+        (s["command"], s["seq"], s["reason"], s["queue"]),
+        (1.0, 17.0, f64::from(Reason::LiftedOff.code()), 5.0)
+    );
+    let st = Status {
+        state: 1,
+        queue: 3,
+        rejected: 1234,
+        overruns: 7,
+        last_adjust: -40,
+        flags: 5,
+    };
+    let s = decode(&d, &st.encode());
+    assert_eq!(
+        (
+            s["state"],
+            s["queue"],
+            s["rejected"],
+            s["overruns"],
+            s["flags"]
+        ),
+        (1.0, 3.0, 1234.0, 7.0, 5.0)
+    );
+    close(s["last_adjust"], -0.2, 0.005, "last_adjust");
+    let stream = Stream {
+        cog: [12.345678, -0.123456],
+        cog_vel: [0.3125, -0.25],
+        zmp: [-1.5, 0.07],
+        phase: 3,
+        tick: 200,
+        feet: [[12.4, 0.1, 0.0321, 0.5], [-12.2, -0.1, 0.0, -0.25]],
+    };
+    let frames = stream.encode();
+    let s = decode(&d, &frames[0]);
+    close(s["cog_x"], 12.345678, 1e-6, "cog_x");
+    close(s["cog_y"], -0.123456, 1e-6, "cog_y");
+    let s = decode(&d, &frames[1]);
+    close(s["zmp_x"], -1.5, 1e-6, "zmp_x");
+    close(s["zmp_y"], 0.07, 1e-6, "zmp_y");
+    let s = decode(&d, &frames[2]);
+    close(s["cog_vx"], 0.3125, 1e-4, "cog_vx");
+    close(s["cog_vy"], -0.25, 1e-4, "cog_vy");
+    assert_eq!((s["phase"], s["tick"]), (3.0, 200.0));
+    for (k, f) in frames[3..].iter().enumerate() {
+        let s = decode(&d, f);
+        let want = stream.feet[k];
+        close(s["x"], want[0], 1e-4, "foot x");
+        close(s["y"], want[1], 1e-4, "foot y");
+        close(s["z"], want[2], 5e-4, "foot z");
+        close(s["yaw"], want[3], 1e-4, "foot yaw");
+    }
+}

@@ -1,0 +1,84 @@
+//! The simulation over the virtual CAN bus: the node behind the bus produces exactly what the
+//! gait produces when driven directly, the controller decodes the stream to its units, and the
+//! stream keeps to the bus.
+
+use host_sim::bus::Faults;
+use host_sim::scenario::{self, BUILT_IN};
+use host_sim::sim::{simulate, SimConfig};
+use planner_core::gait::GaitParams;
+
+#[test]
+fn the_node_over_the_bus_equals_the_gait_driven_directly() {
+    for name in BUILT_IN {
+        let s = scenario::built_in(name).unwrap();
+        let direct = scenario::run(&s, GaitParams::hrp2());
+        let sim = simulate(&s, &SimConfig::default()).unwrap();
+        // Footsteps travel at 0.1 mm and 1.5 mrad: the scenarios use representable values, so
+        // both runs see the same footsteps (to rounding) and the same command ticks.
+        let n = direct.trajectory.len().min(sim.run.trajectory.len());
+        assert!(n > 500, "{name}: {n} ticks");
+        let mut worst: f64 = 0.0;
+        for (a, b) in direct.trajectory[..n].iter().zip(&sim.run.trajectory[..n]) {
+            worst = worst
+                .max((a.x.cog - b.x.cog).abs())
+                .max((a.y.cog - b.y.cog).abs())
+                .max((a.x.zmp - b.x.zmp).abs())
+                .max((a.y.zmp - b.y.zmp).abs());
+            assert_eq!(a.phase, b.phase, "{name}");
+        }
+        assert!(worst < 1e-4, "{name}: {worst}");
+        let adj = |r: &scenario::Run| {
+            r.adjustments
+                .iter()
+                .map(|a| (a.tick, a.adjust_s))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(adj(&direct), adj(&sim.run), "{name}");
+        assert!(
+            sim.run.events.iter().all(|e| e.result.is_ok()),
+            "{name}: {:?}",
+            sim.run.events
+        );
+        // The controller's decoded stream (one tick late) is the reference to 1 µm.
+        for k in 1..n - 1 {
+            let (r, st) = (&sim.run.trajectory[k], &sim.stream[k]);
+            assert!(
+                (st.cog[0] - r.x.cog).abs() <= 0.5e-6 + 1e-12,
+                "{name} tick {k}"
+            );
+            assert!(
+                (st.zmp[1] - r.y.zmp).abs() <= 0.5e-6 + 1e-12,
+                "{name} tick {k}"
+            );
+        }
+        // The stream and the answers keep below 20 % of 1 Mbit/s.
+        assert!(
+            sim.bus_load > 0.05 && sim.bus_load < 0.2,
+            "{name}: {}",
+            sim.bus_load
+        );
+        assert!(sim.can_log.len() as u64 >= sim.bus.sent / 2);
+    }
+}
+
+#[test]
+fn lost_heartbeats_stop_the_robot() {
+    let s = scenario::built_in("stop").unwrap();
+    // The controller falls silent at 2 s (its frames are lost) and the scenario's own stop
+    // command at 3 s never arrives: the node stops by itself.
+    let cfg = SimConfig {
+        faults: Faults {
+            from_port: Some(0),
+            silence_ns: Some((2_000_000_000, u64::MAX)),
+            ..Faults::default()
+        },
+        ..SimConfig::default()
+    };
+    let sim = simulate(&s, &cfg).unwrap();
+    let end = sim.run.trajectory.last().unwrap();
+    assert_eq!(end.phase, planner_core::gait::Phase::Standing);
+    assert!(end.x.cog_vel.abs() < 1e-9);
+    // It stopped within a bounded number of steps after the silence began.
+    let t_end = (sim.run.trajectory.len() - 1) as f64 * 0.005;
+    assert!(t_end < 2.0 + 0.5 + 3.0, "{t_end}");
+}
