@@ -4,10 +4,12 @@
 #     bash tests/run-all.sh          (from any directory)
 #
 # 1. installs what rustup can provide and the build needs (the thumbv7em-none-eabihf target,
-#    clippy, rustfmt) if it is missing;
+#    clippy, rustfmt) if it is missing, and QEMU (qemu-system-arm, apt-get);
 # 2. the host workspace: unit, integration and bench targets, then the doctests;
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
-# 4. the firmware image (its own workspace in firmware/).
+# 4. the firmware images: the STM32H743 one (workspace firmware/) and the QEMU one
+#    (firmware/qemu; the walk-tests QEMU test in step 2 builds and runs it, which needs
+#    qemu-system-arm: step 1 installs it with apt-get).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -39,6 +41,30 @@ done
 rustc --version
 cargo --version
 
+# QEMU (Debian's qemu-system-arm, 7.2 on Debian 12) for the firmware's instruction-counted
+# timing checks under mps2-an500 (tests/tests/qemu.rs fails without it unless
+# WALK_SKIP_QEMU=1).
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+    echo "installing qemu-system-arm"
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q qemu-system-arm
+fi
+qemu-system-arm --version | head -n 1
+
+# --- host-sim plots: a TrueType font (Debian's fonts-dejavu-core) -------------------------
+# host-sim/src/plot.rs renders the PNG text with DejaVu Sans read at run time (or the font
+# named by HOST_SIM_FONT); the plot tests fail without one.
+if [ -z "${HOST_SIM_FONT:-}" ] && [ ! -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ]; then
+    echo "installing fonts-dejavu-core"
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q fonts-dejavu-core
+fi
+# --- end host-sim plots ------------------------------------------------------------------
+
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT
 
@@ -48,22 +74,37 @@ cargo test --workspace --doc 2>&1 | tee -a "$LOG"
 section "host workspace: cargo test --workspace --all-targets"
 cargo test --workspace --all-targets 2>&1 | tee -a "$LOG"
 
+section "host-sim with the SocketCAN backend (compile test: no CAN interface here)"
+cargo build -p host-sim --features socketcan
+
 section "planner-core for $TARGET (no_std)"
 cargo build -p planner-core --target "$TARGET"
 
-section "firmware (release image)"
+section "firmware images (release)"
+image_size() {
+    if command -v llvm-size >/dev/null 2>&1; then
+        llvm-size "$1"
+    elif command -v arm-none-eabi-size >/dev/null 2>&1; then
+        arm-none-eabi-size "$1"
+    else
+        ls -l "$1"
+    fi
+}
+# The STM32H743 image (workspace firmware/: app + board) and the QEMU image (its own
+# workspace firmware/qemu, built and run by tests/tests/qemu.rs above).
 (
     cd firmware
     cargo build --release
-    elf="target/$TARGET/release/firmware"
+    elf="target/$TARGET/release/board"
     test -f "$elf"
-    if command -v llvm-size >/dev/null 2>&1; then
-        llvm-size "$elf"
-    elif command -v arm-none-eabi-size >/dev/null 2>&1; then
-        arm-none-eabi-size "$elf"
-    else
-        ls -l "$elf"
-    fi
+    image_size "$elf"
+)
+(
+    cd firmware/qemu
+    cargo build --release
+    elf="target/$TARGET/release/qemu"
+    test -f "$elf"
+    image_size "$elf"
 )
 
 section "all tests passed"

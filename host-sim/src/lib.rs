@@ -9,4 +9,6 @@ pub mod paper;
 pub mod plot;
 pub mod scenario;
 pub mod sim;
+#[cfg(feature = "socketcan")]
+pub mod socketcan_link;
 pub mod toml_scenario;

@@ -57,6 +57,18 @@ fn dispatch(args: &[String]) -> Result<(), Box<dyn Error>> {
             run_scenario(name, &out_dir(args, &default))
         }
         Some("tables") => tables(&out_dir(args, "out/tables")),
+        #[cfg(feature = "socketcan")]
+        Some("node") => {
+            let iface = args
+                .get(1)
+                .ok_or("usage: host-sim node <interface> [--seconds S]")?;
+            let secs = args
+                .iter()
+                .position(|a| a == "--seconds")
+                .and_then(|i| args.get(i + 1))
+                .and_then(|s| s.parse().ok());
+            host_sim::socketcan_link::run_node(iface, secs)
+        }
         Some("-h" | "--help" | "help") => {
             println!("usage: host-sim [list | run <scenario> [--out DIR] | tables [--out DIR]]");
             Ok(())
@@ -247,6 +259,23 @@ fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+/// Largest distance between the multi-body ZMP and the support-foot centre during the single
+/// support in which the modification takes effect \[m\] (the paper's "maximum ZMP error");
+/// `None` when the model's legs cannot reach the footsteps.
+fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
+    let mb = evaluate(&Hrp2::default(), &m.trajectory, dt).ok()?;
+    let start = paper::MODIFICATION_TICK as usize;
+    let support = (m.before * 3.0, -0.1);
+    let mut worst: f64 = 0.0;
+    for (r, s) in m.trajectory.iter().zip(&mb).skip(start) {
+        if r.phase != Phase::Single(Side::Right) {
+            break;
+        }
+        worst = worst.max((s.mb_zmp_x - support.0).hypot(s.mb_zmp_y - support.1));
+    }
+    Some(worst)
+}
+
 fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
     let params = GaitParams::<f64>::hrp2();
     fs::create_dir_all(out)?;
@@ -254,16 +283,23 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
     let mut adjust = vec![vec![0.0; n]; n];
     let mut with = vec![vec![0.0; n]; n];
     let mut without = vec![vec![0.0; n]; n];
+    let mut lipm_with = vec![vec![0.0; n]; n];
+    let mut lipm_without = vec![vec![0.0; n]; n];
     let mut grid = Vec::new();
+    // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
+    let mut bare = without_adjustment(params);
+    bare.shaping = false;
     for (r, &after) in STEP_LENGTHS.iter().enumerate() {
         let mut row = Vec::new();
         for (c, &before) in STEP_LENGTHS.iter().enumerate() {
             eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
             let m = paper::modification(params, before, after);
-            let w = paper::modification(without_adjustment(params), before, after);
+            let w = paper::modification(bare, before, after);
             adjust[r][c] = m.adjust_s;
-            with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
-            without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
+            lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
+            lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
+            with[r][c] = modified_support_error(&m, params.dt).unwrap_or(f64::NAN);
+            without[r][c] = modified_support_error(&w, params.dt).unwrap_or(f64::NAN);
             let mut m = m;
             m.trajectory.clear();
             row.push(m);
@@ -279,9 +315,11 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         "adjust_s": adjust,
         "paper_adjust_s": PAPER_ADJUST_S,
         "cells_within_one_cycle": within,
-        "zmp_error_model": "linear inverted pendulum (planned ZMP vs support-foot centre); the multi-body model comes with the host-sim issue",
+        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
         "max_zmp_error_without_m": without,
         "max_zmp_error_with_m": with,
+        "lipm_zmp_fluctuation_without_m": lipm_without,
+        "lipm_zmp_fluctuation_with_m": lipm_with,
         "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
         "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
     });
@@ -308,6 +346,43 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         md += "\n";
     }
     md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
+    let cell = |v: f64| {
+        if v.is_finite() {
+            format!("{:.1}", v * 100.0)
+        } else {
+            "n/a".to_string()
+        }
+    };
+    for (title, ours, theirs) in [
+        (
+            "Table I: maximum ZMP error without any adjustment [cm], ours (multi-body) / paper",
+            &without,
+            &PAPER_ERROR_WITHOUT_M,
+        ),
+        (
+            "Table II: maximum ZMP error with the proposed method [cm], ours (multi-body) / paper",
+            &with,
+            &PAPER_ERROR_WITH_M,
+        ),
+    ] {
+        md += &format!("\n{title}\n\n| after \\ before |");
+        for b in STEP_LENGTHS {
+            md += &format!(" {b:+.1} |");
+        }
+        md += "\n|---|";
+        for _ in 0..n {
+            md += "---|";
+        }
+        md += "\n";
+        for (r, row) in ours.iter().enumerate() {
+            md += &format!("| {:+.1} |", STEP_LENGTHS[r]);
+            for (c, v) in row.iter().enumerate() {
+                md += &format!(" {} / {:.1} |", cell(*v), theirs[r][c] * 100.0);
+            }
+            md += "\n";
+        }
+    }
+    md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
     fs::write(out.join("tables.md"), &md)?;
     println!("{md}");
     println!(

@@ -1,6 +1,6 @@
-//! Puts the top-level `memory.x` (STM32H743 layout, shared by every image of this repository)
-//! where cortex-m-rt's `link.x` can `INCLUDE` it: a copy in OUT_DIR, and OUT_DIR on the linker
-//! search path.
+//! Puts this package's `memory.x` (QEMU mps2-an500 layout) where cortex-m-rt's `link.x` can
+//! `INCLUDE` it (a copy in OUT_DIR, and OUT_DIR on this package's linker search path), and
+//! links with cortex-m-rt's linker script.
 
 use std::env;
 use std::fs;
@@ -9,13 +9,14 @@ use std::path::PathBuf;
 fn main() {
     let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR"));
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("OUT_DIR"));
-    let memory_x = manifest.join("..").join("memory.x");
+    let memory_x = manifest.join("memory.x");
 
     let layout =
         fs::read(&memory_x).unwrap_or_else(|e| panic!("cannot read {}: {e}", memory_x.display()));
     fs::write(out.join("memory.x"), layout).expect("cannot write memory.x into OUT_DIR");
 
     println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rerun-if-changed={}", memory_x.display());
     println!("cargo:rerun-if-changed=build.rs");
 }

@@ -1,0 +1,129 @@
+//! Timing statistics per kind of work: count, maximum (and where), sum.
+//!
+//! Units are whatever the image's [`Clock`](crate::Clock) counts (QEMU: CMSDK timer ticks,
+//! 40 instructions each under `-icount shift=0`; board: core cycles).
+
+/// A kind of timed work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// `Gait::new` (the preview-control gains: about 1100 Riccati iterations).
+    New,
+    /// `Gait::push`.
+    Push,
+    /// `Gait::start`: plans the start window.
+    Start,
+    /// `Gait::modify`: for the next swing target, the feasibility check plans the re-plan it
+    /// will cause (eq. 17).
+    Modify,
+    /// `Gait::stop` or `Gait::clear_and_stop`.
+    StopCommand,
+    /// `Gait::tick` while standing.
+    Standing,
+    /// `Gait::tick` while walking, no re-plan.
+    Steady,
+    /// `Gait::tick` that re-plans at the start of a single support, no time adjustment.
+    Replan,
+    /// `Gait::tick` that re-plans with a single-support time adjustment (`adjust_ticks != 0`:
+    /// the first single support after a modification, eq. 18 solves the target pattern too).
+    Adjust,
+    /// A whole control cycle: the commands applied in it plus its tick.
+    Cycle,
+}
+
+impl Kind {
+    /// Every kind, in report order.
+    pub const ALL: [Kind; 10] = [
+        Kind::New,
+        Kind::Push,
+        Kind::Start,
+        Kind::Modify,
+        Kind::StopCommand,
+        Kind::Standing,
+        Kind::Steady,
+        Kind::Replan,
+        Kind::Adjust,
+        Kind::Cycle,
+    ];
+
+    /// The name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::New => "new",
+            Kind::Push => "push",
+            Kind::Start => "start",
+            Kind::Modify => "modify",
+            Kind::StopCommand => "stop-command",
+            Kind::Standing => "standing",
+            Kind::Steady => "steady",
+            Kind::Replan => "replan",
+            Kind::Adjust => "adjust",
+            Kind::Cycle => "cycle",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// Statistics of one kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stat {
+    /// Number of samples.
+    pub n: u32,
+    /// Largest sample.
+    pub max: u32,
+    /// Control tick of the largest sample (the gait's tick count when it was taken).
+    pub max_tick: u64,
+    /// Sum of the samples.
+    pub sum: u64,
+}
+
+impl Stat {
+    fn record(&mut self, units: u32, tick: u64) {
+        if self.n == 0 || units > self.max {
+            self.max = units;
+            self.max_tick = tick;
+        }
+        self.n += 1;
+        self.sum += u64::from(units);
+    }
+}
+
+/// Statistics of every kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    by_kind: [Stat; Kind::ALL.len()],
+}
+
+impl Stats {
+    /// Nothing recorded.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Records one sample of `kind` taken at control tick `tick`.
+    pub fn record(&mut self, kind: Kind, units: u32, tick: u64) {
+        self.by_kind[kind.index()].record(units, tick);
+    }
+
+    /// The statistics of `kind`.
+    pub fn get(&self, kind: Kind) -> &Stat {
+        &self.by_kind[kind.index()]
+    }
+
+    /// Adds the samples of `other` (the tick of a maximum is kept as recorded).
+    pub fn merge(&mut self, other: &Stats) {
+        for (mine, theirs) in self.by_kind.iter_mut().zip(other.by_kind.iter()) {
+            if theirs.n == 0 {
+                continue;
+            }
+            if mine.n == 0 || theirs.max > mine.max {
+                mine.max = theirs.max;
+                mine.max_tick = theirs.max_tick;
+            }
+            mine.n += theirs.n;
+            mine.sum += theirs.sum;
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! The two hardware accesses of the QEMU image, and its only `unsafe` code: the CMSDK APB
+//! timer's registers (volatile MMIO) and the read-back of the painted stack.
+
+// The crate denies unsafe code; this module is the audited exception.
+#![allow(unsafe_code)]
+
+use core::ptr::{addr_of, read_volatile, write_volatile};
+use core::sync::atomic::{AtomicBool, Ordering};
+
+/// CMSDK APB timer 0 of the MPS2 board (QEMU `hw/arm/mps2.c`).
+const TIMER0_BASE: usize = 0x4000_0000;
+/// Control: bit 0 enables the counter.
+const CTRL: usize = 0x00;
+/// Current value (counts down at the timer's clock, reloads from RELOAD after 0).
+const VALUE: usize = 0x04;
+/// Reload value.
+const RELOAD: usize = 0x08;
+
+/// The timer's clock: the board's SYSCLK \[Hz\].
+pub const TIMER_HZ: u32 = 25_000_000;
+
+static TAKEN: AtomicBool = AtomicBool::new(false);
+
+/// CMSDK timer 0 as a free-running 32-bit counter (wraps after 2³² / 25 MHz ≈ 172 s).
+pub struct Timer0 {
+    _private: (),
+}
+
+impl Timer0 {
+    /// The timer, once.
+    pub fn take() -> Option<Self> {
+        if TAKEN.swap(true, Ordering::AcqRel) {
+            None
+        } else {
+            Some(Self { _private: () })
+        }
+    }
+
+    fn write(&mut self, offset: usize, value: u32) {
+        // SAFETY: TIMER0_BASE + offset is a 32-bit register of the CMSDK timer, which exists
+        // on every MPS2 machine of QEMU; `&mut self` (a singleton) serialises the accesses.
+        unsafe { write_volatile((TIMER0_BASE + offset) as *mut u32, value) }
+    }
+
+    fn read(&self, offset: usize) -> u32 {
+        // SAFETY: as in `write`; reading VALUE has no side effect.
+        unsafe { read_volatile((TIMER0_BASE + offset) as *const u32) }
+    }
+
+    /// Starts counting down from `u32::MAX`, reloading `u32::MAX`, no interrupt.
+    pub fn start_free_running(&mut self) {
+        self.write(CTRL, 0);
+        self.write(RELOAD, u32::MAX);
+        self.write(VALUE, u32::MAX);
+        self.write(CTRL, 1);
+    }
+
+    /// Timer ticks since the start (modulo 2³²): an up-counter.
+    pub fn count(&self) -> u32 {
+        !self.read(VALUE)
+    }
+}
+
+extern "C" {
+    // cortex-m-rt's linker script: the stack grows down from `_stack_start` (end of RAM) to
+    // `_stack_end` (end of .bss); with the `paint-stack` feature the reset handler fills that
+    // range with STACK_PAINT_VALUE before `main`.
+    static _stack_start: u32;
+    static _stack_end: u32;
+}
+
+/// The stack's high-water mark: `(used, size)` in bytes, `used` from the top of the stack
+/// down to the lowest word that no longer holds the paint.
+pub fn stack_usage() -> (usize, usize) {
+    let top = addr_of!(_stack_start) as usize;
+    let bottom = addr_of!(_stack_end) as usize;
+    let mut p = bottom;
+    while p < top {
+        // SAFETY: [bottom, top) is RAM reserved for the stack by the linker script, aligned to
+        // 4 bytes (link.x asserts it); reading a word there has no side effect.
+        let word = unsafe { read_volatile(p as *const u32) };
+        if word != cortex_m_rt::STACK_PAINT_VALUE {
+            break;
+        }
+        p += 4;
+    }
+    (top - p, top - bottom)
+}
+
+/// A fault (e.g. the stack running below the start of RAM) ends the run with exit code 1
+/// instead of cortex-m-rt's default endless loop, which would only show as a timeout.
+#[cortex_m_rt::exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    cortex_m_semihosting::hprintln!(
+        "FAULT hardfault pc={:#010x} lr={:#010x}",
+        frame.pc(),
+        frame.lr()
+    );
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
