@@ -526,30 +526,58 @@ struct Active<T: Real> {
 }
 
 impl<T: Real> Active<T> {
-    fn plan(
+    /// An unused window buffer.
+    fn empty(p: &GaitParams<T>, feet: &[Footstep<T>; 2]) -> Self {
+        let inputs = Inputs {
+            kind: WindowKind::Stop,
+            support: feet[0],
+            other: feet[1],
+            land: [feet[0]; 3],
+            n_land: 0,
+            first_ticks: p.settle_ticks,
+        };
+        Self {
+            inputs,
+            spec: Spec {
+                ticks: [1; M],
+                kinds: [Kind::Stand; M],
+                support: [None; M],
+                via: [[T::ZERO; 2]; M],
+                replan: None,
+            },
+            bounds: [PlaneBoundary::default(); 2],
+            factor: Factorized::empty(crate::window::Basis::Exponential),
+            plan: Plan::zeroed(Timing {
+                omega: p.omega,
+                durations: [T::ONE; M],
+            }),
+            tick: 0,
+            starts: [0; M + 1],
+        }
+    }
+
+    /// Plans a window in this buffer, in place (the buffer is 9 KB: never moved on the control
+    /// path). On error the buffer must not be used.
+    fn plan_into(
+        &mut self,
         p: &GaitParams<T>,
         inputs: Inputs<T>,
         cog: [State<T>; 2],
         zmp: [State<T>; 2],
-    ) -> Result<Self, PlanError> {
-        let spec = build_spec(p, &inputs);
-        let (timing, bounds) = boundaries(p, &spec, cog, zmp);
-        let factor = Factorized::new(&timing)?;
-        let mut plan = Plan::zeroed(timing);
-        factor.solve(&bounds[0], &bounds[1], &mut plan)?;
-        let mut starts = [0u32; M + 1];
+    ) -> Result<(), PlanError> {
+        self.spec = build_spec(p, &inputs);
+        let (timing, bounds) = boundaries(p, &self.spec, cog, zmp);
+        self.bounds = bounds;
+        self.factor.refactor(&timing)?;
+        self.factor
+            .solve(&self.bounds[0], &self.bounds[1], &mut self.plan)?;
+        self.starts[0] = 0;
         for j in 0..M {
-            starts[j + 1] = starts[j] + spec.ticks[j];
+            self.starts[j + 1] = self.starts[j] + self.spec.ticks[j];
         }
-        Ok(Self {
-            inputs,
-            spec,
-            bounds,
-            factor,
-            plan,
-            tick: 0,
-            starts,
-        })
+        self.inputs = inputs;
+        self.tick = 0;
+        Ok(())
     }
 
     fn interval(&self, tick: u32) -> usize {
@@ -611,7 +639,16 @@ pub struct Gait<T: Real, const Q: usize> {
     swing: Option<Queued<T>>,
     mode: Mode,
     stop_requested: bool,
-    win: Option<Active<T>>,
+    /// Two window buffers: the one being executed and the one the next re-plan is built in.
+    wins: [Active<T>; 2],
+    /// The buffer being executed, if walking.
+    cur: Option<usize>,
+    /// Changes whenever the footsteps or the stop request change.
+    gen: u32,
+    /// Changes whenever a new window becomes the current one.
+    serial: u32,
+    /// Cached `x_f` of eq. 18: (gen, serial, window tick, state).
+    target: Option<(u32, u32, u32, [Sample<T>; 2])>,
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
@@ -671,7 +708,14 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             swing: None,
             mode: Mode::Standing,
             stop_requested: false,
-            win: None,
+            wins: [
+                Active::empty(&params, &[left, right]),
+                Active::empty(&params, &[left, right]),
+            ],
+            cur: None,
+            gen: 0,
+            serial: 0,
+            target: None,
             tick: 0,
             last: Reference {
                 x: at(mid[0]),
@@ -790,7 +834,9 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 step,
                 modified: false,
             })
-            .map_err(|q| (GaitError::QueueFull, q.step))
+            .map_err(|q| (GaitError::QueueFull, q.step))?;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
     }
 
     /// Starts walking (from standing) with the queued steps.
@@ -813,14 +859,15 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             first_ticks: self.params.start_ticks,
         };
         let (cog, zmp) = self.state();
-        let win = Active::plan(&self.params, inputs, cog, zmp)?;
-        self.start_shaping(&win);
+        self.wins[0].plan_into(&self.params, inputs, cog, zmp)?;
+        self.cur = Some(0);
+        self.serial = self.serial.wrapping_add(1);
+        self.start_shaping();
         // The reference of this instant becomes the window's tick 0 (the same position, with
         // the velocities the pattern starts with), and the compensators take their tick 0.
-        let (sx, sy) = self.shaped(&win, 0);
+        let (sx, sy) = self.shaped(0);
         self.last.x = sx;
         self.last.y = sy;
-        self.win = Some(win);
         self.mode = Mode::Walking;
         self.stop_requested = false;
         for q in self.queue.iter_mut() {
@@ -833,12 +880,14 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// Steps that are not given are no longer padded with steps in place.
     pub fn stop(&mut self) {
         self.stop_requested = true;
+        self.gen = self.gen.wrapping_add(1);
     }
 
     /// Drops every queued step (not the one being swung) and stops after the present swing.
     pub fn clear_and_stop(&mut self) {
         self.queue.clear();
         self.stop_requested = true;
+        self.gen = self.gen.wrapping_add(1);
     }
 
     /// Modifies the queued step `id`. Refused when its foot has lifted off, when it is unknown,
@@ -861,6 +910,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             q.step = step;
             q.modified = true;
         }
+        self.gen = self.gen.wrapping_add(1);
         if pos == 0 && self.mode == Mode::Walking {
             // This is the next swing target: check the re-plan it will cause.
             match self.predict_replan() {
@@ -868,12 +918,14 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                     if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
                         *q = o;
                     }
+                    self.gen = self.gen.wrapping_add(1);
                     return Err(GaitError::Infeasible);
                 }
                 Err(e) => {
                     if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
                         *q = o;
                     }
+                    self.gen = self.gen.wrapping_add(1);
                     return Err(e);
                 }
                 _ => {}
@@ -923,10 +975,11 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
 
     /// The re-plan that will happen at the next start of single support if nothing else
     /// changes: returns the worst first-interval ZMP excursion, or `None` if no re-plan is due.
-    fn predict_replan(&self) -> Result<Option<[T; 2]>, GaitError> {
-        let Some(win) = self.win.as_ref() else {
+    fn predict_replan(&mut self) -> Result<Option<[T; 2]>, GaitError> {
+        let Some(c) = self.cur else {
             return Ok(None);
         };
+        let win = &self.wins[c];
         let Some(j) = win.spec.replan else {
             return Ok(None);
         };
@@ -943,11 +996,13 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let Some(next) = self.next_walk_inputs(win, j) else {
             return Ok(None);
         };
-        let (adjust, _, _) = self.adjustment(win, at, cog, zmp)?;
+        let (adjust, _, _) = self.adjustment(c, at, cog, zmp)?;
         let mut inputs = next;
         inputs.first_ticks = adjusted(self.params.single_ticks, adjust);
-        let w = Active::plan(&self.params, inputs, cog, zmp)?;
-        Ok(Some(w.worst_first()))
+        // Planned in the spare buffer, which is free between re-plans.
+        let spare = 1 - c;
+        self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
+        Ok(Some(self.wins[spare].worst_first()))
     }
 
     /// Inputs of the walking window that starts at interval `j` of `win` (a single support),
@@ -981,19 +1036,9 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         })
     }
 
-    /// Eq. 18 at window tick `at` of `win`: the adjustment in ticks, `r`, and the deciding plane.
-    fn adjustment(
-        &self,
-        win: &Active<T>,
-        at: u32,
-        cog: [State<T>; 2],
-        zmp: [State<T>; 2],
-    ) -> Result<(i32, T, u8), GaitError> {
-        let pending = self.queue.front().map(|q| q.modified).unwrap_or(false);
-        if !pending {
-            return Ok((0, T::ONE, 0));
-        }
-        // x_f: the present window solved again from its own start with today's footsteps.
+    /// The boundary values of `x_f` of eq. 18: the window `win` with its own initial state and
+    /// the footsteps as they are now.
+    fn target_bounds(&self, win: &Active<T>) -> [PlaneBoundary<T>; 2] {
         let mut inputs = win.inputs;
         // The first landing of a walking window was its swing target: fixed since lift-off.
         let mut land = inputs.land;
@@ -1021,11 +1066,44 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             [win.bounds[0].cog_start, win.bounds[1].cog_start],
             [win.bounds[0].zmp_start, win.bounds[1].zmp_start],
         );
-        let mut target = Plan::zeroed(*win.factor.timing());
-        win.factor.solve(&bounds[0], &bounds[1], &mut target)?;
-        let j = win.interval(at);
-        let tau = self.params.seconds(at - win.starts[j]);
-        let f = [target.x[j].sample(tau), target.y[j].sample(tau)];
+        bounds
+    }
+
+    /// Eq. 18 at window tick `at` of the current window `c` (index into the buffers), from the
+    /// present state `(cog, zmp)`: the adjustment in ticks, `r`, and the deciding plane. The
+    /// target state `x_f` is cached between the feasibility check of a modification and the
+    /// re-plan it causes (same footsteps, same window), so a re-plan does not compute it twice.
+    fn adjustment(
+        &mut self,
+        c: usize,
+        at: u32,
+        cog: [State<T>; 2],
+        zmp: [State<T>; 2],
+    ) -> Result<(i32, T, u8), GaitError> {
+        let pending = self.queue.front().map(|q| q.modified).unwrap_or(false);
+        if !pending {
+            return Ok((0, T::ONE, 0));
+        }
+        let f = match self.target {
+            Some((g, w, a, f)) if g == self.gen && w == self.serial && a == at => f,
+            _ => {
+                let bounds = self.target_bounds(&self.wins[c]);
+                // Solved with the current window's factorisation (same timing) into the spare
+                // buffer's plan, which the re-plan overwrites anyway: nothing large is copied.
+                let (w0, w1) = self.wins.split_at_mut(1);
+                let (cur, spare) = if c == 0 {
+                    (&w0[0], &mut w1[0])
+                } else {
+                    (&w1[0], &mut w0[0])
+                };
+                cur.factor.solve(&bounds[0], &bounds[1], &mut spare.plan)?;
+                let j = cur.interval(at);
+                let tau = self.params.seconds(at - cur.starts[j]);
+                let f = [spare.plan.x[j].sample(tau), spare.plan.y[j].sample(tau)];
+                self.target = Some((self.gen, self.serial, at, f));
+                f
+            }
+        };
         let w = self.params.omega;
         let mut d_i = [T::ZERO; 2];
         let mut d_f = [T::ZERO; 2];
@@ -1063,17 +1141,18 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// Advances one control period and returns its reference.
     pub fn tick(&mut self) -> Reference<T> {
         self.tick += 1;
-        let Some(mut win) = self.win.take() else {
+        let Some(c) = self.cur else {
             self.last.phase = Phase::Standing;
             self.last.feet = self.ground_poses();
             return self.last;
         };
-        win.tick += 1;
+        self.wins[c].tick += 1;
+        let wt = self.wins[c].tick;
         let mut kept = None;
-        if let Some(j) = win.spec.replan {
-            if win.tick == win.starts[j] {
+        if let Some(j) = self.wins[c].spec.replan {
+            if wt == self.wins[c].starts[j] {
                 // The state at this instant, from the window being left (shaped).
-                let (sx, sy) = self.shaped(&win, win.tick);
+                let (sx, sy) = self.shaped(wt);
                 let cog = [
                     State::new(sx.cog, sx.cog_vel),
                     State::new(sy.cog, sy.cog_vel),
@@ -1082,34 +1161,34 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                     State::new(sx.zmp, sx.zmp_vel),
                     State::new(sy.zmp, sy.zmp_vel),
                 ];
-                let (next, replanned) = self.replan(win, j, cog, zmp);
-                win = next;
-                if replanned {
-                    self.start_shaping(&win);
+                if self.replan(j, cog, zmp) {
+                    self.start_shaping();
                 } else {
                     kept = Some((sx, sy));
                 }
             }
         }
-        let end = win.starts[M];
-        if win.tick >= end && win.spec.replan.is_none() {
-            // The stop window has ended: standing (the compensation has died out long before:
-            // the last window is at least a settle and a rest long).
-            let (sx, sy) = win.sample(&self.params, end);
+        let c = self.cur.unwrap_or(c);
+        let end = self.wins[c].starts[M];
+        if self.wins[c].tick >= end && self.wins[c].spec.replan.is_none() {
+            // The stop window has ended: standing (it is never shaped, so the analytic end,
+            // at rest, is the reference).
+            let (sx, sy) = self.wins[c].sample(&self.params, end);
             self.last.x = sx;
             self.last.y = sy;
             self.mode = Mode::Standing;
             self.stop_requested = false;
             self.last.phase = Phase::Standing;
             self.last.feet = self.ground_poses();
-            self.win = None;
+            self.cur = None;
             return self.last;
         }
-        let t = win.tick.min(end);
+        let t = self.wins[c].tick.min(end);
         let (sx, sy) = match kept {
             Some(k) => k,
-            None => self.shaped(&win, t),
+            None => self.shaped(t),
         };
+        let win = &self.wins[c];
         let j = win.interval(t);
         let phase = match win.spec.support[j] {
             Some(s) if win.spec.kinds[j] == Kind::Single => Phase::Single(s),
@@ -1123,33 +1202,33 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 self.swing = None;
             }
         }
+        let feet = self.foot_poses(&self.wins[c], j, t);
         self.last = Reference {
             x: sx,
             y: sy,
             phase,
-            feet: self.foot_poses(&win, j, t),
+            feet,
         };
-        self.win = Some(win);
         self.last
     }
 
-    /// Re-plans at the start of the single support `j` of `win`. On failure the old window
+    /// Re-plans at the start of the single support `j` of the current window, into the spare
+    /// buffer; `true` if the new window is now the current one. On failure the old window
     /// goes on (it already contains that single support).
-    fn replan(
-        &mut self,
-        win: Active<T>,
-        j: usize,
-        cog: [State<T>; 2],
-        zmp: [State<T>; 2],
-    ) -> (Active<T>, bool) {
+    fn replan(&mut self, j: usize, cog: [State<T>; 2], zmp: [State<T>; 2]) -> bool {
+        let Some(c) = self.cur else {
+            return false;
+        };
+        let spare = 1 - c;
         // Land the swing that just ended (the double support before this single support).
         if let Some(s) = self.swing.take() {
             self.feet[s.step.side.index()] = s.step;
         }
-        let Some(mut inputs) = self.next_walk_inputs(&win, j) else {
+        let Some(mut inputs) = self.next_walk_inputs(&self.wins[c], j) else {
             // Stopping with nothing left to swing: settle.
-            let support = self.feet[win.spec.support[j].map(|s| s.index()).unwrap_or(0)];
-            let other = self.feet[support.side.other().index()];
+            let side = self.wins[c].spec.support[j].unwrap_or(Side::Left);
+            let support = self.feet[side.index()];
+            let other = self.feet[side.other().index()];
             let inputs = Inputs {
                 kind: WindowKind::Stop,
                 support,
@@ -1158,15 +1237,18 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 n_land: 0,
                 first_ticks: self.params.settle_ticks,
             };
-            return match Active::plan(&self.params, inputs, cog, zmp) {
-                Ok(w) => (w, true),
-                Err(_) => (win, false),
-            };
+            if self.wins[spare]
+                .plan_into(&self.params, inputs, cog, zmp)
+                .is_err()
+            {
+                return false;
+            }
+            self.cur = Some(spare);
+            self.serial = self.serial.wrapping_add(1);
+            return true;
         };
-        let (adjust, ratio, plane) = match self.adjustment(&win, win.tick, cog, zmp) {
-            Ok(a) => a,
-            Err(_) => (0, T::ONE, 0),
-        };
+        let at = self.wins[c].tick;
+        let (adjust, ratio, plane) = self.adjustment(c, at, cog, zmp).unwrap_or((0, T::ONE, 0));
         inputs.first_ticks = adjusted(self.params.single_ticks, adjust);
         // The swing target is the queue front; if there is none (walking in place), the
         // padded zero-length step.
@@ -1178,16 +1260,18 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 modified: false,
             },
         };
-        let new = match Active::plan(&self.params, inputs, cog, zmp) {
-            Ok(w) => w,
-            Err(_) => {
-                // Keep the old window; the step goes back to the queue.
-                if swing.id != u16::MAX {
-                    let _ = self.queue.push_front(swing);
-                }
-                return (win, false);
+        if self.wins[spare]
+            .plan_into(&self.params, inputs, cog, zmp)
+            .is_err()
+        {
+            // Keep the old window; the step goes back to the queue.
+            if swing.id != u16::MAX {
+                let _ = self.queue.push_front(swing);
             }
-        };
+            return false;
+        }
+        self.cur = Some(spare);
+        self.serial = self.serial.wrapping_add(1);
         self.swing = Some(swing);
         for q in self.queue.iter_mut() {
             q.modified = false;
@@ -1197,15 +1281,18 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             adjust_ticks: adjust,
             ratio,
             plane,
-            worst_zmp: new.worst_first(),
+            worst_zmp: self.wins[spare].worst_first(),
         });
-        (new, true)
+        true
     }
 
-    /// The analytic plan at window tick `t` minus the compensation of this tick (the
-    /// compensators advance by one tick: call once per tick).
-    fn shaped(&mut self, win: &Active<T>, t: u32) -> (Sample<T>, Sample<T>) {
-        let (sx, sy) = win.sample(&self.params, t);
+    /// The current window's analytic plan at window tick `t` minus the compensation of this
+    /// tick (the compensators advance by one tick: call once per tick).
+    fn shaped(&mut self, t: u32) -> (Sample<T>, Sample<T>) {
+        let Some(c) = self.cur else {
+            return (self.last.x, self.last.y);
+        };
+        let (sx, sy) = self.wins[c].sample(&self.params, t);
         if !self.params.shaping {
             return (sx, sy);
         }
@@ -1215,17 +1302,21 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         (minus(sx, cx), minus(sy, cy))
     }
 
-    /// Restarts the compensators from rest with the fluctuation of the first interval of a new
-    /// window as their reference.
-    fn start_shaping(&mut self, win: &Active<T>) {
+    /// Restarts the compensators from rest with the fluctuation of the first interval of the
+    /// current window as their reference.
+    fn start_shaping(&mut self) {
+        let Some(c) = self.cur else {
+            return;
+        };
+        let win = &self.wins[c];
         for (k, comp) in self.comp.iter_mut().enumerate() {
             comp.reset();
             // Only a window that is followed by a re-plan is shaped: the re-plan starts from
             // the shaped state and so absorbs what is left of the compensation, while the last
-            // window must end exactly at rest.
-            // The start and stop windows begin with a double support, where the fluctuation
-            // is harmless (the polygon spans both feet) and shaping would only carry it into
-            // the following single support: they are not shaped.
+            // window must end exactly at rest. The start and stop windows begin with a double
+            // support, where the fluctuation is harmless (the polygon spans both feet) and
+            // shaping would only carry it into the following single support: they are not
+            // shaped.
             let walking = win.inputs.kind == WindowKind::Walk;
             if self.params.shaping && walking && win.spec.replan.is_some() {
                 let seg = if k == 0 {

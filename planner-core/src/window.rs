@@ -261,7 +261,7 @@ fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
 
 /// Builds `Z` for a timing into `z` (no allocation; `z` is overwritten).
 pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, N>) {
-    z.fill(T::ZERO);
+    z.as_mut_slice().fill(T::ZERO);
     let w = timing.omega;
     let d = &timing.durations;
     // E_j = e^{−ωD_j}, once per interval.
@@ -387,14 +387,40 @@ impl<T: Real> Factorized<T> {
 
     /// Builds and factorises `Z` in the given basis.
     pub fn with_basis(timing: &Timing<T>, basis: Basis) -> Result<Self, PlanError> {
+        let mut f = Self::empty(basis);
+        f.refactor(timing)?;
+        Ok(f)
+    }
+
+    /// A factorisation of nothing yet (all zero), to be filled by [`Factorized::refactor`]:
+    /// lets a caller keep its matrices in place (no 3 KB moves on the control path).
+    pub fn empty(basis: Basis) -> Self {
+        Self {
+            timing: Timing {
+                omega: T::ONE,
+                durations: [T::ONE; M],
+            },
+            basis,
+            lu: SMatrix::<T, N, N>::from_element(T::ZERO),
+            pivots: [0; N],
+            col_scale: [T::ONE; N],
+            kl: BANDWIDTH,
+            ku: BANDWIDTH,
+        }
+    }
+
+    /// Builds and factorises `Z` for a new timing in place. On error the factorisation is
+    /// unusable until the next successful call.
+    pub fn refactor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
         timing.validate()?;
-        let mut lu = SMatrix::<T, N, N>::from_element(T::ZERO);
-        build_z(timing, basis, &mut lu);
+        // Mark unusable until the end (a failed refactor must not look like the old timing).
+        self.timing.omega = T::ZERO;
+        let lu = &mut self.lu;
+        build_z(timing, self.basis, lu);
         let (kl, ku) = (BANDWIDTH, BANDWIDTH);
         // Equilibrate the columns (largest entry 1): the quartic columns of a short interval
         // carry 24/(ωD)⁴, which would otherwise dominate the singularity threshold.
-        let mut col_scale = [T::ONE; N];
-        for (j, s) in col_scale.iter_mut().enumerate() {
+        for (j, s) in self.col_scale.iter_mut().enumerate() {
             let rows = j.saturating_sub(ku)..(j + kl + 1).min(N);
             let mut m = T::ZERO;
             for i in rows.clone() {
@@ -408,16 +434,11 @@ impl<T: Real> Factorized<T> {
                 lu[(i, j)] *= *s;
             }
         }
-        let pivots = factor_banded(&mut lu, kl, ku)?;
-        Ok(Self {
-            timing: *timing,
-            basis,
-            lu,
-            pivots,
-            col_scale,
-            kl,
-            ku,
-        })
+        self.pivots = factor_banded(lu, kl, ku)?;
+        self.kl = kl;
+        self.ku = ku;
+        self.timing = *timing;
+        Ok(())
     }
 
     /// The timing this factorisation was built for.
@@ -450,6 +471,10 @@ impl<T: Real> Factorized<T> {
     ) -> Result<(), PlanError> {
         if !(x.all_finite() && y.all_finite()) {
             return Err(PlanError::NonFinite);
+        }
+        if self.timing.omega == T::ZERO {
+            // A failed refactor.
+            return Err(PlanError::Singular);
         }
         out.timing = self.timing;
         self.solve_plane_into(x, &mut out.x)?;
