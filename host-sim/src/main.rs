@@ -276,6 +276,27 @@ fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
     Some(worst)
 }
 
+/// A 7×7 grid over the step lengths as a Markdown table (rows: after, columns: before).
+fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> String {
+    let mut md = format!("{title}\n\n| after \\ before |");
+    for b in STEP_LENGTHS {
+        md += &format!(" {b:+.1} |");
+    }
+    md += "\n|---|";
+    for _ in STEP_LENGTHS {
+        md += "---|";
+    }
+    md += "\n";
+    for (r, after) in STEP_LENGTHS.iter().enumerate() {
+        md += &format!("| {after:+.1} |");
+        for c in 0..STEP_LENGTHS.len() {
+            md += &format!(" {} |", cell(r, c));
+        }
+        md += "\n";
+    }
+    md
+}
+
 fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
     let params = GaitParams::<f64>::hrp2();
     fs::create_dir_all(out)?;
@@ -327,24 +348,10 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         out.join("tables.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    let mut md = String::new();
-    md += "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)\n\n";
-    md += "| after \\ before |";
-    for b in STEP_LENGTHS {
-        md += &format!(" {b:+.1} |");
-    }
-    md += "\n|---|";
-    for _ in 0..n {
-        md += "---|";
-    }
-    md += "\n";
-    for (r, row) in adjust.iter().enumerate() {
-        md += &format!("| {:+.1} |", STEP_LENGTHS[r]);
-        for (c, v) in row.iter().enumerate() {
-            md += &format!(" {v:.3} / {:.3} |", PAPER_ADJUST_S[r][c]);
-        }
-        md += "\n";
-    }
+    let mut md = grid_markdown(
+        "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)",
+        |r, c| format!("{:.3} / {:.3}", adjust[r][c], PAPER_ADJUST_S[r][c]),
+    );
     md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
     let cell = |v: f64| {
         if v.is_finite() {
@@ -365,22 +372,10 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
             &PAPER_ERROR_WITH_M,
         ),
     ] {
-        md += &format!("\n{title}\n\n| after \\ before |");
-        for b in STEP_LENGTHS {
-            md += &format!(" {b:+.1} |");
-        }
-        md += "\n|---|";
-        for _ in 0..n {
-            md += "---|";
-        }
         md += "\n";
-        for (r, row) in ours.iter().enumerate() {
-            md += &format!("| {:+.1} |", STEP_LENGTHS[r]);
-            for (c, v) in row.iter().enumerate() {
-                md += &format!(" {} / {:.1} |", cell(*v), theirs[r][c] * 100.0);
-            }
-            md += "\n";
-        }
+        md += &grid_markdown(title, |r, c| {
+            format!("{} / {:.1}", cell(ours[r][c]), theirs[r][c] * 100.0)
+        });
     }
     md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
     fs::write(out.join("tables.md"), &md)?;

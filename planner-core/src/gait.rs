@@ -660,6 +660,14 @@ pub struct Gait<T: Real, const Q: usize> {
 /// Preview length of the shaping compensator \[ticks\] (1.6 s at 5 ms).
 pub const PREVIEW: usize = 320;
 
+/// COG and ZMP states of both planes from their samples.
+fn states<T: Real>(x: &Sample<T>, y: &Sample<T>) -> ([State<T>; 2], [State<T>; 2]) {
+    (
+        [State::new(x.cog, x.cog_vel), State::new(y.cog, y.cog_vel)],
+        [State::new(x.zmp, x.zmp_vel), State::new(y.zmp, y.zmp_vel)],
+    )
+}
+
 /// `p − c`, sample by sample.
 fn minus<T: Real>(p: Sample<T>, c: Sample<T>) -> Sample<T> {
     Sample {
@@ -960,17 +968,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
 
     /// The present reference state (what the next window starts from).
     fn state(&self) -> ([State<T>; 2], [State<T>; 2]) {
-        let r = &self.last;
-        (
-            [
-                State::new(r.x.cog, r.x.cog_vel),
-                State::new(r.y.cog, r.y.cog_vel),
-            ],
-            [
-                State::new(r.x.zmp, r.x.zmp_vel),
-                State::new(r.y.zmp, r.y.zmp_vel),
-            ],
-        )
+        states(&self.last.x, &self.last.y)
     }
 
     /// The re-plan that will happen at the next start of single support if nothing else
@@ -985,14 +983,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         };
         let at = win.starts[j];
         let (sx, sy) = win.sample(&self.params, at);
-        let cog = [
-            State::new(sx.cog, sx.cog_vel),
-            State::new(sy.cog, sy.cog_vel),
-        ];
-        let zmp = [
-            State::new(sx.zmp, sx.zmp_vel),
-            State::new(sy.zmp, sy.zmp_vel),
-        ];
+        let (cog, zmp) = states(&sx, &sy);
         let Some(next) = self.next_walk_inputs(win, j) else {
             return Ok(None);
         };
@@ -1153,14 +1144,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             if wt == self.wins[c].starts[j] {
                 // The state at this instant, from the window being left (shaped).
                 let (sx, sy) = self.shaped(wt);
-                let cog = [
-                    State::new(sx.cog, sx.cog_vel),
-                    State::new(sy.cog, sy.cog_vel),
-                ];
-                let zmp = [
-                    State::new(sx.zmp, sx.zmp_vel),
-                    State::new(sy.zmp, sy.zmp_vel),
-                ];
+                let (cog, zmp) = states(&sx, &sy);
                 if self.replan(j, cog, zmp) {
                     self.start_shaping();
                 } else {
