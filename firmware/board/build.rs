@@ -1,6 +1,7 @@
 //! Puts the top-level `memory.x` (STM32H743 layout) where cortex-m-rt's `link.x` can `INCLUDE`
 //! it (a copy in OUT_DIR, and OUT_DIR on this package's linker search path), and links with
-//! cortex-m-rt's and defmt's linker scripts.
+//! cortex-m-rt's and defmt's linker scripts and with `stack.x` (this package's: the stack at
+//! the top of the AXI SRAM, see that file).
 
 use std::env;
 use std::fs;
@@ -14,11 +15,17 @@ fn main() {
     let layout =
         fs::read(&memory_x).unwrap_or_else(|e| panic!("cannot read {}: {e}", memory_x.display()));
     fs::write(out.join("memory.x"), layout).expect("cannot write memory.x into OUT_DIR");
+    let stack_x = manifest.join("stack.x");
+    let stack =
+        fs::read(&stack_x).unwrap_or_else(|e| panic!("cannot read {}: {e}", stack_x.display()));
+    fs::write(out.join("stack.x"), stack).expect("cannot write stack.x into OUT_DIR");
 
     println!("cargo:rustc-link-search={}", out.display());
     // cortex-m-rt's linker script (it INCLUDEs memory.x) and defmt's (interned strings).
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    println!("cargo:rustc-link-arg-bins=-Tstack.x");
     println!("cargo:rerun-if-changed={}", memory_x.display());
+    println!("cargo:rerun-if-changed={}", stack_x.display());
     println!("cargo:rerun-if-changed=build.rs");
 }

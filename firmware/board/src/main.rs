@@ -1,51 +1,86 @@
-//! The STM32H743 image: board init, then the gait loop at a fixed 5 ms cycle.
+//! The STM32H743 image: board set-up, then the CAN node at a fixed 5 ms cycle.
 //!
-//! * clocks: 480 MHz system clock (VOS0, rev V silicon), I- and D-cache on;
-//! * TIM2 overflows every 5 ms: the loop waits for it, runs one control cycle, and counts an
-//!   overrun when the next overflow has already happened by the time the cycle's work is done;
-//! * PE1 (an LED on the Nucleo-H743ZI) is held high while the planner works, for a scope or a
-//!   logic analyser; the loop sees it through embedded-hal 1.0's `OutputPin`;
-//! * DWT CYCCNT times every gait call (cycles at 480 MHz), classified per kind of cycle;
-//! * the footsteps come from the scripted source of `gait-loop` (host-sim's `fig4` and
-//!   `lateral`, played in turn forever) until the CAN node exists; a summary per scenario
-//!   goes out over RTT (defmt).
+//! * clocks: 480 MHz system clock (VOS0, rev V silicon), I- and D-cache on; PLL1Q = 80 MHz is
+//!   the FDCAN kernel clock;
+//! * FDCAN1 in classic CAN mode at 1 Mbit/s on the pins of a Nucleo-H743ZI's CN9 (PD0 = RX,
+//!   PD1 = TX, AF9), behind `embedded_can::nb::Can` ([`can::FdcanBus`]); every standard data
+//!   frame goes to RX FIFO0, extended and remote frames are rejected by the filters;
+//! * TIM2 overflows every 5 ms: the loop waits for it (servicing the CAN FIFOs meanwhile) and
+//!   runs one [`Node::poll`] per overflow, never two: a late cycle still publishes its
+//!   reference once, and the next one starts at the next overflow;
+//! * DWT CYCCNT measures every cycle; a cycle is an overrun when it took longer than its 5 ms
+//!   slot or the next overflow had already happened when it was done. It is logged (defmt)
+//!   and counted by [`Node::note_overrun`], so the node's `STATUS` frame reports it;
+//! * PE1 (LD2 on the Nucleo-H743ZI) is held high while the node works, for a scope or a logic
+//!   analyser (through embedded-hal 1.0's `OutputPin`);
+//! * once a second a summary (worst and mean cycle, overruns, frames) goes out over RTT.
 //!
-//! The gait (~38 KB, most of it the preview-control gains) lives on the stack, in DTCM, in
-//! the frame of `run_scenario`: no `static mut`, no allocator. The frames are laid out as in
-//! the QEMU image (`new_gait`, `control_cycle` and the gait calls not inlined), whose painted
-//! stack measures the high-water mark: ~93 KB of the 128 KB.
+//! The node (`Node<16>`, ~47 KB: the gait's two plan windows and preview gains) is built once
+//! in a function of its own and moved into a `static` in .bss (DTCM) by
+//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
 
+mod can;
+
 use core::convert::Infallible;
+use core::num::{NonZeroU16, NonZeroU8};
 
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
 use defmt_rtt as _; // global logger over RTT
 use embedded_hal::digital::{ErrorType, OutputPin};
+use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
+use fdcan::filter::{StandardFilter, StandardFilterSlot};
 use panic_probe as _; // panics print through defmt, then the core halts
-use stm32h7xx_hal::gpio::{Output, Pin, PushPull};
-use stm32h7xx_hal::rcc::PllConfigStrategy;
+use stm32h7xx_hal::can::CanExt as _;
+use stm32h7xx_hal::gpio::{Output, Pin, PushPull, Speed};
+use stm32h7xx_hal::rcc::{rec, PllConfigStrategy};
 use stm32h7xx_hal::timer::Timer;
 use stm32h7xx_hal::{pac, prelude::*};
 
-use gait_loop::{new_gait, script, Clock, Kind, Player, Scenario, Stats, QUEUE};
-use planner_core::gait::{Gait, GaitParams};
+use planner_core::gait::GaitError;
+use planner_core::node::{Node, NodeConfig};
+
+use crate::can::FdcanBus;
 
 /// System clock \[Hz\].
 const SYSCLK_HZ: u32 = 480_000_000;
+/// FDCAN kernel clock (PLL1Q = VCO 960 MHz / 12) \[Hz\].
+const FDCAN_KER_HZ: u32 = 80_000_000;
 /// Control cycle \[Hz\] (5 ms).
 const CYCLE_HZ: u32 = 200;
+/// Control cycle \[ms\].
+const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
 /// Core cycles in one control cycle.
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
+/// Footstep queue capacity of the node.
+const QUEUE: usize = 16;
+/// A summary every this many cycles (1 s).
+const SUMMARY_EVERY: u32 = CYCLE_HZ;
 
-/// The DWT cycle counter as the loop's clock.
-struct Cycles;
-
-impl Clock for Cycles {
-    fn now(&mut self) -> u32 {
-        DWT::cycle_count()
+/// 1 Mbit/s from the 80 MHz kernel clock: prescaler 2 gives 40 time quanta per bit,
+/// 1 (sync) + 34 + 5, sample point at 35/40 = 87.5 % (CiA 301), SJW 5.
+fn bit_timing() -> NominalBitTiming {
+    const PRESCALER: NonZeroU16 = match NonZeroU16::new(2) {
+        Some(v) => v,
+        None => panic!(),
+    };
+    const SEG1: NonZeroU8 = match NonZeroU8::new(34) {
+        Some(v) => v,
+        None => panic!(),
+    };
+    const SEG2: NonZeroU8 = match NonZeroU8::new(5) {
+        Some(v) => v,
+        None => panic!(),
+    };
+    const _: () = assert!(FDCAN_KER_HZ / 2 / (1 + 34 + 5) == 1_000_000);
+    NominalBitTiming {
+        prescaler: PRESCALER,
+        seg1: SEG1,
+        seg2: SEG2,
+        sync_jump_width: SEG2,
     }
 }
 
@@ -67,105 +102,38 @@ impl<const P: char, const N: u8> OutputPin for BusyPin<P, N> {
     }
 }
 
-/// One control cycle with the busy pin held high around the planner's work; returns the
-/// cycles spent between raising and lowering the pin. Not inlined: the planner's temporaries
-/// get a frame of their own, not one next to the gait's.
+/// Builds the node and moves it into its `static` (in .bss). Not inlined: the temporaries of
+/// `Node::new` (the gait and the preview-gain computation) live in this frame and are gone
+/// once the node is in place, instead of staying reserved in `main`'s frame forever.
 #[inline(never)]
-fn control_cycle<B: OutputPin>(
-    busy: &mut B,
-    player: &mut Player<'_>,
-    gait: &mut Gait<f64, QUEUE>,
-    stats: &mut Stats,
-) -> u32 {
-    // Infallible on this board; a pin error must not stop the control loop anyway.
-    let _ = busy.set_high();
-    let t0 = DWT::cycle_count();
-    let record = player.cycle(gait, &mut Cycles, stats, |c| {
-        if let Err(e) = c.result {
-            defmt::warn!(
-                "tick {=u64}: {=str} refused: {}",
-                c.tick,
-                c.command.name(),
-                e
-            );
-        }
-    });
-    let spent = DWT::cycle_count().wrapping_sub(t0);
-    let _ = busy.set_low();
-    if let Some(info) = record.replan {
-        if info.adjust_ticks != 0 {
-            defmt::info!(
-                "tick {=u64}: single support adjusted by {=i32} ticks",
-                record.tick,
-                info.adjust_ticks
-            );
-        }
+fn place_node(cfg: NodeConfig) -> Result<&'static mut Node<QUEUE>, GaitError> {
+    let node = Node::new(cfg)?;
+    match cortex_m::singleton!(: Node<QUEUE> = node) {
+        Some(n) => Ok(n),
+        None => panic!("place_node called twice"),
     }
-    spent
 }
 
-fn report(name: &str, stats: &Stats, overruns: u32, worst_busy: u32) {
-    for kind in Kind::ALL {
-        let s = stats.get(kind);
-        if s.n == 0 {
-            continue;
-        }
-        defmt::info!(
-            "TIMING scenario={=str} kind={=str} n={=u32} max={=u32} mean={=u64} max_tick={=u64} (cycles)",
-            name,
-            kind.name(),
-            s.n,
-            s.max,
-            s.sum / u64::from(s.n),
-            s.max_tick
-        );
-    }
-    defmt::info!(
-        "scenario {=str}: worst busy time {=u32} cycles of {=u32}, {=u32} overruns",
-        name,
-        worst_busy,
-        PERIOD_CYCLES,
-        overruns
-    );
-}
-
-/// Plays one scenario with a fresh gait at one control cycle per timer overflow. The gait
-/// lives in this function's frame (not inlined: one frame, in DTCM).
-#[inline(never)]
-fn run_scenario<B: OutputPin>(
-    scenario: &Scenario,
-    params: GaitParams<f64>,
-    timer: &mut Timer<pac::TIM2>,
-    busy: &mut B,
-) {
-    let mut stats = Stats::new();
-    let t0 = DWT::cycle_count();
-    let mut created = new_gait(params, scenario);
-    stats.record(Kind::New, DWT::cycle_count().wrapping_sub(t0), 0);
-    // Borrowed where `new_gait` returned it (moving it would copy 38 KB).
-    let gait = match &mut created {
-        Ok(g) => g,
-        Err(e) => {
-            defmt::error!("Gait::new failed: {}", e);
+/// Waits for the next TIM2 overflow, moving CAN frames between the hardware and software
+/// FIFOs meanwhile.
+fn wait_tick<I: fdcan::Instance>(timer: &mut Timer<pac::TIM2>, bus: &mut FdcanBus<I>) {
+    loop {
+        bus.service();
+        if timer.wait().is_ok() {
             return;
         }
-    };
-    let mut player = Player::new(scenario);
-    let mut overruns = 0u32;
-    let mut worst_busy = 0u32;
-    // Align the first cycle on a timer overflow.
-    let _ = nb::block!(timer.wait());
-    while !player.done(gait) {
-        let spent = control_cycle(busy, &mut player, gait, &mut stats);
-        worst_busy = worst_busy.max(spent);
-        // The overflow that ends this cycle has already happened: the work (or the logging
-        // after it) took longer than 5 ms.
-        if !timer.is_irq_clear() {
-            overruns += 1;
-        }
-        let _ = nb::block!(timer.wait());
     }
-    report(scenario.name, &stats, overruns, worst_busy);
+}
+
+/// Cycle statistics between two summaries.
+#[derive(Default)]
+struct Window {
+    cycles: u32,
+    worst: u32,
+    sum: u64,
+    received: u32,
+    refused: u32,
+    sent: u32,
 }
 
 #[entry]
@@ -185,9 +153,15 @@ fn main() -> ! {
         .constrain()
         .pll1_strategy(PllConfigStrategy::Iterative)
         .sys_ck(SYSCLK_HZ.Hz())
+        .pll1_q_ck(FDCAN_KER_HZ.Hz())
         .freeze(pwrcfg, &dp.SYSCFG);
     cp.SCB.enable_icache();
     cp.SCB.enable_dcache(&mut cp.CPUID);
+    // The bit timing assumes exactly 80 MHz.
+    match ccdr.clocks.pll1_q_ck() {
+        Some(f) if f.raw() == FDCAN_KER_HZ => {}
+        _ => panic!("PLL1Q is not 80 MHz: no CAN bit timing for it"),
+    }
 
     // Cycle counter (the Cortex-M7's DWT has a software lock).
     cp.DCB.enable_trace();
@@ -198,21 +172,109 @@ fn main() -> ! {
     let mut busy = BusyPin(gpioe.pe1.into_push_pull_output());
     let _ = busy.set_low();
 
-    let mut timer = dp
-        .TIM2
-        .timer(CYCLE_HZ.Hz(), ccdr.peripheral.TIM2, &ccdr.clocks);
+    // FDCAN1 on PD0 (RX) / PD1 (TX), classic CAN, 1 Mbit/s.
+    let gpiod = dp.GPIOD.split(ccdr.peripheral.GPIOD);
+    let rx = gpiod.pd0.into_alternate::<9>().speed(Speed::VeryHigh);
+    let tx = gpiod.pd1.into_alternate::<9>().speed(Speed::VeryHigh);
+    let prec = ccdr
+        .peripheral
+        .FDCAN
+        .kernel_clk_mux(rec::FdcanClkSel::Pll1Q);
+    let mut fdcan = dp.FDCAN1.fdcan(tx, rx, prec);
+    fdcan.set_protocol_exception_handling(false);
+    fdcan.set_frame_transmit(FrameTransmissionConfig::ClassicCanOnly);
+    fdcan.set_nominal_bit_timing(bit_timing());
+    fdcan.set_standard_filter(
+        StandardFilterSlot::_0,
+        StandardFilter::accept_all_into_fifo0(),
+    );
+    // Extended and remote frames are not part of the message set.
+    fdcan.set_global_filter(GlobalFilter::reject_all());
+    let mut bus = FdcanBus::new(fdcan.into_normal());
+
     defmt::info!(
-        "sysclk {=u32} Hz, control cycle {=u32} cycles",
+        "sysclk {=u32} Hz, control cycle {=u32} cycles, CAN 1 Mbit/s on PD0/PD1",
         ccdr.clocks.sys_ck().raw(),
         PERIOD_CYCLES
     );
 
-    let params = GaitParams::<f64>::hrp2();
+    let t0 = DWT::cycle_count();
+    let node = match place_node(NodeConfig::hrp2()) {
+        Ok(n) => n,
+        Err(e) => defmt::panic!("Node::new failed: {}", e),
+    };
+    defmt::info!(
+        "node ready ({=usize} bytes) in {=u32} cycles",
+        core::mem::size_of::<Node<QUEUE>>(),
+        DWT::cycle_count().wrapping_sub(t0)
+    );
+
+    // Started once the node exists (building it takes ~1 ms): the first cycle then starts on
+    // a fresh overflow.
+    let mut timer = dp
+        .TIM2
+        .timer(CYCLE_HZ.Hz(), ccdr.peripheral.TIM2, &ccdr.clocks);
+
+    // A free-running millisecond clock: one control cycle = 5 ms. A cycle that overruns by
+    // more than a whole period loses that time (the timer only remembers one overflow).
+    let mut now_ms: u32 = 0;
+    let mut overruns: u32 = 0;
+    let mut window = Window::default();
+    // Align the first cycle on a timer overflow.
+    wait_tick(&mut timer, &mut bus);
     loop {
-        for name in script::NAMES {
-            if let Some(scenario) = Scenario::by_name(name) {
-                run_scenario(&scenario, params, &mut timer, &mut busy);
-            }
+        let _ = busy.set_high();
+        let t0 = DWT::cycle_count();
+        let report = node.poll(now_ms, &mut bus);
+        let spent = DWT::cycle_count().wrapping_sub(t0);
+        let _ = busy.set_low();
+
+        // Late: the work did not fit the slot, or the overflow that ends this cycle has
+        // already happened (so the next cycle starts late).
+        if spent > PERIOD_CYCLES || !timer.is_irq_clear() {
+            overruns = overruns.saturating_add(1);
+            node.note_overrun();
+            defmt::warn!(
+                "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
+                node.cycles(),
+                spent,
+                PERIOD_CYCLES,
+                overruns
+            );
         }
+        if report.refused > 0 {
+            defmt::warn!(
+                "cycle {=u32}: {=u8} of {=u8} commands refused",
+                node.cycles(),
+                report.refused,
+                report.received
+            );
+        }
+
+        window.cycles += 1;
+        window.worst = window.worst.max(spent);
+        window.sum += u64::from(spent);
+        window.received += u32::from(report.received);
+        window.refused += u32::from(report.refused);
+        window.sent += u32::from(report.sent);
+        if window.cycles == SUMMARY_EVERY {
+            let c = bus.counters();
+            defmt::info!(
+                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32}; rx FIFO overruns {=u32}",
+                node.cycles(),
+                window.worst,
+                window.sum / u64::from(window.cycles),
+                PERIOD_CYCLES,
+                window.received,
+                window.refused,
+                window.sent,
+                overruns,
+                c.rx_overruns
+            );
+            window = Window::default();
+        }
+
+        wait_tick(&mut timer, &mut bus);
+        now_ms = now_ms.wrapping_add(CYCLE_MS);
     }
 }
