@@ -4,6 +4,7 @@
 //!   API.
 //! * [`scenario`]: timelines of footstep commands and the built-in HRP-2 scenarios.
 pub mod bus;
+pub mod faults;
 pub mod multibody;
 pub mod paper;
 pub mod plot;

@@ -19,6 +19,9 @@
 //! finished, then the robot settles between its feet); an emergency stop does the same at once
 //! and refuses every motion command until a `Reset` once standing.
 //!
+//! Step ids must count up from 0 (after start-up and after a `Reset`): a gap is refused, so a
+//! lost step cannot be skipped over.
+//!
 //! Reach limits (HRP-2, in the frame of the previous foot of the other side): forward
 //! −0.30 … +0.40 m, across 0.15 … 0.40 m on the foot's own side (a step to the other side of
 //! the support foot is `Crossing`), heading change at most 0.6 rad.
@@ -340,6 +343,8 @@ impl<const Q: usize> Node<Q> {
                 }
                 self.estopped = false;
                 self.lost = false;
+                // The controller starts a new sequence of step ids from 0.
+                self.last_append = None;
                 Ok(())
             }
         }
@@ -349,13 +354,14 @@ impl<const Q: usize> Node<Q> {
         if self.estopped {
             return Err(Reason::EmergencyStopped);
         }
-        if let Some(last) = self.last_append {
-            if s.id == last {
-                return Err(Reason::Duplicate);
-            }
-            if s.id != last.wrapping_add(1) {
-                return Err(Reason::SequenceGap);
-            }
+        // Step ids count from 0 after start-up and after a reset: a lost first step must not
+        // let the second one become the first (a stride from standing twice as long).
+        let expected = self.last_append.map_or(0, |l| l.wrapping_add(1));
+        if Some(s.id) == self.last_append {
+            return Err(Reason::Duplicate);
+        }
+        if s.id != expected {
+            return Err(Reason::SequenceGap);
         }
         let step = Self::footstep(s);
         self.check_reach(&step, None)?;

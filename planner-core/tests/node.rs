@@ -181,6 +181,11 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         ),
         Reason::Crossing,
     );
+    // Step ids count from 0: a first step with another id is a gap (a lost step 0).
+    check(
+        ask(&mut n, &mut bus, &mut t, step(1, false, 0.2)),
+        Reason::SequenceGap,
+    );
     assert_eq!(
         ask(&mut n, &mut bus, &mut t, step(0, false, 0.2)).reason,
         None

@@ -1,0 +1,494 @@
+//! The bodies of the fuzz targets, shared by the libFuzzer binaries (`fuzz_targets/`) and by
+//! the deterministic replay test (`tests/replay.rs`, plain `cargo test`, no nightly needed).
+//!
+//! * [`decode_one`]: bytes `[id lo, id hi, data…]` → [`RawFrame::new`] → [`Command::decode`];
+//!   an accepted command encodes to a frame that decodes to the same command, and a refusal
+//!   never panics.
+//! * [`node_run`]: the bytes are a program of operations on a `Node<8>` (raw frames through
+//!   the bus or through [`Node::handle`], well-formed footsteps near a nominal gait so that
+//!   the fuzzer reaches the walking states, control commands, time steps). Checked: no panic,
+//!   every poll publishes exactly one reference (one frame of each of the five stream
+//!   identifiers, with this cycle's tick counter) whose values are finite, and every frame
+//!   received is answered with one `ACK`.
+
+use std::collections::VecDeque;
+use std::sync::OnceLock;
+
+use embedded_can::{Frame, Id, StandardId};
+use planner_core::gait::Side;
+use planner_core::node::{Node, NodeConfig};
+use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Stream, WireStep};
+
+/// `decode` target: see the module docs.
+pub fn decode_one(data: &[u8]) {
+    if data.len() < 2 {
+        return;
+    }
+    let id = u16::from_le_bytes([data[0], data[1]]);
+    let Some(frame) = RawFrame::new(id, &data[2..]) else {
+        assert!(id > 0x7FF || data.len() > 10, "a valid frame was refused");
+        return;
+    };
+    match Command::decode(&frame) {
+        Ok(cmd) => {
+            let again = cmd.encode();
+            assert_eq!(again.id, frame.id, "{cmd:?}");
+            assert_eq!(Command::decode(&again), Ok(cmd), "{frame:?}");
+            // The codec is canonical: what it accepts, it re-encodes bit for bit.
+            assert_eq!(again, frame, "{cmd:?}");
+            assert_eq!(u16::from(cmd.code()), frame.id & 0xFF);
+        }
+        Err((reason, _seq)) => {
+            let r = reason.code();
+            assert!((1..=15).contains(&r));
+        }
+    }
+}
+
+/// A frame of the in-memory bus device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemFrame(pub RawFrame);
+
+impl Frame for MemFrame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        match id.into() {
+            Id::Standard(s) => RawFrame::new(s.as_raw(), data).map(MemFrame),
+            Id::Extended(_) => None,
+        }
+    }
+    fn new_remote(_: impl Into<Id>, _: usize) -> Option<Self> {
+        None
+    }
+    fn is_extended(&self) -> bool {
+        false
+    }
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+    fn id(&self) -> Id {
+        Id::Standard(StandardId::new(self.0.id).unwrap_or(StandardId::ZERO))
+    }
+    fn dlc(&self) -> usize {
+        usize::from(self.0.len)
+    }
+    fn data(&self) -> &[u8] {
+        self.0.bytes()
+    }
+}
+
+/// An in-memory `embedded-can` device: frames to receive, frames transmitted.
+#[derive(Debug, Default)]
+pub struct MemCan {
+    /// Frames waiting to be received by the node.
+    pub rx: VecDeque<RawFrame>,
+    /// Frames the node transmitted.
+    pub tx: Vec<RawFrame>,
+}
+
+/// Never happens: the in-memory device does not fail.
+#[derive(Debug)]
+pub struct NoError;
+
+impl embedded_can::Error for NoError {
+    fn kind(&self) -> embedded_can::ErrorKind {
+        embedded_can::ErrorKind::Other
+    }
+}
+
+impl embedded_can::nb::Can for MemCan {
+    type Frame = MemFrame;
+    type Error = NoError;
+    fn transmit(&mut self, frame: &MemFrame) -> nb::Result<Option<MemFrame>, NoError> {
+        self.tx.push(frame.0);
+        Ok(None)
+    }
+    fn receive(&mut self) -> nb::Result<MemFrame, NoError> {
+        self.rx
+            .pop_front()
+            .map(MemFrame)
+            .ok_or(nb::Error::WouldBlock)
+    }
+}
+
+fn fresh_node() -> Node<8> {
+    static NODE: OnceLock<Node<8>> = OnceLock::new();
+    NODE.get_or_init(|| Node::new(NodeConfig::hrp2()).expect("HRP-2 node"))
+        .clone()
+}
+
+/// A byte reader that yields zeros once the input is exhausted.
+struct Bytes<'a>(&'a [u8]);
+
+impl Bytes<'_> {
+    fn u8(&mut self) -> u8 {
+        match self.0.split_first() {
+            Some((b, rest)) => {
+                self.0 = rest;
+                *b
+            }
+            None => 0,
+        }
+    }
+    fn i8(&mut self) -> i8 {
+        self.u8() as i8
+    }
+    fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+/// Operation codes of the `node` target's program (the first byte of an operation, modulo 8).
+pub mod op {
+    /// `[id lo, id hi, len, data…]`: a raw frame into the receive queue.
+    pub const RAW: u8 = 0;
+    /// `[id lo, id hi, len, data…]`: a raw frame straight to `Node::handle`.
+    pub const HANDLE: u8 = 1;
+    /// `[id delta, dx, dy, dyaw]`: append the next footstep of a nominal 0.2 m gait, perturbed.
+    pub const APPEND: u8 = 2;
+    /// `[back, dx, dy, dyaw]`: modify a recent footstep, perturbed.
+    pub const MODIFY: u8 = 3;
+    /// `[seq, op]`: a control command (op modulo 5).
+    pub const CONTROL: u8 = 4;
+    /// `[seq]`: an emergency stop.
+    pub const ESTOP: u8 = 5;
+    /// `[n]`: poll `n + 1` cycles of 5 ms.
+    pub const POLL: u8 = 6;
+    /// `[ms lo, ms hi]`: poll once after a jump of the clock (it may wrap).
+    pub const JUMP: u8 = 7;
+}
+
+struct Driver {
+    node: Node<8>,
+    can: MemCan,
+    now_ms: u32,
+    cycles: u32,
+    next_id: u8,
+    side: Side,
+    x: f64,
+    sent: Vec<WireStep>,
+}
+
+fn finite(r: &planner_core::gait::Reference<f64>) -> bool {
+    [r.x.cog, r.x.cog_vel, r.x.zmp, r.y.cog, r.y.cog_vel, r.y.zmp]
+        .iter()
+        .all(|v| v.is_finite())
+        && r.feet
+            .iter()
+            .all(|f| [f.x, f.y, f.z, f.yaw].iter().all(|v| v.is_finite()))
+}
+
+impl Driver {
+    fn new() -> Self {
+        Self {
+            node: fresh_node(),
+            can: MemCan::default(),
+            now_ms: 0,
+            cycles: 0,
+            next_id: 0,
+            side: Side::Right,
+            x: 0.0,
+            sent: Vec::new(),
+        }
+    }
+
+    fn queue(&mut self, f: RawFrame) {
+        // A controller's receive FIFO is bounded; so is the fuzz input's effect.
+        if self.can.rx.len() < 256 {
+            self.can.rx.push_back(f);
+        }
+    }
+
+    fn poll(&mut self, dt_ms: u32) {
+        self.now_ms = self.now_ms.wrapping_add(dt_ms);
+        let pending = self.can.rx.len();
+        self.can.tx.clear();
+        let report = self.node.poll(self.now_ms, &mut self.can);
+        self.cycles = self.cycles.wrapping_add(1);
+        assert!(finite(&report.reference), "{:?}", report.reference);
+        assert_eq!(self.node.cycles(), self.cycles);
+        // Exactly one reference: one frame of each stream identifier, this cycle's tick.
+        let mut stream = Stream::default();
+        for id in [
+            ids::COG,
+            ids::ZMP,
+            ids::COG_VEL,
+            ids::FOOT_LEFT,
+            ids::FOOT_RIGHT,
+        ] {
+            let frames: Vec<_> = self.can.tx.iter().filter(|f| f.id == id).collect();
+            assert_eq!(frames.len(), 1, "stream id {id:#x}: {:?}", self.can.tx);
+            assert!(stream.decode_into(frames[0]));
+        }
+        assert_eq!(stream.tick, (self.cycles & 0xFF) as u8);
+        // Every frame handled is answered once (at most 16 per cycle).
+        let handled = pending.min(16);
+        assert_eq!(usize::from(report.received), handled);
+        let acks = self.can.tx.iter().filter(|f| f.id == ids::ACK).count();
+        assert_eq!(acks, handled, "{:?}", self.can.tx);
+        assert!(self
+            .can
+            .tx
+            .iter()
+            .filter(|f| f.id == ids::ACK)
+            .all(|f| Ack::decode(f).is_some()));
+        let status = self.can.tx.iter().filter(|f| f.id == ids::STATUS).count();
+        assert_eq!(status, usize::from(self.cycles % 20 == 0));
+    }
+
+    fn step(&mut self, b: &mut Bytes) {
+        match b.u8() % 8 {
+            op::RAW | op::HANDLE => {
+                // (HANDLE is taken by `node_run` before it gets here.)
+                let id = u16::from_le_bytes([b.u8(), b.u8()]) & 0x7FF;
+                let len = usize::from(b.u8() % 9);
+                let data: Vec<u8> = (0..len).map(|_| b.u8()).collect();
+                let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
+                self.queue(f);
+            }
+            op::APPEND => {
+                let id = self.next_id.wrapping_add(b.u8() % 4);
+                let (dx, dy, dyaw) = (b.i8(), b.i8(), b.i8());
+                self.x += 0.2;
+                let y = if self.side == Side::Left { 0.1 } else { -0.1 };
+                let x = self.x + f64::from(dx) * 2e-3;
+                let y = y + f64::from(dy) * 1e-3;
+                let yaw = f64::from(dyaw) * 5e-3;
+                if let Some(w) = WireStep::from_si(id, self.side == Side::Left, x, y, yaw) {
+                    self.queue(Command::Append(w).encode());
+                    self.sent.push(w);
+                }
+                self.next_id = id.wrapping_add(1);
+                self.side = self.side.other();
+            }
+            op::MODIFY => {
+                let back = usize::from(b.u8() % 4);
+                let (dx, dy, dyaw) = (b.i8(), b.i8(), b.i8());
+                if let Some(&w) = self.sent.iter().rev().nth(back) {
+                    let (x, y, yaw) = w.si();
+                    if let Some(m) = WireStep::from_si(
+                        w.id,
+                        w.left,
+                        x + f64::from(dx) * 1e-3,
+                        y + f64::from(dy) * 5e-4,
+                        yaw + f64::from(dyaw) * 2e-3,
+                    ) {
+                        self.queue(Command::Modify(m).encode());
+                    }
+                }
+            }
+            op::CONTROL => {
+                let seq = b.u8();
+                let op = [
+                    ControlOp::Heartbeat,
+                    ControlOp::Start,
+                    ControlOp::Stop,
+                    ControlOp::StopNow,
+                    ControlOp::Reset,
+                ][usize::from(b.u8() % 5)];
+                self.queue(Command::Control { seq, op }.encode());
+            }
+            op::ESTOP => {
+                let seq = b.u8();
+                self.queue(Command::EmergencyStop { seq }.encode());
+            }
+            op::POLL => {
+                for _ in 0..=b.u8() {
+                    self.poll(5);
+                }
+            }
+            _ => {
+                let ms = u32::from(u16::from_le_bytes([b.u8(), b.u8()]));
+                self.poll(ms);
+            }
+        }
+    }
+}
+
+/// `node` target: see the module docs.
+pub fn node_run(data: &[u8]) {
+    let mut d = Driver::new();
+    let mut b = Bytes(data);
+    let mut ops = 0;
+    // Bounded work per input: at most 64 operations, and a final poll.
+    while !b.is_empty() && ops < 64 {
+        // HANDLE is RAW given straight to `Node::handle` (no poll, no queue limit).
+        if b.0[0] % 8 == op::HANDLE {
+            b.u8();
+            let id = u16::from_le_bytes([b.u8(), b.u8()]) & 0x7FF;
+            let len = usize::from(b.u8() % 9);
+            let data: Vec<u8> = (0..len).map(|_| b.u8()).collect();
+            let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
+            let ack = d.node.handle(&f, d.now_ms);
+            assert_eq!(Ack::decode(&ack.encode()), Some(ack));
+            if let Ok(cmd) = Command::decode(&f) {
+                assert_eq!(ack.command, cmd.code());
+            } else {
+                assert!(
+                    ack.reason.is_some(),
+                    "a malformed frame was accepted: {f:?}"
+                );
+            }
+        } else {
+            d.step(&mut b);
+        }
+        ops += 1;
+    }
+    d.poll(5);
+}
+
+/// The seed corpus: a few valid inputs of every message type, per target, by file name.
+pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let frame = |f: RawFrame| {
+        let mut v = f.id.to_le_bytes().to_vec();
+        v.extend_from_slice(f.bytes());
+        v
+    };
+    let step = |id, left, x, y, yaw| WireStep::from_si(id, left, x, y, yaw).unwrap();
+    let commands = [
+        ("estop", Command::EmergencyStop { seq: 7 }),
+        (
+            "heartbeat",
+            Command::Control {
+                seq: 0,
+                op: ControlOp::Heartbeat,
+            },
+        ),
+        (
+            "start",
+            Command::Control {
+                seq: 1,
+                op: ControlOp::Start,
+            },
+        ),
+        (
+            "stop",
+            Command::Control {
+                seq: 2,
+                op: ControlOp::Stop,
+            },
+        ),
+        (
+            "stopnow",
+            Command::Control {
+                seq: 3,
+                op: ControlOp::StopNow,
+            },
+        ),
+        (
+            "reset",
+            Command::Control {
+                seq: 4,
+                op: ControlOp::Reset,
+            },
+        ),
+        ("append", Command::Append(step(0, false, 0.2, -0.1, 0.0))),
+        ("modify", Command::Modify(step(3, true, 0.6, 0.1, 0.1))),
+    ];
+    for (name, c) in commands {
+        out.push(("decode", format!("seed-{name}"), frame(c.encode())));
+    }
+    // Answers and the stream: not commands, refused as unknown identifiers.
+    let ack = Ack {
+        command: 0,
+        seq: 1,
+        reason: None,
+        queue: 2,
+    };
+    out.push(("decode", "seed-ack".into(), frame(ack.encode())));
+    let st = Stream {
+        cog: [0.1, -0.05],
+        cog_vel: [0.2, 0.0],
+        zmp: [0.1, -0.1],
+        phase: 2,
+        tick: 9,
+        feet: [[0.2, 0.1, 0.01, 0.0], [0.0, -0.1, 0.0, 0.0]],
+    };
+    for (i, f) in st.encode().into_iter().enumerate() {
+        out.push(("decode", format!("seed-stream{i}"), frame(f)));
+    }
+    out.push((
+        "decode",
+        "seed-status".into(),
+        frame(planner_core::wire::Status::default().encode()),
+    ));
+    // `node`: a walk of four steps, a modification, a stop; an emergency stop and reset; a
+    // silent controller; raw frames of every command identifier.
+    let walk = vec![
+        op::APPEND,
+        0,
+        0,
+        0,
+        0,
+        op::APPEND,
+        0,
+        0,
+        0,
+        0,
+        op::APPEND,
+        0,
+        0,
+        0,
+        0,
+        op::APPEND,
+        0,
+        0,
+        0,
+        0,
+        op::CONTROL,
+        1,
+        1,
+        op::POLL,
+        200,
+        op::MODIFY,
+        1,
+        10,
+        0,
+        0,
+        op::POLL,
+        200,
+        op::CONTROL,
+        2,
+        2,
+        op::POLL,
+        255,
+        op::POLL,
+        255,
+    ];
+    out.push(("node", "seed-walk".into(), walk.clone()));
+    let mut estop = walk[..25].to_vec();
+    estop.extend_from_slice(&[
+        op::ESTOP,
+        9,
+        op::POLL,
+        255,
+        op::CONTROL,
+        3,
+        4,
+        op::POLL,
+        255,
+        op::POLL,
+        255,
+        op::CONTROL,
+        4,
+        4,
+        op::POLL,
+        1,
+    ]);
+    out.push(("node", "seed-estop".into(), estop));
+    let mut silent = walk[..25].to_vec();
+    silent.extend_from_slice(&[op::JUMP, 0x20, 0x03, op::POLL, 255, op::POLL, 255]);
+    out.push(("node", "seed-silent".into(), silent));
+    let mut raw = Vec::new();
+    for (_, c) in commands {
+        let f = c.encode();
+        raw.push(op::RAW);
+        raw.extend_from_slice(&f.id.to_le_bytes());
+        raw.push(f.len);
+        raw.extend_from_slice(f.bytes());
+        raw.extend_from_slice(&[op::POLL, 3]);
+    }
+    raw.extend_from_slice(&[op::HANDLE, 0x10, 0x00, 1, 5, op::HANDLE, 0x23, 0x01, 0]);
+    out.push(("node", "seed-raw".into(), raw));
+    out
+}
