@@ -14,7 +14,6 @@
 use std::collections::VecDeque;
 use std::sync::OnceLock;
 
-use embedded_can::{Frame, Id, StandardId};
 use planner_core::gait::Side;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Stream, WireStep};
@@ -45,36 +44,8 @@ pub fn decode_one(data: &[u8]) {
     }
 }
 
-/// A frame of the in-memory bus device.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MemFrame(pub RawFrame);
-
-impl Frame for MemFrame {
-    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
-        match id.into() {
-            Id::Standard(s) => RawFrame::new(s.as_raw(), data).map(MemFrame),
-            Id::Extended(_) => None,
-        }
-    }
-    fn new_remote(_: impl Into<Id>, _: usize) -> Option<Self> {
-        None
-    }
-    fn is_extended(&self) -> bool {
-        false
-    }
-    fn is_remote_frame(&self) -> bool {
-        false
-    }
-    fn id(&self) -> Id {
-        Id::Standard(StandardId::new(self.0.id).unwrap_or(StandardId::ZERO))
-    }
-    fn dlc(&self) -> usize {
-        usize::from(self.0.len)
-    }
-    fn data(&self) -> &[u8] {
-        self.0.bytes()
-    }
-}
+/// A frame of the in-memory bus device: the codec's own frame type.
+pub type MemFrame = RawFrame;
 
 /// An in-memory `embedded-can` device: frames to receive, frames transmitted.
 #[derive(Debug, Default)]
@@ -99,14 +70,11 @@ impl embedded_can::nb::Can for MemCan {
     type Frame = MemFrame;
     type Error = NoError;
     fn transmit(&mut self, frame: &MemFrame) -> nb::Result<Option<MemFrame>, NoError> {
-        self.tx.push(frame.0);
+        self.tx.push(*frame);
         Ok(None)
     }
     fn receive(&mut self) -> nb::Result<MemFrame, NoError> {
-        self.rx
-            .pop_front()
-            .map(MemFrame)
-            .ok_or(nb::Error::WouldBlock)
+        self.rx.pop_front().ok_or(nb::Error::WouldBlock)
     }
 }
 

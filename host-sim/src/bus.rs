@@ -19,7 +19,6 @@ use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::rc::Rc;
 
-use embedded_can::{Frame, Id, StandardId};
 use planner_core::wire::RawFrame;
 
 /// Transmit mailbox capacity of a port.
@@ -27,36 +26,8 @@ pub const MAILBOX: usize = 64;
 /// Receive FIFO capacity of a port.
 pub const RX_FIFO: usize = 64;
 
-/// A frame on the virtual bus (standard identifier, data frame).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VFrame(pub RawFrame);
-
-impl Frame for VFrame {
-    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
-        match id.into() {
-            Id::Standard(s) => RawFrame::new(s.as_raw(), data).map(VFrame),
-            Id::Extended(_) => None,
-        }
-    }
-    fn new_remote(_: impl Into<Id>, _: usize) -> Option<Self> {
-        None
-    }
-    fn is_extended(&self) -> bool {
-        false
-    }
-    fn is_remote_frame(&self) -> bool {
-        false
-    }
-    fn id(&self) -> Id {
-        Id::Standard(StandardId::new(self.0.id).unwrap_or(StandardId::ZERO))
-    }
-    fn dlc(&self) -> usize {
-        usize::from(self.0.len)
-    }
-    fn data(&self) -> &[u8] {
-        self.0.bytes()
-    }
-}
+/// A frame on the virtual bus: the codec's own frame type, which is an `embedded-can` frame.
+pub type VFrame = RawFrame;
 
 /// Bus errors seen by a port.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -335,7 +306,7 @@ impl embedded_can::nb::Can for Port {
         if port.mailbox.len() >= MAILBOX {
             return Err(nb::Error::WouldBlock);
         }
-        port.mailbox.push(frame.0);
+        port.mailbox.push(*frame);
         Ok(None)
     }
 
@@ -344,7 +315,6 @@ impl embedded_can::nb::Can for Port {
         b.ports[self.index]
             .rx
             .pop_front()
-            .map(VFrame)
             .ok_or(nb::Error::WouldBlock)
     }
 }
@@ -355,7 +325,7 @@ mod tests {
     use embedded_can::nb::Can;
 
     fn frame(id: u16, data: &[u8]) -> VFrame {
-        VFrame(RawFrame::new(id, data).unwrap())
+        RawFrame::new(id, data).unwrap()
     }
 
     #[test]
@@ -370,10 +340,10 @@ mod tests {
         bus.advance(134_000);
         assert!(b.receive().is_err());
         bus.advance(135_000);
-        assert_eq!(b.receive().unwrap().0.id, 0x100);
+        assert_eq!(b.receive().unwrap().id, 0x100);
         bus.advance(1_000_000);
-        assert_eq!(b.receive().unwrap().0.id, 0x200);
-        assert_eq!(b.receive().unwrap().0.id, 0x300);
+        assert_eq!(b.receive().unwrap().id, 0x200);
+        assert_eq!(b.receive().unwrap().id, 0x300);
         assert!(a.receive().is_err(), "a sender does not hear itself");
         let log = bus.log();
         assert_eq!(log[0], "(0.000135) can0 100#0202020202020202");
@@ -391,12 +361,12 @@ mod tests {
                 let _ = a.transmit(&frame(0x100, &i.to_le_bytes()));
                 bus.advance(u64::from(i + 1) * 1_000_000);
                 while let Ok(f) = b.receive() {
-                    got.push(f.0);
+                    got.push(f);
                 }
             }
             bus.advance(1_000_000_000);
             while let Ok(f) = b.receive() {
-                got.push(f.0);
+                got.push(f);
             }
             (got, bus.stats())
         };

@@ -180,7 +180,7 @@ impl Can for Tap<'_> {
     fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
         let r = self.port.transmit(frame);
         if r.is_ok() {
-            self.sent.push(frame.0);
+            self.sent.push(*frame);
         }
         r
     }
@@ -241,7 +241,7 @@ impl Flood {
                 let len = ((r >> 11) % 9) as usize;
                 let data = self.rng.next().to_le_bytes();
                 if let Some(f) = RawFrame::new((r & 0x7FF) as u16, &data[..len]) {
-                    if self.port.transmit(&VFrame(f)).is_ok() {
+                    if self.port.transmit(&f).is_ok() {
                         self.waiting = Some(f);
                     }
                 }
@@ -249,7 +249,7 @@ impl Flood {
             now = (now + STEP).min(t);
             bus.advance(now);
             while let Ok(f) = self.listener.receive() {
-                if Some(f.0) == self.waiting {
+                if Some(f) == self.waiting {
                     self.waiting = None;
                 }
             }
@@ -520,7 +520,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                     }
                 }
             }
-            let _ = ctl.transmit(&VFrame(cmd.encode()));
+            let _ = ctl.transmit(&cmd.encode());
             pending.push(Pending {
                 cmd,
                 step,
@@ -537,7 +537,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 p.retries += 1;
                 p.last_sent = k;
                 retransmissions += 1;
-                let _ = ctl.transmit(&VFrame(p.cmd.encode()));
+                let _ = ctl.transmit(&p.cmd.encode());
             }
         }
         if k % 20 == 0 {
@@ -545,7 +545,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 seq: 0,
                 op: ControlOp::Heartbeat,
             };
-            let _ = ctl.transmit(&VFrame(hb.encode()));
+            let _ = ctl.transmit(&hb.encode());
         }
         // 4. The node's cycle (the babbling port runs with the bus).
         flood.run(&bus, t0, t0 + 5 * ms / 2);
@@ -576,7 +576,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         // 5. The controller reads the answers and the stream.
         flood.run(&bus, t0 + 5 * ms / 2, t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
-            if let Some(a) = Ack::decode(&f.0) {
+            if let Some(a) = Ack::decode(&f) {
                 let Some(i) = pending
                     .iter()
                     .position(|p| p.open && p.cmd.code() == a.command && key(&p.cmd) == a.seq)
@@ -617,7 +617,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                     }
                 }
             } else {
-                stream.decode_into(&f.0);
+                stream.decode_into(&f);
             }
         }
         if stream.tick != (node.cycles() & 0xFF) as u8 {

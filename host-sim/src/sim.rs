@@ -14,7 +14,7 @@ use planner_core::gait::Reference;
 use planner_core::node::{Counters, Node, NodeConfig};
 use planner_core::wire::{Ack, Command, ControlOp, RawFrame, Stream, WireStep};
 
-use crate::bus::{Bus, BusStats, Faults, VFrame};
+use crate::bus::{Bus, BusStats, Faults};
 use crate::scenario::{self, Adjustment, Event, Run, Scenario};
 
 use embedded_can::nb::Can;
@@ -70,7 +70,7 @@ pub struct SimRun {
 
 fn send(port: &mut crate::bus::Port, f: RawFrame) {
     // The mailbox holds 64 frames; a scenario never sends that many in one tick.
-    let _ = port.transmit(&VFrame(f));
+    let _ = port.transmit(&f);
 }
 
 /// Plays a scenario through the virtual bus and the node.
@@ -166,10 +166,10 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         }
         bus.advance(t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
-            if let Some(a) = Ack::decode(&f.0) {
+            if let Some(a) = Ack::decode(&f) {
                 acks.push((k, a));
             } else {
-                stream.decode_into(&f.0);
+                stream.decode_into(&f);
             }
         }
         streams.push(stream);

@@ -118,6 +118,36 @@ impl RawFrame {
     }
 }
 
+/// `RawFrame` is itself an `embedded-can` frame (standard identifiers, data frames only), so
+/// test devices, the virtual bus and the fuzzers need no frame type of their own.
+impl embedded_can::Frame for RawFrame {
+    fn new(id: impl Into<embedded_can::Id>, data: &[u8]) -> Option<Self> {
+        match id.into() {
+            embedded_can::Id::Standard(s) => RawFrame::new(s.as_raw(), data),
+            embedded_can::Id::Extended(_) => None,
+        }
+    }
+    fn new_remote(_: impl Into<embedded_can::Id>, _: usize) -> Option<Self> {
+        None
+    }
+    fn is_extended(&self) -> bool {
+        false
+    }
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+    fn id(&self) -> embedded_can::Id {
+        let id = embedded_can::StandardId::new(self.id).unwrap_or(embedded_can::StandardId::ZERO);
+        embedded_can::Id::Standard(id)
+    }
+    fn dlc(&self) -> usize {
+        usize::from(self.len.min(8))
+    }
+    fn data(&self) -> &[u8] {
+        self.bytes()
+    }
+}
+
 /// Why a command was refused. `0` on the wire means accepted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

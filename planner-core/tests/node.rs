@@ -3,48 +3,14 @@
 
 use std::collections::VecDeque;
 
-use embedded_can::{Frame, Id, StandardId};
 use planner_core::gait::Phase;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{
     ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
 };
 
-#[derive(Clone, Debug, PartialEq)]
-struct F {
-    id: u16,
-    data: Vec<u8>,
-}
-
-impl Frame for F {
-    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
-        match id.into() {
-            Id::Standard(s) if data.len() <= 8 => Some(F {
-                id: s.as_raw(),
-                data: data.to_vec(),
-            }),
-            _ => None,
-        }
-    }
-    fn new_remote(_: impl Into<Id>, _: usize) -> Option<Self> {
-        None
-    }
-    fn is_extended(&self) -> bool {
-        false
-    }
-    fn is_remote_frame(&self) -> bool {
-        false
-    }
-    fn id(&self) -> Id {
-        Id::Standard(StandardId::new(self.id).unwrap())
-    }
-    fn dlc(&self) -> usize {
-        self.data.len()
-    }
-    fn data(&self) -> &[u8] {
-        &self.data
-    }
-}
+/// The codec's frame type is an `embedded-can` frame.
+type F = RawFrame;
 
 /// A loop-back device: what the test puts in `rx` the node receives; what it sends lands in
 /// `tx`.
@@ -66,7 +32,7 @@ impl embedded_can::nb::Can for Bus {
     type Frame = F;
     type Error = E;
     fn transmit(&mut self, f: &F) -> nb::Result<Option<F>, E> {
-        self.tx.push(f.clone());
+        self.tx.push(*f);
         Ok(None)
     }
     fn receive(&mut self) -> nb::Result<F, E> {
@@ -79,15 +45,10 @@ impl Bus {
         self.send_raw(c.encode());
     }
     fn send_raw(&mut self, r: RawFrame) {
-        self.rx
-            .push_back(F::new(StandardId::new(r.id).unwrap(), r.bytes()).unwrap());
+        self.rx.push_back(r);
     }
     fn acks(&mut self) -> Vec<Ack> {
-        let acks = self
-            .tx
-            .iter()
-            .filter_map(|f| Ack::decode(&RawFrame::from_frame(f).unwrap()))
-            .collect();
+        let acks = self.tx.iter().filter_map(Ack::decode).collect();
         self.tx.clear();
         acks
     }
@@ -326,9 +287,8 @@ fn the_stream_carries_the_gaits_reference() {
         t += 5;
         let rep = n.poll(t, &mut bus);
         for f in bus.tx.drain(..) {
-            let raw = RawFrame::from_frame(&f).unwrap();
-            stream.decode_into(&raw);
-            if let Some(s) = Status::decode(&raw) {
+            stream.decode_into(&f);
+            if let Some(s) = Status::decode(&f) {
                 status = Some(s);
             }
         }
