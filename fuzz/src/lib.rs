@@ -136,15 +136,6 @@ struct Driver {
     sent: Vec<WireStep>,
 }
 
-fn finite(r: &planner_core::gait::Reference<f64>) -> bool {
-    [r.x.cog, r.x.cog_vel, r.x.zmp, r.y.cog, r.y.cog_vel, r.y.zmp]
-        .iter()
-        .all(|v| v.is_finite())
-        && r.feet
-            .iter()
-            .all(|f| [f.x, f.y, f.z, f.yaw].iter().all(|v| v.is_finite()))
-}
-
 impl Driver {
     fn new() -> Self {
         Self {
@@ -172,7 +163,7 @@ impl Driver {
         self.can.tx.clear();
         let report = self.node.poll(self.now_ms, &mut self.can);
         self.cycles = self.cycles.wrapping_add(1);
-        assert!(finite(&report.reference), "{:?}", report.reference);
+        assert!(report.reference.is_finite(), "{:?}", report.reference);
         assert_eq!(self.node.cycles(), self.cycles);
         // Exactly one reference: one frame of each stream identifier, this cycle's tick.
         let mut stream = Stream::default();

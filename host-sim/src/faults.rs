@@ -373,15 +373,6 @@ pub fn landings(traj: &[Reference<f64>]) -> Vec<(Side, FootPose<f64>)> {
     out
 }
 
-fn finite(r: &Reference<f64>) -> bool {
-    [r.x.cog, r.x.cog_vel, r.x.zmp, r.y.cog, r.y.cog_vel, r.y.zmp]
-        .iter()
-        .all(|v| v.is_finite())
-        && r.feet
-            .iter()
-            .all(|f| [f.x, f.y, f.z, f.yaw].iter().all(|v| v.is_finite()))
-}
-
 /// Plays `scenario` with one fault kind at one rate and one seed, and evaluates the outcome.
 pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<CaseResult, String> {
     let cfg = NodeConfig::hrp2();
@@ -565,7 +556,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         let one_each = stream_ids
             .iter()
             .all(|id| tap.sent.iter().filter(|f| f.id == *id).count() == 1);
-        if !one_each || !finite(&report.reference) {
+        if !one_each || !report.reference.is_finite() {
             ticks_without_reference += 1;
         }
         trajectory.push(report.reference);

@@ -295,6 +295,25 @@ pub struct Reference<T> {
     pub feet: [FootPose<T>; 2],
 }
 
+impl<T: Real> Reference<T> {
+    /// `true` when every COG, ZMP and foot value is finite.
+    pub fn is_finite(&self) -> bool {
+        let plane = |p: &Sample<T>| {
+            p.cog.is_finite()
+                && p.cog_vel.is_finite()
+                && p.cog_acc.is_finite()
+                && p.zmp.is_finite()
+                && p.zmp_vel.is_finite()
+        };
+        plane(&self.x)
+            && plane(&self.y)
+            && self
+                .feet
+                .iter()
+                .all(|f| f.x.is_finite() && f.y.is_finite() && f.z.is_finite() && f.yaw.is_finite())
+    }
+}
+
 /// What the last re-plan did (for reports and tests).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReplanInfo<T> {
@@ -392,26 +411,15 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
             );
         }
         WindowKind::Start | WindowKind::Walk => {
-            if inp.kind == WindowKind::Start {
+            // A start window shifts the ZMP onto the support foot first; a walking window
+            // begins with the (possibly adjusted) single support itself.
+            let single = if inp.kind == WindowKind::Start {
                 push(&mut spec, &mut n, Kind::Start, inp.first_ticks, last, None);
-                push(
-                    &mut spec,
-                    &mut n,
-                    Kind::Single,
-                    p.single_ticks,
-                    last,
-                    Some(s0.side),
-                );
+                p.single_ticks
             } else {
-                push(
-                    &mut spec,
-                    &mut n,
-                    Kind::Single,
-                    inp.first_ticks,
-                    last,
-                    Some(s0.side),
-                );
-            }
+                inp.first_ticks
+            };
+            push(&mut spec, &mut n, Kind::Single, single, last, Some(s0.side));
             let mut last_side = s0.side;
             for (i, l) in inp.land.iter().take(inp.n_land).enumerate() {
                 if n >= M - 1 {
