@@ -28,6 +28,24 @@ pub fn decode_one(data: &[u8]) {
         assert!(id > 0x7FF || data.len() > 10, "a valid frame was refused");
         return;
     };
+    decode_checked(&frame);
+    // The same frame with its last byte made the right CRC-8: the field checks behind the
+    // CRC are reached by every input, not by one in 256.
+    decode_checked(&with_crc(frame));
+}
+
+/// `frame` with its last data byte replaced by the CRC-8 of its identifier and the bytes
+/// before it (unchanged if it has no data).
+pub fn with_crc(mut frame: RawFrame) -> RawFrame {
+    let n = usize::from(frame.len.min(8));
+    if n > 0 {
+        frame.data[n - 1] = planner_core::wire::crc8(frame.id, &frame.data[..n - 1]);
+    }
+    frame
+}
+
+fn decode_checked(frame: &RawFrame) {
+    let frame = *frame;
     match Command::decode(&frame) {
         Ok(cmd) => {
             let again = cmd.encode();
@@ -39,7 +57,7 @@ pub fn decode_one(data: &[u8]) {
         }
         Err((reason, _seq)) => {
             let r = reason.code();
-            assert!((1..=15).contains(&r));
+            assert!((1..=planner_core::wire::Reason::ALL.len() as u8).contains(&r));
         }
     }
 }
@@ -107,9 +125,10 @@ impl Bytes<'_> {
 
 /// Operation codes of the `node` target's program (the first byte of an operation, modulo 8).
 pub mod op {
-    /// `[id lo, id hi, len, data…]`: a raw frame into the receive queue.
+    /// `[id lo, id hi, len, data…]`: a raw frame into the receive queue (`len` modulo 9 bytes;
+    /// `len` ≥ 0x80: the last byte is replaced by the right CRC-8).
     pub const RAW: u8 = 0;
-    /// `[id lo, id hi, len, data…]`: a raw frame straight to `Node::handle`.
+    /// `[id lo, id hi, len, data…]`: a raw frame straight to `Node::handle` (as `RAW`).
     pub const HANDLE: u8 = 1;
     /// `[id delta, dx, dy, dyaw]`: append the next footstep of a nominal 0.2 m gait, perturbed.
     pub const APPEND: u8 = 2;
@@ -199,10 +218,11 @@ impl Driver {
             op::RAW | op::HANDLE => {
                 // (HANDLE is taken by `node_run` before it gets here.)
                 let id = u16::from_le_bytes([b.u8(), b.u8()]) & 0x7FF;
-                let len = usize::from(b.u8() % 9);
-                let data: Vec<u8> = (0..len).map(|_| b.u8()).collect();
+                let l = b.u8();
+                let data: Vec<u8> = (0..usize::from(l % 9)).map(|_| b.u8()).collect();
                 let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
-                self.queue(f);
+                // Length byte ≥ 0x80: the frame gets a right CRC-8 (see `with_crc`).
+                self.queue(if l >= 0x80 { with_crc(f) } else { f });
             }
             op::APPEND => {
                 let id = self.next_id.wrapping_add(b.u8() % 4);
@@ -274,9 +294,10 @@ pub fn node_run(data: &[u8]) {
         if b.0[0] % 8 == op::HANDLE {
             b.u8();
             let id = u16::from_le_bytes([b.u8(), b.u8()]) & 0x7FF;
-            let len = usize::from(b.u8() % 9);
-            let data: Vec<u8> = (0..len).map(|_| b.u8()).collect();
+            let l = b.u8();
+            let data: Vec<u8> = (0..usize::from(l % 9)).map(|_| b.u8()).collect();
             let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
+            let f = if l >= 0x80 { with_crc(f) } else { f };
             let ack = d.node.handle(&f, d.now_ms);
             assert_eq!(Ack::decode(&ack.encode()), Some(ack));
             if let Ok(cmd) = Command::decode(&f) {
@@ -353,6 +374,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         seq: 1,
         reason: None,
         queue: 2,
+        echo: 0x5A,
     };
     out.push(("decode", "seed-ack".into(), frame(ack.encode())));
     let st = Stream {
@@ -443,7 +465,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         let f = c.encode();
         raw.push(op::RAW);
         raw.extend_from_slice(&f.id.to_le_bytes());
-        raw.push(f.len);
+        raw.push(f.len | 0x80);
         raw.extend_from_slice(f.bytes());
         raw.extend_from_slice(&[op::POLL, 3]);
     }

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 
 use can_dbc::{ByteOrder, Dbc, MessageId, ValueType};
 use planner_core::wire::{
-    ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
+    self, ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
 };
 
 fn dbc() -> Dbc {
@@ -81,17 +81,19 @@ fn commands_decode_the_same_with_the_dbc() {
     let d = dbc();
     for &(id, left, x, y, yaw) in &[
         (7u8, true, 0.4, 0.1, 0.0),
-        (200, false, -12.3456, 51.0, -3.0),
-        (0, true, 0.0001, -0.0001, 3.1),
+        (200, false, -12.3456, 32.0, -3.0),
+        (0, true, 0.0005, -0.0005, 3.1),
     ] {
         let w = WireStep::from_si(id, left, x, y, yaw).unwrap();
         for c in [Command::Append(w), Command::Modify(w)] {
             let s = decode(&d, &c.encode());
             assert_eq!(s["step_id"], f64::from(id));
             assert_eq!(s["left"], f64::from(u8::from(left)));
-            close(s["x"], x, 1e-4, "x");
-            close(s["y"], y, 1e-4, "y");
+            close(s["x"], x, planner_core::wire::STEP_UNIT, "x");
+            close(s["y"], y, planner_core::wire::STEP_UNIT, "y");
             close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
+            let f = c.encode();
+            assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
         }
     }
     let s = decode(&d, &Command::EmergencyStop { seq: 9 }.encode());
@@ -105,6 +107,7 @@ fn commands_decode_the_same_with_the_dbc() {
         .encode(),
     );
     assert_eq!((s["seq"], s["op"]), (3.0, 3.0));
+    assert_eq!(s["crc"], f64::from(wire::crc8(ids::CONTROL, &[3, 3])));
 }
 
 #[test]
@@ -115,12 +118,15 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
         seq: 17,
         reason: Some(Reason::LiftedOff),
         queue: 5,
+        echo: 0xC3,
     };
     let s = decode(&d, &a.encode());
     assert_eq!(
-        (s["command"], s["seq"], s["reason"], s["queue"]),
-        (1.0, 17.0, f64::from(Reason::LiftedOff.code()), 5.0)
+        (s["command"], s["seq"], s["reason"], s["queue"], s["echo"]),
+        (1.0, 17.0, f64::from(Reason::LiftedOff.code()), 5.0, 195.0)
     );
+    let body = [1, 17, Reason::LiftedOff.code(), 5, 0xC3];
+    assert_eq!(s["crc"], f64::from(wire::crc8(ids::ACK, &body)));
     let st = Status {
         state: 1,
         queue: 3,

@@ -50,6 +50,9 @@ fn fault_sweep() {
     for r in &rows {
         let name = format!("{} {}", r.kind.name(), r.kind.rate_label(r.rate));
         assert_eq!(r.falls, 0, "{name}: {r:?}");
+        // No accepted footstep lost or walked twice (the CRC refuses corrupted commands, the
+        // controller retransmits, repeats are answered `Duplicate`).
+        assert_eq!(r.lost, 0, "{name}: {r:?}");
         if r.kind != FaultKind::Flood {
             assert_eq!(r.ticks_without_reference, 0, "{name}: {r:?}");
         }

@@ -806,6 +806,11 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.queue.iter().any(|q| q.id == id)
     }
 
+    /// The footstep queued as `id` (not yet swung), if any.
+    pub fn queued_step(&self, id: u16) -> Option<Footstep<T>> {
+        self.queue.iter().find(|q| q.id == id).map(|q| q.step)
+    }
+
     /// The id of the step being swung, if any.
     pub fn swinging(&self) -> Option<u16> {
         self.swing.map(|s| s.id)

@@ -22,6 +22,12 @@
 //! Step ids must count up from 0 (after start-up and after a `Reset`): a gap is refused, so a
 //! lost step cannot be skipped over.
 //!
+//! Repeats are harmless (the controller retransmits what it saw no answer to): the node keeps
+//! the last [`HISTORY`] footstep frames it accepted, and a footstep frame identical to one of
+//! them is answered `Duplicate` and changes nothing — whatever happened since (the step may
+//! have lifted off or been walked). A control command repeating the last sequence number is
+//! answered `Duplicate` likewise.
+//!
 //! Reach limits (HRP-2, in the frame of the previous foot of the other side): forward
 //! −0.30 … +0.40 m, across 0.15 … 0.40 m on the foot's own side (a step to the other side of
 //! the support foot is `Crossing`), heading change at most 0.6 rad.
@@ -33,6 +39,9 @@ use crate::wire::{Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, Wir
 
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
+
+/// Accepted footstep frames remembered to recognise repeats.
+pub const HISTORY: usize = 16;
 
 /// Leg reach limits (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,8 +120,8 @@ pub struct PollReport {
 pub struct Counters {
     /// Commands refused, total.
     pub refused: u16,
-    /// Refusals per reason code (index = code).
-    pub by_reason: [u16; 16],
+    /// Refusals per reason code (index = code; 0 unused).
+    pub by_reason: [u16; 17],
     /// Frames dropped because the transmit backlog was full.
     pub tx_dropped: u16,
     /// Cycles reported late by the firmware.
@@ -127,6 +136,8 @@ pub struct Node<const Q: usize> {
     cfg: NodeConfig,
     gait: Gait<f64, Q>,
     tx: Deque<RawFrame, TX_BACKLOG>,
+    /// Accepted footstep frames, oldest first.
+    history: Deque<RawFrame, HISTORY>,
     last_append: Option<u8>,
     last_control: Option<u8>,
     last_estop: Option<u8>,
@@ -158,6 +169,7 @@ impl<const Q: usize> Node<Q> {
             gait: Gait::new(cfg.params, cfg.left, cfg.right)?,
             cfg,
             tx: Deque::new(),
+            history: Deque::new(),
             last_append: None,
             last_control: None,
             last_estop: None,
@@ -228,8 +240,9 @@ impl<const Q: usize> Node<Q> {
 
     fn refuse(&mut self, reason: Reason) {
         self.counters.refused = self.counters.refused.saturating_add(1);
-        let i = usize::from(reason.code()) & 15;
-        self.counters.by_reason[i] = self.counters.by_reason[i].saturating_add(1);
+        if let Some(n) = self.counters.by_reason.get_mut(usize::from(reason.code())) {
+            *n = n.saturating_add(1);
+        }
     }
 
     /// Reach and crossing check of a footstep against the other foot before it.
@@ -268,6 +281,7 @@ impl<const Q: usize> Node<Q> {
     /// answer to send.
     pub fn handle(&mut self, frame: &RawFrame, now_ms: u32) -> Ack {
         let queue = |n: &Self| n.gait.queued().min(255) as u8;
+        let echo = crate::wire::echo_of(frame);
         let cmd = match Command::decode(frame) {
             Ok(c) => c,
             Err((reason, seq)) => {
@@ -277,6 +291,7 @@ impl<const Q: usize> Node<Q> {
                     seq,
                     reason: Some(reason),
                     queue: queue(self),
+                    echo,
                 };
             }
         };
@@ -305,8 +320,22 @@ impl<const Q: usize> Node<Q> {
                 };
                 (seq, r)
             }
-            Command::Append(s) => (s.id, self.append(&s)),
-            Command::Modify(s) => (s.id, self.modify(&s)),
+            Command::Append(s) | Command::Modify(s) => {
+                let r = if self.history.iter().any(|h| h == frame) {
+                    Err(Reason::Duplicate)
+                } else if let Command::Append(s) = cmd {
+                    self.append(&s)
+                } else {
+                    self.modify(&s)
+                };
+                if r.is_ok() {
+                    if self.history.is_full() {
+                        self.history.pop_front();
+                    }
+                    let _ = self.history.push_back(*frame);
+                }
+                (s.id, r)
+            }
         };
         if let Err(reason) = result {
             self.refuse(reason);
@@ -316,6 +345,7 @@ impl<const Q: usize> Node<Q> {
             seq,
             reason: result.err(),
             queue: queue(self),
+            echo,
         }
     }
 
@@ -345,6 +375,7 @@ impl<const Q: usize> Node<Q> {
                 self.lost = false;
                 // The controller starts a new sequence of step ids from 0.
                 self.last_append = None;
+                self.history.clear();
                 Ok(())
             }
         }
@@ -356,10 +387,8 @@ impl<const Q: usize> Node<Q> {
         }
         // Step ids count from 0 after start-up and after a reset: a lost first step must not
         // let the second one become the first (a stride from standing twice as long).
+        // (An exact repeat of an accepted append was answered `Duplicate` before this.)
         let expected = self.last_append.map_or(0, |l| l.wrapping_add(1));
-        if Some(s.id) == self.last_append {
-            return Err(Reason::Duplicate);
-        }
         if s.id != expected {
             return Err(Reason::SequenceGap);
         }

@@ -6,7 +6,7 @@ use std::collections::VecDeque;
 use planner_core::gait::Phase;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{
-    ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
+    self, ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
 };
 
 /// The codec's frame type is an `embedded-can` frame.
@@ -118,8 +118,22 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::UnknownId);
     bus.send_raw(RawFrame::new(ids::STEP_APPEND, &[1, 2, 3]).unwrap());
     check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::BadLength);
-    bus.send_raw(RawFrame::new(ids::CONTROL, &[9, 77]).unwrap());
+    let body = [9, 77];
+    let crc = wire::crc8(ids::CONTROL, &body);
+    bus.send_raw(RawFrame::new(ids::CONTROL, &[9, 77, crc]).unwrap());
     check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::OutOfRange);
+    // A corrupted footstep (one bit of x) and a corrupted start: refused, nothing queued.
+    let mut f = step(0, false, 0.2).encode();
+    f.data[2] ^= 0x04;
+    bus.send_raw(f);
+    let a = run(&mut n, &mut bus, &mut t, 1)[0];
+    assert_eq!((a.seq, a.echo), (0, f.data[7]));
+    check(a, Reason::BadCrc);
+    let mut f = control(1, ControlOp::Start).encode();
+    f.data[1] ^= 0x02; // start (1) would read as stop now (3)
+    bus.send_raw(f);
+    check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::BadCrc);
+    assert_eq!(n.gait().queued(), 0);
     // State-level, standing.
     check(
         ask(&mut n, &mut bus, &mut t, modify(0, false, 0.2, -0.1)),
@@ -272,6 +286,50 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     }
     // Every refusal of this node was counted (Infeasible and PlanFailed were the others').
     assert_eq!(n.counters().refused as usize, seen.len() - 2);
+}
+
+/// A retransmitted footstep command (its answer was lost) is answered `Duplicate` and changes
+/// nothing, even once its step has lifted off; the answer echoes the frame's CRC, so the
+/// controller can tell an answer to an older version of a modification from one to the newer.
+#[test]
+fn repeats_are_duplicates_whatever_happened_since() {
+    let (mut n, mut bus, mut t) = walking_node();
+    let first = modify(2, false, 0.62, -0.1);
+    let second = modify(2, false, 0.64, -0.1);
+    let a = ask(&mut n, &mut bus, &mut t, first);
+    assert_eq!((a.reason, a.echo), (None, first.echo()));
+    let a = ask(&mut n, &mut bus, &mut t, second);
+    assert_eq!((a.reason, a.echo), (None, second.echo()));
+    assert_ne!(first.echo(), second.echo());
+    // A late copy of the first modification does not undo the second.
+    let a = ask(&mut n, &mut bus, &mut t, first);
+    assert_eq!((a.reason, a.echo), (Some(Reason::Duplicate), first.echo()));
+    let landing = |n: &N| n.gait().queued_step(2).map(|f| (f.x, f.y));
+    assert_eq!(landing(&n), Some((0.64, -0.1)));
+    // Walk until step 2 is in the air: repeats of its append and of its modification are
+    // still duplicates, not `LiftedOff`; a new modification is `LiftedOff`.
+    for k in 0.. {
+        assert!(k < 2000, "step 2 never lifted off");
+        if k % 20 == 0 {
+            bus.send(control(0, ControlOp::Heartbeat));
+        }
+        run(&mut n, &mut bus, &mut t, 1);
+        if n.gait().swinging() == Some(2) {
+            break;
+        }
+    }
+    for (c, r) in [
+        (step(2, false, 0.6), Reason::Duplicate),
+        (second, Reason::Duplicate),
+        (modify(2, false, 0.66, -0.1), Reason::LiftedOff),
+    ] {
+        assert_eq!(ask(&mut n, &mut bus, &mut t, c).reason, Some(r), "{c:?}");
+    }
+    // An append that reuses an old id with another pose is a sequence error, not a repeat.
+    assert_eq!(
+        ask(&mut n, &mut bus, &mut t, step(1, true, 0.45)).reason,
+        Some(Reason::SequenceGap)
+    );
 }
 
 #[test]
