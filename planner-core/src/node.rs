@@ -8,7 +8,13 @@
 //! 1. receive at most [`NodeConfig::max_rx`] frames; each is validated once
 //!    ([`Command::decode`]), checked against the state (sequence, reach, side order, emergency
 //!    stop) and applied to the [`Gait`], and answered with an `ACK` frame that carries the
-//!    reason code when refused. A refused command changes nothing;
+//!    reason code when refused. A refused command changes nothing. Commands that plan — a
+//!    `Start` (the start window) and an accepted or infeasible `STEP_MODIFY` (eq. 17 plans the
+//!    re-plan it will cause) — cost up to ~60,000 instructions on the Cortex-M7 against ~200
+//!    for the others, so at most [`NodeConfig::max_plans`] of them are taken per cycle: after
+//!    the last one the node stops receiving, and the frames behind it wait in the device's
+//!    queue for the next cycle (their answer comes 5 ms later). This bounds the worst cycle
+//!    whatever arrives;
 //! 2. advance the gait by one tick;
 //! 3. publish the reference (5 frames) and, every 20 cycles, the status (the node's heartbeat);
 //!    frames that cannot be sent now wait in a transmit backlog of [`TX_BACKLOG`] frames; an
@@ -83,6 +89,9 @@ pub struct NodeConfig {
     pub heartbeat_timeout_ms: u32,
     /// Frames handled per cycle at most (the rest wait in the controller's mailbox).
     pub max_rx: usize,
+    /// Planning commands (`Start`, `STEP_MODIFY` that reaches the planner) handled per cycle
+    /// at most (see the module docs).
+    pub max_plans: usize,
     /// Reach limits.
     pub reach: Reach,
 }
@@ -97,6 +106,7 @@ impl NodeConfig {
             right: Footstep::new(Side::Right, 0.0, -0.1, 0.0),
             heartbeat_timeout_ms: 500,
             max_rx: 16,
+            max_plans: 1,
             reach: Reach::default(),
         }
     }
@@ -280,6 +290,24 @@ impl<const Q: usize> Node<Q> {
     /// Handles one frame from the bus (validation, state checks, application) and returns the
     /// answer to send.
     pub fn handle(&mut self, frame: &RawFrame, now_ms: u32) -> Ack {
+        self.handle_planned(frame, now_ms).0
+    }
+
+    /// [`Node::handle`], and whether the command ran the planner.
+    fn handle_planned(&mut self, frame: &RawFrame, now_ms: u32) -> (Ack, bool) {
+        let ack = self.handle_frame(frame, now_ms);
+        let planned = ack.command == (crate::wire::ids::STEP_MODIFY & 0xFF) as u8
+            && matches!(
+                ack.reason,
+                None | Some(Reason::Infeasible | Reason::PlanFailed)
+            )
+            || ack.command == (crate::wire::ids::CONTROL & 0xFF) as u8
+                && frame.data[1] == 1
+                && matches!(ack.reason, None | Some(Reason::PlanFailed));
+        (ack, planned)
+    }
+
+    fn handle_frame(&mut self, frame: &RawFrame, now_ms: u32) -> Ack {
         let queue = |n: &Self| n.gait.queued().min(255) as u8;
         let echo = crate::wire::echo_of(frame);
         let cmd = match Command::decode(frame) {
@@ -450,18 +478,22 @@ impl<const Q: usize> Node<Q> {
         C: embedded_can::nb::Can,
     {
         self.cycle = self.cycle.wrapping_add(1);
-        let (mut received, mut refused) = (0u8, 0u8);
+        let (mut received, mut refused, mut plans) = (0u8, 0u8, 0usize);
         for _ in 0..self.cfg.max_rx {
+            if plans >= self.cfg.max_plans {
+                break; // the rest waits for the next cycle
+            }
             match can.receive() {
                 Ok(f) => {
                     received = received.saturating_add(1);
                     let Some(raw) = RawFrame::from_frame(&f) else {
                         continue; // extended or remote frames are not ours
                     };
-                    let ack = self.handle(&raw, now_ms);
+                    let (ack, planned) = self.handle_planned(&raw, now_ms);
                     if ack.reason.is_some() {
                         refused = refused.saturating_add(1);
                     }
+                    plans += usize::from(planned);
                     self.enqueue(ack.encode());
                 }
                 Err(nb::Error::WouldBlock) => break,

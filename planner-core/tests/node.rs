@@ -332,6 +332,41 @@ fn repeats_are_duplicates_whatever_happened_since() {
     );
 }
 
+/// At most one planning command per cycle: five modifications sent at once are answered one
+/// per cycle, in order, and cheap commands before the first are answered at once.
+#[test]
+fn one_planning_command_per_cycle() {
+    let (mut n, mut bus, mut t) = walking_node();
+    bus.send(control(0, ControlOp::Heartbeat));
+    let mods: Vec<Command> = (0..5)
+        .map(|k| modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1))
+        .collect();
+    for m in &mods {
+        bus.send(*m);
+    }
+    let first = run(&mut n, &mut bus, &mut t, 1);
+    assert_eq!(first.len(), 2, "{first:?}"); // the heartbeat and one modification
+    assert_eq!((first[1].reason, first[1].echo), (None, mods[0].echo()));
+    for m in &mods[1..] {
+        let acks = run(&mut n, &mut bus, &mut t, 1);
+        assert_eq!(acks.len(), 1, "{acks:?}");
+        assert_eq!((acks[0].reason, acks[0].echo), (None, m.echo()));
+    }
+    assert!(run(&mut n, &mut bus, &mut t, 1).is_empty());
+    // With the limit lifted, all in one cycle.
+    let mut cfg = NodeConfig::hrp2();
+    cfg.max_plans = usize::MAX;
+    let (mut m, mut b2, mut t2) = (N::new(cfg).unwrap(), Bus::default(), 0);
+    for (i, x) in [0.2, 0.4, 0.6, 0.8].iter().enumerate() {
+        ask(&mut m, &mut b2, &mut t2, step(i as u8, i % 2 == 1, *x));
+    }
+    ask(&mut m, &mut b2, &mut t2, control(1, ControlOp::Start));
+    for k in 0..3 {
+        b2.send(modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1));
+    }
+    assert_eq!(run(&mut m, &mut b2, &mut t2, 1).len(), 3);
+}
+
 #[test]
 fn the_stream_carries_the_gaits_reference() {
     let (mut n, mut bus, mut t) = walking_node();
