@@ -16,7 +16,7 @@ use std::sync::OnceLock;
 
 use planner_core::gait::Side;
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Stream, WireStep};
+use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Reason, Stream, WireStep};
 
 /// `decode` target: see the module docs.
 pub fn decode_one(data: &[u8]) {
@@ -207,7 +207,9 @@ impl Driver {
         if handled < pending.min(16) {
             let last = acks.last().expect("a planning command was answered");
             assert!(
-                last.command == 0x01 || (last.command == 0x20 && last.reason.is_none()),
+                last.command == 0x01
+                    || (last.command == 0x20
+                        && matches!(last.reason, None | Some(Reason::PlanFailed))),
                 "stopped receiving after {last:?}"
             );
         }

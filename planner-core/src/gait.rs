@@ -806,6 +806,12 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.queue.iter().any(|q| q.id == id)
     }
 
+    /// The id of the next swing target (the first queued step), if any. While walking, a
+    /// modification of this step plans the re-plan it will cause (eq. 17).
+    pub fn next_target(&self) -> Option<u16> {
+        self.queue.front().map(|q| q.id)
+    }
+
     /// The footstep queued as `id` (not yet swung), if any.
     pub fn queued_step(&self, id: u16) -> Option<Footstep<T>> {
         self.queue.iter().find(|q| q.id == id).map(|q| q.step)

@@ -9,8 +9,8 @@
 //!    ([`Command::decode`]), checked against the state (sequence, reach, side order, emergency
 //!    stop) and applied to the [`Gait`], and answered with an `ACK` frame that carries the
 //!    reason code when refused. A refused command changes nothing. Commands that plan — a
-//!    `Start` (the start window) and an accepted or infeasible `STEP_MODIFY` (eq. 17 plans the
-//!    re-plan it will cause) — cost up to ~60,000 instructions on the Cortex-M7 against ~200
+//!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
+//!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the Cortex-M7 against ~200
 //!    for the others, so at most [`NodeConfig::max_plans`] of them are taken per cycle: after
 //!    the last one the node stops receiving, and the frames behind it wait in the device's
 //!    queue for the next cycle (their answer comes 5 ms later). This bounds the worst cycle
@@ -89,8 +89,8 @@ pub struct NodeConfig {
     pub heartbeat_timeout_ms: u32,
     /// Frames handled per cycle at most (the rest wait in the controller's mailbox).
     pub max_rx: usize,
-    /// Planning commands (`Start`, `STEP_MODIFY` that reaches the planner) handled per cycle
-    /// at most (see the module docs).
+    /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
+    /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
     /// Reach limits.
     pub reach: Reach,
@@ -295,22 +295,38 @@ impl<const Q: usize> Node<Q> {
 
     /// [`Node::handle`], and whether the command ran the planner.
     fn handle_planned(&mut self, frame: &RawFrame, now_ms: u32) -> (Ack, bool) {
-        let ack = self.handle_frame(frame, now_ms);
-        let planned = ack.command == (crate::wire::ids::STEP_MODIFY & 0xFF) as u8
+        // Known before handling: a `Start`, or a modification of the next swing target while
+        // walking (the only one that plans, see `Gait::modify`).
+        let decoded = Command::decode(frame);
+        let may_plan = match decoded {
+            Ok(Command::Control {
+                op: ControlOp::Start,
+                ..
+            }) => true,
+            Ok(Command::Modify(s)) => {
+                !self.gait.is_standing() && self.gait.next_target() == Some(u16::from(s.id))
+            }
+            _ => false,
+        };
+        let ack = self.handle_frame(frame, decoded, now_ms);
+        // It did plan if the gait was reached: accepted, or refused by the planner itself.
+        let planned = may_plan
             && matches!(
                 ack.reason,
                 None | Some(Reason::Infeasible | Reason::PlanFailed)
-            )
-            || ack.command == (crate::wire::ids::CONTROL & 0xFF) as u8
-                && frame.data[1] == 1
-                && matches!(ack.reason, None | Some(Reason::PlanFailed));
+            );
         (ack, planned)
     }
 
-    fn handle_frame(&mut self, frame: &RawFrame, now_ms: u32) -> Ack {
+    fn handle_frame(
+        &mut self,
+        frame: &RawFrame,
+        decoded: Result<Command, (Reason, u8)>,
+        now_ms: u32,
+    ) -> Ack {
         let queue = |n: &Self| n.gait.queued().min(255) as u8;
         let echo = crate::wire::echo_of(frame);
-        let cmd = match Command::decode(frame) {
+        let cmd = match decoded {
             Ok(c) => c,
             Err((reason, seq)) => {
                 self.refuse(reason);

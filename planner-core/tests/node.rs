@@ -332,14 +332,20 @@ fn repeats_are_duplicates_whatever_happened_since() {
     );
 }
 
-/// At most one planning command per cycle: five modifications sent at once are answered one
-/// per cycle, in order, and cheap commands before the first are answered at once.
+/// At most one planning command per cycle: five modifications of the next swing target sent
+/// at once are answered one per cycle, in order; cheap commands before the first (a heartbeat,
+/// modifications of later steps) are answered at once.
 #[test]
 fn one_planning_command_per_cycle() {
     let (mut n, mut bus, mut t) = walking_node();
+    assert_eq!(n.gait().next_target(), Some(0));
+    for k in 0..3 {
+        bus.send(modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1));
+    }
+    assert_eq!(run(&mut n, &mut bus, &mut t, 1).len(), 3);
     bus.send(control(0, ControlOp::Heartbeat));
     let mods: Vec<Command> = (0..5)
-        .map(|k| modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1))
+        .map(|k| modify(0, false, 0.2 + 0.01 * f64::from(k), -0.1))
         .collect();
     for m in &mods {
         bus.send(*m);
@@ -362,7 +368,7 @@ fn one_planning_command_per_cycle() {
     }
     ask(&mut m, &mut b2, &mut t2, control(1, ControlOp::Start));
     for k in 0..3 {
-        b2.send(modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1));
+        b2.send(modify(0, false, 0.2 + 0.01 * f64::from(k), -0.1));
     }
     assert_eq!(run(&mut m, &mut b2, &mut t2, 1).len(), 3);
 }
