@@ -478,7 +478,11 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
     }
     // Fill with one-tick standing intervals at the last via point, and end with a resting
     // interval long enough for the final quartic to bring the COG to rest gently.
-    let rest = spec.via[n - 1];
+    // `n ≥ 1` here (the first interval is always pushed); `via[0]` only keeps this panic-free.
+    let rest = match n.checked_sub(1).and_then(|i| spec.via.get(i)) {
+        Some(&v) => v,
+        None => spec.via[0],
+    };
     while n < M - 1 {
         push(&mut spec, &mut n, Kind::Stand, p.stand_ticks, rest, None);
     }
@@ -985,6 +989,12 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         (land, n)
     }
 
+    /// The buffer being executed, if walking: `self.cur` (always 0 or 1), masked so that
+    /// indexing `wins` with it or with `1 - c` needs no bounds check (no panic path).
+    fn cur_buf(&self) -> Option<usize> {
+        self.cur.map(|c| c & 1)
+    }
+
     /// The present reference state (what the next window starts from).
     fn state(&self) -> ([State<T>; 2], [State<T>; 2]) {
         states(&self.last.x, &self.last.y)
@@ -993,14 +1003,17 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// The re-plan that will happen at the next start of single support if nothing else
     /// changes: returns the worst first-interval ZMP excursion, or `None` if no re-plan is due.
     fn predict_replan(&mut self) -> Result<Option<[T; 2]>, GaitError> {
-        let Some(c) = self.cur else {
+        let Some(c) = self.cur_buf() else {
             return Ok(None);
         };
         let win = &self.wins[c];
         let Some(j) = win.spec.replan else {
             return Ok(None);
         };
-        let at = win.starts[j];
+        // `j` indexes an interval of `win` (always in range; `None` is never taken).
+        let Some(&at) = win.starts.get(j) else {
+            return Ok(None);
+        };
         let (sx, sy) = win.sample(&self.params, at);
         let (cog, zmp) = states(&sx, &sy);
         let Some(next) = self.next_walk_inputs(win, j) else {
@@ -1018,7 +1031,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// Inputs of the walking window that starts at interval `j` of `win` (a single support),
     /// with the footsteps as they are now.
     fn next_walk_inputs(&self, win: &Active<T>, j: usize) -> Option<Inputs<T>> {
-        let side = win.spec.support[j]?;
+        let side = win.spec.support.get(j).copied().flatten()?;
         let front = self.queue.front();
         // The support foot: where it landed (in the window's plan) or stands.
         let support = if win.inputs.kind == WindowKind::Start && j == 1 {
@@ -1151,7 +1164,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// Advances one control period and returns its reference.
     pub fn tick(&mut self) -> Reference<T> {
         self.tick += 1;
-        let Some(c) = self.cur else {
+        let Some(c) = self.cur_buf() else {
             self.last.phase = Phase::Standing;
             self.last.feet = self.ground_poses();
             return self.last;
@@ -1160,7 +1173,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let wt = self.wins[c].tick;
         let mut kept = None;
         if let Some(j) = self.wins[c].spec.replan {
-            if wt == self.wins[c].starts[j] {
+            if self.wins[c].starts.get(j) == Some(&wt) {
                 // The state at this instant, from the window being left (shaped).
                 let (sx, sy) = self.shaped(wt);
                 let (cog, zmp) = states(&sx, &sy);
@@ -1171,7 +1184,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 }
             }
         }
-        let c = self.cur.unwrap_or(c);
+        let c = self.cur_buf().unwrap_or(c);
         let end = self.wins[c].starts[M];
         if self.wins[c].tick >= end && self.wins[c].spec.replan.is_none() {
             // The stop window has ended: standing (it is never shaped, so the analytic end,
@@ -1219,7 +1232,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// buffer; `true` if the new window is now the current one. On failure the old window
     /// goes on (it already contains that single support).
     fn replan(&mut self, j: usize, cog: [State<T>; 2], zmp: [State<T>; 2]) -> bool {
-        let Some(c) = self.cur else {
+        let Some(c) = self.cur_buf() else {
             return false;
         };
         let spare = 1 - c;
@@ -1229,7 +1242,13 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         }
         let Some(mut inputs) = self.next_walk_inputs(&self.wins[c], j) else {
             // Stopping with nothing left to swing: settle.
-            let side = self.wins[c].spec.support[j].unwrap_or(Side::Left);
+            let side = self.wins[c]
+                .spec
+                .support
+                .get(j)
+                .copied()
+                .flatten()
+                .unwrap_or(Side::Left);
             let support = self.feet[side.index()];
             let other = self.feet[side.other().index()];
             let inputs = Inputs {
@@ -1292,7 +1311,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// The current window's analytic plan at window tick `t` minus the compensation of this
     /// tick (the compensators advance by one tick: call once per tick).
     fn shaped(&mut self, t: u32) -> (Sample<T>, Sample<T>) {
-        let Some(c) = self.cur else {
+        let Some(c) = self.cur_buf() else {
             return (self.last.x, self.last.y);
         };
         let (sx, sy) = self.wins[c].sample(&self.params, t);
@@ -1308,7 +1327,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// Restarts the compensators from rest with the fluctuation of the first interval of the
     /// current window as their reference.
     fn start_shaping(&mut self) {
-        let Some(c) = self.cur else {
+        let Some(c) = self.cur_buf() else {
             return;
         };
         let win = &self.wins[c];

@@ -179,16 +179,22 @@ pub fn add_particular<T: Real>(g: &mut Particular<T>, k: usize, c: T, lambda: T)
         let l2 = lambda * lambda;
         let mut term = c;
         for n in 1..=SERIES_TERMS {
-            term = term * l2 * T::of(INV_PAIR[k + 2 * n]);
-            g[k + 2 * n] -= term;
+            // In range for every `k ≤ MAX_ORDER`; `get` keeps an out-of-range `k` panic-free.
+            let i = k + 2 * n;
+            let (Some(gi), Some(&inv)) = (g.get_mut(i), INV_PAIR.get(i)) else {
+                break;
+            };
+            term = term * l2 * T::of(inv);
+            *gi -= term;
         }
     } else {
         // The polynomial m_k = Σ_l k!/(k−2l)! λ^{−2l} s^{k−2l}.
         let inv2 = T::ONE / (lambda * lambda);
         let mut term = T::ONE;
         let mut j = k;
-        loop {
-            g[j] += c * term;
+        // `get_mut` fails only for k > MAX_ORDER + 2·SERIES_TERMS (never): no panic path.
+        while let Some(gj) = g.get_mut(j) {
+            *gj += c * term;
             if j < 2 {
                 break;
             }

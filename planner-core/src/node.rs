@@ -528,9 +528,16 @@ impl<const Q: usize> Node<Q> {
             }
         }
         let reference = self.gait.tick();
-        // A stale reference in the backlog is dropped: the new one supersedes it.
-        self.tx
-            .retain(|f| f.id < crate::wire::ids::COG || f.id == crate::wire::ids::STATUS);
+        // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
+        // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
+        // panicking branches the optimiser cannot remove: see firmware/nopanic.)
+        for _ in 0..self.tx.len() {
+            if let Some(f) = self.tx.pop_front() {
+                if f.id < crate::wire::ids::COG || f.id == crate::wire::ids::STATUS {
+                    let _ = self.tx.push_back(f);
+                }
+            }
+        }
         for f in self.stream(&reference).encode() {
             self.enqueue(f);
         }

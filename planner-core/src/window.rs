@@ -588,14 +588,19 @@ fn factor_banded<T: Real>(
             return Err(PlanError::Singular);
         }
         pivots[k] = p as u8;
-        colk.swap(k, p);
+        // `k ≤ p < N`; the slice pattern swaps `colk[k]` and `colk[p]` without a panic path.
+        if let Some([a, .., b]) = colk.get_mut(k..=p) {
+            core::mem::swap(a, b);
+        }
         let inv = T::ONE / colk[k];
         for v in &mut colk[k + 1..=last] {
             *v *= inv;
         }
         let mults = &colk[k + 1..=last];
         for colj in rest.chunks_exact_mut(N).take(right - k) {
-            colj.swap(k, p);
+            if let Some([a, .., b]) = colj.get_mut(k..=p) {
+                core::mem::swap(a, b); // colj.swap(k, p), as above
+            }
             let ukj = colj[k];
             if ukj != T::ZERO {
                 for (v, &l) in colj[k + 1..=last].iter_mut().zip(mults) {
@@ -616,12 +621,21 @@ fn solve_banded<T: Real>(
     b: &mut [T; N],
 ) {
     let data = lu.as_slice();
-    for (k, col) in data.chunks_exact(N).enumerate() {
-        let p = pivots[k] as usize;
-        b.swap(k, p);
-        let bk = b[k];
+    // Written with `get` and slice patterns so that no index can panic (`k ≤ p < N` and
+    // `k < N` hold by construction; the fallbacks are never taken).
+    for (k, (col, &p)) in data.chunks_exact(N).zip(pivots).enumerate() {
+        // b.swap(k, p)
+        if let Some([a, .., z]) = b.get_mut(k..=usize::from(p)) {
+            core::mem::swap(a, z);
+        }
+        let Some(&bk) = b.get(k) else {
+            break;
+        };
         let last = (k + kl).min(N - 1);
-        for (v, &l) in b[k + 1..=last].iter_mut().zip(&col[k + 1..=last]) {
+        let (Some(bs), Some(ls)) = (b.get_mut(k + 1..=last), col.get(k + 1..=last)) else {
+            continue;
+        };
+        for (v, &l) in bs.iter_mut().zip(ls) {
             *v -= l * bk;
         }
     }

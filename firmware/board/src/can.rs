@@ -76,7 +76,8 @@ impl Frame for ClassicFrame {
     }
 
     fn data(&self) -> &[u8] {
-        &self.data[..usize::from(self.len)]
+        // `len ≤ 8` (checked by `new`); `get` keeps this panic-free (firmware/nopanic).
+        self.data.get(..usize::from(self.len)).unwrap_or(&self.data)
     }
 }
 
@@ -149,15 +150,17 @@ impl<I: Instance> FdcanBus<I> {
         let Some(id) = fdcan::id::StandardId::new(frame.id.as_raw()) else {
             return true; // unreachable: an embedded-can StandardId is 11 bits
         };
+        let data = frame.data();
         let header = TxFrameHeader {
-            len: frame.len,
+            // `data.len() ≤ 8`, visibly to the optimiser (`frame.len` is the same number).
+            len: data.len() as u8,
             frame_format: FrameFormat::Standard,
             id: id.into(),
             bit_rate_switching: false,
             marker: None,
         };
         // A free mailbox exists, so nothing is aborted and this cannot block.
-        tx.transmit(header, frame.data()).is_ok()
+        tx.transmit(header, data).is_ok()
     }
 
     /// The next classic standard data frame of RX FIFO0, if any (others are skipped).

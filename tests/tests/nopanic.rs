@@ -1,0 +1,144 @@
+//! The firmware's control cycle cannot panic: a link-time check (`firmware/nopanic`).
+//!
+//! `firmware/nopanic` is the board image's `main` from the node's construction on, built for
+//! `thumbv7em-none-eabihf` with the release profile (fat LTO, opt-level 3), whose panic
+//! handler calls `walk_control_path_can_panic`, a function defined nowhere: the image links
+//! only if no panic is reachable from its code (see `firmware/nopanic/src/main.rs`).
+//!
+//! * `control_cycle_cannot_panic`: the build links, and the image holds the planner (a
+//!   `.text` of tens of KB: nothing was optimised away); then the negative control, the same
+//!   build with `selftest-panic` (one reachable out-of-range index), must FAIL to link with
+//!   that symbol in the linker's message, which shows that the check is live.
+//! * `board_cycle_cannot_panic` (ignored for now): the whole board cycle, without the
+//!   temporary scope (`--no-default-features`): `Node::poll`, the board's FDCAN adapter and
+//!   driver, the defmt logs. It fails today on the panics listed in
+//!   `firmware/nopanic/src/main.rs`; run it with `-- --ignored`.
+//!
+//! The builds run cargo in `firmware/` (its workspace, `.cargo/config.toml` and target dir,
+//! shared with `cd firmware && cargo build --release`), one at a time. When a positive build
+//! fails, `cargo build --release -p firmware-nopanic --features diagnose` in `firmware/` links
+//! anyway, and the callers of `core::panicking::*` in its disassembly are the panics.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::Mutex;
+
+const SYMBOL: &str = "walk_control_path_can_panic";
+const TARGET: &str = "thumbv7em-none-eabihf";
+/// The scoped image's `.text` is ~70 KB (the planner: window solver, gait, shaping, node
+/// command handling, wire codec); far less would mean that the cycle was optimised away.
+const MIN_TEXT: u64 = 40_000;
+
+/// The builds share `firmware/target` and the same output file: one at a time.
+static BUILD: Mutex<()> = Mutex::new(());
+
+fn firmware_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("firmware")
+}
+
+/// `cargo build --release -p firmware-nopanic` in firmware/ with these cargo arguments.
+fn build(args: &[&str]) -> Output {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(firmware_dir())
+        .args(["build", "--release", "-p", "firmware-nopanic"])
+        .args(args);
+    // This test's own build settings must not leak into the firmware's (its target and
+    // rustflags come from firmware/.cargo/config.toml).
+    for var in [
+        "CARGO_TARGET_DIR",
+        "CARGO_BUILD_TARGET",
+        "CARGO_BUILD_TARGET_DIR",
+        "RUSTFLAGS",
+        "CARGO_ENCODED_RUSTFLAGS",
+        "CARGO_BUILD_RUSTFLAGS",
+    ] {
+        cmd.env_remove(var);
+    }
+    cmd.output().expect("cannot run cargo")
+}
+
+/// The linker's lines about the undefined symbol (or the tail of stderr).
+fn explain(stderr: &str) -> String {
+    let lines: Vec<&str> = stderr.lines().collect();
+    match lines.iter().position(|l| l.contains("undefined symbol")) {
+        Some(i) => lines[i..lines.len().min(i + 6)].join("\n"),
+        None => lines[lines.len().saturating_sub(30)..].join("\n"),
+    }
+}
+
+/// Builds with `args` and requires the link to succeed; the image's path.
+fn links(args: &[&str]) -> PathBuf {
+    let out = build(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "firmware-nopanic ({args:?}) did not link: a panic is reachable from the control cycle \
+         (or the build failed). Find it with `cargo build --release -p firmware-nopanic \
+         --features diagnose` in firmware/ and the disassembly.\n{}",
+        explain(&stderr)
+    );
+    let elf = firmware_dir().join(format!("target/{TARGET}/release/nopanic"));
+    assert!(elf.is_file(), "no image at {}", elf.display());
+    elf
+}
+
+/// Size of the ELF32 section `name` (`None` if absent or not an ELF32 file).
+fn section_size(elf: &[u8], name: &str) -> Option<u64> {
+    let u16_at = |o: usize| Some(u16::from_le_bytes(elf.get(o..o + 2)?.try_into().ok()?));
+    let u32_at = |o: usize| Some(u32::from_le_bytes(elf.get(o..o + 4)?.try_into().ok()?));
+    if elf.get(..5)? != b"\x7fELF\x01" {
+        return None;
+    }
+    let shoff = u32_at(0x20)? as usize;
+    let shentsize = usize::from(u16_at(0x2e)?);
+    let shnum = usize::from(u16_at(0x30)?);
+    let shstrndx = usize::from(u16_at(0x32)?);
+    let header = |i: usize| shoff + i * shentsize;
+    let strtab = u32_at(header(shstrndx) + 0x10)? as usize;
+    (0..shnum).find_map(|i| {
+        let at = strtab + u32_at(header(i))? as usize;
+        let end = at + elf.get(at..)?.iter().position(|&b| b == 0)?;
+        (elf.get(at..end)? == name.as_bytes()).then(|| u32_at(header(i) + 0x14).map(u64::from))?
+    })
+}
+
+#[test]
+fn control_cycle_cannot_panic() {
+    let _one = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+
+    let elf = links(&["--features", "scoped"]);
+    let bytes = std::fs::read(&elf).expect("cannot read the image");
+    let text = section_size(&bytes, ".text").expect("no .text section in the image");
+    println!("firmware-nopanic (scoped): links, .text {text} bytes");
+    assert!(
+        text >= MIN_TEXT,
+        ".text is only {text} bytes: the control cycle was optimised away, the check proves nothing"
+    );
+
+    // The negative control: one reachable panic must break the link, naming the symbol.
+    let out = build(&["--features", "scoped,selftest-panic"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "with `selftest-panic` the image linked: the check is not live"
+    );
+    assert!(
+        stderr.contains(&format!("undefined symbol: {SYMBOL}")),
+        "with `selftest-panic` the build failed, but not on `{SYMBOL}`:\n{}",
+        explain(&stderr)
+    );
+    println!(
+        "negative control (selftest-panic): fails to link as it must:\n{}",
+        explain(&stderr)
+    );
+}
+
+#[test]
+#[ignore = "known panics outside the scope (node.rs backlog retain, fdcan driver, defmt-rtt): see firmware/nopanic/src/main.rs"]
+fn board_cycle_cannot_panic() {
+    let _one = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    links(&["--no-default-features"]);
+}
