@@ -1,15 +1,21 @@
 //! The firmware's QEMU image (`firmware/qemu`, Cortex-M7 `mps2-an500`) against the host.
 //!
-//! Builds the image, runs it twice under `qemu-system-arm -icount shift=0` and checks:
-//! * the references it computed (`REF` lines, every 20 ticks and at every re-plan, both
-//!   scenarios) equal `host_sim::scenario::run`'s for the same scenario, to 1e-9 m and m/s
-//!   (both sides use libm; the max difference and whether all ticks are bit-identical are
-//!   printed);
-//! * its scripted timeline (`CMD` lines) is host-sim's, command for command, and the gait
-//!   accepted the same commands and adjusted the same single supports;
+//! The image runs planner-core's CAN node (`Node::poll`, as the board does) fed through an
+//! in-memory CAN device with the scenario's command frames, at the ticks host-sim's
+//! `sim::simulate` sends them. This test builds the image, runs it twice under
+//! `qemu-system-arm -icount shift=0` and checks, against `sim::simulate` on a fault-free bus
+//! (the same node fed the same frames):
+//! * the frames it sent (`CMD` lines) are host-sim's timeline through `WireStep::from_si` and
+//!   `Command::encode`, command for command, and the node answered each the same way in the
+//!   same cycle;
+//! * every reference is bit-identical (FNV-1a digest over all ticks), the sampled `REF` values
+//!   agree (to 1e-9 m and m/s, printed as max difference), the same single supports were
+//!   adjusted by the same amounts, and the node transmitted the same frames (count and digest
+//!   over identifier and data, against the bus's candump log) with the same counters;
 //! * the instruction counts are repeatable: both runs print the same report, line for line;
-//! * the instructions-per-timer-tick factor (40) holds, and the stack stays inside the RAM;
-//! * the worst control cycle fits 5 % of a 5 ms cycle at 480 MHz (120,000 instructions).
+//! * the instructions-per-timer-tick factor (40) holds, and the stack stays inside its region;
+//! * the worst control cycle (a whole `Node::poll`) fits 5 % of a 5 ms cycle at 480 MHz
+//!   (120,000 instructions).
 //!
 //! `qemu-system-arm` comes from Debian's `qemu-system-arm` package, which `tests/run-all.sh`
 //! installs. Without it these tests fail, unless `WALK_SKIP_QEMU=1` is set.
@@ -19,8 +25,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 use std::sync::OnceLock;
 
-use host_sim::scenario::{built_in, run, Command};
-use planner_core::gait::{GaitParams, Reference, Side};
+use host_sim::scenario::{built_in, Command};
+use host_sim::sim::{simulate, SimConfig, SimRun};
+use planner_core::gait::{Reference, Side};
+use planner_core::wire::{ids, Command as Wire, ControlOp, RawFrame, WireStep};
 
 /// 5 % of a 5 ms control cycle at 480 MHz, in cycles (compared with instruction counts).
 const BUDGET: u64 = 120_000;
@@ -185,21 +193,91 @@ fn runs() -> Option<&'static (QemuRun, QemuRun)> {
     .as_ref()
 }
 
-/// The image's digest: FNV-1a 64 over the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x
+/// FNV-1a 64, as the image computes it.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+
+    fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    fn hex(&self) -> String {
+        format!("{:#018x}", self.0)
+    }
+}
+
+/// The image's reference digest: over the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x
 /// then y, every tick from 0.
-fn digest(trajectory: &[Reference<f64>]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+fn digest(trajectory: &[Reference<f64>]) -> String {
+    let mut h = Fnv::new();
     for r in trajectory {
         for s in [&r.x, &r.y] {
             for v in [s.cog, s.cog_vel, s.cog_acc, s.zmp, s.zmp_vel] {
-                for b in v.to_bits().to_le_bytes() {
-                    h ^= u64::from(b);
-                    h = h.wrapping_mul(0x0000_0100_0000_01b3);
-                }
+                h.add(&v.to_bits().to_le_bytes());
             }
         }
     }
-    h
+    h.hex()
+}
+
+/// The frames the node transmitted on the host's bus (from the candump log: the node's
+/// identifiers, ACK and the stream and status from COG up), and the image's digest over them (identifier as 2 bytes little
+/// endian, then the data).
+fn node_frames(sim: &SimRun) -> (usize, String) {
+    let mut h = Fnv::new();
+    let mut n = 0;
+    for line in &sim.can_log {
+        let frame = line.rsplit(' ').next().unwrap_or_default();
+        let (id, data) = frame
+            .split_once('#')
+            .unwrap_or_else(|| panic!("log line {line}"));
+        let id = u16::from_str_radix(id, 16).unwrap_or_else(|_| panic!("log line {line}"));
+        if id != ids::ACK && id < ids::COG {
+            continue; // the controller's frames (ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY)
+        }
+        let bytes: Vec<u8> = (0..data.len() / 2)
+            .map(|i| u8::from_str_radix(&data[2 * i..2 * i + 2], 16).expect("hex data"))
+            .collect();
+        h.add(&id.to_le_bytes());
+        h.add(&bytes);
+        n += 1;
+    }
+    (n, h.hex())
+}
+
+/// The frame host-sim's controller sends for a command (`seq`: its CONTROL sequence number so
+/// far), candump style.
+fn wire_frame(command: &Command, seq: &mut u8) -> String {
+    let wire = match *command {
+        Command::Push(id, f) | Command::Modify(id, f) => {
+            let w = WireStep::from_si(id as u8, f.side == Side::Left, f.x, f.y, f.yaw)
+                .expect("representable footstep");
+            if matches!(command, Command::Push(..)) {
+                Wire::Append(w)
+            } else {
+                Wire::Modify(w)
+            }
+        }
+        Command::Start | Command::Stop | Command::StopNow => {
+            *seq = seq.wrapping_add(1);
+            let op = match command {
+                Command::Start => ControlOp::Start,
+                Command::Stop => ControlOp::Stop,
+                _ => ControlOp::StopNow,
+            };
+            Wire::Control { seq: *seq, op }
+        }
+    };
+    let f: RawFrame = wire.encode();
+    let data: String = f.bytes().iter().map(|b| format!("{b:02X}")).collect();
+    format!("{:03X}#{data}", f.id)
 }
 
 fn side(s: Side) -> &'static str {
@@ -209,29 +287,34 @@ fn side(s: Side) -> &'static str {
     }
 }
 
-/// Timeline, references and adjustments of one scenario against the host; returns the max
-/// |difference| of the REF values and whether every tick is bit-identical.
-fn compare_scenario(q: &QemuRun, name: &str) -> (f64, bool) {
+/// Timeline, answers, references, adjustments and transmitted frames of one scenario against
+/// host-sim's simulation; returns the max |difference| of the REF values.
+fn compare_scenario(q: &QemuRun, name: &str) -> f64 {
     let scenario = built_in(name).unwrap_or_else(|| panic!("host-sim has no scenario {name}"));
-    let params = GaitParams::<f64>::hrp2();
-    let host = run(&scenario, params);
+    let cfg = SimConfig::default();
+    let host = simulate(&scenario, &cfg).unwrap_or_else(|e| panic!("{name}: simulate: {e}"));
+    let params = cfg.node.params;
 
-    // The timeline: the firmware's copy of the scenario is host-sim's.
+    // The tick of the host's answer to each command, paired as `simulate` pairs them.
+    let mut used = vec![false; host.acks.len()];
+    let mut seq = 0u8;
+
+    // The timeline: the firmware's copy of the scenario is host-sim's, sent as the same frames.
     let cmds: Vec<&Record> = q.all("CMD").filter(|r| r.get("scenario") == name).collect();
     assert_eq!(
         cmds.len(),
         scenario.timeline.len(),
-        "{name}: the firmware applied {} commands, host-sim's timeline has {}",
+        "{name}: the firmware sent {} commands, host-sim's timeline has {}",
         cmds.len(),
         scenario.timeline.len()
     );
     for (i, (rec, ((tick, command), event))) in cmds
         .iter()
-        .zip(scenario.timeline.iter().zip(host.events.iter()))
+        .zip(scenario.timeline.iter().zip(host.run.events.iter()))
         .enumerate()
     {
         let ctx = format!("{name}: command {i} ({command:?} at tick {tick})");
-        assert_eq!(rec.num::<u64>("tick"), event.tick, "{ctx}: applied at");
+        assert_eq!(rec.num::<u64>("tick"), event.tick, "{ctx}: sent at");
         let (op, step) = match command {
             Command::Push(id, f) => ("push", Some((id, f))),
             Command::Start => ("start", None),
@@ -248,13 +331,30 @@ fn compare_scenario(q: &QemuRun, name: &str) -> (f64, bool) {
             assert_eq!(rec.num::<f64>("y"), f.y, "{ctx}: y");
             assert_eq!(rec.num::<f64>("yaw"), f.yaw, "{ctx}: yaw");
         }
-        assert_eq!(
-            rec.get("result") == "Ok",
-            event.result.is_ok(),
-            "{ctx}: firmware said {}, host {:?}",
-            rec.get("result"),
-            event.result
+        let frame = wire_frame(command, &mut seq);
+        assert_eq!(rec.get("frame"), frame, "{ctx}: frame");
+        let want = match &event.result {
+            Ok(()) => "Ok".to_string(),
+            Err(e) if e == "no answer" => "NoAnswer".to_string(),
+            Err(e) => e.clone(),
+        };
+        assert_eq!(rec.get("result"), want, "{ctx}: the node's answer");
+        // When the host's node answered it.
+        let (code, key) = (
+            u8::from_str_radix(&frame[1..3], 16).expect("id"),
+            u8::from_str_radix(&frame[4..6], 16).expect("first byte"),
         );
+        let answered = host
+            .acks
+            .iter()
+            .enumerate()
+            .find(|(j, (t, a))| !used[*j] && *t >= event.tick && a.command == code && a.seq == key)
+            .map(|(j, (t, _))| {
+                used[j] = true;
+                t.to_string()
+            })
+            .unwrap_or_else(|| "none".to_string());
+        assert_eq!(rec.get("answered"), answered, "{ctx}: answered in cycle");
     }
 
     // The length of the run and the whole trajectory's bits.
@@ -262,21 +362,69 @@ fn compare_scenario(q: &QemuRun, name: &str) -> (f64, bool) {
         .all("END")
         .find(|r| r.get("scenario") == name)
         .unwrap_or_else(|| panic!("no END line for {name}"));
+    let trajectory = &host.run.trajectory;
     let ticks: usize = end.num("ticks");
     assert_eq!(
         ticks + 1,
-        host.trajectory.len(),
+        trajectory.len(),
         "{name}: the firmware ran {ticks} ticks, the host {}",
-        host.trajectory.len() - 1
+        trajectory.len() - 1
     );
-    let bit_identical = end.get("digest") == format!("{:#018x}", digest(&host.trajectory));
+    assert_eq!(
+        end.get("digest"),
+        digest(trajectory),
+        "{name}: the references of the target and the host are not bit-identical"
+    );
+
+    // The frames the node sent, and its counters.
+    let (n_frames, frames_digest) = node_frames(&host);
+    assert_eq!(
+        (end.num::<usize>("tx_frames"), end.get("tx_digest")),
+        (n_frames, frames_digest.as_str()),
+        "{name}: the frames the node transmitted (count, digest)"
+    );
+    let heartbeats: usize = end.num("heartbeats");
+    assert_eq!(
+        end.num::<usize>("heartbeat_acks"),
+        heartbeats,
+        "{name}: heartbeats answered"
+    );
+    assert_eq!(
+        heartbeats + host.run.events.len(),
+        host.acks.len(),
+        "{name}: answers on the host"
+    );
+    let node = q
+        .all("NODE")
+        .find(|r| r.get("scenario") == name)
+        .unwrap_or_else(|| panic!("no NODE line for {name}"));
+    assert_eq!(
+        node.num::<u16>("refused"),
+        host.counters.refused,
+        "{name}: refused"
+    );
+    assert_eq!(
+        node.num::<u16>("tx_dropped"),
+        host.counters.tx_dropped,
+        "{name}: tx_dropped"
+    );
+    assert_eq!(
+        node.num::<u16>("bus_errors"),
+        host.counters.bus_errors,
+        "{name}: bus_errors"
+    );
+    assert_eq!(
+        node.num::<u32>("rx_overflow"),
+        0,
+        "{name}: frames lost by the device"
+    );
 
     // The references at the sampled ticks.
     let mut max_diff: f64 = 0.0;
     let mut n = 0;
     for rec in q.all("REF").filter(|r| r.get("scenario") == name) {
         let tick: usize = rec.num("tick");
-        let h = &host.trajectory[tick];
+        let h = &trajectory[tick];
         for (key, want) in [
             ("cog_x", h.x.cog),
             ("cog_y", h.y.cog),
@@ -304,6 +452,7 @@ fn compare_scenario(q: &QemuRun, name: &str) -> (f64, bool) {
         .map(|r| (r.num("tick"), r.num("adjust_ticks")))
         .collect();
     let expected: Vec<(u64, i64)> = host
+        .run
         .adjustments
         .iter()
         .filter(|a| a.adjust_s != 0.0)
@@ -313,15 +462,16 @@ fn compare_scenario(q: &QemuRun, name: &str) -> (f64, bool) {
     assert!(!target.is_empty(), "{name}: no adjustment at all");
 
     println!(
-        "{name}: {ticks} ticks, {n} REF samples, max |target - host| = {max_diff:e}, all ticks bit-identical: {bit_identical}"
+        "{name}: {ticks} ticks, {n} REF samples, max |target - host| = {max_diff:e}, all ticks \
+         bit-identical, {n_frames} node frames identical"
     );
-    (max_diff, bit_identical)
+    max_diff
 }
 
 fn print_table(q: &QemuRun) {
     println!(
-        "instructions per call (QEMU mps2-an500, -icount shift=0, resolution {INSTRUCTIONS_PER_TICK}); \
-         budget {BUDGET} = 5 % of 5 ms at 480 MHz"
+        "instructions per Node::poll, by kind of cycle (`new`: Node::new; QEMU mps2-an500, \
+         -icount shift=0, resolution {INSTRUCTIONS_PER_TICK}); budget {BUDGET} = 5 % of 5 ms at 480 MHz"
     );
     println!(
         "{:<14} {:>6} {:>10} {:>10} {:>8}",
@@ -340,9 +490,11 @@ fn print_table(q: &QemuRun) {
     }
     let stack = q.one("STACK");
     println!(
-        "stack: {} of {} bytes",
+        "stack high-water: {} of {} bytes (building the node {}, control loop {})",
         stack.get("used"),
-        stack.get("size")
+        stack.get("size"),
+        stack.get("startup"),
+        stack.get("control")
     );
 }
 
@@ -384,25 +536,32 @@ fn qemu_image_matches_host_and_is_repeatable() {
          (is QEMU running with -icount shift=0?)"
     );
 
-    // The stack stayed inside its region (an overflow below RAM would have faulted).
+    // The stack stayed inside its region (its own, as on the board: an overflow would have
+    // run below the start of SSRAM2 and faulted).
     let stack = first.one("STACK");
     let (used, size): (u64, u64) = (stack.num("used"), stack.num("size"));
+    let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
     assert!(used > 0 && used < size, "stack: {used} of {size} bytes");
+    assert!(
+        control > 0 && control <= used && startup <= used,
+        "stack: control loop {control}, start-up {startup}, high-water {used} bytes"
+    );
 
-    // (b) The same references as the host.
+    // (b) The same node run as on the host.
     let mut max_diff: f64 = 0.0;
     for name in SCENARIOS {
-        let (d, _) = compare_scenario(first, name);
-        max_diff = max_diff.max(d);
+        max_diff = max_diff.max(compare_scenario(first, name));
     }
     println!("max |target - host| over both scenarios: {max_diff:e} (tolerance {TOLERANCE:e})");
     print_table(first);
 }
 
-/// (a) The worst control cycle (its commands and its tick) within 5 % of the 5 ms cycle at
-/// 480 MHz. The worst is the cycle where a modification's feasibility check (`modify`) and the
-/// adjusted re-plan fall together (history: 391,480 instructions before the planner stopped
-/// moving its 9 KB windows and zeroing Z through nalgebra's iterator; 105,560 after).
+/// (a) The worst control cycle (a whole `Node::poll`: its frames, its tick, its stream) within
+/// 5 % of the 5 ms cycle at 480 MHz. The worst is the `modify` cycle of `fig4`, where the
+/// feasibility check of the modified next landing and the adjusted re-plan fall together
+/// (history: 391,480 instructions for the gait calls alone before the planner stopped moving
+/// its 9 KB windows and zeroing Z through nalgebra's iterator; 105,560 after; 112,800 for the
+/// node's whole poll).
 #[test]
 fn worst_cycle_within_budget() {
     let Some((q, _)) = runs() else {

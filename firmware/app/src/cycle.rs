@@ -1,14 +1,18 @@
-//! One control cycle of the scripted gait loop, timed and classified.
+//! One control cycle: the controller's frames, one timed `Node::poll`, the node's answers.
 //!
-//! [`Player`] replays a [`Scenario`] exactly as `host_sim::scenario::run` does (same order of
-//! commands and ticks, same end condition), so the references of every tick can be compared
-//! with the host's one for one.
+//! [`Runner`] plays a [`Scenario`] against planner-core's [`Node`] exactly as
+//! `host_sim::sim::simulate` does with a fault-free bus (same frames at the same ticks, same
+//! `now_ms`, same end condition), so every reference, answer and transmitted frame can be
+//! compared with host-sim's run.
 
-use planner_core::gait::{Footstep, Gait, GaitError, GaitParams, Reference, ReplanInfo};
+use planner_core::gait::{Reference, ReplanInfo};
+use planner_core::node::{Node, PollReport};
+use planner_core::wire::{Command, ControlOp, RawFrame};
 
-use crate::script::{Command, Scenario};
+use crate::bus::ScriptedBus;
+use crate::controller::{Controller, Unrepresentable};
+use crate::script::Scenario;
 use crate::stats::{Kind, Stats};
-use crate::QUEUE;
 
 /// A free-running up-counter provided by the image (wrapping `u32`; only differences are
 /// used).
@@ -17,189 +21,218 @@ pub trait Clock {
     fn now(&mut self) -> u32;
 }
 
-/// A command that was applied, and what it cost.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CommandRecord {
-    /// Tick at which it was applied (the gait's tick count before the cycle's tick).
-    pub tick: u64,
-    /// The command.
-    pub command: Command,
-    /// The gait's answer.
-    pub result: Result<(), GaitError>,
-    /// Clock units spent in the gait call.
-    pub units: u32,
-}
-
 /// What one control cycle did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CycleRecord {
     /// The gait's tick count after the cycle (the index of `reference` in host-sim's
-    /// trajectory).
+    /// trajectory); the cycle ran at tick `tick - 1`.
     pub tick: u64,
-    /// The kind of the cycle's tick.
+    /// The kind of the cycle.
     pub kind: Kind,
-    /// Clock units spent in `Gait::tick`.
-    pub tick_units: u32,
-    /// Clock units spent in the gait calls of the whole cycle (commands and tick).
-    pub cycle_units: u32,
-    /// The reference of this tick.
-    pub reference: Reference<f64>,
-    /// The re-plan done by this tick, if any.
+    /// Clock units spent in `Node::poll`.
+    pub units: u32,
+    /// The node's report (its reference, frames received, refused and sent).
+    pub report: PollReport,
+    /// The re-plan done by this cycle's tick, if any.
     pub replan: Option<ReplanInfo<f64>>,
 }
 
-/// Replays a scenario, one control cycle per call of [`Player::cycle`].
-#[derive(Clone, Debug)]
-pub struct Player<'s> {
-    scenario: &'s Scenario,
-    next: usize,
-    last_command: u64,
-    finished: bool,
+/// FNV-1a 64.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
 }
 
-impl<'s> Player<'s> {
-    /// Replays `scenario` against a gait that was just created with `scenario.feet`.
+impl Fnv {
+    /// Adds bytes.
+    pub fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    /// Adds the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x, then of y.
+    pub fn add_reference(&mut self, r: &Reference<f64>) {
+        for s in [&r.x, &r.y] {
+            for v in [s.cog, s.cog_vel, s.cog_acc, s.zmp, s.zmp_vel] {
+                self.add(&v.to_bits().to_le_bytes());
+            }
+        }
+    }
+
+    /// Adds a frame: its identifier (2 bytes, little endian) and its data bytes.
+    pub fn add_frame(&mut self, f: &RawFrame) {
+        self.add(&f.id.to_le_bytes());
+        self.add(f.bytes());
+    }
+}
+
+/// Classes of received frames, for [`Kind`].
+const RX_PUSH: u8 = 1;
+const RX_MODIFY: u8 = 2;
+const RX_START: u8 = 4;
+const RX_STOP: u8 = 8;
+
+fn class(f: &RawFrame) -> u8 {
+    match Command::decode(f) {
+        Ok(Command::Append(_)) => RX_PUSH,
+        Ok(Command::Modify(_)) => RX_MODIFY,
+        Ok(Command::Control {
+            op: ControlOp::Start,
+            ..
+        }) => RX_START,
+        Ok(Command::Control {
+            op: ControlOp::Stop | ControlOp::StopNow,
+            ..
+        })
+        | Ok(Command::EmergencyStop { .. }) => RX_STOP,
+        _ => 0, // heartbeat, reset, invalid
+    }
+}
+
+/// Frames the node takes per cycle at most (`NodeConfig::max_rx` of `NodeConfig::hrp2`).
+const MAX_RX: usize = 16;
+
+/// Plays a scenario, one control cycle per call of [`Runner::cycle`].
+#[derive(Clone, Debug)]
+pub struct Runner<'s> {
+    controller: Controller<'s>,
+    bus: ScriptedBus,
+    k: u64,
+    finished: bool,
+    tx_frames: u32,
+    tx_digest: Fnv,
+}
+
+impl<'s> Runner<'s> {
+    /// Plays `scenario` against a node that was just created (standing, nothing queued).
     pub fn new(scenario: &'s Scenario) -> Self {
         Self {
-            scenario,
-            next: 0,
-            last_command: scenario.timeline.last().map(|(t, _)| *t).unwrap_or(0),
+            controller: Controller::new(scenario),
+            bus: ScriptedBus::new(),
+            k: 0,
             finished: false,
+            tx_frames: 0,
+            tx_digest: Fnv::default(),
         }
     }
 
-    /// The scenario.
-    pub fn scenario(&self) -> &'s Scenario {
-        self.scenario
+    /// The controller (commands sent, answers).
+    pub fn controller(&self) -> &Controller<'s> {
+        &self.controller
     }
 
-    /// `true` once the scenario has ended: standing after its last command, or `max_ticks`
-    /// elapsed.
-    pub fn done<const Q: usize>(&self, gait: &Gait<f64, Q>) -> bool {
-        self.finished || gait.ticks() >= self.scenario.max_ticks
+    /// The device (frame counters).
+    pub fn bus(&self) -> &ScriptedBus {
+        &self.bus
     }
 
-    /// One control cycle: applies the commands that are due (in timeline order), then ticks
-    /// the gait. Each gait call is timed with `clock` and recorded in `stats`; `on_command`
-    /// sees every applied command. The cycle's time is the sum of its gait calls: what
-    /// `on_command` and the bookkeeping cost is not counted.
+    /// Frames the node transmitted, and their digest ([`Fnv::add_frame`], in sending order).
+    pub fn transmitted(&self) -> (u32, u64) {
+        (self.tx_frames, self.tx_digest.0)
+    }
+
+    /// `true` once the scenario has ended: standing after its last command (as
+    /// `host_sim::sim::simulate` decides), or `max_ticks` cycles run.
+    pub fn done(&self) -> bool {
+        self.finished || self.k >= self.controller.scenario().max_ticks
+    }
+
+    /// One control cycle at tick `k`: the controller sends what is due, the node polls once
+    /// at `now_ms = 5k + 2` (host-sim polls 2.5 ms into the tick), then the controller reads
+    /// what the node sent; `on_frame` sees every transmitted frame and, for an `ACK` that
+    /// answers a command, the command's index in [`Controller::sent`]. Only `Node::poll` is
+    /// timed with `clock` (recorded in `stats` by kind and as [`Kind::Cycle`]).
     pub fn cycle<C: Clock, const Q: usize>(
         &mut self,
-        gait: &mut Gait<f64, Q>,
+        node: &mut Node<Q>,
         clock: &mut C,
         stats: &mut Stats,
-        mut on_command: impl FnMut(&CommandRecord),
-    ) -> CycleRecord {
-        let timeline = &self.scenario.timeline;
-        let mut cycle_units: u32 = 0;
-        while self.next < timeline.len() && timeline[self.next].0 <= gait.ticks() {
-            let (_, command) = timeline[self.next];
-            let t0 = clock.now();
-            let result = apply(gait, command);
-            let units = clock.now().wrapping_sub(t0);
-            let kind = match command {
-                Command::Push(..) => Kind::Push,
-                Command::Start => Kind::Start,
-                Command::Stop | Command::StopNow => Kind::StopCommand,
-                Command::Modify(..) => Kind::Modify,
-            };
-            stats.record(kind, units, gait.ticks());
-            cycle_units = cycle_units.saturating_add(units);
-            on_command(&CommandRecord {
-                tick: gait.ticks(),
-                command,
-                result,
-                units,
-            });
-            self.next += 1;
+        mut on_frame: impl FnMut(&RawFrame, Option<usize>),
+    ) -> Result<CycleRecord, Unrepresentable> {
+        let k = self.k;
+        self.controller.send_due(k, &mut self.bus)?;
+        // What the node may take in this cycle, by class: `seen[i]` covers the first i + 1
+        // waiting frames (it takes a prefix of the FIFO).
+        let mut seen = [0u8; MAX_RX];
+        let mut acc = 0;
+        for (s, f) in seen.iter_mut().zip(self.bus.pending()) {
+            acc |= class(f);
+            *s = acc;
         }
+        let waiting = self.bus.pending_len();
+        let was_standing = node.gait().is_standing();
+        let now_ms = (k * 5 + 2) as u32;
 
-        let was_standing = gait.is_standing();
         let t0 = clock.now();
-        let reference = tick(gait);
-        let tick_units = clock.now().wrapping_sub(t0);
-        cycle_units = cycle_units.saturating_add(tick_units);
-        let tick = gait.ticks();
+        let report = poll(node, now_ms, &mut self.bus);
+        let units = clock.now().wrapping_sub(t0);
 
-        let replan = gait.last_replan().filter(|i| i.tick == tick).copied();
-        let kind = if was_standing && gait.is_standing() {
-            Kind::Standing
+        let taken = waiting - self.bus.pending_len();
+        let rx = if taken == 0 {
+            0
+        } else {
+            seen[taken.min(MAX_RX) - 1]
+        };
+        let tick = node.gait().ticks();
+        let replan = node
+            .gait()
+            .last_replan()
+            .filter(|i| i.tick == tick)
+            .copied();
+        let kind = if rx & RX_MODIFY != 0 {
+            Kind::Modify
+        } else if rx & RX_START != 0 {
+            Kind::Start
         } else if let Some(info) = replan {
             if info.adjust_ticks != 0 {
                 Kind::Adjust
             } else {
                 Kind::Replan
             }
+        } else if rx & RX_STOP != 0 {
+            Kind::StopCommand
+        } else if rx & RX_PUSH != 0 {
+            Kind::Push
+        } else if was_standing && node.gait().is_standing() {
+            Kind::Standing
         } else {
             Kind::Steady
         };
-        stats.record(kind, tick_units, tick);
-        stats.record(Kind::Cycle, cycle_units, tick);
+        stats.record(kind, units, tick);
+        stats.record(Kind::Cycle, units, tick);
 
-        if gait.is_standing() && tick > self.last_command && self.next >= timeline.len() {
+        while let Some(f) = self.bus.take_sent() {
+            self.tx_frames = self.tx_frames.saturating_add(1);
+            self.tx_digest.add_frame(&f);
+            let answered = self.controller.read(k, &f);
+            on_frame(&f, answered);
+        }
+
+        if node.gait().is_standing()
+            && k > self.controller.last_command()
+            && self.controller.all_sent()
+        {
             self.finished = true;
         }
-        CycleRecord {
+        self.k += 1;
+        Ok(CycleRecord {
             tick,
             kind,
-            tick_units,
-            cycle_units,
-            reference,
+            units,
+            report,
             replan,
-        }
+        })
     }
 }
 
-/// `Gait::new` with the HRP-2 feet of `scenario`, in a frame of its own.
-///
-/// Inlined into its caller, `new`'s local copy of the gait (~38 KB) and the returned one would
-/// both stay reserved in the caller's frame for as long as the caller runs. Keep the result
-/// where it was returned and borrow the gait from it (`match &mut result`): moving it out
-/// copies it into yet another slot.
+/// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
 #[inline(never)]
-pub fn new_gait(
-    params: GaitParams<f64>,
-    scenario: &Scenario,
-) -> Result<Gait<f64, QUEUE>, GaitError> {
-    Gait::new(params, scenario.feet[0], scenario.feet[1])
-}
-
-// The gait calls, each in a frame of its own. Inlined into `Player::cycle`, the temporaries of
-// `start`, `modify` and `tick` (plan windows of ~9 KB each, the 20×20 factorisation) would
-// all be reserved at once in one frame: 40 KB of stack instead of the largest of them.
-
-#[inline(never)]
-fn apply<const Q: usize>(gait: &mut Gait<f64, Q>, command: Command) -> Result<(), GaitError> {
-    match command {
-        Command::Push(id, f) => gait.push(id, f).map_err(|(e, _)| e),
-        Command::Start => start(gait),
-        Command::Stop => {
-            gait.stop();
-            Ok(())
-        }
-        Command::StopNow => {
-            gait.clear_and_stop();
-            Ok(())
-        }
-        Command::Modify(id, f) => modify(gait, id, f),
-    }
-}
-
-#[inline(never)]
-fn start<const Q: usize>(gait: &mut Gait<f64, Q>) -> Result<(), GaitError> {
-    gait.start()
-}
-
-#[inline(never)]
-fn modify<const Q: usize>(
-    gait: &mut Gait<f64, Q>,
-    id: u16,
-    step: Footstep<f64>,
-) -> Result<(), GaitError> {
-    gait.modify(id, step)
-}
-
-#[inline(never)]
-fn tick<const Q: usize>(gait: &mut Gait<f64, Q>) -> Reference<f64> {
-    gait.tick()
+fn poll<const Q: usize>(node: &mut Node<Q>, now_ms: u32, bus: &mut ScriptedBus) -> PollReport {
+    node.poll(now_ms, bus)
 }

@@ -1,27 +1,35 @@
 //! # gait-loop
 //!
-//! The gait loop that both firmware images run, without any hardware:
+//! The QEMU image's control loop around planner-core's CAN node, without any hardware:
 //!
-//! * [`script`]: a scripted footstep source (the stand-in for the CAN bus): the `fig4` and
-//!   `lateral` scenarios of `host-sim`, as data;
-//! * [`cycle`]: one 5 ms control cycle (apply the commands that are due, then
-//!   [`Gait::tick`](planner_core::gait::Gait::tick)), each part timed by a [`cycle::Clock`]
-//!   that the image provides, and classified by [`Kind`];
+//! * [`script`]: the `fig4` and `lateral` scenarios of `host-sim`, as data (a timeline of
+//!   footstep commands at given ticks);
+//! * [`controller`]: the controller of `host_sim::sim::simulate`: the timeline as CAN frames
+//!   (`wire::Command::encode`) at the same ticks, heartbeats, and the pairing of the node's
+//!   `ACK`s with the commands;
+//! * [`bus`]: an in-memory `embedded_can::nb::Can` device between the two;
+//! * [`cycle`]: one 5 ms control cycle: the controller's frames, one
+//!   [`Node::poll`](planner_core::node::Node::poll) timed by a [`cycle::Clock`] that the image
+//!   provides and classified by [`Kind`], the node's answers;
 //! * [`stats`]: count, maximum and sum per kind.
 //!
-//! The images differ only in the clock (QEMU: the CMSDK timer under `-icount`; board: DWT
-//! cycles), the 5 ms pacing and the output.
+//! The board image runs the same `Node::poll` over FDCAN1 instead of the in-memory device.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod bus;
+pub mod controller;
 pub mod cycle;
 pub mod script;
 pub mod stats;
 
-pub use cycle::{new_gait, Clock, CommandRecord, CycleRecord, Player};
+pub use bus::ScriptedBus;
+pub use controller::{Answer, Controller, Sent, Unrepresentable, HEARTBEAT_TICKS};
+pub use cycle::{Clock, CycleRecord, Fnv, Runner};
 pub use script::{Command, Scenario};
 pub use stats::{Kind, Stat, Stats};
 
-/// The queue capacity of the firmware's gait (both scenarios queue at most 13 steps).
+/// The queue capacity of the firmware's node (`Node<16>`, as on the board; both scenarios
+/// queue at most 13 steps).
 pub const QUEUE: usize = 16;

@@ -1,11 +1,13 @@
-//! The scripted footstep source: a timeline of gait commands at given control ticks.
+//! The scripted controller's timeline: gait commands at given control ticks.
 //!
 //! The two scenarios are `host-sim`'s built-in `fig4` and `lateral`
 //! (`host-sim/src/scenario.rs`), DUPLICATED here as data: host-sim builds them with `Vec` and
 //! `String` (std), and this crate must stay `no_std`. The footstep coordinates are computed
-//! with the same expressions in the same order, so they are the same `f64` values bit for bit;
-//! the QEMU image prints its timeline (`CMD` lines) and `tests/tests/qemu.rs` compares it with
-//! host-sim's, so the copies cannot drift apart unnoticed.
+//! with the same expressions in the same order, so they are the same `f64` values bit for bit
+//! (and the same frames once quantised by `WireStep::from_si`); the QEMU image prints its
+//! timeline (`CMD` lines, with the frames) and `tests/tests/qemu.rs` compares it with
+//! host-sim's, so the copies cannot drift apart unnoticed. The [`Controller`](crate::Controller)
+//! turns the timeline into CAN frames.
 
 use heapless::Vec;
 use planner_core::gait::{Footstep, Side};

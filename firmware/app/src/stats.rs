@@ -3,30 +3,35 @@
 //! Units are whatever the image's [`Clock`](crate::Clock) counts (QEMU: CMSDK timer ticks,
 //! 40 instructions each under `-icount shift=0`; board: core cycles).
 
-/// A kind of timed work.
+/// A kind of timed work: `New` is the node's start-up, every other kind is a whole
+/// `Node::poll` (one control cycle), classified by what it did, first match wins:
+/// a cycle that received a `STEP_MODIFY` is `Modify`, one that received a `Start` is `Start`,
+/// then by its tick (`Adjust`, `Replan`), then `StopCommand`, `Push`, `Standing`, `Steady`.
+/// Heartbeats do not count as commands. Every cycle is also recorded as `Cycle`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
-    /// `Gait::new` (the preview-control gains: about 1100 Riccati iterations).
+    /// `Node::new` (the preview-control gains: about 1100 Riccati iterations), moved into its
+    /// `static`.
     New,
-    /// `Gait::push`.
+    /// A cycle that received `STEP_APPEND` frames (and no other command).
     Push,
-    /// `Gait::start`: plans the start window.
+    /// A cycle that received a `Start`: plans the start window.
     Start,
-    /// `Gait::modify`: for the next swing target, the feasibility check plans the re-plan it
-    /// will cause (eq. 17).
+    /// A cycle that received `STEP_MODIFY` frames: a modification of the next swing target
+    /// plans the re-plan it will cause (eq. 17); the cycle's tick may re-plan too.
     Modify,
-    /// `Gait::stop` or `Gait::clear_and_stop`.
+    /// A cycle that received a `Stop`, `StopNow` or emergency stop (and did not re-plan).
     StopCommand,
-    /// `Gait::tick` while standing.
+    /// A cycle standing, no command.
     Standing,
-    /// `Gait::tick` while walking, no re-plan.
+    /// A walking cycle without re-plan and without command.
     Steady,
-    /// `Gait::tick` that re-plans at the start of a single support, no time adjustment.
+    /// A cycle whose tick re-plans at the start of a single support, no time adjustment.
     Replan,
-    /// `Gait::tick` that re-plans with a single-support time adjustment (`adjust_ticks != 0`:
-    /// the first single support after a modification, eq. 18 solves the target pattern too).
+    /// A cycle whose tick re-plans with a single-support time adjustment
+    /// (`adjust_ticks != 0`: eq. 18 solves the target pattern too).
     Adjust,
-    /// A whole control cycle: the commands applied in it plus its tick.
+    /// Every control cycle.
     Cycle,
 }
 

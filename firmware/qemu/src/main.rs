@@ -1,6 +1,7 @@
-//! The gait loop on QEMU's `mps2-an500` (Cortex-M7, double-precision FPU): plays host-sim's
-//! `fig4` and `lateral` scenarios from the scripted footstep source, counts the instructions of
-//! every gait call, and prints a machine-readable report over semihosting.
+//! planner-core's CAN node on QEMU's `mps2-an500` (Cortex-M7, double-precision FPU): plays
+//! host-sim's `fig4` and `lateral` scenarios as CAN frames through an in-memory device, counts
+//! the instructions of every `Node::poll` (one 5 ms control cycle, as the board runs it), and
+//! prints a machine-readable report over semihosting.
 //!
 //! Run (from firmware/qemu, after `cargo build --release`):
 //!
@@ -13,7 +14,7 @@
 //! # How the instructions are counted
 //! DWT CYCCNT reads 0 under QEMU. With `-icount shift=0` QEMU advances its virtual clock by
 //! 2⁰ = 1 ns per executed instruction, and the CMSDK APB timer 0 counts at the board's 25 MHz
-//! SYSCLK of that virtual clock: one timer tick = 40 ns = **40 instructions**. A gait call is
+//! SYSCLK of that virtual clock: one timer tick = 40 ns = **40 instructions**. A poll is
 //! timed by reading the timer before and after it, so its count has a resolution of 40
 //! instructions (±1 tick) and includes the few instructions of the two timer reads. The
 //! counts are exact and repeatable run to run (the virtual clock is driven by the
@@ -23,19 +24,38 @@
 //! on the real core) nor flash wait states and caches; the board image measures cycles with
 //! DWT.
 //!
+//! # Memory (as on the board)
+//! The node (`Node<16>`, ~47 KB) is a `static` in .bss, placed once by `cortex_m::singleton!`
+//! (and built again in place of the first one for the second scenario). Building it takes
+//! ~160 KB of stack once (`Node::new`'s own frame is ~109 KB: it builds the gait and the node
+//! by value; the 47 KB `Result` it returns comes on top), which does not fit the 128 KiB RAM
+//! next to the node: `memory.x` puts the stack into a region of its own (`STACK`, 512 KiB, the
+//! board's AXI SRAM), as `board/stack.x` does on the board. The control loop itself needs
+//! ~15 KB of stack (`STACK ... control=`).
+//!
 //! # Output (one record per line, `key=value` fields)
 //! * `CALIB loop_instructions=… timer_ticks=… instructions_per_tick=…`
-//! * `SIZE gait=…` (bytes of `Gait<f64, 16>`)
-//! * `CMD scenario=… tick=… op=… id=… side=… x=… y=… yaw=… result=… instructions=…`
-//! * `REPLAN scenario=… tick=… kind=replan|adjust adjust_ticks=… ratio=… plane=…`
+//! * `SIZE node=… gait=…` (bytes of `Node<16>` and `Gait<f64, 16>`)
+//! * `CMD scenario=… tick=… op=… id=… side=… x=… y=… yaw=… frame=ID#DATA result=… answered=…`
+//!   per command sent (footstep fields for push and modify only): the scenario's command, its
+//!   frame (hex, candump style), the node's answer (`Ok` or the refusal reason) and the tick of
+//!   the cycle that answered
+//! * `REPLAN scenario=… tick=… kind=… adjust_ticks=… ratio=… plane=… instructions=…` (kind of
+//!   the cycle, instructions of its poll)
 //! * `REF scenario=… tick=… kind=… cog_x=… cog_y=… zmp_x=… zmp_y=… cogv_x=… cogv_y=…`
-//!   every 20 ticks and at every non-steady tick; floats in Rust's shortest round-trip `{:e}`
-//! * `END scenario=… ticks=… digest=…` (FNV-1a 64 over the bits of every tick's x and y
-//!   samples, tick 0 included)
+//!   every 20 ticks and at every cycle that is not steady or standing; floats in Rust's
+//!   shortest round-trip `{:e}`
+//! * `END scenario=… ticks=… digest=… tx_frames=… tx_digest=… heartbeats=… heartbeat_acks=…`
+//!   (`digest`: FNV-1a 64 over the bits of every tick's x and y samples, tick 0 included;
+//!   `tx_digest`: over the identifier and data of every frame the node transmitted)
+//! * `NODE scenario=… refused=… tx_dropped=… bus_errors=… rx_overflow=…` (the node's counters,
+//!   the device's lost frames)
 //! * `TIMING scenario=…|all kind=… n=… max=… mean=… max_tick=… max_timer=…` (instructions)
-//! * `STACK used=… size=…` (bytes; the stack is painted at reset)
-//! * `DONE`, then a semihosting exit with code 0 (1 if a command was refused or the gait
-//!   could not be created).
+//! * `STACK used=… size=… startup=… control=…` (bytes: the high-water mark, of the stack
+//!   region's size; `startup`: while building the node, `control`: while running the
+//!   scenarios, measured after painting the stack again once the node is built)
+//! * `DONE`, then a semihosting exit with code 0 (1 if a command was refused or not answered,
+//!   or the node could not be created).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
@@ -48,12 +68,9 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
 use panic_semihosting as _; // panics print over semihosting and exit with code 1
 
-use gait_loop::{
-    new_gait, script, Clock, Command, CommandRecord, CycleRecord, Kind, Player, Scenario, Stats,
-    QUEUE,
-};
-use planner_core::gait::{Gait, GaitParams, Reference, Side};
-use planner_core::Sample;
+use gait_loop::{script, Clock, Command, Fnv, Kind, Runner, Scenario, Sent, Stats, QUEUE};
+use planner_core::gait::{Gait, GaitError, Reference, Side};
+use planner_core::node::{Node, NodeConfig};
 
 /// Instructions per CMSDK timer tick under `-icount shift=0` (1 ns per instruction, 25 MHz).
 const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / hw::TIMER_HZ;
@@ -111,29 +128,6 @@ macro_rules! line {
     }};
 }
 
-/// FNV-1a 64 over the bits of the samples of every tick.
-struct Digest(u64);
-
-impl Digest {
-    fn new() -> Self {
-        Digest(0xcbf2_9ce4_8422_2325)
-    }
-
-    fn add_sample(&mut self, s: &Sample<f64>) {
-        for v in [s.cog, s.cog_vel, s.cog_acc, s.zmp, s.zmp_vel] {
-            for b in v.to_bits().to_le_bytes() {
-                self.0 ^= u64::from(b);
-                self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-            }
-        }
-    }
-
-    fn add(&mut self, r: &Reference<f64>) {
-        self.add_sample(&r.x);
-        self.add_sample(&r.y);
-    }
-}
-
 fn side(s: Side) -> &'static str {
     match s {
         Side::Left => "L",
@@ -182,7 +176,7 @@ fn print_timing(out: &mut Console, scenario: &str, stats: &Stats) {
     }
 }
 
-fn print_command(out: &mut Console, scenario: &str, c: &CommandRecord) {
+fn print_command(out: &mut Console, scenario: &str, c: &Sent) {
     let _ = write!(
         out,
         "CMD scenario={} tick={} op={}",
@@ -201,70 +195,74 @@ fn print_command(out: &mut Console, scenario: &str, c: &CommandRecord) {
             f.yaw
         );
     }
-    match c.result {
-        Ok(()) => {
-            let _ = write!(out, " result=Ok");
-        }
-        Err(e) => {
-            let _ = write!(out, " result={:?}", e);
-        }
+    let _ = write!(out, " frame={:03X}#", c.frame.id);
+    for b in c.frame.bytes() {
+        let _ = write!(out, "{:02X}", b);
     }
-    line!(out, " instructions={}", instructions(c.units));
+    match c.answer {
+        Some(a) => {
+            match a.reason {
+                None => {
+                    let _ = write!(out, " result=Ok");
+                }
+                Some(r) => {
+                    let _ = write!(out, " result={:?}", r);
+                }
+            }
+            line!(out, " answered={}", a.tick);
+        }
+        None => line!(out, " result=NoAnswer answered=none"),
+    }
 }
 
-/// One control cycle, in a frame of its own: the planner's temporaries (windows, the 20×20
-/// factorisation) are not kept reserved next to the gait while it is being created.
+/// The node's `static`: `Node::new`'s result, kept where it was returned.
+type Slot = Result<Node<QUEUE>, GaitError>;
+
+/// Builds the node into its `static` (in .bss) with `cortex_m::singleton!`, as the board's
+/// `place_node` does, but keeps the `Result` (moving the node out of it would copy its 47 KB
+/// through this frame once more). Not inlined: the temporaries of `Node::new` (the gait, the
+/// preview-gain computation, the node returned by value) live in this frame only while it runs.
 #[inline(never)]
-fn control_cycle(
-    player: &mut Player<'_>,
-    gait: &mut Gait<f64, QUEUE>,
-    timer: &mut hw::Timer0,
-    stats: &mut Stats,
-    out: &mut Console,
-    ok: &mut bool,
-) -> CycleRecord {
-    let name = player.scenario().name;
-    player.cycle(gait, timer, stats, |c| {
-        *ok &= c.result.is_ok();
-        print_command(out, name, c);
-    })
+fn place_node(cfg: NodeConfig) -> &'static mut Slot {
+    match cortex_m::singleton!(: Slot = Node::new(cfg)) {
+        Some(slot) => slot,
+        None => panic!("place_node called twice"),
+    }
 }
 
-/// Plays one scenario with a fresh gait; returns `false` if something was refused or failed.
-/// The gait (~38 KB) lives in this function's frame (not inlined: one frame, whatever the
-/// number of scenarios).
+/// A fresh node in place of the old one (the next scenario starts from start-up), in a frame
+/// of its own like [`place_node`].
+#[inline(never)]
+fn renew_node(slot: &mut Slot, cfg: NodeConfig) {
+    *slot = Node::new(cfg);
+}
+
+/// Plays one scenario against `node` (just created); returns `false` if a command was refused
+/// or not answered, or a footstep could not be encoded.
 #[inline(never)]
 fn run_scenario(
     out: &mut Console,
     timer: &mut hw::Timer0,
     scenario: &Scenario,
-    params: GaitParams<f64>,
-    all: &mut Stats,
+    node: &mut Node<QUEUE>,
+    stats: &mut Stats,
 ) -> bool {
     let name = scenario.name;
-    let mut stats = Stats::new();
-    let t0 = timer.now();
-    let mut created = new_gait(params, scenario);
-    let new_units = timer.now().wrapping_sub(t0);
-    // Borrowed where `new_gait` returned it (see there).
-    let gait = match &mut created {
-        Ok(g) => g,
-        Err(e) => {
-            line!(out, "ERROR scenario={} gait_new={:?}", name, e);
-            return false;
-        }
-    };
-    stats.record(Kind::New, new_units, 0);
+    let mut digest = Fnv::default();
+    digest.add_reference(node.gait().last());
+    print_ref(out, name, 0, Kind::Standing.name(), node.gait().last());
 
-    let mut ok = true;
-    let mut digest = Digest::new();
-    digest.add(gait.last());
-    print_ref(out, name, 0, Kind::Standing.name(), gait.last());
-
-    let mut player = Player::new(scenario);
-    while !player.done(gait) {
-        let record = control_cycle(&mut player, gait, timer, &mut stats, out, &mut ok);
-        digest.add(&record.reference);
+    let mut runner = Runner::new(scenario);
+    while !runner.done() {
+        let record = match runner.cycle(node, timer, stats, |_, _| {}) {
+            Ok(r) => r,
+            Err(e) => {
+                line!(out, "ERROR scenario={} unrepresentable_step={}", name, e.0);
+                return false;
+            }
+        };
+        let reference = &record.report.reference;
+        digest.add_reference(reference);
         if let Some(info) = record.replan {
             line!(
                 out,
@@ -275,29 +273,44 @@ fn run_scenario(
                 info.adjust_ticks,
                 info.ratio,
                 info.plane,
-                instructions(record.tick_units)
+                instructions(record.units)
             );
         }
         let notable = !matches!(record.kind, Kind::Steady | Kind::Standing);
         if record.tick % REF_EVERY == 0 || notable {
-            print_ref(
-                out,
-                name,
-                record.tick,
-                record.kind.name(),
-                &record.reference,
-            );
+            print_ref(out, name, record.tick, record.kind.name(), reference);
         }
     }
+
+    let mut ok = true;
+    for c in runner.controller().sent() {
+        ok &= matches!(c.answer, Some(a) if a.reason.is_none());
+        print_command(out, name, c);
+    }
+    let (tx_frames, tx_digest) = runner.transmitted();
+    let (heartbeats, heartbeat_acks, _) = runner.controller().heartbeats();
     line!(
         out,
-        "END scenario={} ticks={} digest={:#018x}",
+        "END scenario={} ticks={} digest={:#018x} tx_frames={} tx_digest={:#018x} heartbeats={} heartbeat_acks={}",
         name,
-        gait.ticks(),
-        digest.0
+        node.gait().ticks(),
+        digest.0,
+        tx_frames,
+        tx_digest,
+        heartbeats,
+        heartbeat_acks
     );
-    print_timing(out, name, &stats);
-    all.merge(&stats);
+    let c = node.counters();
+    line!(
+        out,
+        "NODE scenario={} refused={} tx_dropped={} bus_errors={} rx_overflow={}",
+        name,
+        c.refused,
+        c.tx_dropped,
+        c.bus_errors,
+        runner.bus().rx_overflow()
+    );
+    print_timing(out, name, stats);
     ok
 }
 
@@ -328,23 +341,62 @@ fn main() -> ! {
     );
     line!(
         out,
-        "SIZE gait={}",
+        "SIZE node={} gait={}",
+        core::mem::size_of::<Node<QUEUE>>(),
         core::mem::size_of::<Gait<f64, QUEUE>>()
     );
 
-    let params = GaitParams::<f64>::hrp2();
+    // host-sim's `simulate` runs `NodeConfig::hrp2()` whatever the scenario's feet; both
+    // scenarios start from those feet.
+    let cfg = NodeConfig::hrp2();
     let mut all = Stats::new();
     let mut ok = true;
+    let mut placed: Option<&'static mut Slot> = None;
+    let (mut startup_stack, mut control_stack) = (0, 0);
     for name in script::NAMES {
-        match Scenario::by_name(name) {
-            Some(s) => ok &= run_scenario(&mut out, &mut timer, &s, params, &mut all),
-            None => ok = false,
-        }
+        let Some(scenario) = Scenario::by_name(name) else {
+            ok = false;
+            continue;
+        };
+        ok &= scenario.feet == [cfg.left, cfg.right];
+        let t0 = timer.now();
+        let slot = match placed.take() {
+            None => place_node(cfg),
+            Some(slot) => {
+                renew_node(slot, cfg);
+                slot
+            }
+        };
+        let new_units = timer.now().wrapping_sub(t0);
+        // The start-up's high-water mark (building the node), then a fresh paint for the
+        // control loop's.
+        startup_stack = startup_stack.max(hw::stack_usage().0);
+        hw::repaint_stack();
+        let node = match slot {
+            Ok(n) => n,
+            Err(e) => {
+                line!(out, "ERROR scenario={} node_new={:?}", name, e);
+                exit(debug::EXIT_FAILURE);
+            }
+        };
+        let mut stats = Stats::new();
+        stats.record(Kind::New, new_units, 0);
+        ok &= run_scenario(&mut out, &mut timer, &scenario, node, &mut stats);
+        control_stack = control_stack.max(hw::stack_usage().0);
+        all.merge(&stats);
+        placed = Some(slot);
     }
     print_timing(&mut out, "all", &all);
 
-    let (used, size) = hw::stack_usage();
-    line!(out, "STACK used={} size={}", used, size);
+    let (_, size) = hw::stack_usage();
+    line!(
+        out,
+        "STACK used={} size={} startup={} control={}",
+        startup_stack.max(control_stack),
+        size,
+        startup_stack,
+        control_stack
+    );
     line!(out, "DONE");
     exit(if ok {
         debug::EXIT_SUCCESS
