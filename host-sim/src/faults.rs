@@ -569,12 +569,24 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         flood.run(&bus, t0 + 5 * ms / 2, t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
             if let Some(a) = Ack::decode(&f) {
-                let Some(i) = pending.iter().position(|p| {
-                    p.open
-                        && p.cmd.code() == a.command
-                        && key(&p.cmd) == a.seq
-                        && p.cmd.echo() == a.echo
-                }) else {
+                let same = |p: &Pending| {
+                    p.cmd.code() == a.command && key(&p.cmd) == a.seq && p.cmd.echo() == a.echo
+                };
+                // The open command this answers (the newest, if it was sent more than once);
+                // else a closed one: an acceptance that arrives after a refusal of the same
+                // frame (a delayed copy taken once the steps around it had changed) still
+                // tells what the node now has.
+                let Some(i) = pending.iter().rposition(|p| p.open && same(p)) else {
+                    if a.reason.is_none() {
+                        if let Some((id, f)) =
+                            pending.iter().rev().find(|p| same(p)).and_then(|p| p.step)
+                        {
+                            match accepted.iter_mut().find(|(i, _)| *i == id) {
+                                Some(e) => e.1 = f,
+                                None => accepted.push((id, f)),
+                            }
+                        }
+                    }
                     continue;
                 };
                 let mut confirm = vec![];
@@ -643,17 +655,19 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 .abs()
                 <= 2e-3
     };
+    // Steps are walked in id order: each accepted step (in id order) is matched to the first
+    // unused landing after the previous match, so two steps at the same pose (a multi-step
+    // change applied in part) are told apart; a step walked twice leaves a stray landing.
+    accepted.sort_by_key(|(id, _)| *id); // (answers can arrive out of order)
+    let mut from = 0;
     for (_, f) in &accepted {
-        let hits: Vec<usize> = (0..walked.len())
-            .filter(|&i| !used[i] && matches(f, &walked[i]))
-            .collect();
-        if let Some(&i) = hits.first() {
-            used[i] = true;
-        }
-        match hits.len() {
-            1 => {}
-            0 if safety_stop => cancelled += 1,
-            _ => lost += 1,
+        match (from..walked.len()).find(|&i| !used[i] && matches(f, &walked[i])) {
+            Some(i) => {
+                used[i] = true;
+                from = i + 1;
+            }
+            None if safety_stop => cancelled += 1,
+            None => lost += 1,
         }
     }
     // Landings nobody asked for: a safety stop's closing step is expected (one).

@@ -34,9 +34,22 @@
 //! have lifted off or been walked). A control command repeating the last sequence number is
 //! answered `Duplicate` likewise.
 //!
-//! Reach limits (HRP-2, in the frame of the previous foot of the other side): forward
-//! −0.30 … +0.40 m, across 0.15 … 0.40 m on the foot's own side (a step to the other side of
-//! the support foot is `Crossing`), heading change at most 0.6 rad.
+//! Reach limits ([`Reach`]): what the HRP-2 legs (thigh and shank 0.3 m) can follow at the
+//! gait's COG height, with a margin, measured on host-sim's multi-body model
+//! (`host-sim/tests/reach.rs` walks the corners of these limits and asserts the knee margin).
+//! A step is measured in the frame of the previous foot of the other side (`forward` along
+//! its heading, `width` across, positive on the stepping foot's own side; a negative width is
+//! `Crossing`):
+//! * box: forward −0.20 … +0.30 m, width 0.15 … 0.28 m, heading change at most 0.30 rad;
+//! * distance between the feet `hypot(forward, width)` at most 0.361 m;
+//! * a turn costs reach: `forward + 0.3 m/rad · |Δyaw| ≤ 0.30 m`;
+//! * stride: the swinging foot travels at most 0.43 m along that heading (steady walking up
+//!   to 0.215 m steps);
+//! * growth: a step is at most 0.22 m longer than the one before (from standing: than 0).
+//!
+//! The last two are why a box alone is not enough: a long step needs the speed built up by the
+//! steps before it, and the stop after long steps needs room. A modification is checked with
+//! its two successors (their rules involve the modified step).
 
 use heapless::Deque;
 
@@ -62,16 +75,115 @@ pub struct Reach {
     pub max_width: f64,
     /// Largest heading change \[rad\].
     pub max_yaw: f64,
+    /// Largest distance between the feet \[m\].
+    pub max_feet_distance: f64,
+    /// Forward reach lost per radian of heading change \[m/rad\].
+    pub yaw_cost: f64,
+    /// Largest travel of the swinging foot along the other foot's heading \[m\].
+    pub max_stride: f64,
+    /// Largest growth of the forward step over the step before it \[m\].
+    pub max_growth: f64,
 }
 
 impl Default for Reach {
     fn default() -> Self {
         Self {
-            max_forward: 0.40,
-            max_backward: 0.30,
+            max_forward: 0.30,
+            max_backward: 0.20,
             min_width: 0.15,
-            max_width: 0.40,
-            max_yaw: 0.6,
+            max_width: 0.28,
+            max_yaw: 0.30,
+            max_feet_distance: 0.361,
+            yaw_cost: 0.3,
+            max_stride: 0.43,
+            max_growth: 0.22,
+        }
+    }
+}
+
+/// A foot as a frame: its pose with the sine and cosine of its yaw (computed once per foot:
+/// the reach check runs on the Cortex-M for every footstep frame).
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    x: f64,
+    y: f64,
+    yaw: f64,
+    sin: f64,
+    cos: f64,
+}
+
+impl Frame {
+    fn of(f: &Footstep<f64>) -> Self {
+        Self {
+            x: f.x,
+            y: f.y,
+            yaw: f.yaw,
+            sin: libm::sin(f.yaw),
+            cos: libm::cos(f.yaw),
+        }
+    }
+
+    /// `to` in this frame: forward and width (positive on `to_side`'s own side).
+    fn forward_width(&self, to: &Frame, to_side: Side) -> (f64, f64) {
+        let (dx, dy) = (to.x - self.x, to.y - self.y);
+        let forward = self.cos * dx + self.sin * dy;
+        let width = -self.sin * dx + self.cos * dy;
+        match to_side {
+            Side::Left => (forward, width),
+            Side::Right => (forward, -width),
+        }
+    }
+}
+
+impl Reach {
+    /// Whether the legs can take `step`, where `other` is the previous foot of the other side
+    /// (the support foot of this step) and `same` the previous foot of the same side (where
+    /// the swinging foot lifts off). `Crossing` or `Reach` if not.
+    pub fn check(
+        &self,
+        other: &Footstep<f64>,
+        same: &Footstep<f64>,
+        step: &Footstep<f64>,
+    ) -> Result<(), Reason> {
+        self.check_frames(
+            &Frame::of(other),
+            &Frame::of(same),
+            &Frame::of(step),
+            step.side,
+        )
+    }
+
+    fn check_frames(
+        &self,
+        other: &Frame,
+        same: &Frame,
+        step: &Frame,
+        side: Side,
+    ) -> Result<(), Reason> {
+        const EPS: f64 = 1e-9; // values on the limits pass
+        let (forward, width) = other.forward_width(step, side);
+        if width < 0.0 {
+            return Err(Reason::Crossing);
+        }
+        // Heading change wrapped into [−π, π].
+        let d = step.yaw - other.yaw;
+        let dyaw = libm::fabs(d - core::f64::consts::TAU * libm::round(d / core::f64::consts::TAU));
+        // The step before this one (`other` from `same`), and where the swinging foot was.
+        let before = same.forward_width(other, side.other()).0;
+        let lift = other.forward_width(same, side).0;
+        let ok = forward <= self.max_forward + EPS
+            && forward >= -self.max_backward - EPS
+            && width >= self.min_width - EPS
+            && width <= self.max_width + EPS
+            && dyaw <= self.max_yaw + EPS
+            && libm::hypot(forward, width) <= self.max_feet_distance + EPS
+            && forward + self.yaw_cost * dyaw <= self.max_forward + EPS
+            && libm::fabs(forward - lift) <= self.max_stride + EPS
+            && forward - before <= self.max_growth + EPS;
+        if ok {
+            Ok(())
+        } else {
+            Err(Reason::Reach)
         }
     }
 }
@@ -255,28 +367,23 @@ impl<const Q: usize> Node<Q> {
         }
     }
 
-    /// Reach and crossing check of a footstep against the other foot before it.
+    /// Reach and crossing check of a footstep: appended (`before` = `None`), or replacing the
+    /// queued step `before`, with its two successors then checked against it.
     fn check_reach(&self, step: &Footstep<f64>, before: Option<u16>) -> Result<(), Reason> {
-        let prev = self.gait.previous_other(step.side, before);
-        let (s, c) = (libm::sin(prev.yaw), libm::cos(prev.yaw));
-        let (dx, dy) = (step.x - prev.x, step.y - prev.y);
-        let forward = c * dx + s * dy;
-        let mut across = -s * dx + c * dy;
-        if step.side == Side::Right {
-            across = -across;
-        }
         let r = &self.cfg.reach;
-        if across < 0.0 {
-            return Err(Reason::Crossing);
-        }
-        let dyaw = libm::remainder(step.yaw - prev.yaw, core::f64::consts::TAU);
-        if forward > r.max_forward
-            || forward < -r.max_backward
-            || across < r.min_width
-            || across > r.max_width
-            || libm::fabs(dyaw) > r.max_yaw
-        {
-            return Err(Reason::Reach);
+        let other = Frame::of(&self.gait.previous_other(step.side, before));
+        let same = Frame::of(&self.gait.previous_other(step.side.other(), before));
+        let f = Frame::of(step);
+        r.check_frames(&other, &same, &f, step.side)?;
+        if let Some(id) = before {
+            let next = |k: u16| self.gait.queued_step(id.wrapping_add(k) & 0xFF);
+            if let Some(s1) = next(1) {
+                let f1 = Frame::of(&s1);
+                r.check_frames(&f, &other, &f1, s1.side)?;
+                if let Some(s2) = next(2) {
+                    r.check_frames(&f1, &f, &Frame::of(&s2), s2.side)?;
+                }
+            }
         }
         Ok(())
     }
@@ -437,6 +544,9 @@ impl<const Q: usize> Node<Q> {
             return Err(Reason::SequenceGap);
         }
         let step = Self::footstep(s);
+        if self.gait.next_side().is_some_and(|side| side != step.side) {
+            return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
+        }
         self.check_reach(&step, None)?;
         self.gait
             .push(u16::from(s.id), step)
@@ -460,6 +570,13 @@ impl<const Q: usize> Node<Q> {
             return Err(Reason::UnknownStep);
         }
         let step = Self::footstep(s);
+        if self
+            .gait
+            .queued_step(id)
+            .is_some_and(|q| q.side != step.side)
+        {
+            return Err(Reason::SideOrder);
+        }
         self.check_reach(&step, Some(id))?;
         self.gait.modify(id, step).map_err(reason_of)
     }

@@ -226,6 +226,10 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     // widened, a 5 m change of the next landing is refused.
     let mut wide = NodeConfig::hrp2();
     wide.reach.max_forward = 10.0;
+    wide.reach.max_feet_distance = 10.0;
+    wide.reach.max_stride = 10.0;
+    wide.reach.max_growth = 10.0;
+    wide.reach.max_backward = 10.0;
     let mut w = N::new(wide).unwrap();
     let (mut b3, mut t3) = (Bus::default(), 0);
     for (i, x) in [0.2, 0.4, 0.6].iter().enumerate() {
@@ -294,8 +298,8 @@ fn every_reason_code_is_answered_and_changes_nothing() {
 #[test]
 fn repeats_are_duplicates_whatever_happened_since() {
     let (mut n, mut bus, mut t) = walking_node();
-    let first = modify(2, false, 0.62, -0.1);
-    let second = modify(2, false, 0.64, -0.1);
+    let first = modify(2, false, 0.61, -0.1);
+    let second = modify(2, false, 0.62, -0.1);
     let a = ask(&mut n, &mut bus, &mut t, first);
     assert_eq!((a.reason, a.echo), (None, first.echo()));
     let a = ask(&mut n, &mut bus, &mut t, second);
@@ -305,7 +309,7 @@ fn repeats_are_duplicates_whatever_happened_since() {
     let a = ask(&mut n, &mut bus, &mut t, first);
     assert_eq!((a.reason, a.echo), (Some(Reason::Duplicate), first.echo()));
     let landing = |n: &N| n.gait().queued_step(2).map(|f| (f.x, f.y));
-    assert_eq!(landing(&n), Some((0.64, -0.1)));
+    assert_eq!(landing(&n), Some((0.62, -0.1)));
     // Walk until step 2 is in the air: repeats of its append and of its modification are
     // still duplicates, not `LiftedOff`; a new modification is `LiftedOff`.
     for k in 0.. {
@@ -321,7 +325,7 @@ fn repeats_are_duplicates_whatever_happened_since() {
     for (c, r) in [
         (step(2, false, 0.6), Reason::Duplicate),
         (second, Reason::Duplicate),
-        (modify(2, false, 0.66, -0.1), Reason::LiftedOff),
+        (modify(2, false, 0.615, -0.1), Reason::LiftedOff),
     ] {
         assert_eq!(ask(&mut n, &mut bus, &mut t, c).reason, Some(r), "{c:?}");
     }
@@ -345,7 +349,7 @@ fn one_planning_command_per_cycle() {
     assert_eq!(run(&mut n, &mut bus, &mut t, 1).len(), 3);
     bus.send(control(0, ControlOp::Heartbeat));
     let mods: Vec<Command> = (0..5)
-        .map(|k| modify(0, false, 0.2 + 0.01 * f64::from(k), -0.1))
+        .map(|k| modify(0, false, 0.2, -0.11 - 0.01 * f64::from(k)))
         .collect();
     for m in &mods {
         bus.send(*m);
@@ -368,7 +372,7 @@ fn one_planning_command_per_cycle() {
     }
     ask(&mut m, &mut b2, &mut t2, control(1, ControlOp::Start));
     for k in 0..3 {
-        b2.send(modify(0, false, 0.2 + 0.01 * f64::from(k), -0.1));
+        b2.send(modify(0, false, 0.2, -0.11 - 0.01 * f64::from(k)));
     }
     assert_eq!(run(&mut m, &mut b2, &mut t2, 1).len(), 3);
 }
@@ -422,4 +426,90 @@ fn a_silent_controller_stops_the_robot() {
     assert_eq!(n.gait().queued(), 0);
     run(&mut n, &mut bus, &mut t, 800);
     assert!(n.gait().is_standing());
+}
+
+/// Each rule of the reach limits, just inside and just outside, the others kept satisfied:
+/// the right foot at the origin is the support (`other`), the left foot lifts off from
+/// `(sx, 0.2)` (`same`) and lands at `(fx, w)` turned by `yaw`.
+#[test]
+fn reach_rules_one_by_one() {
+    use planner_core::gait::{Footstep, Side};
+    use planner_core::node::Reach;
+    let r = Reach::default();
+    let other = Footstep::new(Side::Right, 0.0, 0.0, 0.0);
+    let check = |sx: f64, fx: f64, w: f64, yaw: f64| {
+        let same = Footstep::new(Side::Left, sx, 0.2, 0.0);
+        r.check(&other, &same, &Footstep::new(Side::Left, fx, w, yaw))
+    };
+    let reach = Err(Reason::Reach);
+    for (what, inside, outside) in [
+        (
+            "forward",
+            check(-0.1, 0.30, 0.2, 0.0),
+            check(-0.1, 0.305, 0.2, 0.0),
+        ),
+        (
+            "yaw cost",
+            check(-0.1, 0.285, 0.2, 0.05),
+            check(-0.1, 0.30, 0.2, 0.05),
+        ),
+        (
+            "yaw",
+            check(0.0, 0.0, 0.2, 0.30),
+            check(0.0, 0.0, 0.2, 0.31),
+        ),
+        (
+            "width",
+            check(0.0, 0.0, 0.28, 0.0),
+            check(0.0, 0.0, 0.29, 0.0),
+        ),
+        (
+            "narrow",
+            check(0.0, 0.0, 0.15, 0.0),
+            check(0.0, 0.0, 0.14, 0.0),
+        ),
+        (
+            "backward",
+            check(0.0, -0.2, 0.2, 0.0),
+            check(0.0, -0.21, 0.2, 0.0),
+        ),
+        (
+            "stride",
+            check(-0.23, 0.2, 0.2, 0.0),
+            check(-0.24, 0.2, 0.2, 0.0),
+        ),
+        (
+            "growth",
+            check(0.0, 0.22, 0.2, 0.0),
+            check(0.0, 0.23, 0.2, 0.0),
+        ),
+        (
+            "feet distance",
+            check(-0.1, 0.25, 0.26, 0.0),
+            check(-0.1, 0.25, 0.27, 0.0),
+        ),
+    ] {
+        assert_eq!(inside, Ok(()), "{what} inside");
+        assert_eq!(outside, reach, "{what} outside");
+    }
+    assert_eq!(check(0.0, 0.1, -0.01, 0.0), Err(Reason::Crossing));
+}
+
+/// A modification is checked with its successors: moving step 2 back makes step 4's stride
+/// too long, so it is refused although step 2 alone would be in reach.
+#[test]
+fn a_modification_is_checked_with_its_successors() {
+    let (mut n, mut bus, mut t) = walking_node();
+    // Step 2 (right) at 0.6 → 0.5: from step 1 (left, 0.4) a 0.1 m step, fine on its own; but
+    // step 3 (left, 0.8) becomes a 0.3 m step after a 0.1 m one (growth 0.2, fine), and step 4
+    // (right, 1.0) then travels 0.5 m from 0.5 (stride > 0.43).
+    assert_eq!(
+        ask(&mut n, &mut bus, &mut t, modify(2, false, 0.5, -0.1)).reason,
+        Some(Reason::Reach)
+    );
+    assert_eq!(n.gait().queued_step(2).map(|f| f.x), Some(0.6));
+    assert_eq!(
+        ask(&mut n, &mut bus, &mut t, modify(2, false, 0.58, -0.1)).reason,
+        None
+    );
 }
