@@ -345,8 +345,19 @@ enum WindowKind {
     Stop,
 }
 
+/// What [`Gait::predict_replan`] planned into the spare buffer (see `Gait::predicted`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Predicted<T> {
+    gen: u32,
+    serial: u32,
+    at: u32,
+    inputs: Inputs<T>,
+    cog: [State<T>; 2],
+    zmp: [State<T>; 2],
+}
+
 /// Everything needed to build a window, kept so that eq. 18 can solve it again.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Inputs<T> {
     kind: WindowKind,
     /// Support foot of the first single support.
@@ -661,6 +672,11 @@ pub struct Gait<T: Real, const Q: usize> {
     serial: u32,
     /// Cached `x_f` of eq. 18: (gen, serial, window tick, state).
     target: Option<(u32, u32, u32, [Sample<T>; 2])>,
+    /// The re-plan that the feasibility check of a modification planned into the spare
+    /// buffer: (gen, serial, window tick, its inputs and initial state). The re-plan at that
+    /// tick takes the spare buffer as it is if all of these are still the same (the plan is a
+    /// function of them: bit for bit what it would compute again).
+    predicted: Option<Predicted<T>>,
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
@@ -681,6 +697,26 @@ fn states<T: Real>(x: &Sample<T>, y: &Sample<T>) -> ([State<T>; 2], [State<T>; 2
 }
 
 /// `p − c`, sample by sample.
+/// The plan of `win` at window tick `t` minus the compensation of the next step of `comp`
+/// (which it advances), or the plan alone without shaping.
+fn shaped_sample<T: Real>(
+    win: &Active<T>,
+    params: &GaitParams<T>,
+    gains: &PreviewGains<T, PREVIEW>,
+    comp: &mut [Compensator<T>; 2],
+    t: u32,
+) -> (Sample<T>, Sample<T>) {
+    let (sx, sy) = win.sample(params, t);
+    if !params.shaping {
+        return (sx, sy);
+    }
+    let zf = gains.zmp_factor();
+    let [c0, c1] = comp;
+    let cx = c0.step(gains).sample(zf);
+    let cy = c1.step(gains).sample(zf);
+    (minus(sx, cx), minus(sy, cy))
+}
+
 fn minus<T: Real>(p: Sample<T>, c: Sample<T>) -> Sample<T> {
     Sample {
         cog: p.cog - c.cog,
@@ -735,6 +771,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             cur: None,
             gen: 0,
             serial: 0,
+            predicted: None,
             target: None,
             tick: 0,
             last: Reference {
@@ -841,8 +878,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.tick
     }
 
-    /// The side that must land next.
-    fn next_side(&self) -> Option<Side> {
+    /// The side the next appended step must have (`None`: either, nothing queued or swung).
+    pub fn next_side(&self) -> Option<Side> {
         if let Some(b) = self.queue.back() {
             return Some(b.step.side.other());
         }
@@ -1014,7 +1051,16 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let Some(&at) = win.starts.get(j) else {
             return Ok(None);
         };
-        let (sx, sy) = win.sample(&self.params, at);
+        // The state the re-plan will start from: the plan at `at`, shaped. If the re-plan is
+        // the next tick's, that is exactly what the tick will compute (the compensators'
+        // next step, on a copy); further ahead the compensation is left out (it is small: a
+        // few millimetres, see shaping.rs).
+        let (sx, sy) = if at == win.tick.wrapping_add(1) {
+            let mut comp = self.comp.clone();
+            shaped_sample(win, &self.params, &self.gains, &mut comp, at)
+        } else {
+            win.sample(&self.params, at)
+        };
         let (cog, zmp) = states(&sx, &sy);
         let Some(next) = self.next_walk_inputs(win, j) else {
             return Ok(None);
@@ -1024,7 +1070,16 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         inputs.first_ticks = adjusted(self.params.single_ticks, adjust);
         // Planned in the spare buffer, which is free between re-plans.
         let spare = 1 - c;
+        self.predicted = None;
         self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
+        self.predicted = Some(Predicted {
+            gen: self.gen,
+            serial: self.serial,
+            at,
+            inputs,
+            cog,
+            zmp,
+        });
         Ok(Some(self.wins[spare].worst_first()))
     }
 
@@ -1282,9 +1337,21 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 modified: false,
             },
         };
-        if self.wins[spare]
-            .plan_into(&self.params, inputs, cog, zmp)
-            .is_err()
+        // Planned already by the feasibility check of a modification, with the same inputs
+        // from the same state? Then the spare buffer holds this very plan.
+        let this = Predicted {
+            gen: self.gen,
+            serial: self.serial,
+            at,
+            inputs,
+            cog,
+            zmp,
+        };
+        let planned = self.predicted.take() == Some(this);
+        if !planned
+            && self.wins[spare]
+                .plan_into(&self.params, inputs, cog, zmp)
+                .is_err()
         {
             // Keep the old window; the step goes back to the queue.
             if swing.id != u16::MAX {
@@ -1314,14 +1381,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let Some(c) = self.cur_buf() else {
             return (self.last.x, self.last.y);
         };
-        let (sx, sy) = self.wins[c].sample(&self.params, t);
-        if !self.params.shaping {
-            return (sx, sy);
-        }
-        let zf = self.gains.zmp_factor();
-        let cx = self.comp[0].step(&self.gains).sample(zf);
-        let cy = self.comp[1].step(&self.gains).sample(zf);
-        (minus(sx, cx), minus(sy, cy))
+        shaped_sample(&self.wins[c], &self.params, &self.gains, &mut self.comp, t)
     }
 
     /// Restarts the compensators from rest with the fluctuation of the first interval of the
