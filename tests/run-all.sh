@@ -9,7 +9,9 @@
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
 # 4. the firmware images: the STM32H743 one (workspace firmware/) and the QEMU one
 #    (firmware/qemu; the walk-tests QEMU test in step 2 builds and runs it, which needs
-#    qemu-system-arm: step 1 installs it with apt-get).
+#    qemu-system-arm: step 1 installs it with apt-get);
+# 5. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
+#    about 4 minutes; WALK_SKIP_MIRI=1 leaves it out).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -106,6 +108,14 @@ image_size() {
     test -f "$elf"
     image_size "$elf"
 )
+
+section "Miri: planner-core under the interpreter (nightly toolchain, bounded selection)"
+# tests/miri.sh installs the nightly toolchain with miri if missing; WALK_SKIP_MIRI=1 skips.
+if [ "${WALK_SKIP_MIRI:-0}" = 1 ]; then
+    echo "skipped (WALK_SKIP_MIRI=1)"
+else
+    bash tests/miri.sh 2>&1 | tee -a "$LOG"
+fi
 
 section "all tests passed"
 # One closing line for the whole run (cargo prints one "test result" line per test binary).
