@@ -1072,15 +1072,26 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let spare = 1 - c;
         self.predicted = None;
         self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
-        self.predicted = Some(Predicted {
+        self.predicted = Some(self.prediction(at, inputs, cog, zmp));
+        Ok(Some(self.wins[spare].worst_first()))
+    }
+
+    /// The key under which a plan of `inputs` from `(cog, zmp)` at window tick `at` is kept.
+    fn prediction(
+        &self,
+        at: u32,
+        inputs: Inputs<T>,
+        cog: [State<T>; 2],
+        zmp: [State<T>; 2],
+    ) -> Predicted<T> {
+        Predicted {
             gen: self.gen,
             serial: self.serial,
             at,
             inputs,
             cog,
             zmp,
-        });
-        Ok(Some(self.wins[spare].worst_first()))
+        }
     }
 
     /// Inputs of the walking window that starts at interval `j` of `win` (a single support),
@@ -1339,14 +1350,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         };
         // Planned already by the feasibility check of a modification, with the same inputs
         // from the same state? Then the spare buffer holds this very plan.
-        let this = Predicted {
-            gen: self.gen,
-            serial: self.serial,
-            at,
-            inputs,
-            cog,
-            zmp,
-        };
+        let this = self.prediction(at, inputs, cog, zmp);
         let planned = self.predicted.take() == Some(this);
         if !planned
             && self.wins[spare]

@@ -14,13 +14,16 @@ use planner_core::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M
 use planner_core::{Segment, State};
 use proptest::prelude::*;
 
-/// 256 cases per property (the file runs in about a second). Failures are not persisted to a
-/// regressions file (proptest cannot locate one for an integration test); the shrunk
-/// counterexample is printed in the failure message.
+/// 256 cases per property (the file runs in about a second), from a fixed seed: the same cases
+/// on every run, so CI cannot pass or fail by chance (`PROPTEST_RNG_SEED` does not apply: set
+/// `rng_seed` here to explore others). Failures are not persisted to a regressions file
+/// (proptest cannot locate one for an integration test); the shrunk counterexample is printed
+/// in the failure message.
 fn config() -> ProptestConfig {
     ProptestConfig {
         cases: 256,
         failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EED_0002),
         ..ProptestConfig::default()
     }
 }
