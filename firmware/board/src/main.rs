@@ -23,6 +23,7 @@
 #![deny(unsafe_code)]
 
 mod can;
+mod cycle;
 
 use core::convert::Infallible;
 use core::num::{NonZeroU16, NonZeroU8};
@@ -57,8 +58,8 @@ const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node.
 const QUEUE: usize = 16;
-/// A summary every this many cycles (1 s).
-const SUMMARY_EVERY: u32 = CYCLE_HZ;
+// A summary every second.
+const _: () = assert!(cycle::SUMMARY_EVERY == CYCLE_HZ);
 
 /// 1 Mbit/s from the 80 MHz kernel clock: prescaler 2 gives 40 time quanta per bit,
 /// 1 (sync) + 34 + 5, sample point at 35/40 = 87.5 % (CiA 301), SJW 5.
@@ -123,17 +124,6 @@ fn wait_tick<I: fdcan::Instance>(timer: &mut Timer<pac::TIM2>, bus: &mut FdcanBu
             return;
         }
     }
-}
-
-/// Cycle statistics between two summaries.
-#[derive(Default)]
-struct Window {
-    cycles: u32,
-    worst: u32,
-    sum: u64,
-    received: u32,
-    refused: u32,
-    sent: u32,
 }
 
 #[entry]
@@ -218,8 +208,7 @@ fn main() -> ! {
     // A free-running millisecond clock: one control cycle = 5 ms. A cycle that overruns by
     // more than a whole period loses that time (the timer only remembers one overflow).
     let mut now_ms: u32 = 0;
-    let mut overruns: u32 = 0;
-    let mut window = Window::default();
+    let mut stats = cycle::Stats::default();
     // Align the first cycle on a timer overflow.
     wait_tick(&mut timer, &mut bus);
     loop {
@@ -231,15 +220,15 @@ fn main() -> ! {
 
         // Late: the work did not fit the slot, or the overflow that ends this cycle has
         // already happened (so the next cycle starts late).
-        if spent > PERIOD_CYCLES || !timer.is_irq_clear() {
-            overruns = overruns.saturating_add(1);
-            node.note_overrun();
+        let late = spent > PERIOD_CYCLES || !timer.is_irq_clear();
+        let outcome = stats.record(node, &report, spent, late);
+        if outcome.overrun {
             defmt::warn!(
                 "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
                 node.cycles(),
                 spent,
                 PERIOD_CYCLES,
-                overruns
+                stats.overruns
             );
         }
         if report.refused > 0 {
@@ -250,28 +239,20 @@ fn main() -> ! {
                 report.received
             );
         }
-
-        window.cycles += 1;
-        window.worst = window.worst.max(spent);
-        window.sum += u64::from(spent);
-        window.received += u32::from(report.received);
-        window.refused += u32::from(report.refused);
-        window.sent += u32::from(report.sent);
-        if window.cycles == SUMMARY_EVERY {
+        if let Some(w) = outcome.summary {
             let c = bus.counters();
             defmt::info!(
                 "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32}; rx FIFO overruns {=u32}",
                 node.cycles(),
-                window.worst,
-                window.sum / u64::from(window.cycles),
+                w.worst,
+                w.mean(),
                 PERIOD_CYCLES,
-                window.received,
-                window.refused,
-                window.sent,
-                overruns,
+                w.received,
+                w.refused,
+                w.sent,
+                stats.overruns,
                 c.rx_overruns
             );
-            window = Window::default();
         }
 
         wait_tick(&mut timer, &mut bus);

@@ -13,14 +13,16 @@
 //! # The whole board cycle (`--no-default-features`)
 //!
 //! `main` is the board's `main` (`board/src/main.rs`) from the node's construction on, with the
-//! same per-cycle work, the same types and the board's own CAN adapter (`board/src/can.rs`,
-//! compiled into this crate as it is):
+//! same per-cycle work, the same types, the board's own CAN adapter (`board/src/can.rs`) and
+//! cycle bookkeeping (`board/src/cycle.rs`: overruns, statistics), both compiled into this crate
+//! from the board's source:
 //!
 //! * `Node::<16>::new(NodeConfig::hrp2())` in a frame of its own, moved into a `static` by
 //!   `cortex_m::singleton!` (the board's `place_node`); an error idles instead of panicking;
 //! * per cycle: busy pin high, DWT CYCCNT, `node.poll(now_ms, &mut bus)`, busy pin low, the
-//!   overrun test (cycles spent or TIM2's update flag already set), `node.note_overrun()`, the
-//!   defmt warnings, the statistics window and its summary once per 200 cycles
+//!   overrun test (cycles spent or TIM2's update flag already set), `cycle::Stats::record`
+//!   (`node.note_overrun()`, the statistics window and its summary once per 200 cycles), the
+//!   defmt warnings
 //!   (`bus.counters()`), then the wait for the next TIM2 update while `bus.service()` moves
 //!   frames between the FDCAN and the software FIFOs; `now_ms` advances by 5 per cycle;
 //! * the CAN adapter is `can::FdcanBus` over the `fdcan` crate's driver of FDCAN1 (the register
@@ -66,6 +68,9 @@
 #[path = "../../board/src/can.rs"]
 #[cfg_attr(feature = "mock-can", allow(dead_code))]
 mod can;
+/// The board's cycle bookkeeping, compiled from its source.
+#[path = "../../board/src/cycle.rs"]
+mod cycle;
 #[cfg(feature = "mock-can")]
 mod mock;
 
@@ -96,8 +101,6 @@ const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node (the board's).
 const QUEUE: usize = 16;
-/// A summary every this many cycles (1 s).
-const SUMMARY_EVERY: u32 = CYCLE_HZ;
 
 /// The only `unsafe` of this crate: what stands in for the hardware set-up, and the panic
 /// handler. None of it ever runs (the image is only linked).
@@ -184,17 +187,6 @@ fn wait_tick(tim2: &pac::TIM2, bus: &mut Bus) {
     }
 }
 
-/// Cycle statistics between two summaries (the board's).
-#[derive(Default)]
-struct Window {
-    cycles: u32,
-    worst: u32,
-    sum: u64,
-    received: u32,
-    refused: u32,
-    sent: u32,
-}
-
 /// Start-up failed (the board panics here): idle.
 fn idle() -> ! {
     loop {
@@ -219,8 +211,7 @@ fn main() -> ! {
     };
 
     let mut now_ms: u32 = 0;
-    let mut overruns: u32 = 0;
-    let mut window = Window::default();
+    let mut stats = cycle::Stats::default();
     wait_tick(&dp.TIM2, &mut bus);
     loop {
         dp.GPIOE.bsrr.write(|w| w.bs1().set_bit()); // busy pin high
@@ -229,16 +220,16 @@ fn main() -> ! {
         let spent = DWT::cycle_count().wrapping_sub(t0);
         dp.GPIOE.bsrr.write(|w| w.br1().set_bit()); // busy pin low
 
-        if spent > PERIOD_CYCLES || dp.TIM2.sr.read().uif().bit_is_set() {
-            overruns = overruns.saturating_add(1);
-            node.note_overrun();
-            #[cfg(not(feature = "no-log"))]
+        let late = spent > PERIOD_CYCLES || dp.TIM2.sr.read().uif().bit_is_set();
+        let outcome = stats.record(node, &report, spent, late);
+        #[cfg(not(feature = "no-log"))]
+        if outcome.overrun {
             defmt::warn!(
                 "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
                 node.cycles(),
                 spent,
                 PERIOD_CYCLES,
-                overruns
+                stats.overruns
             );
         }
         #[cfg(not(feature = "no-log"))]
@@ -258,34 +249,23 @@ fn main() -> ! {
             black_box(table[black_box(now_ms) as usize]);
         }
 
-        window.cycles += 1;
-        window.worst = window.worst.max(spent);
-        window.sum += u64::from(spent);
-        window.received += u32::from(report.received);
-        window.refused += u32::from(report.refused);
-        window.sent += u32::from(report.sent);
-        if window.cycles == SUMMARY_EVERY {
+        if let Some(w) = outcome.summary {
             let c = bus.counters();
             #[cfg(feature = "no-log")]
-            black_box((
-                window.sum / u64::from(window.cycles),
-                c.rx_overruns,
-                overruns,
-            ));
+            black_box((w.mean(), w, c.rx_overruns, stats.overruns, outcome.overrun));
             #[cfg(not(feature = "no-log"))]
             defmt::info!(
                 "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32}; rx FIFO overruns {=u32}",
                 node.cycles(),
-                window.worst,
-                window.sum / u64::from(window.cycles),
+                w.worst,
+                w.mean(),
                 PERIOD_CYCLES,
-                window.received,
-                window.refused,
-                window.sent,
-                overruns,
+                w.received,
+                w.refused,
+                w.sent,
+                stats.overruns,
                 c.rx_overruns
             );
-            window = Window::default();
         }
 
         wait_tick(&dp.TIM2, &mut bus);
