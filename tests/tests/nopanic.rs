@@ -20,7 +20,7 @@
 //! anyway, and the callers of `core::panicking::*` in its disassembly are the panics.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::Mutex;
 
 const SYMBOL: &str = "walk_control_path_can_panic";
@@ -40,23 +40,9 @@ fn firmware_dir() -> PathBuf {
 
 /// `cargo build --release -p firmware-nopanic` in firmware/ with these cargo arguments.
 fn build(args: &[&str]) -> Output {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(firmware_dir())
-        .args(["build", "--release", "-p", "firmware-nopanic"])
+    let mut cmd = walk_tests::firmware_cargo(&firmware_dir());
+    cmd.args(["build", "--release", "-p", "firmware-nopanic"])
         .args(args);
-    // This test's own build settings must not leak into the firmware's (its target and
-    // rustflags come from firmware/.cargo/config.toml).
-    for var in [
-        "CARGO_TARGET_DIR",
-        "CARGO_BUILD_TARGET",
-        "CARGO_BUILD_TARGET_DIR",
-        "RUSTFLAGS",
-        "CARGO_ENCODED_RUSTFLAGS",
-        "CARGO_BUILD_RUSTFLAGS",
-    ] {
-        cmd.env_remove(var);
-    }
     cmd.output().expect("cannot run cargo")
 }
 

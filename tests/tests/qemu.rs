@@ -125,21 +125,8 @@ fn qemu_available() -> bool {
 /// `cargo build --release` in firmware/qemu (its own workspace and target dir); the ELF.
 fn build_image() -> PathBuf {
     let dir = firmware_dir();
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Process::new(cargo);
-    cmd.current_dir(&dir).args(["build", "--release"]);
-    // This test's own build settings must not leak into the firmware's (its target and
-    // rustflags come from firmware/.cargo/config.toml).
-    for var in [
-        "CARGO_TARGET_DIR",
-        "CARGO_BUILD_TARGET",
-        "CARGO_BUILD_TARGET_DIR",
-        "RUSTFLAGS",
-        "CARGO_ENCODED_RUSTFLAGS",
-        "CARGO_BUILD_RUSTFLAGS",
-    ] {
-        cmd.env_remove(var);
-    }
+    let mut cmd = walk_tests::firmware_cargo(&dir);
+    cmd.args(["build", "--release"]);
     let out = cmd.output().expect("cannot run cargo");
     assert!(
         out.status.success(),
