@@ -8,15 +8,19 @@
 //!   the bus or through [`Node::handle`], well-formed footsteps near a nominal gait so that
 //!   the fuzzer reaches the walking states, control commands, time steps). Checked: no panic,
 //!   every poll publishes exactly one reference (one frame of each of the five stream
-//!   identifiers, with this cycle's tick counter) whose values are finite, and every frame
-//!   received is answered with one `ACK`.
+//!   identifiers, with this cycle's tick counter) whose values are finite, every frame with
+//!   one of the node's identifiers received is answered with one `ACK` and every other frame
+//!   with none (counted as foreign), and a refused frame changes nothing
+//!   ([`Node::same_state`] against a clone taken before it).
 
 use std::collections::VecDeque;
 use std::sync::OnceLock;
 
 use planner_core::gait::Side;
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Reason, Stream, WireStep};
+use planner_core::wire::{
+    ids, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream, WireModify, WireStep,
+};
 
 /// `decode` target: see the module docs.
 pub fn decode_one(data: &[u8]) {
@@ -153,6 +157,7 @@ struct Driver {
     side: Side,
     x: f64,
     sent: Vec<WireStep>,
+    book: StepBook,
 }
 
 impl Driver {
@@ -166,6 +171,7 @@ impl Driver {
             side: Side::Right,
             x: 0.0,
             sent: Vec::new(),
+            book: StepBook::new(),
         }
     }
 
@@ -178,9 +184,10 @@ impl Driver {
 
     fn poll(&mut self, dt_ms: u32) {
         self.now_ms = self.now_ms.wrapping_add(dt_ms);
-        let pending = self.can.rx.len();
+        let foreign_before = self.node.counters().foreign;
         self.can.tx.clear();
         let report = self.node.poll(self.now_ms, &mut self.can);
+        let foreign = usize::from(self.node.counters().foreign - foreign_before);
         self.cycles = self.cycles.wrapping_add(1);
         assert!(report.reference.is_finite(), "{:?}", report.reference);
         assert_eq!(self.node.cycles(), self.cycles);
@@ -198,13 +205,15 @@ impl Driver {
             assert!(stream.decode_into(frames[0]));
         }
         assert_eq!(stream.tick, (self.cycles & 0xFF) as u8);
-        // Every frame handled is answered once: at most 16 per cycle, fewer only if the last
-        // one handled was a planning command (one per cycle).
-        let handled = usize::from(report.received);
-        assert!(handled <= pending.min(16));
+        // Every command frame handled is answered once, no other frame is: at most 16
+        // commands and 128 others per cycle; the node stops early only after a planning
+        // command (one per cycle).
+        let handled = usize::from(report.received) - foreign;
+        let cfg = self.node.config();
+        assert!(handled <= cfg.max_rx && foreign <= cfg.max_foreign);
         let acks: Vec<Ack> = self.can.tx.iter().filter_map(Ack::decode).collect();
         assert_eq!(acks.len(), handled, "{:?}", self.can.tx);
-        if handled < pending.min(16) {
+        if handled < cfg.max_rx && foreign < cfg.max_foreign && !self.can.rx.is_empty() {
             let last = acks.last().expect("a planning command was answered");
             assert!(
                 last.command == 0x01
@@ -219,8 +228,10 @@ impl Driver {
             .iter()
             .filter(|f| f.id == ids::ACK)
             .all(|f| Ack::decode(f).is_some()));
-        let status = self.can.tx.iter().filter(|f| f.id == ids::STATUS).count();
-        assert_eq!(status, usize::from(self.cycles % 20 == 0));
+        for id in [ids::STATUS, ids::DIAG] {
+            let n = self.can.tx.iter().filter(|f| f.id == id).count();
+            assert_eq!(n, usize::from(self.cycles % 20 == 0), "id {id:#x}");
+        }
     }
 
     fn step(&mut self, b: &mut Bytes) {
@@ -242,9 +253,11 @@ impl Driver {
                 let x = self.x + f64::from(dx) * 2e-3;
                 let y = y + f64::from(dy) * 1e-3;
                 let yaw = f64::from(dyaw) * 5e-3;
-                if let Some(w) = WireStep::from_si(id, self.side == Side::Left, x, y, yaw) {
-                    self.queue(Command::Append(w).encode());
-                    self.sent.push(w);
+                if let Some(c) = self.book.append(id, self.side == Side::Left, x, y, yaw) {
+                    self.queue(c.encode());
+                    if let Command::Append(w) = c {
+                        self.sent.push(w);
+                    }
                 }
                 self.next_id = id.wrapping_add(1);
                 self.side = self.side.other();
@@ -254,14 +267,13 @@ impl Driver {
                 let (dx, dy, dyaw) = (b.i8(), b.i8(), b.i8());
                 if let Some(&w) = self.sent.iter().rev().nth(back) {
                     let (x, y, yaw) = w.si();
-                    if let Some(m) = WireStep::from_si(
+                    if let Some(m) = self.book.modify(
                         w.id,
-                        w.left,
                         x + f64::from(dx) * 1e-3,
                         y + f64::from(dy) * 5e-4,
                         yaw + f64::from(dyaw) * 2e-3,
                     ) {
-                        self.queue(Command::Modify(m).encode());
+                        self.queue(m.encode());
                     }
                 }
             }
@@ -308,7 +320,21 @@ pub fn node_run(data: &[u8]) {
             let data: Vec<u8> = (0..usize::from(l % 9)).map(|_| b.u8()).collect();
             let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
             let f = if l >= 0x80 { with_crc(f) } else { f };
-            let ack = d.node.handle(&f, d.now_ms);
+            let before = d.node.clone();
+            let Some(ack) = d.node.handle(&f, d.now_ms) else {
+                assert!(!ids::is_command(f.id), "a command was not answered: {f:?}");
+                assert_eq!(d.node.counters().foreign, before.counters().foreign + 1);
+                assert!(d.node.same_state(&before));
+                ops += 1;
+                continue;
+            };
+            assert!(ids::is_command(f.id), "a foreign frame was answered: {f:?}");
+            if ack.reason.is_some() {
+                assert!(
+                    d.node.same_state(&before),
+                    "refused {ack:?} changed the node"
+                );
+            }
             assert_eq!(Ack::decode(&ack.encode()), Some(ack));
             if let Ok(cmd) = Command::decode(&f) {
                 assert_eq!(ack.command, cmd.code());
@@ -335,6 +361,9 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         v
     };
     let step = |id, left, x, y, yaw| WireStep::from_si(id, left, x, y, yaw).unwrap();
+    let change = |id, left, x, y, yaw| {
+        WireModify::from_si(&step(id, left, 0.0, 0.0, 0.0), 1, x, y, yaw).unwrap()
+    };
     let commands = [
         ("estop", Command::EmergencyStop { seq: 7 }),
         (
@@ -373,7 +402,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
             },
         ),
         ("append", Command::Append(step(0, false, 0.2, -0.1, 0.0))),
-        ("modify", Command::Modify(step(3, true, 0.6, 0.1, 0.1))),
+        ("modify", Command::Modify(change(3, true, 0.6, 0.1, 0.1))),
     ];
     for (name, c) in commands {
         out.push(("decode", format!("seed-{name}"), frame(c.encode())));

@@ -51,7 +51,7 @@ use std::fmt::Write as _;
 use embedded_can::nb::Can;
 use planner_core::gait::{FootPose, Footstep, Phase, Reference, Side};
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Reason, Stream, WireStep};
+use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream};
 
 use crate::bus::{Bus, BusError, Faults, Port, VFrame};
 use crate::multibody::{evaluate, max_zmp_error, Hrp2, MbError};
@@ -277,15 +277,36 @@ struct Pending {
 }
 
 fn key(c: &Command) -> u8 {
+    c.key()
+}
+
+/// The version a footstep command carries (0 for an append).
+fn version(c: &Command) -> u8 {
     match c {
-        Command::Append(w) | Command::Modify(w) => w.id,
-        Command::Control { seq, .. } | Command::EmergencyStop { seq } => *seq,
+        Command::Modify(m) => m.version,
+        _ => 0,
     }
 }
 
-fn wire_step(id: u16, f: &Footstep<f64>) -> Result<WireStep, String> {
-    WireStep::from_si(id as u8, f.side == Side::Left, f.x, f.y, f.yaw)
-        .ok_or_else(|| format!("footstep {id} is not representable on the bus"))
+/// The frame of footstep `id` at `f`: its append, or its next modification.
+fn wire_step(
+    book: &mut StepBook,
+    append: bool,
+    id: u16,
+    f: &Footstep<f64>,
+) -> Result<Command, String> {
+    let wid = u8::try_from(id).map_err(|_| format!("footstep id {id} does not fit the bus"))?;
+    let c = if append {
+        book.append(wid, f.side == Side::Left, f.x, f.y, f.yaw)
+    } else {
+        book.modify(wid, f.x, f.y, f.yaw)
+    };
+    c.ok_or_else(|| {
+        format!(
+            "footstep {id} at ({}, {}) is not representable on the bus",
+            f.x, f.y
+        )
+    })
 }
 
 /// Distance of `p` outside the convex polygon `hull` (counter-clockwise); 0 inside.
@@ -420,7 +441,23 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
 
     let mut trajectory = vec![*node.gait().last()];
     let mut pending: Vec<Pending> = Vec::new();
-    let mut accepted: Vec<(u16, Footstep<f64>)> = Vec::new();
+    let mut book = StepBook::new();
+    // What the node has as the controller knows it: (id, pose, version in force).
+    let mut accepted: Vec<(u16, Footstep<f64>, u8)> = Vec::new();
+    // Takes an acceptance: a newer version than the one known replaces it (answers may
+    // arrive out of order; the node never takes an older version after a newer one).
+    let take = |accepted: &mut Vec<(u16, Footstep<f64>, u8)>, id: u16, f: Footstep<f64>, v: u8| {
+        match accepted.iter_mut().find(|(i, _, _)| *i == id) {
+            Some(e) => {
+                let d = v.wrapping_sub(e.2) % 128;
+                if (1..64).contains(&d) {
+                    e.1 = f;
+                    e.2 = v;
+                }
+            }
+            None => accepted.push((id, f, v)),
+        }
+    };
     let mut seq: u8 = 0;
     let mut next = 0;
     // Commands not sent yet: a control command waits until every earlier command is answered
@@ -449,13 +486,13 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
             match command {
                 scenario::Command::Push(id, f) => {
                     plan.push((id, f));
-                    issue.push((Command::Append(wire_step(id, &f)?), Some((id, f))));
+                    issue.push((wire_step(&mut book, true, id, &f)?, Some((id, f))));
                 }
                 scenario::Command::Modify(id, f) => {
                     if let Some(e) = plan.iter_mut().find(|(i, _)| *i == id) {
                         e.1 = f;
                     }
-                    issue.push((Command::Modify(wire_step(id, &f)?), Some((id, f))));
+                    issue.push((wire_step(&mut book, false, id, &f)?, Some((id, f))));
                 }
                 scenario::Command::Start => issue.push((control(ControlOp::Start), None)),
                 scenario::Command::Stop => issue.push((control(ControlOp::Stop), None)),
@@ -492,7 +529,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                         f.y + sy * da + cy * dc,
                         f.yaw + rng.range(-0.1, 0.1),
                     );
-                    issue.push((Command::Modify(wire_step(id, &m)?), Some((id, m))));
+                    issue.push((wire_step(&mut book, false, id, &m)?, Some((id, m))));
                 }
             }
         }
@@ -578,12 +615,9 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 // tells what the node now has.
                 let Some(i) = pending.iter().rposition(|p| p.open && same(p)) else {
                     if a.reason.is_none() {
-                        if let Some((id, f)) =
-                            pending.iter().rev().find(|p| same(p)).and_then(|p| p.step)
-                        {
-                            match accepted.iter_mut().find(|(i, _)| *i == id) {
-                                Some(e) => e.1 = f,
-                                None => accepted.push((id, f)),
+                        if let Some(p) = pending.iter().rev().find(|p| same(p)) {
+                            if let Some((id, f)) = p.step {
+                                take(&mut accepted, id, f, version(&p.cmd));
                             }
                         }
                     }
@@ -600,11 +634,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                     let p = &mut pending[j];
                     p.open = false;
                     if let Some((id, f)) = p.step {
-                        if let Some(e) = accepted.iter_mut().find(|(i, _)| *i == id) {
-                            e.1 = f;
-                        } else {
-                            accepted.push((id, f));
-                        }
+                        take(&mut accepted, id, f, version(&p.cmd));
                     }
                 }
             } else {
@@ -658,9 +688,9 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
     // Steps are walked in id order: each accepted step (in id order) is matched to the first
     // unused landing after the previous match, so two steps at the same pose (a multi-step
     // change applied in part) are told apart; a step walked twice leaves a stray landing.
-    accepted.sort_by_key(|(id, _)| *id); // (answers can arrive out of order)
+    accepted.sort_by_key(|(id, _, _)| *id); // (answers can arrive out of order)
     let mut from = 0;
-    for (_, f) in &accepted {
+    for (_, f, _) in &accepted {
         match (from..walked.len()).find(|&i| !used[i] && matches(f, &walked[i])) {
             Some(i) => {
                 used[i] = true;

@@ -12,7 +12,7 @@
 
 use planner_core::gait::Reference;
 use planner_core::node::{Counters, Node, NodeConfig};
-use planner_core::wire::{Ack, Command, ControlOp, RawFrame, Stream, WireStep};
+use planner_core::wire::{Ack, Command, ControlOp, RawFrame, StepBook, Stream};
 
 use crate::bus::{Bus, BusStats, Faults};
 use crate::scenario::{self, Adjustment, Event, Run, Scenario};
@@ -90,6 +90,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut adjustments = Vec::new();
     let mut footsteps: Vec<(u16, planner_core::gait::Footstep<f64>)> = Vec::new();
     let mut seq: u8 = 0;
+    let mut book = StepBook::new();
     let mut next = 0;
     let mut last_replan = None;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
@@ -102,14 +103,22 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
             let wire = match command {
                 scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) => {
                     let left = f.side == planner_core::gait::Side::Left;
-                    let Some(w) = WireStep::from_si(id as u8, left, f.x, f.y, f.yaw) else {
-                        return Err(format!("footstep {id} is not representable on the bus"));
+                    let Ok(wid) = u8::try_from(id) else {
+                        return Err(format!("footstep id {id} does not fit the bus (0 … 255)"));
                     };
-                    if matches!(command, scenario::Command::Push(..)) {
-                        Command::Append(w)
+                    let wire = if matches!(command, scenario::Command::Push(..)) {
+                        book.append(wid, left, f.x, f.y, f.yaw)
                     } else {
-                        Command::Modify(w)
-                    }
+                        book.modify(wid, f.x, f.y, f.yaw)
+                    };
+                    let Some(w) = wire else {
+                        return Err(format!(
+                            "footstep {id} at ({:.4}, {:.4}) m is not representable on the bus \
+                             (x, y within ±32.77 m; a modification within ±4.096 m of the append)",
+                            f.x, f.y
+                        ));
+                    };
+                    w
                 }
                 scenario::Command::Start => {
                     seq = seq.wrapping_add(1);
@@ -182,14 +191,10 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut out_events = Vec::new();
     for (k, command, wire) in events {
         let code = wire.code();
-        let key = match wire {
-            Command::Append(w) | Command::Modify(w) => w.id,
-            Command::Control { seq, .. } | Command::EmergencyStop { seq } => seq,
-        };
-        let found = acks
-            .iter()
-            .enumerate()
-            .find(|(i, (t, a))| !used[*i] && *t >= k && a.command == code && a.seq == key);
+        let key = wire.key();
+        let found = acks.iter().enumerate().find(|(i, (t, a))| {
+            !used[*i] && *t >= k && a.command == code && a.seq == key && a.echo == wire.echo()
+        });
         let result = match found {
             Some((i, (_, a))) => {
                 used[i] = true;

@@ -7,7 +7,8 @@ use std::collections::HashMap;
 
 use can_dbc::{ByteOrder, Dbc, MessageId, ValueType};
 use planner_core::wire::{
-    self, ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
+    self, ids, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream, WireModify,
+    WireStep,
 };
 
 fn dbc() -> Dbc {
@@ -68,6 +69,7 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
         ids::FOOT_LEFT,
         ids::FOOT_RIGHT,
         ids::STATUS,
+        ids::DIAG,
     ]
     .iter()
     .map(|&i| u32::from(i))
@@ -81,20 +83,32 @@ fn commands_decode_the_same_with_the_dbc() {
     let d = dbc();
     for &(id, left, x, y, yaw) in &[
         (7u8, true, 0.4, 0.1, 0.0),
-        (200, false, -12.3456, 32.0, -3.0),
+        (200, false, -12.3456, 28.0, -3.0),
         (0, true, 0.0005, -0.0005, 3.1),
     ] {
         let w = WireStep::from_si(id, left, x, y, yaw).unwrap();
-        for c in [Command::Append(w), Command::Modify(w)] {
-            let s = decode(&d, &c.encode());
-            assert_eq!(s["step_id"], f64::from(id));
-            assert_eq!(s["left"], f64::from(u8::from(left)));
-            close(s["x"], x, planner_core::wire::STEP_UNIT, "x");
-            close(s["y"], y, planner_core::wire::STEP_UNIT, "y");
-            close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
-            let f = c.encode();
-            assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
-        }
+        let c = Command::Append(w);
+        let s = decode(&d, &c.encode());
+        assert_eq!(s["step_id"], f64::from(id));
+        assert_eq!(s["left"], f64::from(u8::from(left)));
+        close(s["x"], x, planner_core::wire::STEP_UNIT, "x");
+        close(s["y"], y, planner_core::wire::STEP_UNIT, "y");
+        close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
+        let f = c.encode();
+        assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
+        // A modification of it: version, offsets from the appended position, heading.
+        let (mx, my, myaw) = (x - 1.2345, y + 4.0, -yaw);
+        let m = WireModify::from_si(&w, 99, mx, my, myaw).unwrap();
+        let c = Command::Modify(m);
+        let s = decode(&d, &c.encode());
+        assert_eq!((s["step_id"], s["version"]), (f64::from(id), 99.0));
+        assert_eq!(s["left"], f64::from(u8::from(left)));
+        let (bx, by, _) = w.si();
+        close(s["dx"], mx - bx, planner_core::wire::STEP_UNIT, "dx");
+        close(s["dy"], my - by, planner_core::wire::STEP_UNIT, "dy");
+        close(s["yaw"], myaw, planner_core::wire::YAW_UNIT, "yaw");
+        let f = c.encode();
+        assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
     }
     let s = decode(&d, &Command::EmergencyStop { seq: 9 }.encode());
     assert_eq!(s["seq"], 9.0);
@@ -147,6 +161,24 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
         (1.0, 3.0, 1234.0, 7.0, 5.0)
     );
     close(s["last_adjust"], -0.2, 0.005, "last_adjust");
+    let dg = Diag {
+        foreign: 40_000,
+        bus_errors: 12,
+        tx_dropped: 3,
+        next_side: 2,
+        last_control: 201,
+    };
+    let s = decode(&d, &dg.encode());
+    assert_eq!(
+        (
+            s["foreign"],
+            s["bus_errors"],
+            s["tx_dropped"],
+            s["next_side"],
+            s["last_control"]
+        ),
+        (40_000.0, 12.0, 3.0, 2.0, 201.0)
+    );
     let stream = Stream {
         cog: [12.345678, -0.123456],
         cog_vel: [0.3125, -0.25],

@@ -132,6 +132,11 @@ impl<T: Real> Footstep<T> {
     }
 }
 
+/// `a` wrapped into [−π, π].
+fn wrap_angle<T: Real>(a: T) -> T {
+    T::of(libm::remainder(a.f64(), core::f64::consts::TAU))
+}
+
 fn sin_cos<T: Real>(a: T) -> (T, T) {
     let v = a.f64();
     (T::of(libm::sin(v)), T::of(libm::cos(v)))
@@ -372,7 +377,7 @@ struct Inputs<T> {
 }
 
 /// A window's intervals.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Spec<T> {
     ticks: [u32; M],
     kinds: [Kind; M],
@@ -660,6 +665,8 @@ pub struct Gait<T: Real, const Q: usize> {
     feet: [Footstep<T>; 2],
     /// The step being swung, with its id.
     swing: Option<Queued<T>>,
+    /// The side of the last step that landed (none since start-up or a re-basing).
+    landed: Option<Side>,
     mode: Mode,
     stop_requested: bool,
     /// Two window buffers: the one being executed and the one the next re-plan is built in.
@@ -762,6 +769,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             queue: Deque::new(),
             feet: [left, right],
             swing: None,
+            landed: None,
             mode: Mode::Standing,
             stop_requested: false,
             wins: [
@@ -878,12 +886,87 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.tick
     }
 
-    /// The side the next appended step must have (`None`: either, nothing queued or swung).
+    /// The side the next appended step must have; `None` only when either foot may step
+    /// (standing, with nothing queued, and no step landed since start-up or the last
+    /// [`Gait::rebase`]). Steps always alternate: the other side than the last queued step,
+    /// else than the step being swung, else than the support foot of the current window's
+    /// next single support (while walking, the foot that will swing next is fixed by the
+    /// plan), else than the last step that landed.
     pub fn next_side(&self) -> Option<Side> {
         if let Some(b) = self.queue.back() {
             return Some(b.step.side.other());
         }
-        self.swing.map(|s| s.step.side.other())
+        if let Some(s) = self.swing {
+            return Some(s.step.side.other());
+        }
+        if let Some(c) = self.cur_buf() {
+            let w = &self.wins[c];
+            if let Some(side) = w
+                .spec
+                .replan
+                .and_then(|j| w.spec.support.get(j).copied().flatten())
+            {
+                return Some(side.other());
+            }
+        }
+        self.landed.map(Side::other)
+    }
+
+    /// Moves the world frame while standing: the new origin is `(x, y)` of the old frame and
+    /// the new x axis has the old heading `yaw`. Every pose the gait holds (feet, the resting
+    /// reference) is expressed in the new frame; the queue is dropped, and the side of the
+    /// next step is free again. `WrongState` unless standing.
+    pub fn rebase(&mut self, x: T, y: T, yaw: T) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        if !(x.is_finite() && y.is_finite() && yaw.is_finite()) {
+            return Err(GaitError::NonFinite);
+        }
+        let (s, c) = sin_cos(yaw);
+        let to = |px: T, py: T| {
+            let (dx, dy) = (px - x, py - y);
+            (c * dx + s * dy, -s * dx + c * dy)
+        };
+        for f in self.feet.iter_mut() {
+            let (nx, ny) = to(f.x, f.y);
+            f.x = nx;
+            f.y = ny;
+            f.yaw = wrap_angle(f.yaw - yaw);
+        }
+        let (cx, cy) = to(self.last.x.cog, self.last.y.cog);
+        let (zx, zy) = to(self.last.x.zmp, self.last.y.zmp);
+        let rot = |a: T, b: T| (c * a + s * b, -s * a + c * b);
+        let (vx, vy) = rot(self.last.x.cog_vel, self.last.y.cog_vel);
+        let (ax, ay) = rot(self.last.x.cog_acc, self.last.y.cog_acc);
+        let (wx, wy) = rot(self.last.x.zmp_vel, self.last.y.zmp_vel);
+        self.last.x = Sample {
+            cog: cx,
+            cog_vel: vx,
+            cog_acc: ax,
+            zmp: zx,
+            zmp_vel: wx,
+        };
+        self.last.y = Sample {
+            cog: cy,
+            cog_vel: vy,
+            cog_acc: ay,
+            zmp: zy,
+            zmp_vel: wy,
+        };
+        self.last.feet = self.ground_poses();
+        self.queue.clear();
+        self.landed = None;
+        self.stop_requested = false;
+        self.target = None;
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Where each foot stands (left, right); the swinging foot where it lifted off.
+    pub fn feet(&self) -> &[Footstep<T>; 2] {
+        &self.feet
     }
 
     /// Appends a footstep. A full queue hands the step back.
@@ -983,23 +1066,61 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             // This is the next swing target: check the re-plan it will cause.
             match self.predict_replan() {
                 Ok(Some(worst)) if !self.inside_sole(worst) => {
-                    if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
-                        *q = o;
-                    }
-                    self.gen = self.gen.wrapping_add(1);
+                    self.undo_modify(pos, old);
                     return Err(GaitError::Infeasible);
                 }
                 Err(e) => {
-                    if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
-                        *q = o;
-                    }
-                    self.gen = self.gen.wrapping_add(1);
+                    self.undo_modify(pos, old);
                     return Err(e);
                 }
                 _ => {}
             }
         }
         Ok(())
+    }
+
+    /// Puts back the step a refused modification replaced. The spare buffer now holds the
+    /// refused plan: the prediction is dropped (a cache: the re-plan computes it again, bit
+    /// for bit the same), and `gen` moves on so that no cache keyed on it is taken.
+    fn undo_modify(&mut self, pos: usize, old: Option<Queued<T>>) {
+        if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
+            *q = o;
+        }
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// `true` if `other` walks on exactly as `self` does: every field that decides a future
+    /// reference is equal (queue, feet, swing, phase, the window being executed and its
+    /// compensators, the last reference). Not compared: the caches (the spare window buffer,
+    /// the eq. 18 target, the prediction of a modification's re-plan, the generation counter
+    /// that keys them), which only save work, and the preview gains, which never change.
+    pub fn same_state(&self, other: &Self) -> bool {
+        let window = |g: &Self| {
+            g.cur_buf().map(|c| {
+                let w = &g.wins[c];
+                (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
+            })
+        };
+        self.params == other.params
+            && self.queue.iter().eq(other.queue.iter())
+            && self.feet == other.feet
+            && self.swing == other.swing
+            && self.landed == other.landed
+            && self.mode == other.mode
+            && self.stop_requested == other.stop_requested
+            && self.serial == other.serial
+            && self.tick == other.tick
+            && self.last == other.last
+            && self.info == other.info
+            && self.comp == other.comp
+            && window(self) == window(other)
+    }
+
+    /// `true` while a requested stop is being carried out (the queue is walked without
+    /// padding, then the robot settles).
+    pub fn is_stopping(&self) -> bool {
+        self.mode == Mode::Walking && self.stop_requested
     }
 
     fn inside_sole(&self, worst: [T; 2]) -> bool {
@@ -1281,6 +1402,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         if let Some(s) = self.swing {
             if phase == Phase::Double && win.spec.kinds[j] == Kind::Double {
                 self.feet[s.step.side.index()] = s.step;
+                self.landed = Some(s.step.side);
                 self.swing = None;
             }
         }
@@ -1305,6 +1427,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         // Land the swing that just ended (the double support before this single support).
         if let Some(s) = self.swing.take() {
             self.feet[s.step.side.index()] = s.step;
+            self.landed = Some(s.step.side);
         }
         let Some(mut inputs) = self.next_walk_inputs(&self.wins[c], j) else {
             // Stopping with nothing left to swing: settle.
@@ -1423,7 +1546,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             x: f.x,
             y: f.y,
             z: T::ZERO,
-            yaw: f.yaw,
+            yaw: wrap_angle(f.yaw),
         };
         [pose(&self.feet[0]), pose(&self.feet[1])]
     }
@@ -1445,7 +1568,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 x: from.x + b * (to.x - from.x),
                 y: from.y + b * (to.y - from.y),
                 z: self.params.step_height * lift,
-                yaw: from.yaw + b * (to.yaw - from.yaw),
+                // Along the shorter way round (a turn across ±π), in [−π, π].
+                yaw: wrap_angle(from.yaw + b * wrap_angle(to.yaw - from.yaw)),
             };
         }
         poses

@@ -637,7 +637,7 @@ impl<T: Real> Compensation<T> {
 /// The incremental shaping compensator: one tick per [`step`](Self::step), fixed cost, no
 /// buffers. Holds at most `P` reference pieces; the gains are passed in on every step so that
 /// both planes share one [`PreviewGains`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Compensator<T, const P: usize = DEFAULT_PIECES> {
     state: [T; 3],
     error_sum: T,

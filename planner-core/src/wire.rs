@@ -8,8 +8,9 @@
 //! # Units (fixed point, little-endian, two's complement)
 //! | quantity | unit | range |
 //! |---|---|---|
-//! | footstep x, y | 0.5 mm (17 bits) | ±32.77 m |
-//! | footstep yaw | 2π/4096 rad ≈ 1.53 mrad (12 bits) | ±π |
+//! | footstep x, y | 0.5 mm (17 bits) | −32.768 … +32.7675 m |
+//! | modification dx, dy (from the appended x, y) | 0.5 mm (14 bits) | −4.096 … +4.0955 m |
+//! | footstep yaw | 2π/4096 rad ≈ 1.53 mrad (12 bits) | [−π, π) (any heading, wrapped) |
 //! | COG, ZMP position | 1 µm (32 bits) | ±2147 m |
 //! | COG velocity | 0.1 mm/s (16 bits) | ±3.27 m/s |
 //! | foot x, y | 0.1 mm (20 bits) | ±52.4 m |
@@ -19,8 +20,21 @@
 //! The paper's figures are given to 1 mm (positions) and 5 ms (times): footsteps travel at
 //! 0.5 mm and the published references at 1 µm, far below what the robot can follow. The
 //! footstep's 17-bit coordinates bound the walking area to ±32.77 m around the origin of the
-//! node's world frame (the controller re-bases its frame, with a `Reset` while standing, for
-//! longer walks); they leave room for the CRC in the 8 data bytes.
+//! node's world frame; a `Reset` while standing re-bases that frame (its origin moves to the
+//! midpoint of the feet, its x axis to their mean heading: see `node`), so a longer walk is a
+//! sequence of walks of at most that size. Every range is one definition shared by the
+//! encoder ([`WireStep::from_si`]) and the decoder: what one accepts, the other does.
+//!
+//! # Versions of a footstep
+//! A footstep is appended once (`STEP_APPEND`, version 0) and may be modified many times
+//! (`STEP_MODIFY`); each modification carries a 7-bit version, one more (modulo 128) than the
+//! one before it for that step. The node takes a modification only if its version is newer
+//! than the version in force (1 … 63 ahead, modulo 128): an older modification that arrives
+//! late (overtaken by a newer one for the same step) is refused with [`Reason::Stale`], so the
+//! step is always walked at the newest version the node accepted. A frame equal to the version
+//! in force (or to the step's append) is answered [`Reason::Duplicate`]. The modification
+//! carries its position as the offset from the appended position (that makes room for the
+//! version), its heading absolute; [`StepBook`] keeps what a controller needs for that.
 //!
 //! # End-to-end protection (CRC-8)
 //! CAN's own CRC-15 catches errors on the wire, not a frame a faulty gateway or controller
@@ -47,7 +61,7 @@
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
 //! | 0x020 | `CONTROL` | in | 3 | seq u8, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step id u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
-//! | 0x101 | `STEP_MODIFY` | in | 8 | as `STEP_APPEND` (the id names the step to change) |
+//! | 0x101 | `STEP_MODIFY` | in | 8 | step id u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
 //! | 0x080 | `ACK` | out | 6 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8, echo u8, crc u8 |
 //! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
@@ -55,6 +69,11 @@
 //! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
 //! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
 //! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 |
+//! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next side u8, last control seq u8 |
+//!
+//! The node's own commands are [`ids::COMMANDS`]; a frame on any other identifier (or an
+//! extended or remote frame) is not the node's: it is counted and never answered (every CAN
+//! backend also filters the bus for exactly [`ids::COMMANDS`] in hardware where it can).
 //!
 //! Bits of a 64-bit field group are packed from the least significant bit of byte 0 upwards.
 
@@ -82,6 +101,16 @@ pub mod ids {
     pub const FOOT_RIGHT: u16 = 0x211;
     /// Node status (also the node's heartbeat), every 100 ms.
     pub const STATUS: u16 = 0x300;
+    /// Node diagnostics (foreign frames, bus errors, what the node expects next), every 100 ms.
+    pub const DIAG: u16 = 0x301;
+
+    /// The identifiers the node receives: everything else on the bus is not its business.
+    pub const COMMANDS: [u16; 4] = [ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY];
+
+    /// `true` for one of [`COMMANDS`].
+    pub fn is_command(id: u16) -> bool {
+        COMMANDS.contains(&id)
+    }
 }
 
 /// A classic CAN data frame with a standard identifier.
@@ -173,7 +202,8 @@ impl embedded_can::Frame for RawFrame {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum Reason {
-    /// The identifier is not a command of this node.
+    /// The identifier is not a command of this node. [`Command::decode`] says so; the node
+    /// never answers such a frame (it is not its business: counted in `DIAG`).
     UnknownId = 1,
     /// The data length does not match the message.
     BadLength = 2,
@@ -194,7 +224,8 @@ pub enum Reason {
     WrongState = 9,
     /// The step id is not the one after the last appended id.
     SequenceGap = 10,
-    /// The command repeats the last one (same sequence number): ignored.
+    /// The frame equals the command in force (a repeat of the last accepted control
+    /// command, of an accepted append, of a step's version in force): nothing to do.
     Duplicate = 11,
     /// The footstep is out of the leg's reach from the previous one.
     Reach = 12,
@@ -206,11 +237,18 @@ pub enum Reason {
     PlanFailed = 15,
     /// The frame's CRC-8 does not match its identifier and data (see the module docs).
     BadCrc = 16,
+    /// Older than the command in force: a modification whose version is not newer than the
+    /// step's version in force, or a `Start`/`Reset` whose sequence number is behind the last
+    /// accepted control command (a late copy overtaken by newer commands).
+    Stale = 17,
+    /// The controller fell silent while the robot walked: motion commands are refused until
+    /// a `Reset` once standing.
+    ControllerLost = 18,
 }
 
 impl Reason {
     /// Every reason, in code order.
-    pub const ALL: [Reason; 16] = [
+    pub const ALL: [Reason; 18] = [
         Reason::UnknownId,
         Reason::BadLength,
         Reason::OutOfRange,
@@ -227,6 +265,8 @@ impl Reason {
         Reason::EmergencyStopped,
         Reason::PlanFailed,
         Reason::BadCrc,
+        Reason::Stale,
+        Reason::ControllerLost,
     ];
 
     /// The wire code.
@@ -308,7 +348,60 @@ impl ControlOp {
     }
 }
 
-/// A footstep as carried on the bus (fixed point, see the module docs).
+/// Largest magnitude of a 20-bit field.
+const I20_MAX: i32 = (1 << 19) - 1;
+/// Footstep yaw unit \[rad\].
+pub const YAW_UNIT: f64 = core::f64::consts::TAU / 4096.0;
+/// Footstep position unit \[m\].
+pub const STEP_UNIT: f64 = 5e-4;
+/// Foot position unit of the stream \[m\].
+pub const FOOT_UNIT: f64 = 1e-4;
+/// Bits of a footstep coordinate (x, y of `STEP_APPEND`).
+pub const STEP_BITS: u32 = 17;
+/// Bits of a modification's offset (dx, dy of `STEP_MODIFY`).
+pub const OFFSET_BITS: u32 = 14;
+/// Bits of a footstep heading.
+pub const YAW_BITS: u32 = 12;
+/// Modification versions are counted modulo this.
+pub const VERSIONS: u8 = 128;
+
+/// The range of a signed `bits`-bit field: `(min, max)`, two's complement. The one definition
+/// used by the encoders and the decoders.
+pub const fn signed_range(bits: u32) -> (i32, i32) {
+    (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
+}
+
+/// `v` in `unit`s, rounded, if finite and inside a signed `bits`-bit field.
+fn quantise(v: f64, unit: f64, bits: u32) -> Option<i32> {
+    let (min, max) = signed_range(bits);
+    let r = libm::round(v / unit);
+    (v.is_finite() && r >= f64::from(min) && r <= f64::from(max)).then_some(r as i32)
+}
+
+/// A heading in `YAW_UNIT`s, wrapped into the 12-bit field: every finite heading has one
+/// (±π, and π − half a unit, become −2048 = −π).
+fn quantise_yaw(yaw: f64) -> Option<i16> {
+    if !yaw.is_finite() {
+        return None;
+    }
+    let turns = 1i64 << YAW_BITS;
+    let w = libm::remainder(yaw, core::f64::consts::TAU); // [−π, π]
+    let r = libm::round(w / YAW_UNIT) as i64;
+    let r = (r + turns / 2).rem_euclid(turns) - turns / 2;
+    Some(r as i16)
+}
+
+/// Sign-extends the low `n` bits of `v`.
+fn sign_extend(v: u64, n: u32) -> i32 {
+    ((v << (64 - n)) as i64 >> (64 - n)) as i32
+}
+
+/// `v` as an `n`-bit two's complement field.
+fn field(v: i32, n: u32) -> u64 {
+    (v as i64 as u64) & ((1u64 << n) - 1)
+}
+
+/// A footstep as carried by `STEP_APPEND` (fixed point, see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireStep {
@@ -316,46 +409,25 @@ pub struct WireStep {
     pub id: u8,
     /// `true` for the left foot.
     pub left: bool,
-    /// x in 0.5 mm.
+    /// x in 0.5 mm (17 bits).
     pub x: i32,
-    /// y in 0.5 mm.
+    /// y in 0.5 mm (17 bits).
     pub y: i32,
-    /// yaw in 2π/4096 rad.
+    /// yaw in 2π/4096 rad (12 bits).
     pub yaw: i16,
 }
 
-/// Largest magnitude of a 20-bit field.
-const I20_MAX: i32 = (1 << 19) - 1;
-/// Largest magnitude of a 17-bit field.
-const I17_MAX: i32 = (1 << 16) - 1;
-/// Largest magnitude of a 12-bit field.
-const I12_MAX: i32 = (1 << 11) - 1;
-/// Footstep yaw unit \[rad\].
-pub const YAW_UNIT: f64 = core::f64::consts::TAU / 4096.0;
-/// Footstep position unit \[m\].
-pub const STEP_UNIT: f64 = 5e-4;
-/// Foot position unit of the stream \[m\].
-pub const FOOT_UNIT: f64 = 1e-4;
-
 impl WireStep {
-    /// A footstep in SI units, rounded to the wire units; `None` if out of range or not finite.
+    /// A footstep in SI units, rounded to the wire units; `None` if a coordinate is out of
+    /// range or a value not finite. Any finite heading is representable (wrapped into
+    /// [−π, π)).
     pub fn from_si(id: u8, left: bool, x: f64, y: f64, yaw: f64) -> Option<Self> {
-        let q = |v: f64, unit: f64, max: i32| -> Option<i32> {
-            let r = libm::round(v / unit);
-            (v.is_finite() && libm::fabs(r) <= f64::from(max)).then_some(r as i32)
-        };
-        // Wrap the yaw into [−π, π).
-        let mut yaw = libm::fmod(yaw + core::f64::consts::PI, core::f64::consts::TAU);
-        if yaw < 0.0 {
-            yaw += core::f64::consts::TAU;
-        }
-        let yaw = yaw - core::f64::consts::PI;
         Some(Self {
             id,
             left,
-            x: q(x, STEP_UNIT, I17_MAX)?,
-            y: q(y, STEP_UNIT, I17_MAX)?,
-            yaw: q(yaw, YAW_UNIT, I12_MAX)? as i16,
+            x: quantise(x, STEP_UNIT, STEP_BITS)?,
+            y: quantise(y, STEP_UNIT, STEP_BITS)?,
+            yaw: quantise_yaw(yaw)?,
         })
     }
 
@@ -368,32 +440,171 @@ impl WireStep {
         )
     }
 
-    /// The 8 data bytes of a footstep frame on identifier `id` (CRC in the last byte).
-    fn pack(&self, id: u16) -> [u8; 8] {
+    /// `true` when every field is inside its range (what the decoder produces).
+    pub fn in_range(&self) -> bool {
+        let (min, max) = signed_range(STEP_BITS);
+        let (ymin, ymax) = signed_range(YAW_BITS);
+        (min..=max).contains(&self.x)
+            && (min..=max).contains(&self.y)
+            && (ymin..=ymax).contains(&i32::from(self.yaw))
+    }
+
+    /// The 8 data bytes of a `STEP_APPEND` frame (CRC in the last byte).
+    fn pack(&self) -> [u8; 8] {
         let mut bits: u64 = u64::from(self.id);
         bits |= u64::from(self.left as u8) << 8;
-        bits |= (self.x as u64 & 0x1_FFFF) << 10;
-        bits |= (self.y as u64 & 0x1_FFFF) << 27;
-        bits |= (self.yaw as u64 & 0xFFF) << 44;
+        bits |= field(self.x, STEP_BITS) << 10;
+        bits |= field(self.y, STEP_BITS) << 27;
+        bits |= field(i32::from(self.yaw), YAW_BITS) << 44;
         let mut d = bits.to_le_bytes();
-        d[7] = crc8(id, &d[..7]);
+        d[7] = crc8(ids::STEP_APPEND, &d[..7]);
         d
     }
 
-    /// Fields of a footstep frame whose CRC was checked.
+    /// Fields of a `STEP_APPEND` frame whose CRC was checked.
     fn unpack(data: &[u8; 8]) -> Result<Self, Reason> {
         let bits = u64::from_le_bytes(*data);
         if (bits >> 9) & 1 != 0 {
             return Err(Reason::OutOfRange);
         }
-        let sx = |v: u64, n: u32| -> i32 { ((v << (64 - n)) as i64 >> (64 - n)) as i32 };
         Ok(Self {
             id: (bits & 0xFF) as u8,
             left: (bits >> 8) & 1 == 1,
-            x: sx((bits >> 10) & 0x1_FFFF, 17),
-            y: sx((bits >> 27) & 0x1_FFFF, 17),
-            yaw: sx((bits >> 44) & 0xFFF, 12) as i16,
+            x: sign_extend(bits >> 10, STEP_BITS),
+            y: sign_extend(bits >> 27, STEP_BITS),
+            yaw: sign_extend(bits >> 44, YAW_BITS) as i16,
         })
+    }
+}
+
+/// A modification as carried by `STEP_MODIFY`: the step's new version, its position as the
+/// offset from where it was appended, its heading absolute (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireModify {
+    /// Step id.
+    pub id: u8,
+    /// Version, 0 … 127 (one more than the step's previous version, modulo 128; the append
+    /// is version 0).
+    pub version: u8,
+    /// `true` for the left foot (a modification cannot change the side).
+    pub left: bool,
+    /// x offset from the appended x, in 0.5 mm (14 bits).
+    pub dx: i32,
+    /// y offset from the appended y, in 0.5 mm (14 bits).
+    pub dy: i32,
+    /// yaw in 2π/4096 rad (12 bits).
+    pub yaw: i16,
+}
+
+impl WireModify {
+    /// The modification of the step appended as `base` to the pose `(x, y, yaw)` \[m, rad\],
+    /// as version `version`; `None` if the offset is out of range or a value not finite.
+    pub fn from_si(base: &WireStep, version: u8, x: f64, y: f64, yaw: f64) -> Option<Self> {
+        // Offsets on the wire grid: the new position rounded, minus the appended one.
+        let x = quantise(x, STEP_UNIT, STEP_BITS)?;
+        let y = quantise(y, STEP_UNIT, STEP_BITS)?;
+        let (min, max) = signed_range(OFFSET_BITS);
+        let (dx, dy) = (x - base.x, y - base.y);
+        ((min..=max).contains(&dx) && (min..=max).contains(&dy)).then_some(Self {
+            id: base.id,
+            version: version % VERSIONS,
+            left: base.left,
+            dx,
+            dy,
+            yaw: quantise_yaw(yaw)?,
+        })
+    }
+
+    /// The footstep this modification makes of the step appended as `base`: `None` if the
+    /// result leaves the footstep coordinate range.
+    pub fn applied_to(&self, base: &WireStep) -> Option<WireStep> {
+        let s = WireStep {
+            id: self.id,
+            left: self.left,
+            x: base.x.checked_add(self.dx)?,
+            y: base.y.checked_add(self.dy)?,
+            yaw: self.yaw,
+        };
+        s.in_range().then_some(s)
+    }
+
+    /// `true` if `self.version` is newer than `current` (1 … 63 ahead, modulo 128).
+    pub fn is_newer_than(&self, current: u8) -> bool {
+        let d = self.version.wrapping_sub(current) % VERSIONS;
+        (1..VERSIONS / 2).contains(&d)
+    }
+
+    fn pack(&self) -> [u8; 8] {
+        let mut bits: u64 = u64::from(self.id);
+        bits |= u64::from(self.version % VERSIONS) << 8;
+        bits |= u64::from(self.left as u8) << 15;
+        bits |= field(self.dx, OFFSET_BITS) << 16;
+        bits |= field(self.dy, OFFSET_BITS) << 30;
+        bits |= field(i32::from(self.yaw), YAW_BITS) << 44;
+        let mut d = bits.to_le_bytes();
+        d[7] = crc8(ids::STEP_MODIFY, &d[..7]);
+        d
+    }
+
+    fn unpack(data: &[u8; 8]) -> Self {
+        let bits = u64::from_le_bytes(*data);
+        Self {
+            id: (bits & 0xFF) as u8,
+            version: ((bits >> 8) & 0x7F) as u8,
+            left: (bits >> 15) & 1 == 1,
+            dx: sign_extend(bits >> 16, OFFSET_BITS),
+            dy: sign_extend(bits >> 30, OFFSET_BITS),
+            yaw: sign_extend(bits >> 44, YAW_BITS) as i16,
+        }
+    }
+}
+
+/// What a controller keeps to speak the footstep protocol: the appended position of every
+/// step id and the version of its last modification (no_std, 256 entries, about 3 KB).
+#[derive(Clone, Debug)]
+pub struct StepBook {
+    steps: [Option<(WireStep, u8)>; 256],
+}
+
+impl Default for StepBook {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl StepBook {
+    /// Knows no step.
+    pub const fn new() -> Self {
+        Self { steps: [None; 256] }
+    }
+
+    /// The `STEP_APPEND` of step `id` at `(x, y, yaw)`; `None` if not representable.
+    pub fn append(&mut self, id: u8, left: bool, x: f64, y: f64, yaw: f64) -> Option<Command> {
+        let s = WireStep::from_si(id, left, x, y, yaw)?;
+        self.steps[usize::from(id)] = Some((s, 0));
+        Some(Command::Append(s))
+    }
+
+    /// The next `STEP_MODIFY` of step `id` to `(x, y, yaw)` (one version newer than the last
+    /// one made here); `None` if the step was never appended here or the offset from its
+    /// appended position is out of range.
+    pub fn modify(&mut self, id: u8, x: f64, y: f64, yaw: f64) -> Option<Command> {
+        let (base, v) = self.steps[usize::from(id)]?;
+        let v = (v + 1) % VERSIONS;
+        let m = WireModify::from_si(&base, v, x, y, yaw)?;
+        self.steps[usize::from(id)] = Some((base, v));
+        Some(Command::Modify(m))
+    }
+
+    /// The append of step `id` as recorded, if any.
+    pub fn appended(&self, id: u8) -> Option<WireStep> {
+        self.steps[usize::from(id)].map(|(s, _)| s)
+    }
+
+    /// Forgets every step (after a `Reset`: ids count from 0 again).
+    pub fn clear(&mut self) {
+        self.steps = [None; 256];
     }
 }
 
@@ -416,7 +627,7 @@ pub enum Command {
     /// Append a footstep.
     Append(WireStep),
     /// Modify a queued footstep.
-    Modify(WireStep),
+    Modify(WireModify),
 }
 
 impl Command {
@@ -452,11 +663,10 @@ impl Command {
                 }
                 let mut d = [0u8; 8];
                 d.copy_from_slice(b);
-                let s = WireStep::unpack(&d).map_err(|r| (r, first))?;
                 Ok(if f.id == ids::STEP_APPEND {
-                    Command::Append(s)
+                    Command::Append(WireStep::unpack(&d).map_err(|r| (r, first))?)
                 } else {
-                    Command::Modify(s)
+                    Command::Modify(WireModify::unpack(&d))
                 })
             }
             _ => Err((Reason::UnknownId, 0)),
@@ -471,8 +681,8 @@ impl Command {
                 let c = crc8(ids::CONTROL, &[*seq, op.code()]);
                 (ids::CONTROL, [*seq, op.code(), c, 0, 0, 0, 0, 0], 3)
             }
-            Command::Append(s) => (ids::STEP_APPEND, s.pack(ids::STEP_APPEND), 8),
-            Command::Modify(s) => (ids::STEP_MODIFY, s.pack(ids::STEP_MODIFY), 8),
+            Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
+            Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
         };
         RawFrame {
             id,
@@ -482,6 +692,24 @@ impl Command {
                 d[..usize::from(n)].copy_from_slice(&data[..usize::from(n)]);
                 d
             },
+        }
+    }
+
+    /// The step id of a footstep command.
+    pub fn step_id(&self) -> Option<u8> {
+        match self {
+            Command::Append(s) => Some(s.id),
+            Command::Modify(m) => Some(m.id),
+            _ => None,
+        }
+    }
+
+    /// What an `ACK` to this command carries as `seq`: the step id or the sequence number.
+    pub fn key(&self) -> u8 {
+        match self {
+            Command::Append(s) => s.id,
+            Command::Modify(m) => m.id,
+            Command::Control { seq, .. } | Command::EmergencyStop { seq } => *seq,
         }
     }
 
@@ -561,7 +789,8 @@ impl Ack {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status {
-    /// 0 standing, 1 walking, 2 emergency-stopped, 3 controller lost (stopping).
+    /// 0 standing, 1 walking, 2 emergency-stopped, 3 controller lost, 4 stopping (a `Stop`
+    /// or `StopNow` is being carried out). See the state table in the node's docs.
     pub state: u8,
     /// Queued steps.
     pub queue: u8,
@@ -608,6 +837,52 @@ impl Status {
             overruns: u16::from_le_bytes([d[4], d[5]]),
             last_adjust: d[6] as i8,
             flags: d[7],
+        })
+    }
+}
+
+/// The node's diagnostics (every 100 ms, with `STATUS`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Diag {
+    /// Frames received that are not the node's (other identifiers, extended or remote
+    /// frames), saturating.
+    pub foreign: u16,
+    /// Bus errors on receive or transmit, saturating.
+    pub bus_errors: u16,
+    /// Frames dropped because the transmit backlog was full, saturating.
+    pub tx_dropped: u16,
+    /// The side the next appended step must have: 0 either, 1 left, 2 right.
+    pub next_side: u8,
+    /// Sequence number of the last accepted `Start`, `Stop`, `StopNow` or `Reset` (0 before
+    /// any): a controller that restarts continues from it.
+    pub last_control: u8,
+}
+
+impl Diag {
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let [f0, f1] = self.foreign.to_le_bytes();
+        let [b0, b1] = self.bus_errors.to_le_bytes();
+        let [t0, t1] = self.tx_dropped.to_le_bytes();
+        RawFrame {
+            id: ids::DIAG,
+            len: 8,
+            data: [f0, f1, b0, b1, t0, t1, self.next_side, self.last_control],
+        }
+    }
+    /// Decodes a `DIAG` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::DIAG || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            foreign: u16::from_le_bytes([d[0], d[1]]),
+            bus_errors: u16::from_le_bytes([d[2], d[3]]),
+            tx_dropped: u16::from_le_bytes([d[4], d[5]]),
+            next_side: d[6],
+            last_control: d[7],
         })
     }
 }
@@ -747,6 +1022,86 @@ mod tests {
         assert!(WireStep::from_si(0, false, f64::NAN, 0.0, 0.0).is_none());
     }
 
+    /// Every heading is representable: ±π, π − half a unit, several turns (issue 10, item 7).
+    #[test]
+    fn every_finite_heading_is_representable() {
+        use core::f64::consts::{PI, TAU};
+        for yaw in [PI, -PI, PI - 5e-4, -PI + 5e-4, 3.0 * PI, 100.0, -7.0, 0.0] {
+            let s = WireStep::from_si(0, true, 0.0, 0.0, yaw).expect("representable");
+            let Ok(Command::Append(back)) = Command::decode(&Command::Append(s).encode()) else {
+                panic!("decodes");
+            };
+            let d = libm::remainder(back.si().2 - yaw, TAU);
+            assert!(d.abs() <= YAW_UNIT / 2.0 + 1e-9, "{yaw}: {}", back.si().2);
+        }
+        assert!(WireStep::from_si(0, true, 0.0, 0.0, f64::INFINITY).is_none());
+    }
+
+    /// Encoder and decoder agree on every range: the extreme values the decoder accepts are
+    /// produced by the encoder, and one unit beyond is refused by it (issue 10, item 7).
+    #[test]
+    fn encoder_and_decoder_agree_on_the_ranges() {
+        let (min, max) = signed_range(STEP_BITS);
+        for v in [min, max] {
+            let m = f64::from(v) * STEP_UNIT;
+            let s = WireStep::from_si(1, false, m, m, 0.0).expect("extreme encodable");
+            assert_eq!((s.x, s.y), (v, v));
+            let Ok(Command::Append(back)) = Command::decode(&Command::Append(s).encode()) else {
+                panic!("decodes");
+            };
+            assert_eq!(back, s);
+        }
+        let beyond = f64::from(max + 1) * STEP_UNIT;
+        assert!(WireStep::from_si(1, false, beyond, 0.0, 0.0).is_none());
+        let below = f64::from(min - 1) * STEP_UNIT;
+        assert!(WireStep::from_si(1, false, 0.0, below, 0.0).is_none());
+        // Every 17-bit pattern decodes to a value in range, and re-encodes to itself.
+        for raw in [0u64, 1, 0xFFFF, 0x1_0000, 0x1_FFFF] {
+            let bits = raw << 10 | raw << 27;
+            let mut d = bits.to_le_bytes();
+            d[7] = crc8(ids::STEP_APPEND, &d[..7]);
+            let f = RawFrame::new(ids::STEP_APPEND, &d).unwrap();
+            let Ok(Command::Append(s)) = Command::decode(&f) else {
+                panic!("decodes");
+            };
+            assert!(s.in_range());
+            assert_eq!(Command::Append(s).encode(), f);
+        }
+    }
+
+    #[test]
+    fn modifications_carry_a_version_and_an_offset() {
+        let base = WireStep::from_si(5, true, 10.0, 0.1, 0.0).unwrap();
+        let m = WireModify::from_si(&base, 3, 10.25, 0.05, -0.2).unwrap();
+        assert_eq!(
+            (m.id, m.version, m.left, m.dx, m.dy),
+            (5, 3, true, 500, -100)
+        );
+        let f = Command::Modify(m).encode();
+        assert_eq!(Command::decode(&f), Ok(Command::Modify(m)));
+        let s = m.applied_to(&base).unwrap();
+        let (x, y, yaw) = s.si();
+        assert!((x - 10.25).abs() < 1e-12 && (y - 0.05).abs() < 1e-12);
+        assert!((yaw + 0.2).abs() <= YAW_UNIT / 2.0);
+        // The offset's range: ±4.096 m.
+        assert!(WireModify::from_si(&base, 1, 14.0955, 0.1, 0.0).is_some());
+        assert!(WireModify::from_si(&base, 1, 14.1, 0.1, 0.0).is_none());
+        // Newer: 1 … 63 ahead modulo 128.
+        let v = |version| WireModify { version, ..m };
+        assert!(v(4).is_newer_than(3) && v(66).is_newer_than(3) && v(0).is_newer_than(127));
+        assert!(!v(3).is_newer_than(3) && !v(2).is_newer_than(3) && !v(67).is_newer_than(3));
+        // The controller's book counts versions per step.
+        let mut book = StepBook::new();
+        assert!(book.modify(9, 0.0, 0.0, 0.0).is_none(), "never appended");
+        assert!(book.append(9, false, 0.2, -0.1, 0.0).is_some());
+        for want in 1..=130u32 {
+            let Some(Command::Modify(m)) = book.modify(9, 0.25, -0.1, 0.0) else {
+                panic!("modify");
+            };
+            assert_eq!(u32::from(m.version), want % 128);
+        }
+    }
+
     #[test]
     fn bad_frames_are_rejected_with_a_reason() {
         let f = RawFrame::new(ids::CONTROL, &[3, 9, crc8(ids::CONTROL, &[3, 9])]).unwrap();
@@ -783,9 +1138,10 @@ mod tests {
     #[test]
     fn every_one_two_and_three_bit_error_is_caught() {
         let step = WireStep::from_si(9, true, 1.2345, -0.2, 0.25).unwrap();
+        let change = WireModify::from_si(&step, 77, 1.3, -0.25, 0.2).unwrap();
         for cmd in [
             Command::Append(step),
-            Command::Modify(step),
+            Command::Modify(change),
             Command::Control {
                 seq: 77,
                 op: ControlOp::Stop,
@@ -841,6 +1197,14 @@ mod tests {
             bad.data[3] ^= 0x10;
             assert_eq!(Ack::decode(&bad), None);
         }
+        let d = Diag {
+            foreign: 700,
+            bus_errors: 3,
+            tx_dropped: 1,
+            next_side: 2,
+            last_control: 9,
+        };
+        assert_eq!(Diag::decode(&d.encode()), Some(d));
         let s = Status {
             state: 1,
             queue: 4,

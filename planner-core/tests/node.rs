@@ -6,7 +6,7 @@ use std::collections::VecDeque;
 use planner_core::gait::Phase;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{
-    self, ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireStep,
+    self, ids, Ack, Command, ControlOp, RawFrame, Reason, Status, Stream, WireModify, WireStep,
 };
 
 /// The codec's frame type is an `embedded-can` frame.
@@ -60,13 +60,37 @@ fn node() -> N {
     N::new(NodeConfig::hrp2()).unwrap()
 }
 
-fn step(id: u8, left: bool, x: f64) -> Command {
-    let y = if left { 0.1 } else { -0.1 };
-    Command::Append(WireStep::from_si(id, left, x, y, 0.0).unwrap())
+thread_local! {
+    /// The controller's memory: appended step of each id and the last version made.
+    static BOOK: std::cell::RefCell<std::collections::HashMap<u8, (WireStep, u8)>> =
+        Default::default();
 }
 
+fn step(id: u8, left: bool, x: f64) -> Command {
+    let y = if left { 0.1 } else { -0.1 };
+    let s = WireStep::from_si(id, left, x, y, 0.0).unwrap();
+    BOOK.with(|b| {
+        let mut b = b.borrow_mut();
+        if b.get(&id).map(|e| e.0) != Some(s) {
+            b.insert(id, (s, 0));
+        }
+    });
+    Command::Append(s)
+}
+
+/// The next version of a modification of step `id` (offsets from its append; a step never
+/// appended is taken as appended at the origin).
 fn modify(id: u8, left: bool, x: f64, y: f64) -> Command {
-    Command::Modify(WireStep::from_si(id, left, x, y, 0.0).unwrap())
+    BOOK.with(|b| {
+        let mut b = b.borrow_mut();
+        let e = b
+            .entry(id)
+            .or_insert((WireStep::from_si(id, left, 0.0, 0.0, 0.0).unwrap(), 0));
+        e.1 = (e.1 + 1) % wire::VERSIONS;
+        let mut m = WireModify::from_si(&e.0, e.1, x, y, 0.0).unwrap();
+        m.left = left;
+        Command::Modify(m)
+    })
 }
 
 fn control(seq: u8, op: ControlOp) -> Command {
@@ -84,11 +108,26 @@ fn run(n: &mut N, bus: &mut Bus, t: &mut u32, cycles: u32) -> Vec<Ack> {
     acks
 }
 
-/// Sends one command, runs one cycle, returns its ack.
+/// Sends one command, runs one cycle, returns its ack. A refusal must have changed nothing:
+/// the node is then in the state of a clone that ran the same cycle without the frame.
 fn ask(n: &mut N, bus: &mut Bus, t: &mut u32, c: Command) -> Ack {
-    bus.send(c);
+    ask_raw(n, bus, t, c.encode())
+}
+
+fn ask_raw(n: &mut N, bus: &mut Bus, t: &mut u32, f: RawFrame) -> Ack {
+    assert!(bus.rx.is_empty());
+    let mut without = n.clone();
+    without.poll(*t + 5, &mut Bus::default());
+    bus.send_raw(f);
     let acks = run(n, bus, t, 1);
     assert_eq!(acks.len(), 1, "{acks:?}");
+    if acks[0].reason.is_some() {
+        assert!(
+            n.same_state(&without),
+            "refused {:?} changed the node",
+            acks[0]
+        );
+    }
     acks[0]
 }
 
@@ -113,26 +152,26 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         seen.borrow_mut().push(r);
     };
     let (mut n, mut bus, mut t) = (node(), Bus::default(), 0);
-    // Frame-level.
+    // Frame-level. A frame that is not the node's is not answered (counted in DIAG).
     bus.send_raw(RawFrame::new(0x555, &[1, 2]).unwrap());
-    check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::UnknownId);
-    bus.send_raw(RawFrame::new(ids::STEP_APPEND, &[1, 2, 3]).unwrap());
-    check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::BadLength);
+    assert!(run(&mut n, &mut bus, &mut t, 1).is_empty());
+    assert_eq!(n.counters().foreign, 1);
+    seen.borrow_mut().push(Reason::UnknownId); // (the decoder's; never sent)
+    let f = RawFrame::new(ids::STEP_APPEND, &[1, 2, 3]).unwrap();
+    check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::BadLength);
     let body = [9, 77];
     let crc = wire::crc8(ids::CONTROL, &body);
-    bus.send_raw(RawFrame::new(ids::CONTROL, &[9, 77, crc]).unwrap());
-    check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::OutOfRange);
+    let f = RawFrame::new(ids::CONTROL, &[9, 77, crc]).unwrap();
+    check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::OutOfRange);
     // A corrupted footstep (one bit of x) and a corrupted start: refused, nothing queued.
     let mut f = step(0, false, 0.2).encode();
     f.data[2] ^= 0x04;
-    bus.send_raw(f);
-    let a = run(&mut n, &mut bus, &mut t, 1)[0];
+    let a = ask_raw(&mut n, &mut bus, &mut t, f);
     assert_eq!((a.seq, a.echo), (0, f.data[7]));
     check(a, Reason::BadCrc);
     let mut f = control(1, ControlOp::Start).encode();
     f.data[1] ^= 0x02; // start (1) would read as stop now (3)
-    bus.send_raw(f);
-    check(run(&mut n, &mut bus, &mut t, 1)[0], Reason::BadCrc);
+    check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::BadCrc);
     assert_eq!(n.gait().queued(), 0);
     // State-level, standing.
     check(
@@ -200,9 +239,19 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         None
     );
     check(
-        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Stop)),
+        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Start)),
         Reason::Duplicate,
     );
+    // A late copy of an older `Start` (sequence behind the last accepted control command).
+    check(
+        ask(&mut n, &mut bus, &mut t, control(1, ControlOp::Start)),
+        Reason::Stale,
+    );
+    // A late copy of an older version of a modification.
+    let older = modify(5, true, 0.7, 0.1);
+    let newer = modify(5, true, 0.71, 0.1);
+    assert_eq!(ask(&mut n, &mut bus, &mut t, newer).reason, None);
+    check(ask(&mut n, &mut bus, &mut t, older), Reason::Stale);
     check(
         ask(&mut n, &mut bus, &mut t, modify(42, true, 0.3, 0.1)),
         Reason::UnknownStep,
@@ -223,7 +272,7 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     );
     // Eq. 17: within the HRP-2 reach limits the adjusted single support always keeps the ZMP
     // on the foot (a 2.8 m step would still pass, see tests/gait.rs); with the reach check
-    // widened, a 5 m change of the next landing is refused.
+    // widened, a 4 m change of the next landing is refused.
     let mut wide = NodeConfig::hrp2();
     wide.reach.max_forward = 10.0;
     wide.reach.max_feet_distance = 10.0;
@@ -249,7 +298,7 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         run(&mut w, &mut b3, &mut t3, 1);
     }
     check(
-        ask(&mut w, &mut b3, &mut t3, modify(1, true, 5.0, 0.1)),
+        ask(&mut w, &mut b3, &mut t3, modify(1, true, 4.4, 0.1)),
         Reason::Infeasible,
     );
     // Emergency stop, then motion commands are refused until reset once standing.
@@ -271,6 +320,14 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         ask(&mut n, &mut bus, &mut t, control(4, ControlOp::Reset)).reason,
         None
     );
+    // The controller falls silent while walking: motion commands are refused until a reset.
+    let (mut l, mut bl, mut tl) = walking_node();
+    run(&mut l, &mut bl, &mut tl, 101);
+    assert_eq!(l.status().state, 3);
+    check(
+        ask(&mut l, &mut bl, &mut tl, step(5, false, 1.2)),
+        Reason::ControllerLost,
+    );
     // A plan that cannot be made: a zero single-support time.
     let mut cfg = NodeConfig::hrp2();
     cfg.params.single_ticks = 0;
@@ -288,8 +345,9 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     for r in Reason::ALL {
         assert!(seen.contains(&r), "no test for {r:?}");
     }
-    // Every refusal of this node was counted (Infeasible and PlanFailed were the others').
-    assert_eq!(n.counters().refused as usize, seen.len() - 2);
+    // Every refusal of this node was counted (UnknownId is not a refusal; Infeasible,
+    // PlanFailed and ControllerLost were the other nodes').
+    assert_eq!(n.counters().refused as usize, seen.len() - 4);
 }
 
 /// A retransmitted footstep command (its answer was lost) is answered `Duplicate` and changes
@@ -305,9 +363,12 @@ fn repeats_are_duplicates_whatever_happened_since() {
     let a = ask(&mut n, &mut bus, &mut t, second);
     assert_eq!((a.reason, a.echo), (None, second.echo()));
     assert_ne!(first.echo(), second.echo());
-    // A late copy of the first modification does not undo the second.
+    // A late copy of the first modification does not undo the second: it is stale; a repeat
+    // of the second (the version in force) is a duplicate.
     let a = ask(&mut n, &mut bus, &mut t, first);
-    assert_eq!((a.reason, a.echo), (Some(Reason::Duplicate), first.echo()));
+    assert_eq!((a.reason, a.echo), (Some(Reason::Stale), first.echo()));
+    let a = ask(&mut n, &mut bus, &mut t, second);
+    assert_eq!((a.reason, a.echo), (Some(Reason::Duplicate), second.echo()));
     let landing = |n: &N| n.gait().queued_step(2).map(|f| (f.x, f.y));
     assert_eq!(landing(&n), Some((0.62, -0.1)));
     // Walk until step 2 is in the air: repeats of its append and of its modification are
@@ -426,6 +487,17 @@ fn a_silent_controller_stops_the_robot() {
     assert_eq!(n.gait().queued(), 0);
     run(&mut n, &mut bus, &mut t, 800);
     assert!(n.gait().is_standing());
+    // The state is latched until a reset once standing.
+    assert_eq!(n.status().state, 3);
+    assert_eq!(
+        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Start)).reason,
+        Some(Reason::ControllerLost)
+    );
+    assert_eq!(
+        ask(&mut n, &mut bus, &mut t, control(3, ControlOp::Reset)).reason,
+        None
+    );
+    assert_eq!(n.status().state, 0);
 }
 
 /// Each rule of the reach limits, just inside and just outside, the others kept satisfied:

@@ -5,7 +5,7 @@
 //! `sim::simulate` sends them. This test builds the image, runs it twice under
 //! `qemu-system-arm -icount shift=0` and checks, against `sim::simulate` on a fault-free bus
 //! (the same node fed the same frames):
-//! * the frames it sent (`CMD` lines) are host-sim's timeline through `WireStep::from_si` and
+//! * the frames it sent (`CMD` lines) are host-sim's timeline through `wire::StepBook` and
 //!   `Command::encode`, command for command, and the node answered each the same way in the
 //!   same cycle;
 //! * every reference is bit-identical (FNV-1a digest over all ticks), the sampled `REF` values
@@ -28,7 +28,7 @@ use std::sync::OnceLock;
 use host_sim::scenario::{built_in, Command};
 use host_sim::sim::{simulate, SimConfig, SimRun};
 use planner_core::gait::{Reference, Side};
-use planner_core::wire::{ids, Command as Wire, ControlOp, RawFrame, WireStep};
+use planner_core::wire::{ids, Command as Wire, ControlOp, RawFrame, StepBook};
 
 /// 5 % of a 5 ms control cycle at 480 MHz, in cycles (compared with instruction counts).
 const BUDGET: u64 = 120_000;
@@ -241,17 +241,14 @@ fn node_frames(sim: &SimRun) -> (usize, String) {
 
 /// The frame host-sim's controller sends for a command (`seq`: its CONTROL sequence number so
 /// far), candump style.
-fn wire_frame(command: &Command, seq: &mut u8) -> String {
+fn wire_frame(command: &Command, seq: &mut u8, book: &mut StepBook) -> String {
     let wire = match *command {
-        Command::Push(id, f) | Command::Modify(id, f) => {
-            let w = WireStep::from_si(id as u8, f.side == Side::Left, f.x, f.y, f.yaw)
-                .expect("representable footstep");
-            if matches!(command, Command::Push(..)) {
-                Wire::Append(w)
-            } else {
-                Wire::Modify(w)
-            }
-        }
+        Command::Push(id, f) => book
+            .append(id as u8, f.side == Side::Left, f.x, f.y, f.yaw)
+            .expect("representable footstep"),
+        Command::Modify(id, f) => book
+            .modify(id as u8, f.x, f.y, f.yaw)
+            .expect("representable modification"),
         Command::Start | Command::Stop | Command::StopNow => {
             *seq = seq.wrapping_add(1);
             let op = match command {
@@ -285,6 +282,7 @@ fn compare_scenario(q: &QemuRun, name: &str) -> f64 {
     // The tick of the host's answer to each command, paired as `simulate` pairs them.
     let mut used = vec![false; host.acks.len()];
     let mut seq = 0u8;
+    let mut book = StepBook::new();
 
     // The timeline: the firmware's copy of the scenario is host-sim's, sent as the same frames.
     let cmds: Vec<&Record> = q.all("CMD").filter(|r| r.get("scenario") == name).collect();
@@ -318,7 +316,7 @@ fn compare_scenario(q: &QemuRun, name: &str) -> f64 {
             assert_eq!(rec.num::<f64>("y"), f.y, "{ctx}: y");
             assert_eq!(rec.num::<f64>("yaw"), f.yaw, "{ctx}: yaw");
         }
-        let frame = wire_frame(command, &mut seq);
+        let frame = wire_frame(command, &mut seq, &mut book);
         assert_eq!(rec.get("frame"), frame, "{ctx}: frame");
         let want = match &event.result {
             Ok(()) => "Ok".to_string(),

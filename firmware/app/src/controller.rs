@@ -2,8 +2,8 @@
 //! answers.
 //!
 //! [`Controller`] does what the controller of `host_sim::sim::simulate` does, frame for frame:
-//! at tick `k` it sends the commands due at `k` (in timeline order), footsteps through
-//! [`WireStep::from_si`] (`id as u8`), `Start`/`Stop`/`StopNow` as `CONTROL` frames with a
+//! at tick `k` it sends the commands due at `k` (in timeline order), footsteps through a
+//! [`StepBook`] (`id as u8`; modifications as versioned offsets), `Start`/`Stop`/`StopNow` as `CONTROL` frames with a
 //! sequence number counted from 1, then a heartbeat (`CONTROL`, sequence 0) every
 //! [`HEARTBEAT_TICKS`] ticks; every frame through [`wire::Command::encode`](Wire::encode).
 //! On host-sim's bus the frames of one tick arrive by arbitration, lowest identifier first,
@@ -18,7 +18,7 @@
 
 use heapless::Vec;
 use planner_core::gait::Side;
-use planner_core::wire::{Ack, Command as Wire, ControlOp, RawFrame, Reason, WireStep};
+use planner_core::wire::{Ack, Command as Wire, ControlOp, RawFrame, Reason, StepBook};
 
 use crate::bus::ScriptedBus;
 use crate::script::{Command, Scenario, MAX_COMMANDS};
@@ -66,6 +66,8 @@ pub struct Controller<'s> {
     scenario: &'s Scenario,
     next: usize,
     seq: u8,
+    /// Appended positions and versions of the steps (modifications are offsets from them).
+    book: StepBook,
     sent: Vec<Sent, MAX_COMMANDS>,
     heartbeats: u32,
     heartbeat_acks: u32,
@@ -79,6 +81,7 @@ impl<'s> Controller<'s> {
             scenario,
             next: 0,
             seq: 0,
+            book: StepBook::new(),
             sent: Vec::new(),
             heartbeats: 0,
             heartbeat_acks: 0,
@@ -123,16 +126,16 @@ impl<'s> Controller<'s> {
         while self.next < timeline.len() && timeline[self.next].0 <= k {
             let (_, command) = timeline[self.next];
             let wire = match command {
-                Command::Push(id, f) | Command::Modify(id, f) => {
+                Command::Push(id, f) => {
                     let left = f.side == Side::Left;
-                    let w = WireStep::from_si(id as u8, left, f.x, f.y, f.yaw)
-                        .ok_or(Unrepresentable(id))?;
-                    if matches!(command, Command::Push(..)) {
-                        Wire::Append(w)
-                    } else {
-                        Wire::Modify(w)
-                    }
+                    self.book
+                        .append(id as u8, left, f.x, f.y, f.yaw)
+                        .ok_or(Unrepresentable(id))?
                 }
+                Command::Modify(id, f) => self
+                    .book
+                    .modify(id as u8, f.x, f.y, f.yaw)
+                    .ok_or(Unrepresentable(id))?,
                 Command::Start => self.control(ControlOp::Start),
                 Command::Stop => self.control(ControlOp::Stop),
                 Command::StopNow => self.control(ControlOp::StopNow),

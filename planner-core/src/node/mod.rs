@@ -1,0 +1,728 @@
+//! The hardware-free node: one call of [`Node::poll`] is one 5 ms control cycle.
+//!
+//! Time is passed in (`now_ms`, a free-running millisecond counter that may wrap) and the bus
+//! is behind the `embedded-can` non-blocking trait, as smoltcp's `poll(timestamp, device)`:
+//! the same code runs in the firmware (FDCAN), in host-sim (a virtual bus) and in tests.
+//!
+//! Per cycle, with bounded work:
+//! 1. receive at most [`NodeConfig::max_rx`] of the node's own frames ([`ids::COMMANDS`]);
+//!    each is validated once ([`Command::decode`]), checked against the state (sequence,
+//!    version, reach, side order, emergency stop, supervision) and applied to the [`Gait`],
+//!    and answered with an `ACK` frame that carries the reason code when refused. Frames that
+//!    are not the node's (other identifiers, extended or remote frames) are counted
+//!    ([`Counters::foreign`], published in `DIAG`) and never answered; at most
+//!    [`NodeConfig::max_foreign`] of them are drained per cycle, apart from the command budget,
+//!    so a busy shared bus does not delay the controller's commands. Commands that plan — a
+//!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
+//!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
+//!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them are
+//!    taken per cycle: after the last one the node stops receiving, and the frames behind it
+//!    wait in the device's queue for the next cycle. This bounds the worst cycle whatever
+//!    arrives;
+//! 2. supervision: if the robot moves and the controller has not been heard (an accepted
+//!    command) for more than [`NodeConfig::heartbeat_timeout_ms`], the node enters the
+//!    *controller lost* state: the queue is dropped, the swing in progress ends, the robot
+//!    settles, and motion commands are refused (`ControllerLost`) until a `Reset` once
+//!    standing. So **no foot lifts off more than `heartbeat_timeout_ms` after the controller
+//!    was last heard**, for the whole walk (a lift-off happens in step 3 of a cycle whose
+//!    step 2 found the controller heard within the timeout);
+//! 3. advance the gait by one tick;
+//! 4. publish the reference (5 frames) and, every 20 cycles, `STATUS` and `DIAG` (the node's
+//!    heartbeat); frames that cannot be sent now wait in a transmit backlog of [`TX_BACKLOG`]
+//!    frames; an unsent reference is replaced by the next one rather than sent late.
+//!
+//! # Answers
+//! A refused command changes nothing but the refusal counters: [`Node::same_state`] holds
+//! between the node before and after it (tested for every reason code, and for random
+//! programs against a reference model in `planner-core/tests/protocol.rs`). Only an accepted
+//! command proves the controller alive. The state machine (standing, walking, stopping,
+//! controller lost, emergency-stopped; for each command what the node does and answers) is the
+//! table in the README's *Reliability* section, which `planner-core/tests/state_table.rs`
+//! checks against this code cell by cell.
+//!
+//! * Step ids count up from 0 after start-up and after a `Reset`: a gap is refused, so a lost
+//!   step cannot be skipped over. Steps alternate feet ([`Gait::next_side`], published in
+//!   `DIAG`): a step for the foot that will be supporting is refused (`SideOrder`).
+//! * Versions: a modification must be newer than the step's version in force
+//!   ([`WireModify::is_newer_than`]), or it is `Stale`; the step is walked at the newest
+//!   version accepted.
+//! * Repeats: a footstep frame equal to a step's append or to its version in force (for the
+//!   queued step, the one being swung and the last [`HISTORY`] done) is answered `Duplicate`;
+//!   so is a control command equal to the last accepted one (heartbeats excepted: always
+//!   accepted) and an `ESTOP` repeating the one in force. `Start` and `Reset` must carry a
+//!   sequence number ahead of the last accepted control command (1 … 127, modulo 256), or
+//!   they are `Stale` (a late copy never starts the robot); `Stop` and `StopNow` are always
+//!   carried out.
+//! * `Reset` (only when standing) starts afresh: the queue and the step memory are dropped, ids
+//!   count from 0, the emergency stop and the controller-lost state are left, and the node's
+//!   world frame is **re-based**: its origin moves to the midpoint of the feet and its x axis
+//!   to their mean heading; the stream and every later footstep are in the new frame.
+//!
+//! Reach limits ([`Reach`]): what the HRP-2 legs (thigh and shank 0.3 m) can follow at the
+//! gait's COG height, with a margin, measured on host-sim's multi-body model
+//! (`host-sim/tests/reach.rs` walks the corners of these limits and asserts the knee margin).
+//! A step is measured in the frame of the previous foot of the other side (`forward` along
+//! its heading, `width` across, positive on the stepping foot's own side; a negative width is
+//! `Crossing`):
+//! * box: forward −0.20 … +0.30 m, width 0.15 … 0.28 m, heading change at most 0.30 rad;
+//! * distance between the feet `hypot(forward, width)` at most 0.361 m;
+//! * a turn costs reach: `forward + 0.3 m/rad · |Δyaw| ≤ 0.30 m`;
+//! * stride: the swinging foot travels at most 0.43 m along that heading (steady walking up
+//!   to 0.215 m steps);
+//! * growth: a step is at most 0.22 m longer than the one before (from standing: than 0).
+//!
+//! The last two are why a box alone is not enough: a long step needs the speed built up by the
+//! steps before it, and the stop after long steps needs room. A modification is checked with
+//! its two successors (their rules involve the modified step).
+
+mod reach;
+mod steps;
+
+use heapless::Deque;
+
+use reach::Frame;
+pub use reach::Reach;
+pub use steps::HISTORY;
+use steps::{Record, Steps};
+
+use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side};
+use crate::wire::{
+    ids, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream, WireModify, WireStep,
+};
+
+/// Frames that can wait to be sent.
+pub const TX_BACKLOG: usize = 32;
+
+/// Node configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeConfig {
+    /// Gait parameters.
+    pub params: GaitParams<f64>,
+    /// Where the left foot stands at start-up.
+    pub left: Footstep<f64>,
+    /// Where the right foot stands at start-up.
+    pub right: Footstep<f64>,
+    /// Silence of the controller after which a moving robot stops \[ms\] (see the module
+    /// docs: the supervision bound).
+    pub heartbeat_timeout_ms: u32,
+    /// Command frames handled per cycle at most (the rest wait in the controller's mailbox).
+    pub max_rx: usize,
+    /// Frames that are not the node's drained per cycle at most (apart from `max_rx`).
+    pub max_foreign: usize,
+    /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
+    /// handled per cycle at most (see the module docs).
+    pub max_plans: usize,
+    /// Reach limits.
+    pub reach: Reach,
+}
+
+impl NodeConfig {
+    /// HRP-2 defaults: feet 0.2 m apart at the origin, 500 ms heartbeat timeout, 16 command
+    /// frames and 128 foreign frames per cycle (more than a 1 Mbit/s bus carries in 5 ms).
+    pub fn hrp2() -> Self {
+        Self {
+            params: GaitParams::hrp2(),
+            left: Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+            right: Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+            heartbeat_timeout_ms: 500,
+            max_rx: 16,
+            max_foreign: 128,
+            max_plans: 1,
+            reach: Reach::default(),
+        }
+    }
+}
+
+/// What one cycle did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PollReport {
+    /// The reference of this cycle.
+    pub reference: Reference<f64>,
+    /// Frames received (the node's and foreign ones).
+    pub received: u8,
+    /// Commands refused.
+    pub refused: u8,
+    /// Frames handed to the bus.
+    pub sent: u8,
+}
+
+/// Counters kept by the node (all saturating).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Commands refused, total.
+    pub refused: u16,
+    /// Refusals per reason code (index = code; 0 unused).
+    pub by_reason: [u16; 19],
+    /// Frames received that are not the node's (never answered).
+    pub foreign: u16,
+    /// Frames dropped because the transmit backlog was full.
+    pub tx_dropped: u16,
+    /// Cycles reported late by the firmware.
+    pub overruns: u16,
+    /// Bus errors on receive or transmit.
+    pub bus_errors: u16,
+}
+
+/// The published state (the `state` field of `STATUS`; the README's state table).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NodeState {
+    /// Standing still.
+    Standing = 0,
+    /// Walking (the queue, padded with steps in place).
+    Walking = 1,
+    /// Emergency-stopped (latched until a `Reset` once standing).
+    EmergencyStopped = 2,
+    /// The controller fell silent while the robot moved (latched until a `Reset` once
+    /// standing).
+    ControllerLost = 3,
+    /// Walking out the queue after `Stop` or `StopNow`, then settling.
+    Stopping = 4,
+}
+
+/// The node.
+#[derive(Clone, Debug)]
+pub struct Node<const Q: usize> {
+    cfg: NodeConfig,
+    gait: Gait<f64, Q>,
+    tx: Deque<RawFrame, TX_BACKLOG>,
+    steps: Steps<Q>,
+    last_append: Option<u8>,
+    /// The last accepted control command other than a heartbeat.
+    last_control: Option<(u8, ControlOp)>,
+    last_estop: Option<u8>,
+    estopped: bool,
+    lost: bool,
+    last_heard: Option<u32>,
+    counters: Counters,
+    cycle: u32,
+    replan_failed: bool,
+}
+
+fn reason_of(e: GaitError) -> Reason {
+    match e {
+        GaitError::QueueFull => Reason::QueueFull,
+        GaitError::NonFinite => Reason::OutOfRange,
+        GaitError::SideOrder => Reason::SideOrder,
+        GaitError::UnknownStep => Reason::UnknownStep,
+        GaitError::LiftedOff => Reason::LiftedOff,
+        GaitError::Infeasible => Reason::Infeasible,
+        GaitError::WrongState => Reason::WrongState,
+        _ => Reason::PlanFailed,
+    }
+}
+
+/// `true` if sequence number `seq` is ahead of `last` (1 … 127, modulo 256).
+fn ahead(seq: u8, last: u8) -> bool {
+    (1..=127).contains(&seq.wrapping_sub(last))
+}
+
+impl<const Q: usize> Node<Q> {
+    /// Step ids are 8 bits: every queued step must have its own.
+    const CAPACITY_OK: () = assert!(Q >= 1 && Q <= 128, "queue capacity 1 … 128");
+
+    /// A node standing still (computes the preview gains).
+    pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
+        let () = Self::CAPACITY_OK;
+        Ok(Self {
+            gait: Gait::new(cfg.params, cfg.left, cfg.right)?,
+            cfg,
+            tx: Deque::new(),
+            steps: Steps::new(),
+            last_append: None,
+            last_control: None,
+            last_estop: None,
+            estopped: false,
+            lost: false,
+            last_heard: None,
+            counters: Counters::default(),
+            cycle: 0,
+            replan_failed: false,
+        })
+    }
+
+    /// The gait.
+    pub fn gait(&self) -> &Gait<f64, Q> {
+        &self.gait
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &NodeConfig {
+        &self.cfg
+    }
+
+    /// The counters.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// Cycles run.
+    pub fn cycles(&self) -> u32 {
+        self.cycle
+    }
+
+    /// When the controller was last heard (an accepted command), if ever \[ms\].
+    pub fn last_heard(&self) -> Option<u32> {
+        self.last_heard
+    }
+
+    /// Tells the node that the last cycle overran its time budget (counted and published).
+    pub fn note_overrun(&mut self) {
+        self.counters.overruns = self.counters.overruns.saturating_add(1);
+    }
+
+    /// `true` if `other` is in the same state as `self`: everything but the counters (see
+    /// [`Gait::same_state`] for what the gait compares). A refused command keeps it.
+    pub fn same_state(&self, other: &Self) -> bool {
+        self.gait.same_state(&other.gait)
+            && self.cfg == other.cfg
+            && self.tx.iter().eq(other.tx.iter())
+            && self.steps == other.steps
+            && self.last_append == other.last_append
+            && self.last_control == other.last_control
+            && self.last_estop == other.last_estop
+            && self.estopped == other.estopped
+            && self.lost == other.lost
+            && self.last_heard == other.last_heard
+            && self.cycle == other.cycle
+            && self.replan_failed == other.replan_failed
+    }
+
+    /// The state of the state machine (the README's table).
+    pub fn state(&self) -> NodeState {
+        if self.estopped {
+            NodeState::EmergencyStopped
+        } else if self.lost {
+            NodeState::ControllerLost
+        } else if self.gait.is_standing() {
+            NodeState::Standing
+        } else if self.gait.is_stopping() {
+            NodeState::Stopping
+        } else {
+            NodeState::Walking
+        }
+    }
+
+    /// The status as published.
+    pub fn status(&self) -> Status {
+        let adjust = self
+            .gait
+            .last_replan()
+            .map(|i| i.adjust_ticks.clamp(-128, 127) as i8)
+            .unwrap_or(0);
+        let mut flags = 0;
+        if self.gait.params().shaping {
+            flags |= 1;
+        }
+        if self.replan_failed {
+            flags |= 2;
+        }
+        if self.counters.tx_dropped > 0 {
+            flags |= 4;
+        }
+        Status {
+            state: self.state() as u8,
+            queue: self.gait.queued().min(255) as u8,
+            rejected: self.counters.refused,
+            overruns: self.counters.overruns,
+            last_adjust: adjust,
+            flags,
+        }
+    }
+
+    /// The diagnostics as published.
+    pub fn diag(&self) -> Diag {
+        Diag {
+            foreign: self.counters.foreign,
+            bus_errors: self.counters.bus_errors,
+            tx_dropped: self.counters.tx_dropped,
+            next_side: match self.gait.next_side() {
+                None => 0,
+                Some(Side::Left) => 1,
+                Some(Side::Right) => 2,
+            },
+            last_control: self.last_control.map_or(0, |(s, _)| s),
+        }
+    }
+
+    fn refuse(&mut self, reason: Reason) {
+        self.counters.refused = self.counters.refused.saturating_add(1);
+        if let Some(n) = self.counters.by_reason.get_mut(usize::from(reason.code())) {
+            *n = n.saturating_add(1);
+        }
+    }
+
+    /// Reach and crossing check of a footstep: appended (`before` = `None`), or replacing the
+    /// queued step `before`, with its two successors then checked against it.
+    fn check_reach(&self, step: &Footstep<f64>, before: Option<u16>) -> Result<(), Reason> {
+        let r = &self.cfg.reach;
+        let other = Frame::of(&self.gait.previous_other(step.side, before));
+        let same = Frame::of(&self.gait.previous_other(step.side.other(), before));
+        let f = Frame::of(step);
+        r.check_frames(&other, &same, &f, step.side)?;
+        if let Some(id) = before {
+            let next = |k: u16| self.gait.queued_step(id.wrapping_add(k) & 0xFF);
+            if let Some(s1) = next(1) {
+                let f1 = Frame::of(&s1);
+                r.check_frames(&f, &other, &f1, s1.side)?;
+                if let Some(s2) = next(2) {
+                    r.check_frames(&f1, &f, &Frame::of(&s2), s2.side)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn footstep(s: &WireStep) -> Footstep<f64> {
+        let (x, y, yaw) = s.si();
+        let side = if s.left { Side::Left } else { Side::Right };
+        Footstep::new(side, x, y, yaw)
+    }
+
+    /// Handles one frame from the bus (validation, state checks, application) and returns the
+    /// answer to send: `None` for a frame that is not the node's (counted, not answered).
+    pub fn handle(&mut self, frame: &RawFrame, now_ms: u32) -> Option<Ack> {
+        self.handle_planned(frame, now_ms).0
+    }
+
+    /// [`Node::handle`], and whether the command ran the planner.
+    fn handle_planned(&mut self, frame: &RawFrame, now_ms: u32) -> (Option<Ack>, bool) {
+        if !ids::is_command(frame.id) {
+            self.counters.foreign = self.counters.foreign.saturating_add(1);
+            return (None, false);
+        }
+        // Known before handling: a `Start`, or a modification of the next swing target while
+        // walking (the only one that plans, see `Gait::modify`).
+        let decoded = Command::decode(frame);
+        let may_plan = match decoded {
+            Ok(Command::Control {
+                op: ControlOp::Start,
+                ..
+            }) => true,
+            Ok(Command::Modify(m)) => {
+                !self.gait.is_standing() && self.gait.next_target() == Some(u16::from(m.id))
+            }
+            _ => false,
+        };
+        let ack = self.handle_command(frame, decoded, now_ms);
+        // It did plan if the gait was reached: accepted, or refused by the planner itself.
+        let planned = may_plan
+            && matches!(
+                ack.reason,
+                None | Some(Reason::Infeasible | Reason::PlanFailed)
+            );
+        (Some(ack), planned)
+    }
+
+    fn handle_command(
+        &mut self,
+        frame: &RawFrame,
+        decoded: Result<Command, (Reason, u8)>,
+        now_ms: u32,
+    ) -> Ack {
+        let echo = crate::wire::echo_of(frame);
+        let (command, seq, result) = match decoded {
+            Ok(cmd) => {
+                let result = match cmd {
+                    Command::EmergencyStop { seq } => self.estop(seq),
+                    Command::Control { seq, op } => self.control(seq, op),
+                    Command::Append(s) => self.append(frame, &s),
+                    Command::Modify(m) => self.modify(frame, &m),
+                };
+                (cmd.code(), cmd.key(), result)
+            }
+            Err((reason, seq)) => ((frame.id & 0xFF) as u8, seq, Err(reason)),
+        };
+        match result {
+            // Only an accepted command proves the controller alive.
+            Ok(()) => self.last_heard = Some(now_ms),
+            Err(reason) => self.refuse(reason),
+        }
+        // Steps the command dropped (emergency stop, stop now) leave the step records.
+        self.steps.sync(&self.gait);
+        Ack {
+            command,
+            seq,
+            reason: result.err(),
+            queue: self.gait.queued().min(255) as u8,
+            echo,
+        }
+    }
+
+    fn estop(&mut self, seq: u8) -> Result<(), Reason> {
+        if self.estopped && self.last_estop == Some(seq) {
+            return Err(Reason::Duplicate);
+        }
+        self.last_estop = Some(seq);
+        self.estopped = true;
+        self.gait.clear_and_stop();
+        Ok(())
+    }
+
+    fn control(&mut self, seq: u8, op: ControlOp) -> Result<(), Reason> {
+        if op == ControlOp::Heartbeat {
+            return Ok(());
+        }
+        if self.last_control == Some((seq, op)) {
+            return Err(Reason::Duplicate);
+        }
+        let standing = self.gait.is_standing();
+        match op {
+            ControlOp::Heartbeat => {}
+            ControlOp::Start | ControlOp::Reset => {
+                if let Some((last, _)) = self.last_control {
+                    if !ahead(seq, last) {
+                        return Err(Reason::Stale);
+                    }
+                }
+                if op == ControlOp::Start {
+                    if self.estopped {
+                        return Err(Reason::EmergencyStopped);
+                    }
+                    if self.lost {
+                        return Err(Reason::ControllerLost);
+                    }
+                    self.gait.start().map_err(reason_of)?;
+                } else {
+                    if !standing {
+                        return Err(Reason::WrongState);
+                    }
+                    self.reset()?;
+                }
+            }
+            ControlOp::Stop => {
+                if !standing {
+                    self.gait.stop();
+                }
+            }
+            ControlOp::StopNow => self.gait.clear_and_stop(),
+        }
+        self.last_control = Some((seq, op));
+        Ok(())
+    }
+
+    /// A fresh start while standing (see the module docs): the frame is re-based on the feet.
+    fn reset(&mut self) -> Result<(), Reason> {
+        let [l, r] = *self.gait.feet();
+        let (x, y) = (0.5 * (l.x + r.x), 0.5 * (l.y + r.y));
+        let yaw = libm::atan2(
+            libm::sin(l.yaw) + libm::sin(r.yaw),
+            libm::cos(l.yaw) + libm::cos(r.yaw),
+        );
+        self.gait.rebase(x, y, yaw).map_err(reason_of)?;
+        self.estopped = false;
+        self.lost = false;
+        self.last_append = None;
+        self.steps.clear();
+        Ok(())
+    }
+
+    fn append(&mut self, frame: &RawFrame, s: &WireStep) -> Result<(), Reason> {
+        if self.steps.is_repeat(frame) {
+            return Err(Reason::Duplicate);
+        }
+        if self.estopped {
+            return Err(Reason::EmergencyStopped);
+        }
+        if self.lost {
+            return Err(Reason::ControllerLost);
+        }
+        // Step ids count from 0 after start-up and after a reset: a lost first step must not
+        // let the second one become the first (a stride from standing twice as long).
+        let expected = self.last_append.map_or(0, |l| l.wrapping_add(1));
+        if s.id != expected {
+            return Err(Reason::SequenceGap);
+        }
+        let step = Self::footstep(s);
+        if self.gait.next_side().is_some_and(|side| side != step.side) {
+            return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
+        }
+        self.check_reach(&step, None)?;
+        self.gait
+            .push(u16::from(s.id), step)
+            .map_err(|(e, _)| reason_of(e))?;
+        self.steps.push(Record {
+            append: *s,
+            append_frame: *frame,
+            version: 0,
+            in_force: None,
+        });
+        self.last_append = Some(s.id);
+        Ok(())
+    }
+
+    fn modify(&mut self, frame: &RawFrame, m: &WireModify) -> Result<(), Reason> {
+        if self.steps.is_repeat(frame) {
+            return Err(Reason::Duplicate);
+        }
+        if self.estopped {
+            return Err(Reason::EmergencyStopped);
+        }
+        if self.lost {
+            return Err(Reason::ControllerLost);
+        }
+        if self.gait.is_standing() && self.gait.queued() == 0 {
+            return Err(Reason::WrongState);
+        }
+        if self.steps.swinging() == Some(m.id) {
+            return Err(Reason::LiftedOff);
+        }
+        let Some(rec) = self.steps.queued_mut(m.id).copied() else {
+            return Err(Reason::UnknownStep);
+        };
+        if !m.is_newer_than(rec.version) {
+            return Err(Reason::Stale);
+        }
+        if m.left != rec.append.left {
+            return Err(Reason::SideOrder);
+        }
+        let s = m.applied_to(&rec.append).ok_or(Reason::OutOfRange)?;
+        let step = Self::footstep(&s);
+        let id = u16::from(m.id);
+        self.check_reach(&step, Some(id))?;
+        self.gait.modify(id, step).map_err(reason_of)?;
+        if let Some(r) = self.steps.queued_mut(m.id) {
+            r.version = m.version;
+            r.in_force = Some(*frame);
+        }
+        Ok(())
+    }
+
+    /// The supervision rule (module docs, step 2): a moving robot whose controller has not
+    /// been heard for longer than the timeout stops, and stays "controller lost". Checked in
+    /// every cycle, so it holds for the whole walk.
+    fn supervise(&mut self, now_ms: u32) {
+        if self.gait.is_standing() {
+            return;
+        }
+        let silent = match self.last_heard {
+            Some(heard) => now_ms.wrapping_sub(heard) > self.cfg.heartbeat_timeout_ms,
+            None => true,
+        };
+        if silent && !self.lost {
+            self.lost = true;
+        }
+        if self.lost && (self.gait.queued() > 0 || !self.gait.is_stopping()) {
+            self.gait.clear_and_stop();
+            self.steps.sync(&self.gait);
+        }
+    }
+
+    fn stream(&self, r: &Reference<f64>) -> Stream {
+        let phase = match r.phase {
+            Phase::Standing => 0,
+            Phase::Double => 1,
+            Phase::Single(Side::Left) => 2,
+            Phase::Single(Side::Right) => 3,
+        };
+        let f = |k: usize| [r.feet[k].x, r.feet[k].y, r.feet[k].z, r.feet[k].yaw];
+        Stream {
+            cog: [r.x.cog, r.y.cog],
+            cog_vel: [r.x.cog_vel, r.y.cog_vel],
+            zmp: [r.x.zmp, r.y.zmp],
+            phase,
+            tick: (self.cycle & 0xFF) as u8,
+            feet: [f(0), f(1)],
+        }
+    }
+
+    fn enqueue(&mut self, f: RawFrame) {
+        if self.tx.push_back(f).is_err() {
+            self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
+        }
+    }
+
+    /// One control cycle (see the module docs).
+    pub fn poll<C>(&mut self, now_ms: u32, can: &mut C) -> PollReport
+    where
+        C: embedded_can::nb::Can,
+    {
+        self.cycle = self.cycle.wrapping_add(1);
+        let (mut received, mut refused, mut plans) = (0u8, 0u8, 0usize);
+        let (mut commands, mut foreign) = (0usize, 0usize);
+        while commands < self.cfg.max_rx && foreign < self.cfg.max_foreign {
+            if plans >= self.cfg.max_plans {
+                break; // the rest waits for the next cycle
+            }
+            match can.receive() {
+                Ok(f) => {
+                    received = received.saturating_add(1);
+                    // Extended and remote frames are not ours either.
+                    let raw = RawFrame::from_frame(&f).unwrap_or(RawFrame {
+                        id: u16::MAX,
+                        len: 0,
+                        data: [0; 8],
+                    });
+                    let (ack, planned) = self.handle_planned(&raw, now_ms);
+                    let Some(ack) = ack else {
+                        foreign += 1;
+                        continue;
+                    };
+                    commands += 1;
+                    if ack.reason.is_some() {
+                        refused = refused.saturating_add(1);
+                    }
+                    plans += usize::from(planned);
+                    self.enqueue(ack.encode());
+                }
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    break;
+                }
+            }
+        }
+        self.supervise(now_ms);
+        let reference = self.gait.tick();
+        self.steps.sync(&self.gait);
+        // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
+        // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
+        // panicking branches the optimiser cannot remove: see firmware/nopanic.)
+        for _ in 0..self.tx.len() {
+            if let Some(f) = self.tx.pop_front() {
+                if matches!(f.id, ids::ACK | ids::STATUS | ids::DIAG) {
+                    let _ = self.tx.push_back(f);
+                }
+            }
+        }
+        for f in self.stream(&reference).encode() {
+            self.enqueue(f);
+        }
+        if self.cycle % 20 == 0 {
+            let s = self.status().encode();
+            self.enqueue(s);
+            let d = self.diag().encode();
+            self.enqueue(d);
+        }
+        let mut sent = 0u8;
+        while let Some(raw) = self.tx.pop_front() {
+            let Some(frame) = raw.to_frame::<C::Frame>() else {
+                continue;
+            };
+            match can.transmit(&frame) {
+                Ok(displaced) => {
+                    sent = sent.saturating_add(1);
+                    if let Some(d) = displaced.as_ref().and_then(RawFrame::from_frame) {
+                        let _ = self.tx.push_front(d);
+                        break;
+                    }
+                }
+                Err(nb::Error::WouldBlock) => {
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+            }
+        }
+        PollReport {
+            reference,
+            received,
+            refused,
+            sent,
+        }
+    }
+}

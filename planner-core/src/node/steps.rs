@@ -1,0 +1,117 @@
+//! What the node remembers of every footstep it accepted: the append frame, the version in
+//! force and its frame. Used to answer repeats (`Duplicate`: a frame equal to the step's append
+//! or to its version in force), to refuse late copies of older versions (`Stale`) and to
+//! rebuild a modification's position from the appended one.
+//!
+//! Records follow the gait's queue: appended in order, moved to `swing` when the gait lifts the
+//! step off, to `done` (the last [`HISTORY`] steps walked or dropped) after that.
+
+use heapless::Deque;
+
+use crate::gait::Gait;
+use crate::wire::{RawFrame, WireStep};
+
+/// Steps walked or dropped whose frames are still recognised as repeats.
+pub const HISTORY: usize = 16;
+
+/// One accepted footstep.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Record {
+    /// The accepted append (version 0).
+    pub append: WireStep,
+    /// Its frame.
+    pub append_frame: RawFrame,
+    /// Version in force (0: as appended).
+    pub version: u8,
+    /// The frame of the modification in force, if any.
+    pub in_force: Option<RawFrame>,
+}
+
+impl Record {
+    fn id(&self) -> u16 {
+        u16::from(self.append.id)
+    }
+    fn is_repeat(&self, f: &RawFrame) -> bool {
+        self.append_frame == *f || self.in_force == Some(*f)
+    }
+}
+
+/// The records of the queued steps (in queue order), of the step being swung, and of the last
+/// steps done.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Steps<const Q: usize> {
+    queued: Deque<Record, Q>,
+    swing: Option<Record>,
+    done: Deque<Record, HISTORY>,
+}
+
+impl<const Q: usize> Steps<Q> {
+    pub fn new() -> Self {
+        Self {
+            queued: Deque::new(),
+            swing: None,
+            done: Deque::new(),
+        }
+    }
+
+    /// Forgets everything (a `Reset`).
+    pub fn clear(&mut self) {
+        self.queued.clear();
+        self.swing = None;
+        self.done.clear();
+    }
+
+    /// `true` if `f` equals an accepted append or a version in force.
+    pub fn is_repeat(&self, f: &RawFrame) -> bool {
+        self.queued.iter().any(|r| r.is_repeat(f))
+            || self.swing.is_some_and(|r| r.is_repeat(f))
+            || self.done.iter().any(|r| r.is_repeat(f))
+    }
+
+    /// The record of queued step `id`.
+    pub fn queued_mut(&mut self, id: u8) -> Option<&mut Record> {
+        self.queued.iter_mut().find(|r| r.append.id == id)
+    }
+
+    /// Records an accepted append (the gait queued it: there is room).
+    pub fn push(&mut self, r: Record) {
+        let _ = self.queued.push_back(r);
+    }
+
+    fn retire(&mut self, r: Record) {
+        if self.done.is_full() {
+            self.done.pop_front();
+        }
+        let _ = self.done.push_back(r);
+    }
+
+    /// Follows the gait after it changed: queued steps it no longer has were lifted off (the
+    /// one it swings) or dropped; a swing it no longer has has landed.
+    pub fn sync<const GQ: usize>(&mut self, gait: &Gait<f64, GQ>) {
+        if let Some(s) = self.swing {
+            if gait.swinging() != Some(s.id()) {
+                self.swing = None;
+                self.retire(s);
+            }
+        }
+        while let Some(r) = self.queued.front().copied() {
+            if gait.is_queued(r.id()) {
+                break;
+            }
+            self.queued.pop_front();
+            if gait.swinging() == Some(r.id()) {
+                if let Some(s) = self.swing.take() {
+                    self.retire(s);
+                }
+                self.swing = Some(r);
+            } else {
+                self.retire(r);
+            }
+        }
+    }
+
+    /// The id of the step being swung, if the node accepted it (padded steps have none).
+    pub fn swinging(&self) -> Option<u8> {
+        self.swing.map(|r| r.append.id)
+    }
+}
