@@ -414,6 +414,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         reason: None,
         queue: 2,
         echo: 0x5A,
+        version: None,
     };
     out.push(("decode", "seed-ack".into(), frame(ack.encode())));
     let st = Stream {

@@ -66,11 +66,13 @@ pub const FALL_MARGIN: f64 = 0.02;
 pub const SOLE_HALF: [f64; 2] = [0.12, 0.07];
 /// Ticks (5 ms) without an answer before a command is sent again (20 ms).
 pub const RETRY_TICKS: u64 = 4;
-/// Retransmissions of one command at most (20 × 20 ms: a command is given up 0.4 s after it
+/// Retransmissions of one command at most (40 × 20 ms: a command is given up 0.8 s after it
 /// was first sent). Repeats are safe — the node answers a repeat of what it applied with
 /// `Duplicate` — so the controller can afford to insist: with 20 % of the frames of each
-/// direction lost, one attempt fails with probability 0.36 and 21 in a row with 5e-10.
-pub const MAX_RETRIES: u8 = 20;
+/// direction lost, one attempt fails with probability 0.36 and 41 in a row with 6e-19; with
+/// 50 % corrupted, 0.75 and 7.5e-6 (at 20 retries it was 2.4e-3, and the sweep's heavier rows
+/// saw a walked step whose every answer was corrupted).
+pub const MAX_RETRIES: u8 = 40;
 /// Latency of a delayed frame \[ns\] (30 ms: beyond the retransmission time-out).
 pub const DELAY_NS: u64 = 30_000_000;
 
@@ -93,7 +95,54 @@ pub enum FaultKind {
     Flood,
     /// Many modifications within one single support.
     Burst,
+    /// A combination of faults: the index of its row in [`HEAVY`].
+    Mixed(usize),
 }
+
+/// One of the heavier combinations of faults (issue 10, item 8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mix {
+    /// As printed in the table.
+    pub label: &'static str,
+    /// Drop probability per frame (both directions).
+    pub drop: f64,
+    /// Corruption probability per frame.
+    pub corrupt: f64,
+    /// Delay probability per frame.
+    pub delay: f64,
+    /// Latency of a delayed frame \[ns\].
+    pub delay_ns: u64,
+    /// Modifications in one single support (as `burst`).
+    pub burst: usize,
+}
+
+/// The heavier rows: what lost footsteps before modifications carried a version.
+pub const HEAVY: [Mix; 3] = [
+    Mix {
+        label: "delay 600 ms 30 % + drop 30 % + corrupt 30 %",
+        drop: 0.3,
+        corrupt: 0.3,
+        delay: 0.3,
+        delay_ns: 600_000_000,
+        burst: 0,
+    },
+    Mix {
+        label: "burst 60 + drop 20 % + delay 600 ms 20 %",
+        drop: 0.2,
+        corrupt: 0.0,
+        delay: 0.2,
+        delay_ns: 600_000_000,
+        burst: 60,
+    },
+    Mix {
+        label: "corrupt 50 %",
+        drop: 0.0,
+        corrupt: 0.5,
+        delay: 0.0,
+        delay_ns: 0,
+        burst: 0,
+    },
+];
 
 impl FaultKind {
     /// Name in the table.
@@ -107,6 +156,7 @@ impl FaultKind {
             FaultKind::Silence => "silence",
             FaultKind::Flood => "flood",
             FaultKind::Burst => "burst",
+            FaultKind::Mixed(_) => "mixed",
         }
     }
 
@@ -116,6 +166,7 @@ impl FaultKind {
             FaultKind::None | FaultKind::Silence => "—".into(),
             FaultKind::Flood => format!("{:.0} % load", rate * 100.0),
             FaultKind::Burst => format!("{rate:.0} / support"),
+            FaultKind::Mixed(i) => HEAVY.get(i).map_or("?", |m| m.label).into(),
             _ => format!("{:.0} %", rate * 100.0),
         }
     }
@@ -157,6 +208,8 @@ pub struct CaseResult {
     pub cancelled: usize,
     /// Commands never answered after every retransmission.
     pub unanswered: usize,
+    /// Footsteps whose version in force the controller got wrong.
+    pub misinformed: usize,
     /// Retransmissions sent.
     pub retransmissions: usize,
     /// The node stopped on its own (controller lost or emergency stop).
@@ -260,8 +313,9 @@ impl Flood {
     }
 }
 
-/// A command of the controller, with the footstep (id, pose) it carries if any.
-type Outgoing = (Command, Option<(u16, Footstep<f64>)>);
+/// A command of the controller, with the footstep (id, pose) it carries if any, and whether it
+/// pins a step (see [`run_case`]).
+type Outgoing = (Command, Option<(u16, Footstep<f64>)>, bool);
 
 /// A command of the controller waiting for its answer.
 struct Pending {
@@ -274,6 +328,8 @@ struct Pending {
     open: bool,
     /// A newer modification of the same step was sent: do not retry this one.
     superseded: bool,
+    /// Sent to pin a step after a refused modification (not pinned again if refused).
+    pin: bool,
 }
 
 fn key(c: &Command) -> u8 {
@@ -417,6 +473,13 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
             let at = (rng.range(0.1, 8.0) * 1e9) as u64;
             faults.silence_ns = Some((at, u64::MAX));
         }
+        FaultKind::Mixed(i) => {
+            let m = HEAVY.get(i).ok_or("no such mixed row")?;
+            faults.drop = m.drop;
+            faults.corrupt = m.corrupt;
+            faults.delay = m.delay;
+            faults.delay_ns = m.delay_ns;
+        }
         FaultKind::None | FaultKind::Flood | FaultKind::Burst => {}
     }
     let bus = Bus::new(1_000_000, 4, faults, seed.wrapping_mul(2).wrapping_add(1));
@@ -432,32 +495,38 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
     // The burst: which single support (counted from the first), how many modifications.
     let burst_support = 1 + rng.next() % 6;
     let mut supports_seen = 0u64;
-    let mut burst_left = if kind == FaultKind::Burst {
-        rate as usize
-    } else {
-        0
+    let mut burst_left = match kind {
+        FaultKind::Burst => rate as usize,
+        FaultKind::Mixed(i) => HEAVY.get(i).map_or(0, |m| m.burst),
+        _ => 0,
     };
     let mut plan: Vec<(u16, Footstep<f64>)> = Vec::new(); // the controller's intended steps
 
     let mut trajectory = vec![*node.gait().last()];
     let mut pending: Vec<Pending> = Vec::new();
     let mut book = StepBook::new();
-    // What the node has as the controller knows it: (id, pose, version in force).
-    let mut accepted: Vec<(u16, Footstep<f64>, u8)> = Vec::new();
+    // What the node has as the controller knows it: (id, pose, order of that version among
+    // the controller's versions of the step: 0 for the append, then 1, 2, … unwrapped).
+    let mut accepted: Vec<(u16, Footstep<f64>, u64)> = Vec::new();
+    // Every version sent: (id, wire version) → (pose, order); a later send of the same wire
+    // version (after 128 modifications) replaces it.
+    let mut node_accepted: Vec<(u16, Footstep<f64>, u64)> = Vec::new();
+    let mut versions: std::collections::HashMap<(u16, u8), (Footstep<f64>, u64)> =
+        Default::default();
+    let mut made: std::collections::HashMap<u16, u64> = Default::default();
     // Takes an acceptance: a newer version than the one known replaces it (answers may
     // arrive out of order; the node never takes an older version after a newer one).
-    let take = |accepted: &mut Vec<(u16, Footstep<f64>, u8)>, id: u16, f: Footstep<f64>, v: u8| {
-        match accepted.iter_mut().find(|(i, _, _)| *i == id) {
-            Some(e) => {
-                let d = v.wrapping_sub(e.2) % 128;
-                if (1..64).contains(&d) {
+    let take =
+        |accepted: &mut Vec<(u16, Footstep<f64>, u64)>, id: u16, f: Footstep<f64>, u: u64| {
+            match accepted.iter_mut().find(|(i, _, _)| *i == id) {
+                Some(e) if u > e.2 => {
                     e.1 = f;
-                    e.2 = v;
+                    e.2 = u;
                 }
+                Some(_) => {}
+                None => accepted.push((id, f, u)),
             }
-            None => accepted.push((id, f, v)),
-        }
-    };
+        };
     let mut seq: u8 = 0;
     let mut next = 0;
     // Commands not sent yet: a control command waits until every earlier command is answered
@@ -486,17 +555,19 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
             match command {
                 scenario::Command::Push(id, f) => {
                     plan.push((id, f));
-                    issue.push((wire_step(&mut book, true, id, &f)?, Some((id, f))));
+                    issue.push((wire_step(&mut book, true, id, &f)?, Some((id, f)), false));
                 }
                 scenario::Command::Modify(id, f) => {
                     if let Some(e) = plan.iter_mut().find(|(i, _)| *i == id) {
                         e.1 = f;
                     }
-                    issue.push((wire_step(&mut book, false, id, &f)?, Some((id, f))));
+                    issue.push((wire_step(&mut book, false, id, &f)?, Some((id, f)), false));
                 }
-                scenario::Command::Start => issue.push((control(ControlOp::Start), None)),
-                scenario::Command::Stop => issue.push((control(ControlOp::Stop), None)),
-                scenario::Command::StopNow => issue.push((control(ControlOp::StopNow), None)),
+                scenario::Command::Start => issue.push((control(ControlOp::Start), None, false)),
+                scenario::Command::Stop => issue.push((control(ControlOp::Stop), None, false)),
+                scenario::Command::StopNow => {
+                    issue.push((control(ControlOp::StopNow), None, false))
+                }
             }
         }
         // 2. The burst of modifications, spread over the chosen single support.
@@ -529,12 +600,12 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                         f.y + sy * da + cy * dc,
                         f.yaw + rng.range(-0.1, 0.1),
                     );
-                    issue.push((wire_step(&mut book, false, id, &m)?, Some((id, m))));
+                    issue.push((wire_step(&mut book, false, id, &m)?, Some((id, m)), false));
                 }
             }
         }
         outbox.extend(issue);
-        while let Some(&(cmd, step)) = outbox.front() {
+        while let Some(&(cmd, step, pin)) = outbox.front() {
             let busy = pending
                 .iter()
                 .any(|p| p.open && !p.superseded && p.retries < MAX_RETRIES);
@@ -549,6 +620,21 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                     }
                 }
             }
+            if let (Some(id), Some((_, f))) = (cmd.step_id(), step) {
+                let id = u16::from(id);
+                let u = match cmd {
+                    Command::Modify(_) => {
+                        let e = made.entry(id).or_insert(0);
+                        *e += 1;
+                        *e
+                    }
+                    _ => {
+                        made.insert(id, 0);
+                        0
+                    }
+                };
+                versions.insert((id, version(&cmd)), (f, u));
+            }
             let _ = ctl.transmit(&cmd.encode());
             pending.push(Pending {
                 cmd,
@@ -557,6 +643,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 retries: 0,
                 open: true,
                 superseded: false,
+                pin,
             });
         }
         // 3. Retransmissions of what is still unanswered (in the order first sent).
@@ -584,6 +671,15 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
             sent: Vec::new(),
         };
         let report = node.poll(now_ms, &mut tap);
+        // What the node accepted, from its own answers as it sent them (before the bus).
+        for a in tap.sent.iter().filter_map(Ack::decode) {
+            if let (0x00 | 0x01, None, Some(v)) = (a.command, a.reason, a.version) {
+                let id = u16::from(a.seq);
+                if let Some(&(f, u)) = versions.get(&(id, v)) {
+                    take(&mut node_accepted, id, f, u);
+                }
+            }
+        }
         let stream_ids = [
             ids::COG,
             ids::ZMP,
@@ -606,6 +702,14 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         flood.run(&bus, t0 + 5 * ms / 2, t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
             if let Some(a) = Ack::decode(&f) {
+                // Every answer about a footstep tells its version in force, whatever the
+                // answer (a refused newer modification leaves an older one in force).
+                if let (0x00 | 0x01, Some(v)) = (a.command, a.version) {
+                    let id = u16::from(a.seq);
+                    if let Some(&(f, u)) = versions.get(&(id, v)) {
+                        take(&mut accepted, id, f, u);
+                    }
+                }
                 let same = |p: &Pending| {
                     p.cmd.code() == a.command && key(&p.cmd) == a.seq && p.cmd.echo() == a.echo
                 };
@@ -617,7 +721,8 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                     if a.reason.is_none() {
                         if let Some(p) = pending.iter().rev().find(|p| same(p)) {
                             if let Some((id, f)) = p.step {
-                                take(&mut accepted, id, f, version(&p.cmd));
+                                let u = versions.get(&(id, version(&p.cmd))).map_or(0, |e| e.1);
+                                take(&mut accepted, id, f, u);
                             }
                         }
                     }
@@ -628,13 +733,33 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
                 match a.reason {
                     Some(Reason::SequenceGap | Reason::BadCrc) if p.retries < MAX_RETRIES => {} // retry later
                     None | Some(Reason::Duplicate) => confirm.push(i),
-                    Some(_) => p.open = false,
+                    Some(r) => {
+                        p.open = false;
+                        // A refused modification leaves an older version in force, and older
+                        // versions still in flight (superseded, their answers lost) could be
+                        // taken after it: pin the step with a new version at the pose in force,
+                        // which makes every older one stale.
+                        let (pin, cmd) = (p.pin, p.cmd);
+                        if let (false, Command::Modify(m), Some(v)) = (pin, cmd, a.version) {
+                            let id = u16::from(m.id);
+                            let in_flight = pending
+                                .iter()
+                                .any(|q| q.superseded && q.cmd.step_id() == Some(m.id));
+                            if in_flight && r != Reason::Stale && r != Reason::LiftedOff {
+                                if let Some(&(f, _)) = versions.get(&(id, v)) {
+                                    let c = wire_step(&mut book, false, id, &f)?;
+                                    outbox.push_back((c, Some((id, f)), true));
+                                }
+                            }
+                        }
+                    }
                 }
                 for j in confirm {
                     let p = &mut pending[j];
                     p.open = false;
                     if let Some((id, f)) = p.step {
-                        take(&mut accepted, id, f, version(&p.cmd));
+                        let u = versions.get(&(id, version(&p.cmd))).map_or(0, |e| e.1);
+                        take(&mut accepted, id, f, u);
                     }
                 }
             } else {
@@ -672,7 +797,19 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         })
         .count();
 
-    // Footsteps: accepted (as the controller knows) against walked.
+    // Footsteps: what the controller believes the node took, against what it took.
+    node_accepted.sort_by_key(|(id, _, _)| *id);
+    accepted.sort_by_key(|(id, _, _)| *id);
+    let misinformed = node_accepted
+        .iter()
+        .filter(|(id, _, u)| !accepted.iter().any(|(j, _, w)| j == id && w == u))
+        .count()
+        + accepted
+            .iter()
+            .filter(|(id, _, _)| !node_accepted.iter().any(|(j, _, _)| j == id))
+            .count();
+    // Footsteps: accepted (as the node answered) against walked.
+    let accepted = node_accepted;
     let walked = landings(&trajectory);
     let mut used = vec![false; walked.len()];
     let (mut lost, mut cancelled) = (0, 0);
@@ -688,7 +825,6 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
     // Steps are walked in id order: each accepted step (in id order) is matched to the first
     // unused landing after the previous match, so two steps at the same pose (a multi-step
     // change applied in part) are told apart; a step walked twice leaves a stray landing.
-    accepted.sort_by_key(|(id, _, _)| *id); // (answers can arrive out of order)
     let mut from = 0;
     for (_, f, _) in &accepted {
         match (from..walked.len()).find(|&i| !used[i] && matches(f, &walked[i])) {
@@ -747,6 +883,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         lost,
         cancelled,
         unanswered,
+        misinformed,
         retransmissions,
         safety_stop,
         ticks_without_reference,
@@ -771,6 +908,9 @@ pub struct SweepRow {
     pub lost: usize,
     /// Footsteps cancelled by a safety stop, summed.
     pub cancelled: usize,
+    /// Footsteps whose version in force the controller got wrong (it believed another version
+    /// taken, or one taken that was not), summed: what an unlucky controller would not know.
+    pub misinformed: usize,
     /// Commands unanswered after every retransmission, summed.
     pub unanswered: usize,
     /// Retransmissions, summed.
@@ -795,14 +935,18 @@ pub struct SweepRow {
     pub model_errors: Vec<String>,
 }
 
-/// Runs the sweep over [`SWEEP`] × [`SCENARIOS`] × `seeds` seeds (1 … seeds).
-pub fn sweep(seeds: u64) -> Result<Vec<SweepRow>, String> {
+/// Runs the sweep over [`SWEEP`] × [`SCENARIOS`] × `seeds` seeds (1 … seeds), then the
+/// [`HEAVY`] rows with `heavy_seeds` seeds.
+pub fn sweep(seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepRow>, String> {
     let scenarios: Vec<Scenario> = SCENARIOS
         .iter()
         .map(|n| scenario::built_in(n).ok_or_else(|| format!("no scenario {n}")))
         .collect::<Result<_, _>>()?;
     let mut rows = Vec::new();
-    for (kind, rates) in SWEEP {
+    let heavy: Vec<(FaultKind, &[f64])> = (0..HEAVY.len())
+        .map(|i| (FaultKind::Mixed(i), &[0.0][..]))
+        .collect();
+    for (kind, rates) in SWEEP.iter().copied().chain(heavy) {
         for &rate in rates {
             let mut row = SweepRow {
                 kind,
@@ -812,6 +956,7 @@ pub fn sweep(seeds: u64) -> Result<Vec<SweepRow>, String> {
                 lost: 0,
                 cancelled: 0,
                 unanswered: 0,
+                misinformed: 0,
                 retransmissions: 0,
                 safety_stops: 0,
                 max_zmp_error: 0.0,
@@ -823,7 +968,11 @@ pub fn sweep(seeds: u64) -> Result<Vec<SweepRow>, String> {
                 max_bus_load: 0.0,
                 model_errors: Vec::new(),
             };
-            let seeds_here = if kind == FaultKind::None { 1 } else { seeds };
+            let seeds_here = match kind {
+                FaultKind::None => 1,
+                FaultKind::Mixed(_) => heavy_seeds,
+                _ => seeds,
+            };
             for s in &scenarios {
                 for seed in 1..=seeds_here {
                     let r = run_case(s, kind, rate, seed)?;
@@ -832,6 +981,7 @@ pub fn sweep(seeds: u64) -> Result<Vec<SweepRow>, String> {
                     row.lost += r.lost;
                     row.cancelled += r.cancelled;
                     row.unanswered += r.unanswered;
+                    row.misinformed += r.misinformed;
                     row.retransmissions += r.retransmissions;
                     row.safety_stops += usize::from(r.safety_stop);
                     row.max_zmp_error = row.max_zmp_error.max(r.max_zmp_error);
@@ -858,14 +1008,14 @@ pub fn markdown(rows: &[SweepRow]) -> String {
     let mut out = String::from(
         "| fault | rate | runs | falls | lost commands | max multi-body ZMP error (mm) | \
          max ZMP outside polygon (mm) | leg out of reach (runs) | cancelled by safety stop | \
-         unanswered | retransmissions | safety stops | cycles without reference | \
-         stream ticks missed by controller | max bus load |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         unanswered | controller misinformed | retransmissions | safety stops | \
+         cycles without reference | stream ticks missed by controller | max bus load |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} / {} | {:.0} % |",
+            "| {} | {} | {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.0} % |",
             r.kind.name(),
             r.kind.rate_label(r.rate),
             r.runs,
@@ -876,6 +1026,7 @@ pub fn markdown(rows: &[SweepRow]) -> String {
             r.out_of_reach,
             r.cancelled,
             r.unanswered,
+            r.misinformed,
             r.retransmissions,
             r.safety_stops,
             r.ticks_without_reference,
@@ -889,7 +1040,7 @@ pub fn markdown(rows: &[SweepRow]) -> String {
 
 /// The sweep with 3 seeds, as Markdown (or the error).
 pub fn sweep_markdown() -> String {
-    match sweep(3) {
+    match sweep(3, 10) {
         Ok(rows) => markdown(&rows),
         Err(e) => format!("sweep failed: {e}\n"),
     }

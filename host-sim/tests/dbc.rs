@@ -133,13 +133,28 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
         reason: Some(Reason::LiftedOff),
         queue: 5,
         echo: 0xC3,
+        version: Some(42),
     };
     let s = decode(&d, &a.encode());
     assert_eq!(
-        (s["command"], s["seq"], s["reason"], s["queue"], s["echo"]),
-        (1.0, 17.0, f64::from(Reason::LiftedOff.code()), 5.0, 195.0)
+        (
+            s["command"],
+            s["seq"],
+            s["reason"],
+            s["queue"],
+            s["echo"],
+            s["version"]
+        ),
+        (
+            1.0,
+            17.0,
+            f64::from(Reason::LiftedOff.code()),
+            5.0,
+            195.0,
+            42.0
+        )
     );
-    let body = [1, 17, Reason::LiftedOff.code(), 5, 0xC3];
+    let body = [1, 17, Reason::LiftedOff.code(), 5, 0xC3, 42];
     assert_eq!(s["crc"], f64::from(wire::crc8(ids::ACK, &body)));
     let st = Status {
         state: 1,

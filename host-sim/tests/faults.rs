@@ -1,5 +1,7 @@
 //! The seeded fault sweep (`host_sim::faults`): every fault kind and rate on the `straight`
-//! and `fig4` scenarios, `WALK_FAULT_SEEDS` seeds (3 by default). Prints the Markdown table.
+//! and `fig4` scenarios, `WALK_FAULT_SEEDS` seeds (3 by default), and the heavier mixed rows
+//! with `WALK_FAULT_HEAVY_SEEDS` seeds (10 by default; more for release runs). Prints the
+//! Markdown table.
 //!
 //! Asserted: the fault-free runs walk every footstep once and keep the multi-body ZMP inside
 //! the support polygon; under every fault no run falls (multi-body ZMP more than
@@ -35,8 +37,12 @@ fn fault_sweep() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(3);
+    let heavy = std::env::var("WALK_FAULT_HEAVY_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10);
     let t = std::time::Instant::now();
-    let rows = sweep(seeds).unwrap();
+    let rows = sweep(seeds, heavy).unwrap();
     println!(
         "\nFault sweep ({seeds} seeds, {:.1} s):\n\n{}",
         t.elapsed().as_secs_f64(),

@@ -62,7 +62,7 @@
 //! | 0x020 | `CONTROL` | in | 3 | seq u8, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step id u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
 //! | 0x101 | `STEP_MODIFY` | in | 8 | step id u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
-//! | 0x080 | `ACK` | out | 6 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8, echo u8, crc u8 |
+//! | 0x080 | `ACK` | out | 7 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8, echo u8, step version in force u8 (0xFF: none), crc u8 |
 //! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x202 | `COG_VEL` | out | 6 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u8 |
@@ -752,23 +752,29 @@ pub struct Ack {
     /// The last byte of the answered frame ([`echo_of`]; the command's CRC for `CONTROL` and
     /// footsteps).
     pub echo: u8,
+    /// For a footstep command: the version of that step in force after the command (0 as
+    /// appended), whatever the answer; `None` (0xFF on the wire) for other commands and for
+    /// steps the node does not know. A controller whose newer modification was refused learns
+    /// from it which of its versions the node walks.
+    pub version: Option<u8>,
 }
 
 impl Ack {
     /// The frame (with its CRC).
     pub fn encode(&self) -> RawFrame {
         let r = self.reason.map(Reason::code).unwrap_or(0);
-        let body = [self.command, self.seq, r, self.queue, self.echo];
+        let v = self.version.unwrap_or(0xFF);
+        let body = [self.command, self.seq, r, self.queue, self.echo, v];
         let c = crc8(ids::ACK, &body);
         RawFrame {
             id: ids::ACK,
-            len: 6,
-            data: [body[0], body[1], body[2], body[3], body[4], c, 0, 0],
+            len: 7,
+            data: [body[0], body[1], body[2], body[3], body[4], v, c, 0],
         }
     }
     /// Decodes an `ACK` frame; `None` if it is not one or its CRC is wrong.
     pub fn decode(f: &RawFrame) -> Option<Self> {
-        if f.id != ids::ACK || f.len != 6 || !crc_ok(f.id, f.bytes()) {
+        if f.id != ids::ACK || f.len != 7 || !crc_ok(f.id, f.bytes()) {
             return None;
         }
         let reason = match f.data[2] {
@@ -781,6 +787,11 @@ impl Ack {
             reason,
             queue: f.data[3],
             echo: f.data[4],
+            version: match f.data[5] {
+                0xFF => None,
+                v if v < VERSIONS => Some(v),
+                _ => return None,
+            },
         })
     }
 }
@@ -1191,6 +1202,7 @@ mod tests {
                 reason: r,
                 queue: 3,
                 echo: 0xA5,
+                version: r.map(|_| 17),
             };
             assert_eq!(Ack::decode(&a.encode()), Some(a));
             let mut bad = a.encode();

@@ -3,8 +3,9 @@
 //! * clocks: 480 MHz system clock (VOS0, rev V silicon), I- and D-cache on; PLL1Q = 80 MHz is
 //!   the FDCAN kernel clock;
 //! * FDCAN1 in classic CAN mode at 1 Mbit/s on the pins of a Nucleo-H743ZI's CN9 (PD0 = RX,
-//!   PD1 = TX, AF9), behind `embedded_can::nb::Can` ([`can::FdcanBus`]); every standard data
-//!   frame goes to RX FIFO0, extended and remote frames are rejected by the filters;
+//!   PD1 = TX, AF9), behind `embedded_can::nb::Can` ([`can::FdcanBus`]); the acceptance
+//!   filters take exactly the node's command identifiers ([`ids::COMMANDS`], standard data
+//!   frames) into RX FIFO0 and reject every other frame in hardware ([`COMMAND_FILTERS`]);
 //! * TIM2 overflows every 5 ms: the loop waits for it (servicing the CAN FIFOs meanwhile) and
 //!   runs one [`Node::poll`] per overflow, never two: a late cycle still publishes its
 //!   reference once, and the next one starts at the next overflow;
@@ -33,7 +34,10 @@ use cortex_m_rt::entry;
 use defmt_rtt as _; // global logger over RTT
 use embedded_hal::digital::{ErrorType, OutputPin};
 use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
-use fdcan::filter::{StandardFilter, StandardFilterSlot};
+use fdcan::filter::{
+    Action, ExtendedFilter, ExtendedFilterSlot, FilterType, StandardFilter, STANDARD_FILTER_MAX,
+};
+use fdcan::id::StandardId;
 use panic_probe as _; // panics print through defmt, then the core halts
 use stm32h7xx_hal::can::CanExt as _;
 use stm32h7xx_hal::gpio::{Output, Pin, PushPull, Speed};
@@ -43,6 +47,7 @@ use stm32h7xx_hal::{pac, prelude::*};
 
 use planner_core::gait::GaitError;
 use planner_core::node::{Node, NodeConfig};
+use planner_core::wire::ids;
 
 use crate::can::FdcanBus;
 
@@ -60,6 +65,35 @@ const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 const QUEUE: usize = 16;
 // A summary every second.
 const _: () = assert!(cycle::SUMMARY_EVERY == CYCLE_HZ);
+
+/// Standard-id filter elements of FDCAN1 (all of them, so none is left as it was): element
+/// `i` accepts exactly identifier `ids::COMMANDS[i]` into RX FIFO0 (a dual-id filter with both
+/// ids equal), the others are disabled. With the global filter rejecting non-matching and
+/// remote frames, only the node's own commands reach the software.
+const COMMAND_FILTERS: [StandardFilter; STANDARD_FILTER_MAX as usize] = command_filters();
+
+/// Builds [`COMMAND_FILTERS`] at compile time (an identifier above 0x7FF or more commands than
+/// filter elements fail the build, not the board).
+const fn command_filters() -> [StandardFilter; STANDARD_FILTER_MAX as usize] {
+    const DISABLED: StandardFilter = StandardFilter {
+        filter: FilterType::Disabled,
+        action: Action::Disable,
+    };
+    const _: () = assert!(ids::COMMANDS.len() <= STANDARD_FILTER_MAX as usize);
+    let mut filters = [DISABLED; STANDARD_FILTER_MAX as usize];
+    let mut i = 0;
+    while i < ids::COMMANDS.len() {
+        let Some(id) = StandardId::new(ids::COMMANDS[i]) else {
+            panic!("a command identifier is not an 11-bit identifier");
+        };
+        filters[i] = StandardFilter {
+            filter: FilterType::DedicatedSingle(id),
+            action: Action::StoreInFifo0,
+        };
+        i += 1;
+    }
+    filters
+}
 
 /// 1 Mbit/s from the 80 MHz kernel clock: prescaler 2 gives 40 time quanta per bit,
 /// 1 (sync) + 34 + 5, sample point at 35/40 = 87.5 % (CiA 301), SJW 5.
@@ -174,11 +208,11 @@ fn main() -> ! {
     fdcan.set_protocol_exception_handling(false);
     fdcan.set_frame_transmit(FrameTransmissionConfig::ClassicCanOnly);
     fdcan.set_nominal_bit_timing(bit_timing());
-    fdcan.set_standard_filter(
-        StandardFilterSlot::_0,
-        StandardFilter::accept_all_into_fifo0(),
-    );
-    // Extended and remote frames are not part of the message set.
+    // Only the node's commands (standard data frames) into RX FIFO0. Extended frames are not
+    // part of the message set: one extended filter rejects them all (the global filter would
+    // too); the global filter rejects non-matching standard frames and every remote frame.
+    fdcan.set_standard_filters(&COMMAND_FILTERS);
+    fdcan.set_extended_filter(ExtendedFilterSlot::_0, ExtendedFilter::reject_all());
     fdcan.set_global_filter(GlobalFilter::reject_all());
     let mut bus = FdcanBus::new(fdcan.into_normal());
 

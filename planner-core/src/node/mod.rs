@@ -440,12 +440,17 @@ impl<const Q: usize> Node<Q> {
         }
         // Steps the command dropped (emergency stop, stop now) leave the step records.
         self.steps.sync(&self.gait);
+        let version = match decoded {
+            Ok(Command::Append(_) | Command::Modify(_)) => self.steps.version(seq),
+            _ => None,
+        };
         Ack {
             command,
             seq,
             reason: result.err(),
             queue: self.gait.queued().min(255) as u8,
             echo,
+            version,
         }
     }
 

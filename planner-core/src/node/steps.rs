@@ -110,6 +110,16 @@ impl<const Q: usize> Steps<Q> {
         }
     }
 
+    /// The version in force of step `id` (queued, swinging or among the last done), if known.
+    pub fn version(&self, id: u8) -> Option<u8> {
+        let of = |r: &Record| (r.append.id == id).then_some(r.version);
+        self.queued
+            .iter()
+            .find_map(of)
+            .or_else(|| self.swing.as_ref().and_then(of))
+            .or_else(|| self.done.iter().rev().find_map(of))
+    }
+
     /// The id of the step being swung, if the node accepted it (padded steps have none).
     pub fn swinging(&self) -> Option<u8> {
         self.swing.map(|r| r.append.id)
