@@ -1,0 +1,186 @@
+//! A controller rig for the node tests: an in-memory CAN device, the step book, the control
+//! sequence, the stream and `DIAG` as received, and every lift-off with the time the
+//! controller was last heard before it. A refused command is checked to change nothing: the
+//! node is then in the state of a clone that ran the same cycle without the frame.
+
+#![allow(dead_code)] // (each test file uses a part)
+
+use std::collections::VecDeque;
+
+use planner_core::node::{Node, NodeConfig, NodeState};
+use planner_core::wire::{Ack, Command, ControlOp, Diag, RawFrame, Reason, StepBook, Stream};
+
+/// The in-memory device.
+#[derive(Default)]
+pub struct Bus {
+    /// To the node.
+    pub rx: VecDeque<RawFrame>,
+    /// From the node.
+    pub tx: Vec<RawFrame>,
+}
+
+/// Never happens.
+#[derive(Debug)]
+pub struct E;
+impl embedded_can::Error for E {
+    fn kind(&self) -> embedded_can::ErrorKind {
+        embedded_can::ErrorKind::Other
+    }
+}
+
+impl embedded_can::nb::Can for Bus {
+    type Frame = RawFrame;
+    type Error = E;
+    fn transmit(&mut self, f: &RawFrame) -> nb::Result<Option<RawFrame>, E> {
+        self.tx.push(*f);
+        Ok(None)
+    }
+    fn receive(&mut self) -> nb::Result<RawFrame, E> {
+        self.rx.pop_front().ok_or(nb::Error::WouldBlock)
+    }
+}
+
+/// The node of the rigs.
+pub type N = Node<16>;
+
+/// A controller with its node: time, the bus, the step book, the control sequence, and every
+/// lift-off seen with the time the controller was last heard before it.
+pub struct Rig {
+    #[allow(missing_docs)]
+    pub n: N,
+    #[allow(missing_docs)]
+    pub bus: Bus,
+    #[allow(missing_docs)]
+    pub t: u32,
+    #[allow(missing_docs)]
+    pub book: StepBook,
+    #[allow(missing_docs)]
+    pub seq: u8,
+    #[allow(missing_docs)]
+    pub swinging: Option<u16>,
+    #[allow(missing_docs)]
+    pub liftoffs: Vec<(u32, Option<u32>, u16)>,
+    #[allow(missing_docs)]
+    pub stream: Stream,
+    #[allow(missing_docs)]
+    pub diag: Option<Diag>,
+}
+
+impl Rig {
+    pub fn new(cfg: NodeConfig) -> Self {
+        Self {
+            n: N::new(cfg).unwrap(),
+            bus: Bus::default(),
+            t: 0,
+            book: StepBook::new(),
+            seq: 0,
+            swinging: None,
+            liftoffs: vec![],
+            stream: Stream::default(),
+            diag: None,
+        }
+    }
+    pub fn hrp2() -> Self {
+        Self::new(NodeConfig::hrp2())
+    }
+    /// One cycle; returns the ACKs.
+    pub fn cycle(&mut self) -> Vec<Ack> {
+        self.t += 5;
+        self.n.poll(self.t, &mut self.bus);
+        let s = self.n.gait().swinging();
+        if s.is_some() && s != self.swinging {
+            self.liftoffs
+                .push((self.t, self.n.last_heard(), s.unwrap_or(u16::MAX)));
+        }
+        self.swinging = s;
+        let mut acks = vec![];
+        for f in self.bus.tx.drain(..) {
+            if let Some(a) = Ack::decode(&f) {
+                acks.push(a);
+            } else if let Some(d) = Diag::decode(&f) {
+                self.diag = Some(d);
+            } else {
+                self.stream.decode_into(&f);
+            }
+        }
+        acks
+    }
+    /// `k` cycles, with a heartbeat every 100 ms if `alive`.
+    pub fn run(&mut self, k: u32, alive: bool) {
+        for i in 0..k {
+            if alive && i % 20 == 0 {
+                self.bus.rx.push_back(
+                    Command::Control {
+                        seq: 0,
+                        op: ControlOp::Heartbeat,
+                    }
+                    .encode(),
+                );
+            }
+            self.cycle();
+        }
+    }
+    pub fn ask(&mut self, c: Command) -> Option<Reason> {
+        assert!(self.bus.rx.is_empty());
+        let mut without = self.n.clone();
+        without.poll(self.t + 5, &mut Bus::default());
+        self.bus.rx.push_back(c.encode());
+        let acks = self.cycle();
+        let a = acks
+            .iter()
+            .find(|a| a.command == c.code() && a.echo == c.echo())
+            .unwrap_or_else(|| panic!("no answer to {c:?}: {acks:?}"));
+        if a.reason.is_some() {
+            assert!(
+                self.n.same_state(&without),
+                "refused {a:?} changed the node"
+            );
+        }
+        a.reason
+    }
+    pub fn append(&mut self, id: u8, left: bool, x: f64, y: f64) -> Option<Reason> {
+        let c = self.book.append(id, left, x, y, 0.0).unwrap();
+        self.ask(c)
+    }
+    pub fn modify(&mut self, id: u8, x: f64, y: f64) -> Option<Reason> {
+        let c = self.book.modify(id, x, y, 0.0).unwrap();
+        self.ask(c)
+    }
+    pub fn control(&mut self, op: ControlOp) -> Option<Reason> {
+        self.seq = self.seq.wrapping_add(1);
+        self.ask(Command::Control { seq: self.seq, op })
+    }
+    /// Runs (alive) until `f` holds, at most `limit` cycles.
+    pub fn until(&mut self, limit: u32, f: impl Fn(&N) -> bool) {
+        for k in 0.. {
+            assert!(k < limit, "condition not reached in {limit} cycles");
+            if f(&self.n) {
+                return;
+            }
+            self.run(1, k % 20 == 0);
+        }
+    }
+}
+
+/// The name of the node's state in the README's table.
+pub fn state_name(n: &N) -> &'static str {
+    let standing = n.gait().is_standing();
+    match (n.state(), standing) {
+        (NodeState::Standing, _) => "standing",
+        (NodeState::Walking, _) => "walking",
+        (NodeState::Stopping, _) => "stopping",
+        (NodeState::ControllerLost, false) => "lost (moving)",
+        (NodeState::ControllerLost, true) => "lost (standing)",
+        (NodeState::EmergencyStopped, false) => "e-stopped (moving)",
+        (NodeState::EmergencyStopped, true) => "e-stopped (standing)",
+    }
+}
+
+/// ±0.1 m: the y of a foot of a straight walk along x.
+pub fn y(left: bool) -> f64 {
+    if left {
+        0.1
+    } else {
+        -0.1
+    }
+}
