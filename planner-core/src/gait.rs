@@ -132,9 +132,15 @@ impl<T: Real> Footstep<T> {
     }
 }
 
-/// `a` wrapped into [−π, π].
+/// `a` wrapped into [−π, π] (unchanged, and no libm call, when it is already inside: the
+/// usual case, on every tick for every foot).
 fn wrap_angle<T: Real>(a: T) -> T {
-    T::of(libm::remainder(a.f64(), core::f64::consts::TAU))
+    let v = a.f64();
+    if v.abs() <= core::f64::consts::PI {
+        a
+    } else {
+        T::of(libm::remainder(v, core::f64::consts::TAU))
+    }
 }
 
 fn sin_cos<T: Real>(a: T) -> (T, T) {

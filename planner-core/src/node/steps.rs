@@ -61,11 +61,14 @@ impl<const Q: usize> Steps<Q> {
         self.done.clear();
     }
 
-    /// `true` if `f` equals an accepted append or a version in force.
+    /// `true` if `f` equals an accepted append or a version in force. (The first data byte of
+    /// a footstep frame is its step id: only that step's records are compared.)
     pub fn is_repeat(&self, f: &RawFrame) -> bool {
-        self.queued.iter().any(|r| r.is_repeat(f))
-            || self.swing.is_some_and(|r| r.is_repeat(f))
-            || self.done.iter().any(|r| r.is_repeat(f))
+        let id = f.data[0];
+        let same = |r: &Record| r.append.id == id && r.is_repeat(f);
+        self.queued.iter().any(same)
+            || self.swing.as_ref().is_some_and(same)
+            || self.done.iter().any(same)
     }
 
     /// The record of queued step `id`.
