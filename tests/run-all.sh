@@ -12,7 +12,17 @@
 #    qemu-system-arm: step 1 installs it with apt-get);
 # 5. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
 #    about 4 minutes; WALK_SKIP_MIRI=1 leaves it out).
+#
+# WALK_LONG=1 makes the long runs for a release: the fault sweep with 10 seeds per row and 40
+# per heavier mixed row, 2,048 random programs of the protocol property test (each can also be
+# set alone: WALK_FAULT_SEEDS, WALK_FAULT_HEAVY_SEEDS, WALK_PROTOCOL_CASES).
 set -euo pipefail
+
+if [ "${WALK_LONG:-0}" = 1 ]; then
+    export WALK_FAULT_SEEDS="${WALK_FAULT_SEEDS:-10}"
+    export WALK_FAULT_HEAVY_SEEDS="${WALK_FAULT_HEAVY_SEEDS:-40}"
+    export WALK_PROTOCOL_CASES="${WALK_PROTOCOL_CASES:-2048}"
+fi
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
