@@ -658,7 +658,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         }
         if k % 20 == 0 {
             let hb = Command::Control {
-                seq: 0,
+                seq: (k / 20) as u8,
                 op: ControlOp::Heartbeat,
             };
             let _ = ctl.transmit(&hb.encode());

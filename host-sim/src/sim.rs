@@ -150,7 +150,8 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
             send(
                 &mut ctl,
                 Command::Control {
-                    seq: 0,
+                    // A new sequence number for every heartbeat (a repeat proves nothing).
+                    seq: (k / cfg.heartbeat_ticks) as u8,
                     op: ControlOp::Heartbeat,
                 }
                 .encode(),

@@ -235,6 +235,49 @@ impl<T: Real> GaitParams<T> {
     fn seconds(&self, ticks: u32) -> T {
         T::of(ticks as f64) * self.dt
     }
+
+    /// Checks that every window this gait can build is one the planner accepts: the control
+    /// period, ω, COG height and gravity finite and positive; every interval (single, double,
+    /// start, settle, standing, rest, and the single support with either adjustment limit) on
+    /// the planner's range of 5 ms … 10 s; `ΔT_min ≤ 0 ≤ ΔT_max`; the sole, the step width and
+    /// height finite and positive (the height non-negative). `BadParams` otherwise.
+    pub fn validate(&self) -> Result<(), GaitError> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let dt = self.dt.f64();
+        let span = |ticks: i64| {
+            let d = ticks as f64 * dt;
+            (0.005 - 1e-12..=10.0 + 1e-12).contains(&d)
+        };
+        let single = i64::from(self.single_ticks);
+        let ok = pos(dt)
+            && pos(self.omega.f64())
+            && pos(self.cog_height)
+            && pos(self.gravity)
+            && [
+                single,
+                i64::from(self.double_ticks),
+                i64::from(self.start_ticks),
+                i64::from(self.settle_ticks),
+                i64::from(self.stand_ticks),
+                i64::from(self.rest_ticks),
+                single + i64::from(self.adjust_min_ticks),
+                single + i64::from(self.adjust_max_ticks),
+            ]
+            .iter()
+            .all(|&t| span(t))
+            && self.adjust_min_ticks <= 0
+            && self.adjust_max_ticks >= 0
+            && pos(self.sole_half_length.f64())
+            && pos(self.sole_half_width.f64())
+            && pos(self.step_width.f64())
+            && self.step_height.f64().is_finite()
+            && self.step_height.f64() >= 0.0;
+        if ok {
+            Ok(())
+        } else {
+            Err(GaitError::BadParams)
+        }
+    }
 }
 
 /// Why the gait refused a command. The gait's plan is unchanged after any of these.
@@ -260,6 +303,8 @@ pub enum GaitError {
     Plan(PlanError),
     /// The preview-control gains could not be computed.
     Gains(GainError),
+    /// The parameters fail [`GaitParams::validate`].
+    BadParams,
 }
 
 impl From<PlanError> for GaitError {
@@ -673,6 +718,8 @@ pub struct Gait<T: Real, const Q: usize> {
     swing: Option<Queued<T>>,
     /// The side of the last step that landed (none since start-up or a re-basing).
     landed: Option<Side>,
+    /// The last re-plan failed (see [`Gait::replan_failed`]).
+    failed: bool,
     mode: Mode,
     stop_requested: bool,
     /// Two window buffers: the one being executed and the one the next re-plan is built in.
@@ -776,6 +823,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             feet: [left, right],
             swing: None,
             landed: None,
+            failed: false,
             mode: Mode::Standing,
             stop_requested: false,
             wins: [
@@ -802,6 +850,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         if !(left.is_finite() && right.is_finite()) {
             return Err(GaitError::NonFinite);
         }
+        params.validate()?;
         if params.shaping {
             let config = PreviewConfig {
                 model: CartTable {
@@ -1027,6 +1076,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.last.y = sy;
         self.mode = Mode::Walking;
         self.stop_requested = false;
+        self.failed = false;
         for q in self.queue.iter_mut() {
             q.modified = false;
         }
@@ -1113,6 +1163,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             && self.feet == other.feet
             && self.swing == other.swing
             && self.landed == other.landed
+            && self.failed == other.failed
             && self.mode == other.mode
             && self.stop_requested == other.stop_requested
             && self.serial == other.serial
@@ -1423,8 +1474,9 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     }
 
     /// Re-plans at the start of the single support `j` of the current window, into the spare
-    /// buffer; `true` if the new window is now the current one. On failure the old window
-    /// goes on (it already contains that single support).
+    /// buffer; `true` if the new window is now the current one. If the walking window cannot
+    /// be planned, the queue is dropped and the stop window planned instead (flagged); only if
+    /// that fails too does the old window go on.
     fn replan(&mut self, j: usize, cog: [State<T>; 2], zmp: [State<T>; 2]) -> bool {
         let Some(c) = self.cur_buf() else {
             return false;
@@ -1437,32 +1489,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         }
         let Some(mut inputs) = self.next_walk_inputs(&self.wins[c], j) else {
             // Stopping with nothing left to swing: settle.
-            let side = self.wins[c]
-                .spec
-                .support
-                .get(j)
-                .copied()
-                .flatten()
-                .unwrap_or(Side::Left);
-            let support = self.feet[side.index()];
-            let other = self.feet[side.other().index()];
-            let inputs = Inputs {
-                kind: WindowKind::Stop,
-                support,
-                other,
-                land: [support; 3],
-                n_land: 0,
-                first_ticks: self.params.settle_ticks,
-            };
-            if self.wins[spare]
-                .plan_into(&self.params, inputs, cog, zmp)
-                .is_err()
-            {
-                return false;
-            }
-            self.cur = Some(spare);
-            self.serial = self.serial.wrapping_add(1);
-            return true;
+            return self.plan_stop(c, j, cog, zmp);
         };
         let at = self.wins[c].tick;
         let (adjust, ratio, plane) = self.adjustment(c, at, cog, zmp).unwrap_or((0, T::ONE, 0));
@@ -1486,12 +1513,16 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 .plan_into(&self.params, inputs, cog, zmp)
                 .is_err()
         {
-            // Keep the old window; the step goes back to the queue.
-            if swing.id != u16::MAX {
-                let _ = self.queue.push_front(swing);
-            }
-            return false;
+            // The walking window cannot be planned (a validated configuration never gets
+            // here): do not walk on a plan the feet no longer follow. Drop the queue and settle
+            // between the feet where they stand; flagged until a walking plan succeeds.
+            self.failed = true;
+            self.queue.clear();
+            self.stop_requested = true;
+            self.gen = self.gen.wrapping_add(1);
+            return self.plan_stop(c, j, cog, zmp);
         }
+        self.failed = false;
         self.cur = Some(spare);
         self.serial = self.serial.wrapping_add(1);
         self.swing = Some(swing);
@@ -1506,6 +1537,64 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             worst_zmp: self.wins[spare].worst_first(),
         });
         true
+    }
+
+    /// Plans the stop window at the single support `j` of the current window `c` (the robot
+    /// settles between its feet); `true` if it is now the current one. On failure the old
+    /// window goes on (flagged: [`Gait::replan_failed`]).
+    fn plan_stop(&mut self, c: usize, j: usize, cog: [State<T>; 2], zmp: [State<T>; 2]) -> bool {
+        let spare = 1 - (c & 1);
+        let side = self.wins[c & 1]
+            .spec
+            .support
+            .get(j)
+            .copied()
+            .flatten()
+            .unwrap_or(Side::Left);
+        let support = self.feet[side.index()];
+        let other = self.feet[side.other().index()];
+        let inputs = Inputs {
+            kind: WindowKind::Stop,
+            support,
+            other,
+            land: [support; 3],
+            n_land: 0,
+            first_ticks: self.params.settle_ticks,
+        };
+        if self.wins[spare]
+            .plan_into(&self.params, inputs, cog, zmp)
+            .is_err()
+        {
+            self.failed = true;
+            return false;
+        }
+        self.cur = Some(spare);
+        self.serial = self.serial.wrapping_add(1);
+        true
+    }
+
+    /// `true` if the last re-plan failed (the gait then stops: see the module docs); cleared by
+    /// the next walking plan that succeeds.
+    pub fn replan_failed(&self) -> bool {
+        self.failed
+    }
+
+    /// `true` if the next swing (the front of the queue) starts from rest: standing, in the
+    /// start window before its first swing, or in a stop window (a new `Start` is needed).
+    pub fn next_swing_from_rest(&self) -> bool {
+        match self.cur_buf() {
+            None => true,
+            Some(c) => match self.wins[c].inputs.kind {
+                WindowKind::Start => self.swing.is_none(),
+                WindowKind::Stop => true,
+                WindowKind::Walk => false,
+            },
+        }
+    }
+
+    /// The position of the queued step `id` in the queue (0: the next swing target).
+    pub fn position(&self, id: u16) -> Option<usize> {
+        self.queue.iter().position(|q| q.id == id)
     }
 
     /// The current window's analytic plan at window tick `t` minus the compensation of this

@@ -45,7 +45,8 @@
 //! fails) followed by the data bytes before the CRC. A command with a wrong CRC is refused
 //! with [`Reason::BadCrc`] and changes nothing; the controller sends it again. `ESTOP` has no
 //! CRC on purpose: any frame on its identifier with the right length stops the robot (a
-//! corrupted emergency stop errs on the safe side). The stream and `STATUS` carry none: every
+//! corrupted emergency stop errs on the safe side; the length is kept, so that no corrupted
+//! command of another identifier can become one: see the exhaustive 3-bit test). The stream and `STATUS` carry none: every
 //! value is superseded 5 ms (100 ms) later.
 //!
 //! The `ACK` echoes the last byte of the frame it answers (the CRC, for the protected

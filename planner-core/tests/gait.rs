@@ -485,3 +485,59 @@ fn a_reused_prediction_is_the_plan_itself() {
         .any(|r| (r.feet[1].x - 0.32).abs() < 1e-12 && r.feet[1].z == 0.0);
     assert!(walked, "the modification was walked");
 }
+
+/// A re-plan that cannot be made (a footstep whose window overflows: f64::MAX m away; the node's
+/// reach check never lets one through, the gait's own API does) does not leave the robot on a
+/// plan its feet no longer follow: the queue is dropped, the robot settles between its feet
+/// where they stand and comes to rest, the failure is flagged until the next walk, and the ZMP
+/// stays on the support throughout.
+#[test]
+fn a_failed_replan_stops_the_robot() {
+    let mut g = standing();
+    g.push(0, Footstep::new(Side::Right, 0.2, -0.1, 0.0))
+        .unwrap();
+    g.push(1, Footstep::new(Side::Left, 0.4, 0.1, 0.0)).unwrap();
+    g.start().unwrap();
+    // Walk until step 0 is in the air, then queue the impossible step behind step 1.
+    for _ in 0..400 {
+        g.tick();
+        if g.swinging() == Some(0) {
+            break;
+        }
+    }
+    g.push(2, Footstep::new(Side::Right, f64::MAX, -0.1, 0.0))
+        .unwrap();
+    assert!(!g.replan_failed());
+    let mut failed_at = None;
+    for k in 0..4000u64 {
+        let r = g.tick();
+        assert!(r.is_finite(), "tick {k}: {r:?}");
+        assert!(
+            zmp_supported(&r, 0.005),
+            "ZMP ({:.4}, {:.4}) outside the support at tick {k} ({:?}, feet {:?})",
+            r.x.zmp,
+            r.y.zmp,
+            r.phase,
+            r.feet
+        );
+        if g.replan_failed() && failed_at.is_none() {
+            failed_at = Some(k);
+            assert_eq!(g.queued(), 0, "the queue is dropped");
+        }
+        if let Phase::Single(s) = r.phase {
+            // Whatever single support the plan still has, a foot swings in it.
+            assert!(
+                g.swinging().is_some(),
+                "tick {k}: single support on {s:?}, nothing swings"
+            );
+        }
+        if g.is_standing() {
+            break;
+        }
+    }
+    assert!(failed_at.is_some(), "the impossible window was planned");
+    assert!(g.is_standing(), "the robot did not come to rest");
+    assert!(g.replan_failed(), "flagged until the next walk");
+    // Nothing of the impossible step was walked.
+    assert!(g.feet().iter().all(|f| f.x.abs() < 1.0), "{:?}", g.feet());
+}

@@ -361,3 +361,76 @@ fn foreign_frames_are_ignored() {
     assert_eq!(answered, 0);
     assert!(r.bus.rx.is_empty());
 }
+
+/// Review finding: the growth rule from standing ("a step at most 0.22 m longer than the one
+/// before, from standing: than 0") held only for parallel feet. With the feet staggered after
+/// a walk, a 0.30 m first step was accepted from rest.
+#[test]
+fn the_first_step_from_standing_grows_from_zero_whatever_the_stagger() {
+    let mut r = Rig::hrp2();
+    assert_eq!(r.append(0, false, 0.1, -0.1), None);
+    assert_eq!(r.append(1, true, 0.2, 0.1), None); // the left foot ends 0.1 m ahead
+    assert_eq!(r.control(ControlOp::Start), None);
+    assert_eq!(r.control(ControlOp::Stop), None);
+    r.until(4000, |n| n.gait().is_standing());
+    let too_long = WireStep::from_si(2, false, 0.5, -0.1, 0.0).unwrap();
+    assert_eq!(r.ask(Command::Append(too_long)), Some(Reason::Reach));
+    // 0.22 m ahead of the support foot is the limit from rest.
+    assert_eq!(r.append(2, false, 0.42, -0.1), None);
+    // A modification of that first step is held to the same rule.
+    let c = r.book.modify(2, 0.5, -0.1, 0.0).unwrap();
+    assert_eq!(r.ask(c), Some(Reason::Reach));
+}
+
+/// Review finding: a late copy of a `Stop` (carried out: the safe side) moved the last
+/// accepted sequence number back, so a late copy of a `Start` after it counted as new again
+/// and started the robot.
+#[test]
+fn a_late_stop_does_not_make_a_late_start_new() {
+    let mut r = Rig::hrp2();
+    assert_eq!(r.append(0, false, 0.1, -0.1), None);
+    let c = |seq, op| Command::Control { seq, op };
+    assert_eq!(r.ask(c(1, ControlOp::Start)), None);
+    assert_eq!(r.ask(c(2, ControlOp::Stop)), None);
+    r.until(4000, |n| n.gait().is_standing());
+    assert_eq!(r.append(1, true, 0.2, 0.1), None);
+    assert_eq!(r.ask(c(3, ControlOp::Start)), None);
+    assert_eq!(
+        r.ask(c(2, ControlOp::Stop)),
+        None,
+        "a stop is always carried out"
+    );
+    r.until(4000, |n| n.gait().is_standing());
+    assert_eq!(r.append(2, false, 0.3, -0.1), None);
+    assert_eq!(r.ask(c(3, ControlOp::Start)), Some(Reason::Duplicate));
+    assert_eq!(r.ask(c(1, ControlOp::Start)), Some(Reason::Stale));
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(r.ask(c(4, ControlOp::Start)), None);
+}
+
+/// Review finding: a heartbeat repeated for ever (a stuck gateway) kept supervision satisfied.
+/// A heartbeat with the previous heartbeat's sequence number proves nothing (`Duplicate`):
+/// the robot stops as if the controller were silent.
+#[test]
+fn a_repeated_heartbeat_proves_nothing() {
+    let mut r = Rig::hrp2();
+    for i in 0..6u8 {
+        let left = i % 2 == 1;
+        assert_eq!(r.append(i, left, 0.15 * f64::from(i + 1), y(left)), None);
+    }
+    assert_eq!(r.control(ControlOp::Start), None);
+    let stuck = r.heartbeat();
+    assert_eq!(r.ask(stuck), None);
+    for k in 0..120u32 {
+        if k % 20 == 0 {
+            r.bus.rx.push_back(stuck.encode());
+        }
+        r.cycle();
+    }
+    assert_eq!(r.n.state(), NodeState::ControllerLost);
+    assert_eq!(r.n.gait().queued(), 0);
+    // New heartbeats are accepted (the state stays latched until a reset once standing).
+    let fresh = r.heartbeat();
+    assert_eq!(r.ask(fresh), None);
+    assert_eq!(r.ask(fresh), Some(Reason::Duplicate));
+}

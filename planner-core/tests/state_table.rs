@@ -136,10 +136,10 @@ fn apply(r: &mut Rig, command: &str) -> (Option<u8>, String) {
     let code = |x: Option<Reason>| x.map(Reason::code);
     let answer = match command {
         "ESTOP" => code(r.ask(Command::EmergencyStop { seq: 2 })),
-        "HEARTBEAT" => code(r.ask(Command::Control {
-            seq: 0,
-            op: ControlOp::Heartbeat,
-        })),
+        "HEARTBEAT" => {
+            let hb = r.heartbeat();
+            code(r.ask(hb))
+        }
         "START" => code(r.control(ControlOp::Start)),
         "STOP" => code(r.control(ControlOp::Stop)),
         "STOP_NOW" => code(r.control(ControlOp::StopNow)),

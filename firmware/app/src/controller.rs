@@ -153,7 +153,8 @@ impl<'s> Controller<'s> {
         }
         if k % HEARTBEAT_TICKS == 0 {
             let hb = Wire::Control {
-                seq: 0,
+                // A new sequence number for every heartbeat, as host-sim's controller.
+                seq: (k / HEARTBEAT_TICKS) as u8,
                 op: ControlOp::Heartbeat,
             };
             let _ = frames.push(hb.encode());

@@ -48,11 +48,12 @@
 //!   version accepted.
 //! * Repeats: a footstep frame equal to a step's append or to its version in force (for the
 //!   queued step, the one being swung and the last [`HISTORY`] done) is answered `Duplicate`;
-//!   so is a control command equal to the last accepted one (heartbeats excepted: always
-//!   accepted) and an `ESTOP` repeating the one in force. `Start` and `Reset` must carry a
-//!   sequence number ahead of the last accepted control command (1 … 127, modulo 256), or
-//!   they are `Stale` (a late copy never starts the robot); `Stop` and `StopNow` are always
-//!   carried out.
+//!   so is a control command equal to the last accepted one, a heartbeat with the sequence
+//!   number of the previous heartbeat (it proves nothing: supervision needs new ones) and an
+//!   `ESTOP` repeating the one in force. `Start` and `Reset` must carry a sequence number ahead
+//!   of the last accepted control command (1 … 127, modulo 256), or they are `Stale` (a late
+//!   copy never starts the robot); `Stop` and `StopNow` are always carried out, and move the
+//!   last accepted sequence number only forward.
 //! * `Reset` (only when standing) starts afresh: the queue and the step memory are dropped, ids
 //!   count from 0, the emergency stop and the controller-lost state are left, and the node's
 //!   world frame is **re-based**: its origin moves to the midpoint of the feet and its x axis
@@ -188,15 +189,17 @@ pub struct Node<const Q: usize> {
     tx: Deque<RawFrame, TX_BACKLOG>,
     steps: Steps<Q>,
     last_append: Option<u8>,
-    /// The last accepted control command other than a heartbeat.
+    /// The last accepted control command other than a heartbeat (`Stop` and `StopNow` that
+    /// are not ahead of it are carried out without replacing it).
     last_control: Option<(u8, ControlOp)>,
+    /// Sequence number of the last heartbeat (a repeat proves nothing).
+    last_heartbeat: Option<u8>,
     last_estop: Option<u8>,
     estopped: bool,
     lost: bool,
     last_heard: Option<u32>,
     counters: Counters,
     cycle: u32,
-    replan_failed: bool,
 }
 
 fn reason_of(e: GaitError) -> Reason {
@@ -231,13 +234,13 @@ impl<const Q: usize> Node<Q> {
             steps: Steps::new(),
             last_append: None,
             last_control: None,
+            last_heartbeat: None,
             last_estop: None,
             estopped: false,
             lost: false,
             last_heard: None,
             counters: Counters::default(),
             cycle: 0,
-            replan_failed: false,
         })
     }
 
@@ -285,7 +288,7 @@ impl<const Q: usize> Node<Q> {
             && self.lost == other.lost
             && self.last_heard == other.last_heard
             && self.cycle == other.cycle
-            && self.replan_failed == other.replan_failed
+            && self.last_heartbeat == other.last_heartbeat
     }
 
     /// The state of the state machine (the README's table).
@@ -314,7 +317,7 @@ impl<const Q: usize> Node<Q> {
         if self.gait.params().shaping {
             flags |= 1;
         }
-        if self.replan_failed {
+        if self.gait.replan_failed() {
             flags |= 2;
         }
         if self.counters.tx_dropped > 0 {
@@ -359,14 +362,20 @@ impl<const Q: usize> Node<Q> {
         let other = Frame::of(&self.gait.previous_other(step.side, before));
         let same = Frame::of(&self.gait.previous_other(step.side.other(), before));
         let f = Frame::of(step);
-        r.check_frames(&other, &same, &f, step.side)?;
+        // The first swing of a walk from standing: its growth counts from a step of 0.
+        let position = match before {
+            Some(id) => self.gait.position(id),
+            None => Some(self.gait.queued()),
+        };
+        let from_rest = position == Some(0) && self.gait.next_swing_from_rest();
+        r.check_frames(&other, &same, &f, step.side, from_rest)?;
         if let Some(id) = before {
             let next = |k: u16| self.gait.queued_step(id.wrapping_add(k) & 0xFF);
             if let Some(s1) = next(1) {
                 let f1 = Frame::of(&s1);
-                r.check_frames(&f, &other, &f1, s1.side)?;
+                r.check_frames(&f, &other, &f1, s1.side, false)?;
                 if let Some(s2) = next(2) {
-                    r.check_frames(&f1, &f, &Frame::of(&s2), s2.side)?;
+                    r.check_frames(&f1, &f, &Frame::of(&s2), s2.side, false)?;
                 }
             }
         }
@@ -466,12 +475,19 @@ impl<const Q: usize> Node<Q> {
 
     fn control(&mut self, seq: u8, op: ControlOp) -> Result<(), Reason> {
         if op == ControlOp::Heartbeat {
+            // A heartbeat proves the controller alive only if it is a new one: a gateway that
+            // repeats one frame for ever must not keep supervision satisfied.
+            if self.last_heartbeat == Some(seq) {
+                return Err(Reason::Duplicate);
+            }
+            self.last_heartbeat = Some(seq);
             return Ok(());
         }
         if self.last_control == Some((seq, op)) {
             return Err(Reason::Duplicate);
         }
         let standing = self.gait.is_standing();
+        let is_ahead = self.last_control.is_none_or(|(last, _)| ahead(seq, last));
         match op {
             ControlOp::Heartbeat => {}
             ControlOp::Start | ControlOp::Reset => {
@@ -502,7 +518,11 @@ impl<const Q: usize> Node<Q> {
             }
             ControlOp::StopNow => self.gait.clear_and_stop(),
         }
-        self.last_control = Some((seq, op));
+        // A late `Stop` is carried out (the safe side) but does not move the sequence back:
+        // a late `Start` behind it stays stale.
+        if is_ahead {
+            self.last_control = Some((seq, op));
+        }
         Ok(())
     }
 

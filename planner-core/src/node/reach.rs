@@ -87,11 +87,24 @@ impl Reach {
         same: &Footstep<f64>,
         step: &Footstep<f64>,
     ) -> Result<(), Reason> {
+        self.check_with(other, same, step, false)
+    }
+
+    /// [`Reach::check`]; `from_rest`: the step is the first swing of a walk from standing, so
+    /// its growth is measured from a step of 0 (whatever the stagger of the feet).
+    pub fn check_with(
+        &self,
+        other: &Footstep<f64>,
+        same: &Footstep<f64>,
+        step: &Footstep<f64>,
+        from_rest: bool,
+    ) -> Result<(), Reason> {
         self.check_frames(
             &Frame::of(other),
             &Frame::of(same),
             &Frame::of(step),
             step.side,
+            from_rest,
         )
     }
 
@@ -101,6 +114,7 @@ impl Reach {
         same: &Frame,
         step: &Frame,
         side: Side,
+        from_rest: bool,
     ) -> Result<(), Reason> {
         const EPS: f64 = 1e-9; // values on the limits pass
         let (forward, width) = other.forward_width(step, side);
@@ -110,8 +124,13 @@ impl Reach {
         // Heading change wrapped into [−π, π].
         let d = step.yaw - other.yaw;
         let dyaw = libm::fabs(d - core::f64::consts::TAU * libm::round(d / core::f64::consts::TAU));
-        // The step before this one (`other` from `same`), and where the swinging foot was.
-        let before = same.forward_width(other, side.other()).0;
+        // The step before this one (`other` from `same`; none from rest), and where the
+        // swinging foot was.
+        let before = if from_rest {
+            0.0
+        } else {
+            same.forward_width(other, side.other()).0
+        };
         let lift = other.forward_width(same, side).0;
         let ok = forward <= self.max_forward + EPS
             && forward >= -self.max_backward - EPS

@@ -64,6 +64,8 @@ pub struct Rig {
     pub stream: Stream,
     #[allow(missing_docs)]
     pub diag: Option<Diag>,
+    /// Sequence number of the last heartbeat.
+    pub hb: u8,
 }
 
 impl Rig {
@@ -78,6 +80,7 @@ impl Rig {
             liftoffs: vec![],
             stream: Stream::default(),
             diag: None,
+            hb: 0,
         }
     }
     pub fn hrp2() -> Self {
@@ -105,17 +108,21 @@ impl Rig {
         }
         acks
     }
+    /// The next heartbeat (each with a new sequence number).
+    pub fn heartbeat(&mut self) -> Command {
+        self.hb = self.hb.wrapping_add(1);
+        Command::Control {
+            seq: self.hb,
+            op: ControlOp::Heartbeat,
+        }
+    }
+
     /// `k` cycles, with a heartbeat every 100 ms if `alive`.
     pub fn run(&mut self, k: u32, alive: bool) {
         for i in 0..k {
             if alive && i % 20 == 0 {
-                self.bus.rx.push_back(
-                    Command::Control {
-                        seq: 0,
-                        op: ControlOp::Heartbeat,
-                    }
-                    .encode(),
-                );
+                let hb = self.heartbeat();
+                self.bus.rx.push_back(hb.encode());
             }
             self.cycle();
         }
