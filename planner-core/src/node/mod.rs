@@ -552,6 +552,12 @@ impl<const Q: usize> Node<Q> {
         if self.lost {
             return Err(Reason::ControllerLost);
         }
+        // A stop walks the queue it has: a step appended now might or might not be walked
+        // before the robot stands (it depends on whether the last window is planned yet), so
+        // it is refused, and the controller appends it once standing.
+        if self.gait.is_stopping() {
+            return Err(Reason::WrongState);
+        }
         // Step ids count from 0 after start-up and after a reset: a lost first step must not
         // let the second one become the first (a stride from standing twice as long).
         let expected = self.last_append.map_or(0, |l| l.wrapping_add(1));
