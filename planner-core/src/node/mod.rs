@@ -34,7 +34,7 @@
 //! # Answers
 //! A refused command changes nothing but the refusal counters: [`Node::same_state`] holds
 //! between the node before and after it (tested for every reason code, and for random
-//! programs against a reference model in `planner-core/tests/protocol.rs`). Only an accepted
+//! programs against a reference model in `planner-core/tests/protocol/`). Only an accepted
 //! command proves the controller alive. The state machine (standing, walking, stopping,
 //! controller lost, emergency-stopped; for each command what the node does and answers) is the
 //! table in the README's *Reliability* section, which `planner-core/tests/state_table.rs`

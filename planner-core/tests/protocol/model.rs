@@ -1,0 +1,389 @@
+//! The reference model (see the test's docs in `main.rs`).
+
+use super::*;
+
+/// Why an accepted step was not walked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Dropped {
+    StopNow,
+    Estop,
+    Lost,
+    Reset,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Fate {
+    Queued,
+    Swinging,
+    Landed,
+    Dropped(Dropped),
+}
+
+/// An accepted footstep.
+#[derive(Clone, Debug)]
+pub(crate) struct Step {
+    /// Resets before its append (ids count from 0 in each epoch).
+    pub(crate) epoch: u32,
+    pub(crate) append: WireStep,
+    pub(crate) append_frame: RawFrame,
+    /// Version in force, and its frame.
+    pub(crate) version: u8,
+    pub(crate) in_force: Option<RawFrame>,
+    /// The pose of the version in force (SI, in the epoch's frame).
+    pub(crate) pose: (f64, f64, f64),
+    pub(crate) fate: Fate,
+    pub(crate) walked: u32,
+    pub(crate) modified: u32,
+}
+
+impl Step {
+    pub(crate) fn side(&self) -> Side {
+        if self.append.left {
+            Side::Left
+        } else {
+            Side::Right
+        }
+    }
+    pub(crate) fn id(&self) -> u8 {
+        self.append.id
+    }
+    pub(crate) fn is_repeat(&self, f: &RawFrame) -> bool {
+        self.append_frame == *f || self.in_force == Some(*f)
+    }
+}
+
+/// What the model says of a frame.
+#[derive(Clone, Debug)]
+pub(crate) enum Answer {
+    /// Not the node's: no answer, nothing changes.
+    Ignored,
+    /// One of these answers (`None`: accepted).
+    OneOf(Vec<Option<Reason>>),
+}
+
+pub(crate) fn must(r: Reason) -> Answer {
+    Answer::OneOf(vec![Some(r)])
+}
+
+pub(crate) fn accepted() -> Answer {
+    Answer::OneOf(vec![None])
+}
+
+/// `true` if `seq` is 1 … 127 ahead of `last` modulo 256 (README: `Start` and `Reset`).
+pub(crate) fn ahead(seq: u8, last: u8) -> bool {
+    (1..=127).contains(&seq.wrapping_sub(last))
+}
+
+pub(crate) fn ix(s: Side) -> usize {
+    match s {
+        Side::Left => 0,
+        Side::Right => 1,
+    }
+}
+
+/// What the protocol promises, from the commands accepted and the lift-offs and landings seen.
+#[derive(Debug)]
+pub(crate) struct Model {
+    pub(crate) timeout: u32,
+    /// Every accepted footstep, all epochs.
+    pub(crate) steps: Vec<Step>,
+    /// Accepted, not lifted off, not dropped: indices into `steps`, in queue order.
+    pub(crate) queue: VecDeque<usize>,
+    /// The accepted step being swung.
+    pub(crate) swing: Option<usize>,
+    /// The last `HISTORY` steps walked or dropped (the node recognises their frames).
+    pub(crate) done: VecDeque<usize>,
+    pub(crate) epoch: u32,
+    pub(crate) last_append: Option<u8>,
+    pub(crate) last_control: Option<(u8, ControlOp)>,
+    pub(crate) last_heartbeat: Option<u8>,
+    pub(crate) last_estop: Option<u8>,
+    pub(crate) estopped: bool,
+    pub(crate) lost: bool,
+    /// A stop was requested (`Stop`, `StopNow`, `ESTOP`, controller lost) while moving.
+    pub(crate) stopping: bool,
+    pub(crate) last_heard: Option<u32>,
+}
+
+impl Model {
+    pub(crate) fn new(timeout: u32) -> Self {
+        Self {
+            timeout,
+            steps: vec![],
+            queue: VecDeque::new(),
+            swing: None,
+            done: VecDeque::new(),
+            epoch: 0,
+            last_append: None,
+            last_control: None,
+            last_heartbeat: None,
+            last_estop: None,
+            estopped: false,
+            lost: false,
+            stopping: false,
+            last_heard: None,
+        }
+    }
+
+    pub(crate) fn expected_id(&self) -> u8 {
+        self.last_append.map_or(0, |l| l.wrapping_add(1))
+    }
+
+    /// The steps whose frames the node remembers: queued, swinging, the last done.
+    pub(crate) fn remembered(&self) -> impl Iterator<Item = &Step> {
+        self.queue
+            .iter()
+            .chain(self.swing.iter())
+            .chain(self.done.iter())
+            .map(|&i| &self.steps[i])
+    }
+
+    pub(crate) fn is_repeat(&self, f: &RawFrame) -> bool {
+        self.remembered().any(|s| s.is_repeat(f))
+    }
+
+    /// The version in force of step `id` as the node's `ACK` reports it: queued, swinging,
+    /// else the latest done.
+    pub(crate) fn version(&self, id: u8) -> Option<u8> {
+        let of = |&i: &usize| (self.steps[i].id() == id).then_some(self.steps[i].version);
+        self.queue
+            .iter()
+            .find_map(of)
+            .or_else(|| self.swing.iter().find_map(of))
+            .or_else(|| self.done.iter().rev().find_map(of))
+    }
+
+    pub(crate) fn queued(&self, id: u8) -> Option<usize> {
+        self.queue
+            .iter()
+            .copied()
+            .find(|&i| self.steps[i].id() == id)
+    }
+
+    pub(crate) fn retire(&mut self, i: usize) {
+        if self.done.len() == HISTORY {
+            self.done.pop_front();
+        }
+        self.done.push_back(i);
+    }
+
+    pub(crate) fn drop_queue(&mut self, why: Dropped) {
+        while let Some(i) = self.queue.pop_front() {
+            self.steps[i].fate = Fate::Dropped(why);
+            self.retire(i);
+        }
+    }
+
+    /// The answer the protocol allows to `f`, the node standing or not and requiring
+    /// `next_side` (both as before the cycle).
+    pub(crate) fn expect(&self, f: &RawFrame, standing: bool, next_side: Option<Side>) -> Answer {
+        use Reason::*;
+        if !COMMAND_IDS.contains(&f.id) {
+            return Answer::Ignored;
+        }
+        let cmd = match Command::decode(f) {
+            Ok(c) => c,
+            Err((r, _)) => return must(r),
+        };
+        match cmd {
+            Command::EmergencyStop { seq } => {
+                if self.estopped && self.last_estop == Some(seq) {
+                    must(Duplicate)
+                } else {
+                    accepted()
+                }
+            }
+            Command::Control {
+                seq,
+                op: ControlOp::Heartbeat,
+            } => {
+                if self.last_heartbeat == Some(seq) {
+                    must(Duplicate)
+                } else {
+                    accepted()
+                }
+            }
+            Command::Control { seq, op } => {
+                if self.last_control == Some((seq, op)) {
+                    return must(Duplicate);
+                }
+                match op {
+                    ControlOp::Start | ControlOp::Reset => {
+                        if let Some((last, _)) = self.last_control {
+                            if !ahead(seq, last) {
+                                return must(Stale);
+                            }
+                        }
+                        if op == ControlOp::Reset {
+                            return if standing {
+                                accepted()
+                            } else {
+                                must(WrongState)
+                            };
+                        }
+                        if self.estopped {
+                            must(EmergencyStopped)
+                        } else if self.lost {
+                            must(ControllerLost)
+                        } else if !standing || self.queue.is_empty() {
+                            must(WrongState)
+                        } else {
+                            // No `PlanFailed`: a validated configuration leaves none (README).
+                            accepted()
+                        }
+                    }
+                    _ => accepted(),
+                }
+            }
+            Command::Append(s) => {
+                let side = if s.left { Side::Left } else { Side::Right };
+                if self.is_repeat(f) {
+                    must(Duplicate)
+                } else if self.estopped {
+                    must(EmergencyStopped)
+                } else if self.lost {
+                    must(ControllerLost)
+                } else if self.stopping && !standing {
+                    must(WrongState)
+                } else if s.id != self.expected_id() {
+                    must(SequenceGap)
+                } else if next_side.is_some_and(|n| n != side) {
+                    must(SideOrder)
+                } else if self.queue.len() >= Q {
+                    Answer::OneOf(vec![Some(Reach), Some(Crossing), Some(QueueFull)])
+                } else {
+                    Answer::OneOf(vec![None, Some(Reach), Some(Crossing)])
+                }
+            }
+            Command::Modify(m) => {
+                if self.is_repeat(f) {
+                    return must(Duplicate);
+                } else if self.estopped {
+                    return must(EmergencyStopped);
+                } else if self.lost {
+                    return must(ControllerLost);
+                } else if standing && self.queue.is_empty() {
+                    return must(WrongState);
+                } else if self.swing.is_some_and(|i| self.steps[i].id() == m.id) {
+                    return must(LiftedOff);
+                }
+                let Some(i) = self.queued(m.id) else {
+                    return must(UnknownStep);
+                };
+                let st = &self.steps[i];
+                if !m.is_newer_than(st.version) {
+                    must(Stale)
+                } else if m.left != st.append.left {
+                    must(SideOrder)
+                } else if m.applied_to(&st.append).is_none() {
+                    must(OutOfRange)
+                } else {
+                    // Reach and eq. 17 depend on geometry; no `PlanFailed` (README).
+                    Answer::OneOf(vec![None, Some(Reach), Some(Crossing), Some(Infeasible)])
+                }
+            }
+        }
+    }
+
+    /// The node accepted `cmd` (frame `f`) at `now`.
+    pub(crate) fn accept(&mut self, f: &RawFrame, cmd: Command, now: u32, standing: bool) {
+        self.last_heard = Some(now);
+        match cmd {
+            Command::EmergencyStop { seq } => {
+                self.last_estop = Some(seq);
+                self.estopped = true;
+                self.drop_queue(Dropped::Estop);
+                self.stopping |= !standing;
+            }
+            Command::Control {
+                seq,
+                op: ControlOp::Heartbeat,
+            } => self.last_heartbeat = Some(seq),
+            Command::Control { seq, op } => {
+                // A late `Stop` or `StopNow` is carried out but does not move the sequence
+                // back (`Start` and `Reset` are accepted only ahead).
+                if self.last_control.is_none_or(|(last, _)| ahead(seq, last)) {
+                    self.last_control = Some((seq, op));
+                }
+                match op {
+                    ControlOp::Heartbeat => {}
+                    ControlOp::Start => self.stopping = false,
+                    ControlOp::Stop => self.stopping |= !standing,
+                    ControlOp::StopNow => {
+                        self.drop_queue(Dropped::StopNow);
+                        self.stopping |= !standing;
+                    }
+                    ControlOp::Reset => {
+                        self.drop_queue(Dropped::Reset);
+                        self.done.clear();
+                        self.swing = None;
+                        self.estopped = false;
+                        self.lost = false;
+                        self.stopping = false;
+                        self.last_append = None;
+                        self.epoch += 1;
+                    }
+                }
+            }
+            Command::Append(s) => {
+                self.steps.push(Step {
+                    epoch: self.epoch,
+                    append: s,
+                    append_frame: *f,
+                    version: 0,
+                    in_force: None,
+                    pose: s.si(),
+                    fate: Fate::Queued,
+                    walked: 0,
+                    modified: 0,
+                });
+                self.queue.push_back(self.steps.len() - 1);
+                self.last_append = Some(s.id);
+            }
+            Command::Modify(m) => {
+                let i = self.queued(m.id).expect("the model allowed it: queued");
+                let st = &mut self.steps[i];
+                let s = m
+                    .applied_to(&st.append)
+                    .expect("the model allowed it: in range");
+                st.version = m.version;
+                st.in_force = Some(*f);
+                st.pose = s.si();
+                st.modified += 1;
+            }
+        }
+    }
+
+    /// The supervision rule at `now` (after the cycle's commands): a moving robot whose
+    /// controller was not heard within the timeout is lost; once lost, the queue is dropped.
+    /// Returns `true` if it became lost now.
+    pub(crate) fn supervise(&mut self, now: u32, moving: bool) -> bool {
+        if !moving {
+            return false;
+        }
+        let silent = self
+            .last_heard
+            .is_none_or(|h| now.wrapping_sub(h) > self.timeout);
+        let became = silent && !self.lost;
+        self.lost |= silent;
+        if self.lost {
+            self.drop_queue(Dropped::Lost);
+            self.stopping = true;
+        }
+        became
+    }
+
+    pub(crate) fn state(&self, standing: bool) -> NodeState {
+        if self.estopped {
+            NodeState::EmergencyStopped
+        } else if self.lost {
+            NodeState::ControllerLost
+        } else if standing {
+            NodeState::Standing
+        } else if self.stopping {
+            NodeState::Stopping
+        } else {
+            NodeState::Walking
+        }
+    }
+}
