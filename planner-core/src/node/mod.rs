@@ -542,7 +542,9 @@ impl<const Q: usize> Node<Q> {
         Ok(())
     }
 
-    fn append(&mut self, frame: &RawFrame, s: &WireStep) -> Result<(), Reason> {
+    /// What refuses any footstep frame first: a repeat of what is in force, then the two
+    /// latched states.
+    fn footstep_gate(&self, frame: &RawFrame) -> Result<(), Reason> {
         if self.steps.is_repeat(frame) {
             return Err(Reason::Duplicate);
         }
@@ -552,6 +554,11 @@ impl<const Q: usize> Node<Q> {
         if self.lost {
             return Err(Reason::ControllerLost);
         }
+        Ok(())
+    }
+
+    fn append(&mut self, frame: &RawFrame, s: &WireStep) -> Result<(), Reason> {
+        self.footstep_gate(frame)?;
         // A stop walks the queue it has: a step appended now might or might not be walked
         // before the robot stands (it depends on whether the last window is planned yet), so
         // it is refused, and the controller appends it once standing.
@@ -583,15 +590,7 @@ impl<const Q: usize> Node<Q> {
     }
 
     fn modify(&mut self, frame: &RawFrame, m: &WireModify) -> Result<(), Reason> {
-        if self.steps.is_repeat(frame) {
-            return Err(Reason::Duplicate);
-        }
-        if self.estopped {
-            return Err(Reason::EmergencyStopped);
-        }
-        if self.lost {
-            return Err(Reason::ControllerLost);
-        }
+        self.footstep_gate(frame)?;
         if self.gait.is_standing() && self.gait.queued() == 0 {
             return Err(Reason::WrongState);
         }
