@@ -742,7 +742,7 @@ pub fn echo_of(f: &RawFrame) -> u8 {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Ack {
     /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0x00 append,
-    /// 0x01 modify; the unknown identifier's low byte for `UnknownId`).
+    /// 0x01 modify).
     pub command: u8,
     /// Sequence number or step id of the command.
     pub seq: u8,

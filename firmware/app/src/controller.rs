@@ -3,9 +3,9 @@
 //!
 //! [`Controller`] does what the controller of `host_sim::sim::simulate` does, frame for frame:
 //! at tick `k` it sends the commands due at `k` (in timeline order), footsteps through a
-//! [`StepBook`] (`id as u8`; modifications as versioned offsets), `Start`/`Stop`/`StopNow` as `CONTROL` frames with a
-//! sequence number counted from 1, then a heartbeat (`CONTROL`, sequence 0) every
-//! [`HEARTBEAT_TICKS`] ticks; every frame through [`wire::Command::encode`](Wire::encode).
+//! [`StepBook`] (`id as u8`; modifications as versioned offsets), `Start`/`Stop`/`StopNow` as
+//! `CONTROL` frames with a sequence number counted from 1, then a heartbeat (`CONTROL`,
+//! sequence `k / HEARTBEAT_TICKS`, a new one each time) every [`HEARTBEAT_TICKS`] ticks; every frame through [`wire::Command::encode`](Wire::encode).
 //! On host-sim's bus the frames of one tick arrive by arbitration, lowest identifier first,
 //! in sending order among equal identifiers, all within the 2.5 ms before the node polls
 //! (at most 14 frames of ≤ 135 µs at 1 Mbit/s); [`Controller::send_due`] hands them to the
