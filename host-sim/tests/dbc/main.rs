@@ -1,15 +1,36 @@
-//! The DBC file (`host-sim/can/walking.dbc`) and the Rust codec (`planner_core::wire`) agree:
-//! every message of the DBC exists in the codec with the same identifier and length, and every
-//! signal decoded with the DBC's own definition (start bit, size, sign, factor, offset) from a
-//! frame built by the Rust encoder gives back the value that was encoded (to half a unit).
+//! The DBC file (`host-sim/can/walking.dbc`) and the Rust codec (`planner_core::wire`) agree,
+//! so that neither can drift from the other:
+//!
+//! * every message of the DBC exists in the codec with the same identifier and length, and every
+//!   data bit of a message belongs to exactly one signal (reserved bits included);
+//! * every signal decoded with the DBC's own definition (start bit, size, sign, factor, offset)
+//!   from a frame built by the Rust encoder gives back the value that was encoded (to half a
+//!   unit), and every signal's `[min|max]` is the codec's range: frames with every field at the
+//!   codec's lowest (highest) value decode to exactly the DBC's minimum (maximum);
+//! * every value table (`VAL_`) is the codec's enumeration, code for code and name for name
+//!   (the snake case of the Rust variant): `Reason::ALL`, `ControlOp`, the command codes of
+//!   `ACK`, `NodeState`, and the phases and next sides the node publishes;
+//! * every message's `GenMsgCycleTime` is the period at which a running node sends it (0 for
+//!   the commands and `ACK`, sent on events), and the bits of `STATUS`'s flags byte are the
+//!   node's.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
 
-use can_dbc::{ByteOrder, Dbc, MessageId, ValueType};
+use can_dbc::{AttributeDefinition, AttributeValue, AttributeValueType, ByteOrder, Dbc, Message};
+use can_dbc::{MessageId, NumericValue, Signal, ValueDescription, ValueType};
+use planner_core::gait::{GaitParams, Phase, Side};
+use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
-    self, ids, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream, WireModify,
-    WireStep,
+    self, ids, signed_range, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream,
+    WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
 };
+
+mod ranges;
+mod running;
+mod tables;
+
+use ranges::*;
+use tables::*;
 
 fn dbc() -> Dbc {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/can/walking.dbc"))
@@ -91,6 +112,7 @@ fn commands_decode_the_same_with_the_dbc() {
         let s = decode(&d, &c.encode());
         assert_eq!(s["step_id"], f64::from(id));
         assert_eq!(s["left"], f64::from(u8::from(left)));
+        assert_eq!(s["reserved"], 0.0);
         close(s["x"], x, planner_core::wire::STEP_UNIT, "x");
         close(s["y"], y, planner_core::wire::STEP_UNIT, "y");
         close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
@@ -166,14 +188,18 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
     };
     let s = decode(&d, &st.encode());
     assert_eq!(
+        (s["state"], s["queue"], s["rejected"], s["overruns"]),
+        (1.0, 3.0, 1234.0, 7.0)
+    );
+    // Flags 5: bit 0 (shaping) and bit 2 (transmit overflow).
+    assert_eq!(
         (
-            s["state"],
-            s["queue"],
-            s["rejected"],
-            s["overruns"],
-            s["flags"]
+            s["shaping"],
+            s["replan_failed"],
+            s["tx_overflow"],
+            s["flags_reserved"]
         ),
-        (1.0, 3.0, 1234.0, 7.0, 5.0)
+        (1.0, 0.0, 1.0, 0.0)
     );
     close(s["last_adjust"], -0.2, 0.005, "last_adjust");
     let dg = Diag {
@@ -221,4 +247,64 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
         close(s["z"], want[2], 5e-4, "foot z");
         close(s["yaw"], want[3], 1e-4, "foot yaw");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The DBC's definitions, looked up.
+
+fn message(d: &Dbc, id: u16) -> &Message {
+    d.messages
+        .iter()
+        .find(|m| m.id == MessageId::Standard(id))
+        .unwrap_or_else(|| panic!("id {id:#x} not in the DBC"))
+}
+
+fn signal<'a>(d: &'a Dbc, id: u16, name: &str) -> &'a Signal {
+    d.signal_by_name(MessageId::Standard(id), name)
+        .unwrap_or_else(|| panic!("{}.{name} not in the DBC", message(d, id).name))
+}
+
+/// The value table (`VAL_`) of a signal.
+fn table(d: &Dbc, id: u16, name: &str) -> BTreeMap<i64, String> {
+    d.value_descriptions_for_signal(MessageId::Standard(id), name)
+        .unwrap_or_else(|| panic!("{}.{name} has no value table", message(d, id).name))
+        .iter()
+        .map(|v| (v.id, v.description.clone()))
+        .collect()
+}
+
+fn number(v: NumericValue) -> f64 {
+    match v {
+        NumericValue::Uint(u) => u as f64,
+        NumericValue::Int(i) => i as f64,
+        NumericValue::Double(x) => x,
+    }
+}
+
+/// Equal but for the last digits of a decimal written to 15 significant digits.
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// The DBC name of a Rust variant from its `Debug` form: `EmergencyStopped` →
+/// `emergency_stopped`, `Single(Left)` → `single_left`.
+fn snake(debug: &str) -> String {
+    let mut out = String::new();
+    for c in debug.chars() {
+        if c.is_ascii_uppercase() {
+            if !out.is_empty() && !out.ends_with('_') {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else if c.is_ascii_alphanumeric() {
+            out.push(c);
+        } else if !out.is_empty() && !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    out.trim_end_matches('_').to_string()
+}
+
+fn name_of(v: &impl std::fmt::Debug) -> String {
+    snake(&format!("{v:?}"))
 }

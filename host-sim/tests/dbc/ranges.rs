@@ -1,0 +1,299 @@
+//! Layout and ranges (see the docs of `main.rs`).
+
+use super::*;
+
+#[test]
+fn every_data_bit_belongs_to_exactly_one_signal() {
+    let d = dbc();
+    for m in &d.messages {
+        let mut owner: Vec<Option<&str>> = vec![None; 8 * m.size as usize];
+        for s in &m.signals {
+            for b in s.start_bit..s.start_bit + s.size {
+                let slot = owner
+                    .get_mut(b as usize)
+                    .unwrap_or_else(|| panic!("{}.{}: bit {b} past the end", m.name, s.name));
+                if let Some(other) = slot.replace(&s.name) {
+                    panic!("{}: bit {b} is in {other} and {}", m.name, s.name);
+                }
+            }
+        }
+        for (b, o) in owner.iter().enumerate() {
+            assert!(o.is_some(), "{}: bit {b} belongs to no signal", m.name);
+        }
+    }
+}
+
+/// The unit of `STATUS.last_adjust`: one control cycle (5 ms).
+pub(crate) fn cycle_s() -> f64 {
+    GaitParams::<f64>::hrp2().dt
+}
+
+pub(crate) type Values = Vec<(&'static str, f64)>;
+
+/// One frame of every message with every field at the codec's lowest (`high` false) or highest
+/// value, and the value of every signal but the CRCs as the codec means it (in SI units).
+pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
+    let pick = |(lo, hi): (i32, i32)| if high { hi } else { lo };
+    let byte = if high { u8::MAX } else { 0 };
+    let word = if high { u16::MAX } else { 0 };
+    let b = |v: u8| f64::from(v);
+    let mut out = vec![];
+
+    out.push((
+        Command::EmergencyStop { seq: byte }.encode(),
+        vec![("seq", b(byte))],
+    ));
+    let ops = OPS.map(op_code);
+    let op = if high {
+        ops.iter().max()
+    } else {
+        ops.iter().min()
+    };
+    let op = OPS[ops.iter().position(|c| Some(c) == op).unwrap()];
+    let f = Command::Control { seq: byte, op }.encode();
+    out.push((f, vec![("seq", b(byte)), ("op", b(op_code(op)))]));
+
+    let s = WireStep {
+        id: byte,
+        left: high,
+        x: pick(signed_range(STEP_BITS)),
+        y: pick(signed_range(STEP_BITS)),
+        yaw: pick(signed_range(YAW_BITS)) as i16,
+    };
+    assert!(s.in_range());
+    let (x, y, yaw) = s.si();
+    out.push((
+        Command::Append(s).encode(),
+        vec![
+            ("step_id", b(s.id)),
+            ("left", b(u8::from(s.left))),
+            ("reserved", 0.0), // the encoder writes 0, the decoder refuses 1
+            ("x", x),
+            ("y", y),
+            ("yaw", yaw),
+        ],
+    ));
+    let m = WireModify {
+        id: byte,
+        version: if high { VERSIONS - 1 } else { 0 },
+        left: high,
+        dx: pick(signed_range(OFFSET_BITS)),
+        dy: pick(signed_range(OFFSET_BITS)),
+        yaw: pick(signed_range(YAW_BITS)) as i16,
+    };
+    out.push((
+        Command::Modify(m).encode(),
+        vec![
+            ("step_id", b(m.id)),
+            ("version", b(m.version)),
+            ("left", b(u8::from(m.left))),
+            ("dx", f64::from(m.dx) * STEP_UNIT),
+            ("dy", f64::from(m.dy) * STEP_UNIT),
+            ("yaw", f64::from(m.yaw) * YAW_UNIT),
+        ],
+    ));
+
+    let codes = commands().map(|(c, _)| c.code());
+    let reason = if high {
+        Reason::ALL.iter().copied().max_by_key(|r| r.code())
+    } else {
+        None // accepted
+    };
+    let a = Ack {
+        command: if high {
+            codes.iter().max()
+        } else {
+            codes.iter().min()
+        }
+        .copied()
+        .unwrap(),
+        seq: byte,
+        reason,
+        queue: byte,
+        echo: byte,
+        version: if high { None } else { Some(0) },
+    };
+    out.push((
+        a.encode(),
+        vec![
+            ("command", b(a.command)),
+            ("seq", b(a.seq)),
+            ("reason", b(a.reason.map_or(0, Reason::code))),
+            ("queue", b(a.queue)),
+            ("echo", b(a.echo)),
+            ("version", b(a.version.unwrap_or(0xFF))), // 0xFF: none
+        ],
+    ));
+
+    let st = Status {
+        state: if high {
+            STATES.iter().max_by_key(|&&s| s as u8)
+        } else {
+            STATES.iter().min_by_key(|&&s| s as u8)
+        }
+        .map(|&s| s as u8)
+        .unwrap(),
+        queue: byte,
+        rejected: word,
+        overruns: word,
+        last_adjust: if high { i8::MAX } else { i8::MIN },
+        flags: byte,
+    };
+    // `Status::flags`: bit 0 shaping, bit 1 last re-plan failed, bit 2 transmit overflow.
+    out.push((
+        st.encode(),
+        vec![
+            ("state", b(st.state)),
+            ("queue", b(st.queue)),
+            ("rejected", f64::from(st.rejected)),
+            ("overruns", f64::from(st.overruns)),
+            ("last_adjust", f64::from(st.last_adjust) * cycle_s()),
+            ("shaping", b(st.flags & 1)),
+            ("replan_failed", b(st.flags >> 1 & 1)),
+            ("tx_overflow", b(st.flags >> 2 & 1)),
+            ("flags_reserved", b(st.flags >> 3)),
+        ],
+    ));
+    let dg = Diag {
+        foreign: word,
+        bus_errors: word,
+        tx_dropped: word,
+        next_side: if high { NEXT_SIDES.len() - 1 } else { 0 } as u8,
+        last_control: byte,
+    };
+    out.push((
+        dg.encode(),
+        vec![
+            ("foreign", f64::from(dg.foreign)),
+            ("bus_errors", f64::from(dg.bus_errors)),
+            ("tx_dropped", f64::from(dg.tx_dropped)),
+            ("next_side", b(dg.next_side)),
+            ("last_control", b(dg.last_control)),
+        ],
+    ));
+
+    // The stream saturates: values far out give the codec's extremes.
+    let v = if high { 1e12 } else { -1e12 };
+    let stream = Stream {
+        cog: [v; 2],
+        cog_vel: [v; 2],
+        zmp: [v; 2],
+        phase: if high { PHASES.len() - 1 } else { 0 } as u8,
+        tick: byte,
+        feet: [[v; 4]; 2],
+    };
+    let frames = stream.encode();
+    let mut st = Stream::default();
+    for f in &frames {
+        assert!(st.decode_into(f));
+    }
+    let foot = |k: usize| -> Values {
+        let f = st.feet[k];
+        vec![("x", f[0]), ("y", f[1]), ("z", f[2]), ("yaw", f[3])]
+    };
+    let values: [Values; 5] = [
+        vec![("cog_x", st.cog[0]), ("cog_y", st.cog[1])],
+        vec![("zmp_x", st.zmp[0]), ("zmp_y", st.zmp[1])],
+        vec![
+            ("cog_vx", st.cog_vel[0]),
+            ("cog_vy", st.cog_vel[1]),
+            ("phase", b(st.phase)),
+            ("tick", b(st.tick)),
+        ],
+        foot(0),
+        foot(1),
+    ];
+    out.extend(frames.into_iter().zip(values));
+    out
+}
+
+/// Every signal's `[min|max]` in the DBC is the codec's range: the frame with every field at
+/// its lowest (highest) value decodes, with the DBC, to the codec's value and to the DBC's
+/// minimum (maximum). The codec's ranges come from its own definitions (`signed_range` of
+/// `STEP_BITS`, `OFFSET_BITS`, `YAW_BITS` in `STEP_UNIT`, `YAW_UNIT`; `VERSIONS`; the
+/// enumerations; the stream's saturation).
+#[test]
+fn every_signal_range_is_the_codecs_range() {
+    let d = dbc();
+    for high in [false, true] {
+        let bound = if high { "max" } else { "min" };
+        let mut seen = BTreeSet::new();
+        for (f, values) in codec_extremes(high) {
+            let m = message(&d, f.id);
+            assert!(seen.insert(f.id), "{} twice", m.name);
+            let s = decode(&d, &f);
+            let values: HashMap<&str, f64> = values.into_iter().collect();
+            for sig in &m.signals {
+                if sig.name == "crc" {
+                    // The last byte, any value.
+                    assert_eq!(sig.start_bit, 8 * (m.size - 1), "{}.crc", m.name);
+                    assert_eq!((sig.size, sig.value_type), (8, ValueType::Unsigned));
+                    assert_eq!((number(sig.min), number(sig.max)), (0.0, 255.0));
+                    continue;
+                }
+                let what = format!("{}.{} {bound}", m.name, sig.name);
+                let codec = *values
+                    .get(sig.name.as_str())
+                    .unwrap_or_else(|| panic!("{}.{}: not a codec field", m.name, sig.name));
+                let dbc_bound = number(if high { sig.max } else { sig.min });
+                assert!(
+                    same(s[&sig.name], codec),
+                    "{what}: DBC decodes {}, codec {codec}",
+                    s[&sig.name]
+                );
+                assert!(
+                    same(dbc_bound, codec),
+                    "{what}: DBC says {dbc_bound}, codec {codec}"
+                );
+            }
+            let names: BTreeSet<&str> = m.signals.iter().map(|s| s.name.as_str()).collect();
+            for k in values.keys() {
+                assert!(names.contains(k), "{}.{k}: not in the DBC", m.name);
+            }
+        }
+        let all: BTreeSet<u16> = d.messages.iter().map(|m| m.id.raw() as u16).collect();
+        assert_eq!(seen, all);
+    }
+}
+
+#[test]
+fn the_reserved_bit_of_step_append_is_refused_when_set() {
+    let d = dbc();
+    let r = signal(&d, ids::STEP_APPEND, "reserved");
+    assert_eq!((r.size, number(r.min), number(r.max)), (1, 0.0, 0.0));
+    let mut f = Command::Append(WireStep::from_si(1, false, 0.1, -0.1, 0.0).unwrap()).encode();
+    let bits = u64::from_le_bytes(f.data) | 1 << r.start_bit;
+    f.data = bits.to_le_bytes();
+    f.data[7] = wire::crc8(f.id, &f.data[..7]);
+    assert_eq!(decode(&d, &f)["reserved"], 1.0);
+    assert_eq!(Command::decode(&f), Err((Reason::OutOfRange, 1)));
+    let comment = d
+        .signal_comment(MessageId::Standard(ids::STEP_APPEND), "reserved")
+        .expect("a comment");
+    assert!(comment.contains("must be 0"), "{comment}");
+}
+
+#[test]
+fn each_flag_of_status_is_its_own_bit() {
+    let d = dbc();
+    let names = ["shaping", "replan_failed", "tx_overflow"];
+    for (k, name) in names.iter().enumerate() {
+        let st = Status {
+            flags: 1 << k,
+            ..Status::default()
+        };
+        let s = decode(&d, &st.encode());
+        for (j, other) in names.iter().enumerate() {
+            assert_eq!(
+                s[*other],
+                f64::from(u8::from(j == k)),
+                "flag bit {k}: {other}"
+            );
+        }
+        assert_eq!(s["flags_reserved"], 0.0);
+        let c = d
+            .signal_comment(MessageId::Standard(ids::STATUS), name)
+            .expect("a comment");
+        assert!(c.contains(&format!("bit {k}")), "{name}: {c}");
+    }
+}
