@@ -12,8 +12,49 @@
 //!   corrupt (flip one data bit: a frame that a faulty gateway would pass on with a valid CRC),
 //!   delay (deliver late, after frames sent later) or silence a port (bus-off: it neither sends
 //!   nor receives for a while). Faults are drawn from a seeded generator, so runs repeat.
-//! * Every delivered frame can be logged as `(seconds) can0 ID#DATA`, the format of
-//!   `candump -L`, for the usual CAN tools.
+//! * Every delivered frame can be logged in the format of `candump -l` (see [below](#the-log)),
+//!   for the usual CAN tools.
+//!
+//! # The log
+//!
+//! One line per delivered frame, in delivery order (so the timestamps never decrease, also with
+//! delayed and duplicated frames), exactly the line format of a `candump -l` log file:
+//!
+//! ```text
+//! (1767225600.000085) can0 020#0000FE
+//! ```
+//!
+//! `(SSSSSSSSSS.UUUUUU)` is an absolute time in seconds and microseconds since the Unix epoch,
+//! the interface is always [`LOG_IFACE`], `ID#DATA` is the standard identifier as 3 upper-case
+//! hexadecimal digits and the data as 2 hexadecimal digits per byte (nothing after `#` for an
+//! empty frame). The time is a fixed, stated epoch plus the simulated time, so the same run
+//! gives the same log byte for byte:
+//!
+//! ```text
+//! log time = LOG_EPOCH_S + t / 10⁹ s     (t: the bus time of the delivery [ns], truncated to 1 µs)
+//! ```
+//!
+//! with [`LOG_EPOCH_S`] = 1767225600 = 2026-01-01T00:00:00Z; simulated time 0 is that instant.
+//! The time of a frame is the end of its transmission, when every receiver has it (plus the
+//! extra latency of a frame the fault layer delays). A log that started at 0 s would look to
+//! can-utils' `log2asc` like a clock that is not set (a banner for every frame of the first
+//! second, all timestamps zero).
+//!
+//! **Against `trajectory.csv`** (host-sim's [`simulate`](crate::sim::simulate) and
+//! `host-sim run`): its `t` column is `j × 5 ms` for row `j`. Row 0 is the node's state before
+//! the first tick; row `j ≥ 1` is the reference of the node's poll in tick `j − 1`, which runs
+//! at bus time `t − 2.5 ms` (`t` = that row's CSV time). The frames that poll publishes (the
+//! five stream frames `200`, `201`, `202`, `210`, `211`, and `080` ACK, `300` STATUS, `301`
+//! DIAG when due) are delivered before the next tick starts (on a bus without faults), so
+//!
+//! ```text
+//! log time − LOG_EPOCH_S = t_csv − 2.5 ms + d,    0 < d ≤ 2.5 ms
+//! ```
+//!
+//! `d` being the frame's wait in the node's mailbox plus its own transmission
+//! (`host-sim/tests/canlog.rs` checks this on every stream frame). The controller's commands of
+//! tick `k` leave at bus time `5k ms` (log time − `LOG_EPOCH_S` = `5k ms + d`, `d < 2.5 ms`),
+//! and the node reacts to them in the poll that produces CSV row `k + 1`.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -25,6 +66,12 @@ use planner_core::wire::RawFrame;
 pub const MAILBOX: usize = 64;
 /// Receive FIFO capacity of a port.
 pub const RX_FIFO: usize = 64;
+
+/// The epoch of the log: simulated time 0 is logged as this many seconds since the Unix epoch
+/// (2026-01-01T00:00:00Z).
+pub const LOG_EPOCH_S: u64 = 1_767_225_600;
+/// The interface name in the log.
+pub const LOG_IFACE: &str = "can0";
 
 /// A frame on the virtual bus: the codec's own frame type, which is an `embedded-can` frame.
 pub type VFrame = RawFrame;
@@ -120,14 +167,7 @@ impl Inner {
 
     fn deliver(&mut self, t: u64, from: usize, f: RawFrame) {
         if let Some(log) = self.log.as_mut() {
-            let data: String = f.bytes().iter().map(|b| format!("{b:02X}")).collect();
-            log.push(format!(
-                "({}.{:06}) can0 {:03X}#{}",
-                t / 1_000_000_000,
-                (t % 1_000_000_000) / 1000,
-                f.id,
-                data
-            ));
+            log.push(log_line(t, &f));
         }
         for i in 0..self.ports.len() {
             if i == from || self.silenced(i, t) {
@@ -220,6 +260,66 @@ impl Inner {
     }
 }
 
+/// The log line of a frame delivered at bus time `t_ns` (see [the log](self#the-log)).
+pub fn log_line(t_ns: u64, f: &RawFrame) -> String {
+    let us = LOG_EPOCH_S * 1_000_000 + t_ns / 1000;
+    let data: String = f.bytes().iter().map(|b| format!("{b:02X}")).collect();
+    format!(
+        "({:010}.{:06}) {LOG_IFACE} {:03X}#{data}",
+        us / 1_000_000,
+        us % 1_000_000,
+        f.id
+    )
+}
+
+/// One line of the log, parsed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LogEntry {
+    /// The log's time: microseconds since the Unix epoch.
+    pub unix_us: u64,
+    /// The frame.
+    pub frame: RawFrame,
+}
+
+impl LogEntry {
+    /// The simulated (bus) time of the delivery \[µs\]: the log time less [`LOG_EPOCH_S`]
+    /// (`None` before the epoch).
+    pub fn sim_us(&self) -> Option<u64> {
+        self.unix_us.checked_sub(LOG_EPOCH_S * 1_000_000)
+    }
+}
+
+/// Parses one line of the log, strictly in the format [`log_line`] writes:
+/// `(` ≥ 1 decimal digits `.` 6 decimal digits `) ` [`LOG_IFACE`] ` ` 3 hexadecimal digits
+/// (at most `7FF`) `#` 0 to 8 bytes as hexadecimal digit pairs. `None` for anything else.
+pub fn parse_log_line(line: &str) -> Option<LogEntry> {
+    let rest = line.strip_prefix('(')?;
+    let (time, rest) = rest.split_once(") ")?;
+    let (secs, micros) = time.split_once('.')?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if !digits(secs) || micros.len() != 6 || !digits(micros) {
+        return None;
+    }
+    let unix_us = secs
+        .parse::<u64>()
+        .ok()?
+        .checked_mul(1_000_000)?
+        .checked_add(micros.parse::<u64>().ok()?)?;
+    let rest = rest.strip_prefix(LOG_IFACE)?.strip_prefix(' ')?;
+    let (id, data) = rest.split_once('#')?;
+    let hex = |s: &str| s.bytes().all(|b| matches!(b, b'0'..=b'9' | b'A'..=b'F'));
+    if id.len() != 3 || !hex(id) || data.len() % 2 != 0 || data.len() > 16 || !hex(data) {
+        return None;
+    }
+    let id = u16::from_str_radix(id, 16).ok()?;
+    let bytes: Vec<u8> = (0..data.len() / 2)
+        .map(|i| u8::from_str_radix(&data[2 * i..2 * i + 2], 16))
+        .collect::<Result<_, _>>()
+        .ok()?;
+    let frame = RawFrame::new(id, &bytes)?;
+    Some(LogEntry { unix_us, frame })
+}
+
 /// The bus.
 #[derive(Clone)]
 pub struct Bus(Rc<RefCell<Inner>>);
@@ -253,12 +353,12 @@ impl Bus {
         Bus(Rc::new(RefCell::new(inner)))
     }
 
-    /// Starts recording a candump log.
+    /// Starts recording a candump log ([the log](self#the-log)).
     pub fn record(&self) {
         self.0.borrow_mut().log = Some(Vec::new());
     }
 
-    /// The candump log so far.
+    /// The candump log so far, one line per delivered frame (no line ends).
     pub fn log(&self) -> Vec<String> {
         self.0.borrow().log.clone().unwrap_or_default()
     }
@@ -346,7 +446,11 @@ mod tests {
         assert_eq!(b.receive().unwrap().id, 0x300);
         assert!(a.receive().is_err(), "a sender does not hear itself");
         let log = bus.log();
-        assert_eq!(log[0], "(0.000135) can0 100#0202020202020202");
+        assert_eq!(log[0], "(1767225600.000135) can0 100#0202020202020202");
+        for line in &log {
+            let e = parse_log_line(line).unwrap();
+            assert_eq!(log_line(e.sim_us().unwrap() * 1000, &e.frame), *line);
+        }
         let busy = 135 + (47 + 16 + (34 + 16 - 1) / 4) + 135;
         assert_eq!(bus.stats().busy_ns, busy * 1000);
     }
