@@ -5,76 +5,151 @@
 //! host-sim list                    the built-in scenarios
 //! host-sim run <scenario|file.toml> [--out DIR]
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
+//! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
 //! ```
+//!
+//! `run` prints every command that failed (refused by the node, never answered, or accepted
+//! and never carried out) with its time, step id and reason, and exits with status 1 if one
+//! failed that the scenario did not expect (`expect` in a TOML entry, see
+//! `host_sim::toml_scenario`). Exit status 2: a usage error, an invalid scenario, a file that
+//! cannot be read or written.
 
 use std::error::Error;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
+use clap::{Parser, Subcommand};
 use host_sim::multibody::{evaluate, max_zmp_error, Hrp2, MbSample};
 use host_sim::paper::{
     self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
     PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
-use host_sim::scenario::{self, Run, BUILT_IN};
-use host_sim::sim::{simulate, SimConfig};
+use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
+use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
+use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, toml_scenario};
 use planner_core::gait::{Footstep, GaitParams, Phase, Side};
 use serde_json::json;
 
-fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if let Err(e) = dispatch(&args) {
-        eprintln!("host-sim: {e}");
-        std::process::exit(2);
+/// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
+/// multi-body model, CSV/JSON/PNG results. Without a subcommand: the demo (the `straight`
+/// scenario into out/demo).
+#[derive(Parser)]
+#[command(
+    name = "host-sim",
+    version,
+    after_help = "Exit status: 0 done; 1 `run`: a command failed (refused, never answered, \
+                  accepted and never carried out) that the scenario did not expect; 2 a usage \
+                  error, an invalid scenario, or a file that cannot be read or written."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Cmd>,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// List the built-in scenarios.
+    List,
+    /// Run a built-in scenario or a TOML scenario file through the virtual CAN bus and the
+    /// node; print every failed command, exit 1 if one failed unexpectedly.
+    Run {
+        /// A built-in scenario (see `host-sim list`) or a file ending in .toml.
+        #[arg(value_name = "SCENARIO|FILE.toml")]
+        scenario: String,
+        /// The output directory [default: out/<scenario name>].
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+    },
+    /// Recompute the paper's Tables I and II (and the Fig. 4 adjustment).
+    Tables {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/tables")]
+        out: PathBuf,
+    },
+    /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
+    Node {
+        /// The CAN interface, e.g. can0.
+        interface: String,
+        /// Stop after this many seconds (default: run until killed).
+        #[arg(long, value_name = "S", value_parser = positive_seconds, allow_negative_numbers = true)]
+        seconds: Option<f64>,
+    },
+}
+
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a positive number of seconds")),
     }
 }
 
-fn out_dir(args: &[String], default: &str) -> PathBuf {
-    args.iter()
-        .position(|a| a == "--out")
-        .and_then(|i| args.get(i + 1))
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(default))
+/// Something the run should not have had: commands that failed against the scenario's
+/// expectations (exit status 1).
+#[derive(Debug)]
+struct Unexpected(String);
+
+impl std::fmt::Display for Unexpected {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
 }
 
-fn dispatch(args: &[String]) -> Result<(), Box<dyn Error>> {
-    match args.first().map(String::as_str) {
-        None => run_scenario("straight", &out_dir(args, "out/demo")),
-        Some("list") => {
+impl Error for Unexpected {}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("host-sim: {e}");
+            ExitCode::from(if e.is::<Unexpected>() { 1 } else { 2 })
+        }
+    }
+}
+
+fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
+    match command {
+        None => run_scenario("straight", Some(Path::new("out/demo"))),
+        Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
                 println!("{name:<10} {}", s.about);
             }
             Ok(())
         }
-        Some("run") => {
-            let name = args
-                .get(1)
-                .ok_or("usage: host-sim run <scenario> [--out DIR]")?;
-            let default = format!("out/{name}");
-            run_scenario(name, &out_dir(args, &default))
-        }
-        Some("tables") => tables(&out_dir(args, "out/tables")),
-        #[cfg(feature = "socketcan")]
-        Some("node") => {
-            let iface = args
-                .get(1)
-                .ok_or("usage: host-sim node <interface> [--seconds S]")?;
-            let secs = args
-                .iter()
-                .position(|a| a == "--seconds")
-                .and_then(|i| args.get(i + 1))
-                .and_then(|s| s.parse().ok());
-            host_sim::socketcan_link::run_node(iface, secs)
-        }
-        Some("-h" | "--help" | "help") => {
-            println!("usage: host-sim [list | run <scenario> [--out DIR] | tables [--out DIR]]");
-            Ok(())
-        }
-        Some(other) => Err(format!("unknown command {other:?} (try: list, run, tables)").into()),
+        Some(Cmd::Run { scenario, out }) => run_scenario(&scenario, out.as_deref()),
+        Some(Cmd::Tables { out }) => tables(&out),
+        Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
     }
+}
+
+#[cfg(feature = "socketcan")]
+fn node(interface: &str, seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
+    host_sim::socketcan_link::run_node(interface, seconds)
+        .map_err(|e| format!("CAN interface {interface}: {e}").into())
+}
+
+#[cfg(not(feature = "socketcan"))]
+fn node(interface: &str, _seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
+    Err(format!(
+        "cannot run the node on {interface}: this host-sim was built without SocketCAN \
+         (cargo run -p host-sim --features socketcan -- node {interface})"
+    )
+    .into())
+}
+
+/// Creates `dir` (and its parents); the error names it.
+fn create_dir(dir: &Path) -> Result<(), String> {
+    fs::create_dir_all(dir)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", dir.display()))
+}
+
+/// Writes `contents` to `path`; the error names it.
+fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), String> {
+    fs::write(path, contents).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
 fn phase_name(p: Phase) -> &'static str {
@@ -92,7 +167,12 @@ fn write_trajectory(
     mb: &[MbSample],
     dt: f64,
 ) -> Result<(), Box<dyn Error>> {
-    let mut csv = std::io::BufWriter::new(fs::File::create(path)?);
+    let named = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let file = fs::File::create(path).map_err(named)?;
+    write_csv(std::io::BufWriter::new(file), run, mb, dt).map_err(|e| named(e).into())
+}
+
+fn write_csv(mut csv: impl Write, run: &Run, mb: &[MbSample], dt: f64) -> std::io::Result<()> {
     writeln!(
         csv,
         "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,mb_zmp_x,mb_zmp_y,phase,left_x,left_y,left_z,left_yaw,right_x,right_y,right_z,right_yaw"
@@ -168,44 +248,142 @@ fn footprints(run: &Run) -> Vec<Footstep<f64>> {
     out
 }
 
-fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
-    let s = if name.ends_with(".toml") {
-        toml_scenario::load(Path::new(name))?
-    } else {
-        scenario::built_in(name).ok_or_else(|| {
-            format!(
-                "unknown scenario {name:?}; built-in: {} (or a .toml file)",
-                BUILT_IN.join(", ")
-            )
-        })?
+/// A command in words: `step 3 (append, left at (0.4000, 0.1000) m)`, `start`.
+fn describe(c: &Command) -> String {
+    let side = |s: Side| if s == Side::Left { "left" } else { "right" };
+    match c {
+        Command::Push(id, f) => format!(
+            "step {id} (append, {} at ({:.4}, {:.4}) m, {:.4} rad)",
+            side(f.side),
+            f.x,
+            f.y,
+            f.yaw
+        ),
+        Command::Modify(id, f) => format!(
+            "step {id} (modify, {} to ({:.4}, {:.4}) m, {:.4} rad)",
+            side(f.side),
+            f.x,
+            f.y,
+            f.yaw
+        ),
+        Command::Start => "start".into(),
+        Command::Stop => "stop".into(),
+        Command::StopNow => "stop_now".into(),
+    }
+}
+
+/// The scenario `name` (built-in, or a file ending in .toml) and the entry behind each of its
+/// commands.
+fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
+    if name.ends_with(".toml") {
+        return Ok(toml_scenario::load_file(Path::new(name))?);
+    }
+    let s: Scenario = scenario::built_in(name).ok_or_else(|| {
+        format!(
+            "unknown scenario {name:?}; built-in: {} (or a .toml file)",
+            BUILT_IN.join(", ")
+        )
+    })?;
+    let entries = (0..s.timeline.len())
+        .map(|i| Entry {
+            label: format!("command #{}", i + 1),
+            expect: None,
+        })
+        .collect();
+    Ok(ScenarioFile {
+        scenario: s,
+        entries,
+    })
+}
+
+/// One outcome as printed: whether it was as the scenario expected, and the line.
+fn outcome_line(o: &Outcome, entry: &Entry, dt: f64) -> (bool, String) {
+    let expected = o.failure == entry.expect;
+    let what = match (o.failure, entry.expect) {
+        (Some(f), _) if expected => format!("{} (expected {})", o.detail, f.name()),
+        (Some(_), None) => o.detail.clone(),
+        (Some(_), Some(x)) => format!("{} (but expected {})", o.detail, x.name()),
+        (None, Some(x)) if o.detail.is_empty() => {
+            format!("carried out, but expected {}", x.name())
+        }
+        (None, Some(x)) => format!("{}, but expected {}", o.detail, x.name()),
+        (None, None) => o.detail.clone(),
     };
+    let mark = if expected { "" } else { "UNEXPECTED " };
+    (
+        expected,
+        format!(
+            "  {mark}{:.3} s, {}: {}: {what}",
+            o.tick as f64 * dt,
+            entry.label,
+            describe(&o.command),
+        ),
+    )
+}
+
+fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
+    let ScenarioFile {
+        scenario: s,
+        entries,
+    } = load_scenario(name)?;
+    let default_out = PathBuf::from(format!("out/{}", s.name));
+    let out = out.unwrap_or(&default_out);
     let name = s.name.as_str();
     let cfg = SimConfig::default();
     let dt = cfg.node.params.dt;
-    let sim = simulate(&s, &cfg)?;
+    let sim = simulate(&s, &cfg).map_err(|e| format!("{name}: {e}"))?;
     let run = &sim.run;
     let mb = evaluate(&Hrp2::default(), &run.trajectory, dt)
         .map_err(|e| format!("multi-body model: {e:?}"))?;
     let mb_error = max_zmp_error(&run.trajectory, &mb);
-    fs::create_dir_all(out)?;
+    create_dir(out)?;
     let traj = out.join("trajectory.csv");
     write_trajectory(&traj, run, &mb, dt)?;
-    fs::write(out.join("can.log"), sim.can_log.join("\n") + "\n")?;
+    write_file(&out.join("can.log"), sim.can_log.join("\n") + "\n")?;
     let (along, across) = max_fluctuation(run);
-    let refused: Vec<_> = run
-        .events
-        .iter()
-        .filter_map(|e| {
-            e.result
-                .as_ref()
-                .err()
-                .map(|err| json!({"t_s": e.tick as f64 * dt, "error": err}))
-        })
-        .collect();
+    let results = outcomes(&s, &sim);
+    let mut lines = Vec::new();
+    // Notes on commands carried out (steps dropped by the scenario's stop_now), by note.
+    let mut notes: Vec<(String, Vec<String>)> = Vec::new();
+    let mut unexpected = 0;
+    let mut failed = Vec::new();
+    for (o, entry) in results.iter().zip(&entries) {
+        let (expected, line) = outcome_line(o, entry, dt);
+        unexpected += usize::from(!expected);
+        if o.failure.is_some() || !expected {
+            lines.push(line);
+        } else if !o.detail.is_empty() {
+            let what = match o.command {
+                Command::Push(id, _) | Command::Modify(id, _) => id.to_string(),
+                c => describe(&c),
+            };
+            match notes.iter_mut().find(|(d, _)| *d == o.detail) {
+                Some((_, ids)) => ids.push(what),
+                None => notes.push((o.detail.clone(), vec![what])),
+            }
+        }
+        if o.failure.is_some() || !expected {
+            let step_id = match o.command {
+                Command::Push(id, _) | Command::Modify(id, _) => Some(id),
+                _ => None,
+            };
+            failed.push(json!({
+                "t_s": o.tick as f64 * dt,
+                "command": describe(&o.command),
+                "step_id": step_id,
+                "failure": o.failure.map(|f| f.name()),
+                "error": o.detail,
+                "expected": entry.expect.map(|f| f.name()),
+                "as_expected": expected,
+                "entry": entry.label,
+            }));
+        }
+    }
     let summary = json!({
         "scenario": name,
         "about": s.about,
         "duration_s": (run.trajectory.len() - 1) as f64 * dt,
+        "ended_by_max_time": sim.cut,
         "adjust_s": run.adjustments.iter().map(|a| a.adjust_s).collect::<Vec<_>>(),
         "adjustments": run.adjustments.iter().map(|a| json!({
             "t_s": a.tick as f64 * dt, "adjust_s": a.adjust_s, "ratio": a.ratio,
@@ -217,20 +395,27 @@ fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
         "bus_load": sim.bus_load,
         "bus_bitrate": cfg.bitrate,
         "frames_sent": sim.bus.sent,
-        "refused_commands": refused,
+        "refused_commands": failed,
+        "unexpected_outcomes": unexpected,
     });
-    fs::write(
-        out.join("summary.json"),
+    write_file(
+        &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))?;
-    println!("{name}: {}", s.about);
+    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))
+        .map_err(|e| format!("plots in {}: {e}", out.display()))?;
+    if s.about.is_empty() {
+        println!("{name}");
+    } else {
+        println!("{name}: {}", s.about);
+    }
     println!(
-        "  {:.2} s simulated in {} ticks of 5 ms, over a virtual CAN bus at {} kbit/s (load {:.1} %)",
+        "  {:.2} s simulated in {} ticks of 5 ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
         (run.trajectory.len() - 1) as f64 * dt,
         run.trajectory.len() - 1,
         cfg.bitrate / 1000,
-        sim.bus_load * 100.0
+        sim.bus_load * 100.0,
+        if sim.cut { ", ended by max_time_s" } else { "" }
     );
     for a in &run.adjustments {
         println!(
@@ -256,6 +441,23 @@ fn run_scenario(name: &str, out: &Path) -> Result<(), Box<dyn Error>> {
         plots.len(),
         out.display()
     );
+    for (note, ids) in &notes {
+        println!("  steps {}: {note}", ids.join(", "));
+    }
+    if !lines.is_empty() {
+        println!("  commands that failed (time sent, entry: command: what happened):");
+        for l in &lines {
+            println!("{l}");
+        }
+    }
+    if unexpected > 0 {
+        return Err(Unexpected(format!(
+            "{name}: {unexpected} command{} failed, or did not fail, against the scenario's \
+             expectations (listed above; a TOML entry that should fail says so with `expect`)",
+            if unexpected == 1 { "" } else { "s" }
+        ))
+        .into());
+    }
     Ok(())
 }
 
@@ -299,7 +501,7 @@ fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> String {
 
 fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
     let params = GaitParams::<f64>::hrp2();
-    fs::create_dir_all(out)?;
+    create_dir(out)?;
     let n = STEP_LENGTHS.len();
     let mut adjust = vec![vec![0.0; n]; n];
     let mut with = vec![vec![0.0; n]; n];
@@ -344,8 +546,8 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
         "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
     });
-    fs::write(
-        out.join("tables.json"),
+    write_file(
+        &out.join("tables.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
     let mut md = grid_markdown(
@@ -378,7 +580,7 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         });
     }
     md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
-    fs::write(out.join("tables.md"), &md)?;
+    write_file(&out.join("tables.md"), &md)?;
     println!("{md}");
     println!(
         "results: {} and {}",

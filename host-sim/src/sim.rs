@@ -9,10 +9,21 @@
 //!
 //! The trajectory is the node's reference at full precision; the stream decoded by the
 //! controller (1 µm units) is kept to check the link.
+//!
+//! What became of every command ([`outcomes`]): carried out, refused by the node (the
+//! [`Reason`] of its answer), never answered, or accepted and never carried out (a footstep
+//! not walked at its accepted pose: the run ended with it still queued or being swung, it was
+//! dropped without the scenario's own `stop_now`, or it landed elsewhere). A footstep dropped
+//! by an accepted `stop_now` of the scenario counts as carried out: that is what the scenario
+//! asked for. These are the names that a scenario file's `expect` key takes ([`Failure`]).
+//!
+//! Step ids: the bus carries a footstep id in one byte ([`WireId`], 0 … 255); the TOML reader
+//! refuses an id that does not fit, naming the entry, and [`simulate`] refuses one too for
+//! scenarios built in code.
 
-use planner_core::gait::Reference;
+use planner_core::gait::{Footstep, Reference, Side};
 use planner_core::node::{Counters, Node, NodeConfig};
-use planner_core::wire::{Ack, Command, ControlOp, RawFrame, StepBook, Stream};
+use planner_core::wire::{self, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream};
 
 use crate::bus::{Bus, BusStats, Faults};
 use crate::scenario::{self, Adjustment, Event, Run, Scenario};
@@ -49,6 +60,39 @@ impl Default for SimConfig {
     }
 }
 
+/// A footstep id as the bus carries it (byte 0 of `STEP_APPEND` and `STEP_MODIFY`, the
+/// `seq` of their `ACK`): the one definition of the id range, from a scenario file to the
+/// wire.
+pub type WireId = u8;
+
+/// The id of a scenario command as the bus carries it, `None` if it does not fit.
+pub fn wire_id(id: u16) -> Option<WireId> {
+    WireId::try_from(id).ok()
+}
+
+/// What became of a footstep id the controller appended, as the node's gait showed it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fate {
+    /// Never queued (every append of it refused or unanswered).
+    Unseen,
+    /// Queued when the run ended.
+    Queued,
+    /// Being swung when the run ended.
+    Swinging,
+    /// Walked: landed in control cycle `tick` at `pose` (the gait's pose of that foot).
+    Landed {
+        /// The control cycle of the landing.
+        tick: u64,
+        /// Where the foot landed.
+        pose: Footstep<f64>,
+    },
+    /// Left the queue in control cycle `tick` without being swung.
+    Dropped {
+        /// The control cycle.
+        tick: u64,
+    },
+}
+
 /// What a simulation produced.
 #[derive(Clone, Debug)]
 pub struct SimRun {
@@ -66,6 +110,11 @@ pub struct SimRun {
     pub bus: BusStats,
     /// The node's counters at the end.
     pub counters: Counters,
+    /// What became of every footstep id the controller appended, in the order first sent.
+    pub steps: Vec<(u16, Fate)>,
+    /// `true` if the run ended at the scenario's `max_ticks` rather than standing after its
+    /// last command.
+    pub cut: bool,
 }
 
 fn send(port: &mut crate::bus::Port, f: RawFrame) {
@@ -91,6 +140,8 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut footsteps: Vec<(u16, planner_core::gait::Footstep<f64>)> = Vec::new();
     let mut seq: u8 = 0;
     let mut book = StepBook::new();
+    let mut steps: Vec<(u16, Side, Fate)> = Vec::new();
+    let mut cut = true;
     let mut next = 0;
     let mut last_replan = None;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
@@ -100,48 +151,12 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         bus.advance(t0);
         while next < s.timeline.len() && s.timeline[next].0 <= k {
             let (_, command) = s.timeline[next];
-            let wire = match command {
-                scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) => {
-                    let left = f.side == planner_core::gait::Side::Left;
-                    let Ok(wid) = u8::try_from(id) else {
-                        return Err(format!("footstep id {id} does not fit the bus (0 … 255)"));
-                    };
-                    let wire = if matches!(command, scenario::Command::Push(..)) {
-                        book.append(wid, left, f.x, f.y, f.yaw)
-                    } else {
-                        book.modify(wid, f.x, f.y, f.yaw)
-                    };
-                    let Some(w) = wire else {
-                        return Err(format!(
-                            "footstep {id} at ({:.4}, {:.4}) m is not representable on the bus \
-                             (x, y within ±32.77 m; a modification within ±4.096 m of the append)",
-                            f.x, f.y
-                        ));
-                    };
-                    w
+            let wire = encode(command, &mut seq, &mut book)?;
+            if let scenario::Command::Push(id, f) = command {
+                if !steps.iter().any(|(i, _, _)| *i == id) {
+                    steps.push((id, f.side, Fate::Unseen));
                 }
-                scenario::Command::Start => {
-                    seq = seq.wrapping_add(1);
-                    Command::Control {
-                        seq,
-                        op: ControlOp::Start,
-                    }
-                }
-                scenario::Command::Stop => {
-                    seq = seq.wrapping_add(1);
-                    Command::Control {
-                        seq,
-                        op: ControlOp::Stop,
-                    }
-                }
-                scenario::Command::StopNow => {
-                    seq = seq.wrapping_add(1);
-                    Command::Control {
-                        seq,
-                        op: ControlOp::StopNow,
-                    }
-                }
-            };
+            }
             send(&mut ctl, wire.encode());
             events.push((k, command, wire));
             next += 1;
@@ -161,6 +176,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         let now_ms = (t0 / ms) as u32 + 2;
         let report = node.poll(now_ms, &mut nport);
         trajectory.push(report.reference);
+        track_steps(node.gait(), k, &mut steps);
         if let Some(info) = node.gait().last_replan() {
             if last_replan != Some(info.tick) {
                 last_replan = Some(info.tick);
@@ -184,6 +200,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         }
         streams.push(stream);
         if node.gait().is_standing() && k > last_command && next >= s.timeline.len() {
+            cut = false;
             break;
         }
     }
@@ -234,7 +251,301 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         bus_load: bus.load(),
         bus: bus.stats(),
         counters: *node.counters(),
+        steps: steps.into_iter().map(|(id, _, f)| (id, f)).collect(),
+        cut,
     })
+}
+
+/// The frame of a scenario command: footsteps through the controller's step book, control
+/// commands with the next sequence number.
+fn encode(
+    command: scenario::Command,
+    seq: &mut u8,
+    book: &mut StepBook,
+) -> Result<Command, String> {
+    let control = |seq: &mut u8, op| {
+        *seq = seq.wrapping_add(1);
+        Ok(Command::Control { seq: *seq, op })
+    };
+    match command {
+        scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) => {
+            let left = f.side == Side::Left;
+            let Some(wid) = wire_id(id) else {
+                return Err(format!(
+                    "footstep id {id} does not fit the bus (0 … {})",
+                    WireId::MAX
+                ));
+            };
+            // The limits as the codec has them.
+            let limits = |bits| {
+                let (min, max) = wire::signed_range(bits);
+                (
+                    f64::from(min) * wire::STEP_UNIT,
+                    f64::from(max) * wire::STEP_UNIT,
+                )
+            };
+            if let scenario::Command::Push(..) = command {
+                book.append(wid, left, f.x, f.y, f.yaw).ok_or_else(|| {
+                    let (min, max) = limits(wire::STEP_BITS);
+                    format!(
+                        "footstep {id} at ({}, {}) m is not representable on the bus: \
+                         STEP_APPEND carries x and y within {min} … {max} m",
+                        f.x, f.y
+                    )
+                })
+            } else {
+                let Some(base) = book.appended(wid) else {
+                    return Err(format!(
+                        "modification of footstep {id}: no append of step {id} was sent \
+                         before it, and STEP_MODIFY carries the offset from the appended \
+                         position"
+                    ));
+                };
+                let (bx, by, _) = base.si();
+                book.modify(wid, f.x, f.y, f.yaw).ok_or_else(|| {
+                    let (min, max) = limits(wire::OFFSET_BITS);
+                    format!(
+                        "modification of footstep {id} to ({}, {}) m is not representable on \
+                         the bus: it is ({:+.4}, {:+.4}) m from the appended ({bx:.4}, \
+                         {by:.4}) m, STEP_MODIFY carries offsets within {min} … {max} m",
+                        f.x,
+                        f.y,
+                        f.x - bx,
+                        f.y - by
+                    )
+                })
+            }
+        }
+        scenario::Command::Start => control(seq, ControlOp::Start),
+        scenario::Command::Stop => control(seq, ControlOp::Stop),
+        scenario::Command::StopNow => control(seq, ControlOp::StopNow),
+    }
+}
+
+/// Checks that every command of `s` can be sent on the bus, as [`simulate`] would send it;
+/// on failure, the index of the first command that cannot and why.
+pub fn wire_check(s: &Scenario) -> Result<(), (usize, String)> {
+    let (mut seq, mut book) = (0, StepBook::new());
+    for (i, &(_, command)) in s.timeline.iter().enumerate() {
+        encode(command, &mut seq, &mut book).map_err(|e| (i, e))?;
+    }
+    Ok(())
+}
+
+/// Follows every appended footstep through the gait after control cycle `k`.
+fn track_steps(g: &planner_core::gait::Gait<f64, 64>, k: u64, steps: &mut [(u16, Side, Fate)]) {
+    let swinging = g.swinging();
+    for (id, side, fate) in steps.iter_mut() {
+        let now = if swinging == Some(*id) {
+            Some(Fate::Swinging)
+        } else if g.is_queued(*id) {
+            Some(Fate::Queued)
+        } else {
+            None
+        };
+        *fate = match (*fate, now) {
+            (_, Some(f)) => f,
+            (Fate::Swinging, None) => Fate::Landed {
+                tick: k,
+                pose: g.feet()[usize::from(*side == Side::Right)],
+            },
+            (Fate::Queued, None) => Fate::Dropped { tick: k },
+            (f, None) => f,
+        };
+    }
+}
+
+/// A way a command can fail: the names a scenario file's `expect` key takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Failure {
+    /// The node refused it: `ACK` with this reason (name: the reason's, as in the DBC's
+    /// `VAL_ 128 reason` table, e.g. `reach`).
+    Refused(Reason),
+    /// No answer came (`no_answer`).
+    NoAnswer,
+    /// Accepted, never carried out: a footstep not walked at its accepted pose
+    /// (`not_walked`).
+    NotWalked,
+}
+
+/// The name of a refusal reason: the snake case of the variant, as in the DBC's value table
+/// (`Reason::SequenceGap` is `sequence_gap`).
+pub fn reason_name(r: Reason) -> String {
+    let mut out = String::new();
+    for (i, c) in format!("{r:?}").chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+impl Failure {
+    /// Every failure, in the order of their names' documentation.
+    pub fn all() -> impl Iterator<Item = Failure> {
+        Reason::ALL
+            .into_iter()
+            .map(Failure::Refused)
+            .chain([Failure::NoAnswer, Failure::NotWalked])
+    }
+
+    /// The name (`reach`, `sequence_gap`, …, `no_answer`, `not_walked`).
+    pub fn name(self) -> String {
+        match self {
+            Failure::Refused(r) => reason_name(r),
+            Failure::NoAnswer => "no_answer".into(),
+            Failure::NotWalked => "not_walked".into(),
+        }
+    }
+
+    /// From a name ([`Failure::name`]; `out_of_reach` is also `reach`).
+    pub fn from_name(name: &str) -> Option<Failure> {
+        if name == "out_of_reach" {
+            return Some(Failure::Refused(Reason::Reach));
+        }
+        Failure::all().find(|f| f.name() == name)
+    }
+}
+
+/// What became of one command of the timeline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// The control cycle it was sent in.
+    pub tick: u64,
+    /// The command.
+    pub command: scenario::Command,
+    /// `None`: accepted and carried out.
+    pub failure: Option<Failure>,
+    /// What happened, in words (for a failure: why; otherwise empty, or a note such as a step
+    /// dropped by the scenario's `stop_now`).
+    pub detail: String,
+}
+
+/// Same pose within the wire's resolution (0.5 mm, 2π/4096 rad) and some rounding.
+fn same_pose(a: &Footstep<f64>, b: &Footstep<f64>) -> bool {
+    let dyaw = (a.yaw - b.yaw + core::f64::consts::PI).rem_euclid(core::f64::consts::TAU)
+        - core::f64::consts::PI;
+    a.side == b.side && (a.x - b.x).abs() <= 5e-4 && (a.y - b.y).abs() <= 5e-4 && dyaw.abs() <= 2e-3
+}
+
+/// What became of every command of a run of `s` ([`simulate`]), in timeline order.
+pub fn outcomes(s: &Scenario, sim: &SimRun) -> Vec<Outcome> {
+    let dt = crate::toml_scenario::TICK_S;
+    let end_s = (sim.run.trajectory.len() - 1) as f64 * dt;
+    let stop_now_at: Vec<u64> = sim
+        .run
+        .events
+        .iter()
+        .filter(|e| e.result.is_ok() && e.command == scenario::Command::StopNow)
+        .map(|e| e.tick)
+        .collect();
+    sim.run
+        .events
+        .iter()
+        .map(|e| {
+            let (failure, detail) = match (&e.result, e.command) {
+                (Err(r), _) => match Reason::ALL.into_iter().find(|x| format!("{x:?}") == *r) {
+                    Some(reason) => (
+                        Some(Failure::Refused(reason)),
+                        format!("refused: {} (code {})", reason_name(reason), reason.code()),
+                    ),
+                    None => (
+                        Some(Failure::NoAnswer),
+                        format!("{r}: the node never answered"),
+                    ),
+                },
+                (Ok(()), scenario::Command::Push(id, _) | scenario::Command::Modify(id, _)) => {
+                    let wanted = sim
+                        .run
+                        .footsteps
+                        .iter()
+                        .find(|(i, _)| *i == id)
+                        .map(|p| p.1);
+                    let fate = sim
+                        .steps
+                        .iter()
+                        .find(|(i, _)| *i == id)
+                        .map_or(Fate::Unseen, |p| p.1);
+                    step_outcome(fate, wanted, &stop_now_at, sim.cut, end_s, s.max_ticks, dt)
+                }
+                (Ok(()), _) => (None, String::new()),
+            };
+            Outcome {
+                tick: e.tick,
+                command: e.command,
+                failure,
+                detail,
+            }
+        })
+        .collect()
+}
+
+fn step_outcome(
+    fate: Fate,
+    wanted: Option<Footstep<f64>>,
+    stop_now_at: &[u64],
+    cut: bool,
+    end_s: f64,
+    max_ticks: u64,
+    dt: f64,
+) -> (Option<Failure>, String) {
+    let not = |why: String| {
+        (
+            Some(Failure::NotWalked),
+            format!("accepted, never walked: {why}"),
+        )
+    };
+    let pose = |f: &Footstep<f64>| format!("({:.4}, {:.4}) m, {:.4} rad", f.x, f.y, f.yaw);
+    match fate {
+        Fate::Landed { tick, pose: p } => match wanted {
+            Some(w) if !same_pose(&p, &w) => (
+                Some(Failure::NotWalked),
+                format!(
+                    "accepted, walked elsewhere: landed at {} at {:.3} s, the accepted pose is {}",
+                    pose(&p),
+                    tick as f64 * dt,
+                    pose(&w)
+                ),
+            ),
+            _ => (None, String::new()),
+        },
+        Fate::Dropped { tick } => match stop_now_at
+            .iter()
+            .rev()
+            .find(|&&t| t <= tick && tick - t <= 1)
+        {
+            Some(&t) => (
+                None,
+                format!(
+                    "dropped by the scenario's stop_now at {:.3} s",
+                    t as f64 * dt
+                ),
+            ),
+            None => not(format!(
+                "dropped from the queue at {:.3} s without a stop_now of the scenario",
+                tick as f64 * dt
+            )),
+        },
+        Fate::Queued | Fate::Swinging if cut => not(format!(
+            "{} when max_time_s ({:.3} s) ended the run",
+            if fate == Fate::Queued {
+                "still queued"
+            } else {
+                "still being swung"
+            },
+            max_ticks as f64 * dt
+        )),
+        Fate::Queued | Fate::Swinging => not(format!(
+            "still queued when the run ended at {end_s:.3} s with the robot standing (no start \
+             after it?)"
+        )),
+        Fate::Unseen => not("the node never queued it".into()),
+    }
 }
 
 /// The reference trajectory a run published.

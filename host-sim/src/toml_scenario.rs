@@ -10,12 +10,14 @@
 //! right = { x = 0.0, y = -0.1 }    # yaw is optional everywhere (default 0)
 //!
 //! [[step]]                         # append footstep `id` to the queue
-//! id = 0                           # 0 … 65535, unique among the [[step]] entries
+//! id = 0                           # 0 … 255 (the bus's one-byte step id), unique among
+//!                                  # the [[step]] entries
 //! side = "right"                   # "left" | "right"
 //! x = 0.2                          # sole centre [m]
 //! y = -0.1                         # sole centre [m]
 //! yaw = 0.0                        # heading [rad] (default 0)
 //! at_s = 0.0                       # when [s] (default 0)
+//! expect = "reach"                 # optional, on any entry: see "Expected failures"
 //!
 //! [[command]]
 //! at_s = 0.1                       # when [s] (required)
@@ -39,10 +41,33 @@
 //! and several modifications at one tick keep the order written, which matters for the
 //! feasibility check of each.)
 //!
-//! Rejected, with a message naming the entry: TOML syntax errors, unknown keys, missing
+//! ## Expected failures
+//!
+//! `host-sim run` reports every command that failed, with its time, step id and reason, and
+//! exits with status 1 when one failed that its entry did not expect. An entry expects a
+//! failure with `expect = "NAME"`, and then that failure must happen (a command that succeeds
+//! against its expectation is reported too). The names:
+//!
+//! * a refusal: the node's reason, as in the DBC's `VAL_ 128 reason` table
+//!   (`host-sim/can/walking.dbc`): `unknown_id`, `bad_length`, `out_of_range`, `queue_full`,
+//!   `side_order`, `unknown_step`, `lifted_off`, `infeasible`, `wrong_state`,
+//!   `sequence_gap` (ids must count from 0), `duplicate`, `reach` (alias `out_of_reach`),
+//!   `crossing`, `emergency_stopped`, `plan_failed`, `bad_crc`, `stale`, `controller_lost`;
+//! * `no_answer`: the node never answered the command;
+//! * `not_walked` (`[[step]]` and `[[modify]]` only): the node accepted the footstep but never
+//!   walked it at that pose: the run ended with it queued (no `start`, or `max_time_s` cut the
+//!   walk) or being swung, it left the queue without a `stop_now` of the scenario, or it
+//!   landed elsewhere. Every accepted entry about that step fails so (its `[[step]]` and its
+//!   accepted `[[modify]]` entries). Steps that the scenario's own accepted `stop_now` drops
+//!   are carried out: that is what it asked for.
+//!
+//! Rejected, with a message naming the entry (and its line): TOML syntax errors, unknown keys, missing
 //! required keys, wrong types, unknown sides or command kinds, negative, non-finite or huge
-//! times, non-finite coordinates, duplicate step ids, a `[[modify]]` of an id that no
-//! `[[step]]` defines and without a `side`, an empty name and a non-positive `max_time_s`.
+//! times, non-finite coordinates, step ids outside 0 … 255 (the bus carries one byte:
+//! [`crate::sim::WireId`]), duplicate step ids, a `[[modify]]` of an id that no `[[step]]`
+//! defines and without a `side`, unknown `expect` names and `not_walked` on a `[[command]]`,
+//! an empty name and a non-positive `max_time_s`. ([`load_file`] also refuses an entry that
+//! cannot be put on the bus, e.g. a modification more than 4.096 m from its append.)
 //! Whether a command makes sense for the gait (alternating feet, reachable steps, …) is left to
 //! the gait: it answers every command when the scenario runs.
 
@@ -51,8 +76,10 @@ use std::path::Path;
 
 use planner_core::gait::{Footstep, Side};
 use serde::Deserialize;
+use toml::Spanned;
 
 use crate::scenario::{Command, Scenario};
+use crate::sim::{Failure, WireId};
 
 /// The scenario tick \[s\] (the HRP-2 control period).
 pub const TICK_S: f64 = 0.005;
@@ -72,11 +99,11 @@ struct File {
     max_time_s: Option<f64>,
     feet: Option<Feet>,
     #[serde(default)]
-    step: Vec<StepEntry>,
+    step: Vec<Spanned<StepEntry>>,
     #[serde(default)]
-    command: Vec<CommandEntry>,
+    command: Vec<Spanned<CommandEntry>>,
     #[serde(default)]
-    modify: Vec<ModifyEntry>,
+    modify: Vec<Spanned<ModifyEntry>>,
 }
 
 #[derive(Deserialize)]
@@ -114,13 +141,14 @@ impl From<SideName> for Side {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct StepEntry {
-    id: u16,
+    id: i64,
     side: SideName,
     x: f64,
     y: f64,
     #[serde(default)]
     yaw: f64,
     at_s: Option<f64>,
+    expect: Option<String>,
 }
 
 #[derive(Clone, Copy, Deserialize)]
@@ -136,18 +164,20 @@ enum Kind {
 struct CommandEntry {
     at_s: f64,
     kind: Kind,
+    expect: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ModifyEntry {
     at_s: f64,
-    id: u16,
+    id: i64,
     side: Option<SideName>,
     x: f64,
     y: f64,
     #[serde(default)]
     yaw: f64,
+    expect: Option<String>,
 }
 
 /// A time in seconds as a tick count (rounded to the nearest tick).
@@ -177,8 +207,70 @@ fn footstep(what: &str, side: Side, x: f64, y: f64, yaw: f64) -> Result<Footstep
     Ok(Footstep::new(side, x, y, yaw))
 }
 
+/// The line (from 1) of byte `offset` of `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    1 + text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+/// A step id as the bus carries it ([`WireId`]).
+fn step_id(what: &str, id: i64) -> Result<u16, String> {
+    WireId::try_from(id).map(u16::from).map_err(|_| {
+        format!(
+            "{what}: step id {id} does not fit the bus (STEP_APPEND and STEP_MODIFY carry it \
+             in one byte: 0 … {})",
+            WireId::MAX
+        )
+    })
+}
+
+/// The `expect` key of an entry.
+fn expectation(what: &str, name: Option<&str>, footstep: bool) -> Result<Option<Failure>, String> {
+    let Some(name) = name else { return Ok(None) };
+    let f = Failure::from_name(name).ok_or_else(|| {
+        format!(
+            "{what}: unknown expect = {name:?}; one of: {} (or out_of_reach for reach)",
+            Failure::all()
+                .map(Failure::name)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })?;
+    if f == Failure::NotWalked && !footstep {
+        return Err(format!(
+            "{what}: expect = \"not_walked\" is for [[step]] and [[modify]] entries"
+        ));
+    }
+    Ok(Some(f))
+}
+
+/// One entry of a scenario file, as [`ScenarioFile::entries`] lists them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// The entry named as in error messages: `[[step]] #3 (id 2) at line 14`.
+    pub label: String,
+    /// The failure it expects (`expect`), if any.
+    pub expect: Option<Failure>,
+}
+
+/// A scenario file: the scenario, and the entry behind each command of its timeline.
+#[derive(Clone, Debug)]
+pub struct ScenarioFile {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// `entries[i]` is the file's entry for `scenario.timeline[i]`.
+    pub entries: Vec<Entry>,
+}
+
 /// Parses a scenario from TOML text (format in the module documentation).
 pub fn parse(text: &str) -> Result<Scenario, String> {
+    parse_file(text).map(|f| f.scenario)
+}
+
+/// Parses a scenario from TOML text, with the entry behind each command.
+pub fn parse_file(text: &str) -> Result<ScenarioFile, String> {
     let file: File = toml::from_str(text).map_err(|e| format!("invalid scenario TOML: {e}"))?;
     if file.name.trim().is_empty() {
         return Err("`name` must not be empty".into());
@@ -201,57 +293,90 @@ pub fn parse(text: &str) -> Result<Scenario, String> {
         ],
     };
 
-    // (tick, class, command): class orders the kinds of entries within a tick.
-    let mut timeline: Vec<(u64, u8, Command)> = Vec::new();
+    // (tick, class, command, entry): class orders the kinds of entries within a tick.
+    let mut timeline: Vec<(u64, u8, Command, Entry)> = Vec::new();
     let mut sides: HashMap<u16, (usize, Side)> = HashMap::new();
-    for (i, s) in file.step.iter().enumerate() {
-        let what = format!("[[step]] #{} (id {})", i + 1, s.id);
-        if let Some((first, _)) = sides.get(&s.id) {
+    for (i, spanned) in file.step.iter().enumerate() {
+        let s = spanned.get_ref();
+        let line = line_of(text, spanned.span().start);
+        let what = format!("[[step]] #{} (id {}) at line {line}", i + 1, s.id);
+        let id = step_id(&what, s.id)?;
+        if let Some((first, _)) = sides.get(&id) {
             return Err(format!(
-                "{what}: duplicate step id {} (already used by [[step]] #{})",
-                s.id,
+                "{what}: duplicate step id {id} (already used by [[step]] #{})",
                 first + 1
             ));
         }
         let tick = ticks(&format!("{what}: at_s"), s.at_s.unwrap_or(0.0))?;
         let f = footstep(&what, s.side.into(), s.x, s.y, s.yaw)?;
-        sides.insert(s.id, (i, f.side));
-        timeline.push((tick, 0, Command::Push(s.id, f)));
+        let expect = expectation(&what, s.expect.as_deref(), true)?;
+        sides.insert(id, (i, f.side));
+        let entry = Entry {
+            label: what,
+            expect,
+        };
+        timeline.push((tick, 0, Command::Push(id, f), entry));
     }
-    for (i, m) in file.modify.iter().enumerate() {
-        let what = format!("[[modify]] #{} (id {})", i + 1, m.id);
-        let side = match (m.side, sides.get(&m.id)) {
+    for (i, spanned) in file.modify.iter().enumerate() {
+        let m = spanned.get_ref();
+        let line = line_of(text, spanned.span().start);
+        let what = format!("[[modify]] #{} (id {}) at line {line}", i + 1, m.id);
+        let id = step_id(&what, m.id)?;
+        let side = match (m.side, sides.get(&id)) {
             (Some(s), _) => s.into(),
             (None, Some(&(_, s))) => s,
             (None, None) => {
                 return Err(format!(
-                    "{what}: no [[step]] has id {}: give `side` to modify a step that this \
-                     file does not define",
-                    m.id
+                    "{what}: no [[step]] has id {id}: give `side` to modify a step that this \
+                     file does not define"
                 ))
             }
         };
         let tick = ticks(&format!("{what}: at_s"), m.at_s)?;
         let f = footstep(&what, side, m.x, m.y, m.yaw)?;
-        timeline.push((tick, 1, Command::Modify(m.id, f)));
+        let expect = expectation(&what, m.expect.as_deref(), true)?;
+        let entry = Entry {
+            label: what,
+            expect,
+        };
+        timeline.push((tick, 1, Command::Modify(id, f), entry));
     }
-    for (i, c) in file.command.iter().enumerate() {
-        let tick = ticks(&format!("[[command]] #{}: at_s", i + 1), c.at_s)?;
+    for (i, spanned) in file.command.iter().enumerate() {
+        let c = spanned.get_ref();
+        let line = line_of(text, spanned.span().start);
+        let what = format!("[[command]] #{} at line {line}", i + 1);
+        let tick = ticks(&format!("{what}: at_s"), c.at_s)?;
         let command = match c.kind {
             Kind::Start => Command::Start,
             Kind::Stop => Command::Stop,
             Kind::StopNow => Command::StopNow,
         };
-        timeline.push((tick, 2, command));
+        let expect = expectation(&what, c.expect.as_deref(), false)?;
+        let entry = Entry {
+            label: what,
+            expect,
+        };
+        timeline.push((tick, 2, command, entry));
     }
     // Stable: file order is kept within a tick and a class.
-    timeline.sort_by_key(|&(tick, class, _)| (tick, class));
-    Ok(Scenario {
-        name: file.name,
-        about: file.about,
-        feet,
-        timeline: timeline.into_iter().map(|(t, _, c)| (t, c)).collect(),
-        max_ticks,
+    timeline.sort_by_key(|&(tick, class, _, _)| (tick, class));
+    let mut entries = Vec::with_capacity(timeline.len());
+    let timeline = timeline
+        .into_iter()
+        .map(|(t, _, c, e)| {
+            entries.push(e);
+            (t, c)
+        })
+        .collect();
+    Ok(ScenarioFile {
+        scenario: Scenario {
+            name: file.name,
+            about: file.about,
+            feet,
+            timeline,
+            max_ticks,
+        },
+        entries,
     })
 }
 
@@ -260,4 +385,16 @@ pub fn load(path: &Path) -> Result<Scenario, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Reads and parses a scenario file, with the entry behind each command, and checks that
+/// every command can be put on the bus ([`crate::sim::wire_check`]); errors name the file
+/// and the entry.
+pub fn load_file(path: &Path) -> Result<ScenarioFile, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let file = parse_file(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::sim::wire_check(&file.scenario)
+        .map_err(|(i, e)| format!("{}: {}: {e}", path.display(), file.entries[i].label))?;
+    Ok(file)
 }

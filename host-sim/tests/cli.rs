@@ -1,0 +1,370 @@
+//! The `host-sim` command line, run as a process: `run` prints every command that failed
+//! (time, step id, reason) and exits 1 unless the scenario expects it; step ids that do not
+//! fit the bus are refused when the file is read, naming the entry; clap's `--help`,
+//! `--version` and usage errors; errors that name the path they concern.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use host_sim::sim::Failure;
+
+/// A fresh directory of this test process.
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("host-sim-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temporary directory");
+    d
+}
+
+fn host_sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("run host-sim")
+}
+
+/// Standard output and standard error together.
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Writes `toml` as `<name>.toml` and runs it into `<dir>/out`.
+fn run_toml(name: &str, toml: &str) -> (Output, String, PathBuf) {
+    let dir = temp_dir(name);
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, toml).expect("scenario file");
+    let out = dir.join("out");
+    let o = host_sim(&[
+        "run",
+        file.to_str().expect("UTF-8 path"),
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ]);
+    let t = text(&o);
+    (o, t, out)
+}
+
+fn step(id: i64, side: &str, x: f64, y: f64, extra: &str) -> String {
+    format!("[[step]]\nid = {id}\nside = \"{side}\"\nx = {x}\ny = {y}\n{extra}\n")
+}
+
+const START_STOP: &str =
+    "[[command]]\nat_s = 0.1\nkind = \"start\"\n\n[[command]]\nat_s = 0.1\nkind = \"stop\"\n";
+
+/// Two 0.2 m steps, then a left step 0.7 m ahead of the right one (out of reach).
+fn out_of_reach(expect: &str) -> String {
+    format!(
+        "name = \"reach\"\n{}{}{}{START_STOP}",
+        step(0, "right", 0.2, -0.1, ""),
+        step(1, "left", 0.4, 0.1, ""),
+        step(2, "right", 1.1, -0.1, expect),
+    )
+}
+
+fn assert_has(t: &str, needles: &[&str]) {
+    for n in needles {
+        assert!(t.contains(n), "output does not mention {n:?}:\n{t}");
+    }
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    let s = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&s).expect("summary.json is JSON")
+}
+
+#[test]
+fn a_refusal_is_printed_and_fails_the_run() {
+    let (o, t, out) = run_toml("reach", &out_of_reach(""));
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    // Time sent, entry (with its line), step id, reason name and code.
+    assert_has(
+        &t,
+        &[
+            "0.000 s, [[step]] #3 (id 2) at line 14",
+            "step 2 (append, right at (1.1000, -0.1000) m",
+            "refused: reach (code 12)",
+            "UNEXPECTED",
+        ],
+    );
+    // The outputs are still written, and the summary has the step id and the reason.
+    let s = summary(&out);
+    let refused = s["refused_commands"].as_array().expect("list");
+    assert_eq!(refused.len(), 1, "{s}");
+    assert_eq!(refused[0]["step_id"], 2);
+    assert_eq!(refused[0]["failure"], "reach");
+    assert_eq!(refused[0]["as_expected"], false);
+    assert_eq!(s["unexpected_outcomes"], 1);
+}
+
+#[test]
+fn an_expected_refusal_passes() {
+    for name in ["reach", "out_of_reach"] {
+        let (o, t, out) = run_toml(
+            &format!("expect-{name}"),
+            &out_of_reach(&format!("expect = \"{name}\"")),
+        );
+        assert_eq!(o.status.code(), Some(0), "{t}");
+        assert_has(
+            &t,
+            &[
+                "step 2 (append",
+                "refused: reach (code 12) (expected reach)",
+            ],
+        );
+        assert!(!t.contains("UNEXPECTED"), "{t}");
+        assert_eq!(summary(&out)["unexpected_outcomes"], 0);
+    }
+}
+
+#[test]
+fn an_expectation_that_does_not_happen_fails_the_run() {
+    let text = format!(
+        "name = \"wrong\"\n{}{}{START_STOP}",
+        step(0, "right", 0.2, -0.1, "expect = \"reach\""),
+        step(1, "left", 0.2, 0.1, ""),
+    );
+    let (o, t, _) = run_toml("wrong-expectation", &text);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert_has(&t, &["step 0 (append", "carried out, but expected reach"]);
+}
+
+#[test]
+fn ids_from_one_are_a_sequence_gap() {
+    let text = format!(
+        "name = \"from1\"\n{}{}{START_STOP}",
+        step(1, "right", 0.2, -0.1, ""),
+        step(2, "left", 0.2, 0.1, ""),
+    );
+    let (o, t, _) = run_toml("from1", &text);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert_has(
+        &t,
+        &[
+            "[[step]] #1 (id 1) at line 2: step 1 (append",
+            "refused: sequence_gap (code 10)",
+        ],
+    );
+}
+
+#[test]
+fn steps_without_a_start_never_take_effect() {
+    let text = format!(
+        "name = \"nostart\"\n{}{}",
+        step(0, "right", 0.2, -0.1, ""),
+        step(1, "left", 0.2, 0.1, ""),
+    );
+    let (o, t, _) = run_toml("nostart", &text);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert_has(
+        &t,
+        &[
+            "step 0 (append",
+            "step 1 (append",
+            "accepted, never walked: still queued",
+            "no start",
+        ],
+    );
+    // Expected, it passes.
+    let text = format!(
+        "name = \"nostart\"\n{}{}",
+        step(0, "right", 0.2, -0.1, "expect = \"not_walked\""),
+        step(1, "left", 0.2, 0.1, "expect = \"not_walked\""),
+    );
+    let (o, t, _) = run_toml("nostart-expected", &text);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+}
+
+#[test]
+fn a_walk_cut_by_max_time_is_reported() {
+    let text = format!(
+        "name = \"cut\"\nmax_time_s = 2.0\n{}{}{}{START_STOP}",
+        step(0, "right", 0.2, -0.1, ""),
+        step(1, "left", 0.4, 0.1, ""),
+        step(2, "right", 0.4, -0.1, ""),
+    );
+    let (o, t, out) = run_toml("cut", &text);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert_has(
+        &t,
+        &[
+            "ended by max_time_s",
+            "step 2 (append",
+            "accepted, never walked: still queued when max_time_s (2.000 s) ended the run",
+        ],
+    );
+    assert!(!t.contains("step 0 (append"), "step 0 was walked:\n{t}");
+    assert_eq!(summary(&out)["ended_by_max_time"], true);
+}
+
+#[test]
+fn step_id_256_is_refused_when_the_file_is_read() {
+    let text = format!("name = \"big\"\n{}", step(256, "right", 0.2, -0.1, ""));
+    let (o, t, out) = run_toml("id256", &text);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert_has(
+        &t,
+        &[
+            "id256.toml",
+            "[[step]] #1 (id 256) at line 2",
+            "step id 256 does not fit the bus",
+            "0 … 255",
+        ],
+    );
+    assert!(!out.exists(), "nothing is run");
+    // The same for a modification, and 255 is fine.
+    let e = host_sim::toml_scenario::parse(
+        "name = \"m\"\n[[modify]]\nat_s = 0.0\nid = 300\nside = \"left\"\nx = 0.0\ny = 0.0\n",
+    )
+    .unwrap_err();
+    assert!(e.contains("[[modify]] #1 (id 300) at line 2"), "{e}");
+    let s = host_sim::toml_scenario::parse(&format!(
+        "name = \"ok\"\n{}",
+        step(255, "right", 0.2, -0.1, "")
+    ))
+    .expect("id 255 fits");
+    assert_eq!(s.timeline.len(), 1);
+}
+
+#[test]
+fn a_modification_the_bus_cannot_carry_is_refused_naming_the_entry() {
+    let text = format!(
+        "name = \"far\"\n{}\n[[modify]]\nat_s = 0.05\nid = 0\nx = 5.0\ny = -0.1\n",
+        step(0, "right", 0.2, -0.1, "")
+    );
+    let (o, t, _) = run_toml("far", &text);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert_has(
+        &t,
+        &[
+            "far.toml",
+            "[[modify]] #1 (id 0) at line 9",
+            "(+4.8000, +0.0000) m from the appended",
+            "-4.096 … 4.0955 m",
+        ],
+    );
+}
+
+#[test]
+fn every_dbc_reason_name_is_an_expectation() {
+    let dbc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("can/walking.dbc"))
+            .expect("walking.dbc");
+    let table = dbc
+        .lines()
+        .find(|l| l.starts_with("VAL_ 128 reason "))
+        .expect("the reason value table");
+    let names: Vec<&str> = table.split('"').skip(1).step_by(2).collect();
+    assert_eq!(names.len(), 19, "{table}");
+    for name in names.iter().filter(|&&n| n != "accepted") {
+        let f = Failure::from_name(name).unwrap_or_else(|| panic!("{name}"));
+        assert_eq!(f.name(), *name);
+        let text = format!(
+            "name = \"n\"\n{}",
+            step(0, "right", 0.2, -0.1, &format!("expect = \"{name}\""))
+        );
+        host_sim::toml_scenario::parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    let e = host_sim::toml_scenario::parse(&format!(
+        "name = \"n\"\n{}",
+        step(0, "right", 0.2, -0.1, "expect = \"far\"")
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("unknown expect = \"far\"") && e.contains("not_walked"),
+        "{e}"
+    );
+}
+
+#[test]
+fn help_lists_every_subcommand() {
+    let o = host_sim(&["--help"]);
+    assert!(o.status.success());
+    let t = text(&o);
+    for sub in ["list", "run", "tables", "node"] {
+        assert!(
+            t.lines().any(|l| l.trim_start().starts_with(sub)),
+            "--help does not list {sub}:\n{t}"
+        );
+    }
+    let o = host_sim(&["--version"]);
+    assert!(o.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        format!("host-sim {}", env!("CARGO_PKG_VERSION"))
+    );
+}
+
+#[test]
+fn usage_errors() {
+    for (args, needle) in [
+        (&["run", "straight", "--bogus"][..], "--bogus"),
+        (&["--bogus"][..], "--bogus"),
+        (&["run", "straight", "--out"][..], "--out"),
+        (&["run"][..], "SCENARIO"),
+        (&["jump"][..], "jump"),
+        (&["node", "can0", "--seconds", "-1"][..], "-1"),
+    ] {
+        let o = host_sim(args);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {t}");
+        assert!(t.contains("error") && t.contains(needle), "{args:?}: {t}");
+    }
+    let o = host_sim(&["run", "nonexistent"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_has(&text(&o), &["unknown scenario \"nonexistent\"", "straight"]);
+    let o = host_sim(&["run", "/nonexistent/walk.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_has(&text(&o), &["/nonexistent/walk.toml"]);
+}
+
+#[test]
+fn an_unwritable_out_names_the_path() {
+    let dir = temp_dir("unwritable");
+    // A path through a regular file cannot be a directory, whoever runs the test (root too).
+    let blocker = dir.join("file");
+    std::fs::write(&blocker, "").expect("file");
+    let out = blocker.join("out");
+    let out = out.to_str().expect("UTF-8 path");
+    for args in [
+        &["run", "straight", "--out", out][..],
+        &["tables", "--out", out][..],
+    ] {
+        let o = host_sim(args);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {t}");
+        assert_has(&t, &[out, "output directory"]);
+    }
+}
+
+#[cfg(not(feature = "socketcan"))]
+#[test]
+fn node_without_the_feature_names_the_interface() {
+    let o = host_sim(&["node", "can7"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_has(&text(&o), &["can7", "socketcan"]);
+}
+
+#[test]
+fn the_built_in_scenarios_pass() {
+    let dir = temp_dir("built-in");
+    for name in host_sim::scenario::BUILT_IN {
+        let out = dir.join(name);
+        let o = host_sim(&["run", name, "--out", out.to_str().expect("UTF-8 path")]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", text(&o));
+        assert_eq!(summary(&out)["unexpected_outcomes"], 0, "{name}");
+    }
+    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    for f in ["fig4.toml", "lateral.toml"] {
+        let o = host_sim(&[
+            "run",
+            scenarios.join(f).to_str().expect("UTF-8 path"),
+            "--out",
+            dir.join(f).to_str().expect("UTF-8 path"),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{f}: {}", text(&o));
+    }
+}
