@@ -3,9 +3,9 @@
 //! ```text
 //! host-sim                         the default demo (the `straight` scenario into out/demo)
 //! host-sim list                    the built-in scenarios
-//! host-sim run <scenario|file.toml> [--out DIR]
+//! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
-//! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
+//! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
 //! `run` prints every command that failed (refused by the node, never answered, or accepted
@@ -21,11 +21,12 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::multibody::{evaluate, max_zmp_error, Hrp2, MbSample};
+use host_sim::multibody::{evaluate, max_zmp_error, MbSample, Model};
 use host_sim::paper::{
     self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
     PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
+use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
@@ -62,6 +63,9 @@ enum Cmd {
         /// The output directory [default: out/<scenario name>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// Recompute the paper's Tables I and II (and the Fig. 4 adjustment).
     Tables {
@@ -76,6 +80,9 @@ enum Cmd {
         /// Stop after this many seconds (default: run until killed).
         #[arg(long, value_name = "S", value_parser = positive_seconds, allow_negative_numbers = true)]
         seconds: Option<f64>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
 }
 
@@ -112,7 +119,7 @@ fn main() -> ExitCode {
 
 fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
     match command {
-        None => run_scenario("straight", Some(Path::new("out/demo"))),
+        None => run_scenario("straight", Some(Path::new("out/demo")), &Robot::hrp2()),
         Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
@@ -120,20 +127,36 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             }
             Ok(())
         }
-        Some(Cmd::Run { scenario, out }) => run_scenario(&scenario, out.as_deref()),
+        Some(Cmd::Run {
+            scenario,
+            out,
+            robot,
+        }) => run_scenario(&scenario, out.as_deref(), &load_robot(robot.as_deref())?),
         Some(Cmd::Tables { out }) => tables(&out),
-        Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
+        Some(Cmd::Node {
+            interface,
+            seconds,
+            robot,
+        }) => node(&interface, seconds, &load_robot(robot.as_deref())?),
     }
 }
 
+/// The robot file at `path`, or HRP-2.
+fn load_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
+    Ok(match path {
+        Some(p) => Robot::load(p)?,
+        None => Robot::hrp2(),
+    })
+}
+
 #[cfg(feature = "socketcan")]
-fn node(interface: &str, seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
-    host_sim::socketcan_link::run_node(interface, seconds)
+fn node(interface: &str, seconds: Option<f64>, robot: &Robot) -> Result<(), Box<dyn Error>> {
+    host_sim::socketcan_link::run_node(interface, seconds, robot.node_config())
         .map_err(|e| format!("CAN interface {interface}: {e}").into())
 }
 
 #[cfg(not(feature = "socketcan"))]
-fn node(interface: &str, _seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
+fn node(interface: &str, _seconds: Option<f64>, _robot: &Robot) -> Result<(), Box<dyn Error>> {
     Err(format!(
         "cannot run the node on {interface}: this host-sim was built without SocketCAN \
          (cargo run -p host-sim --features socketcan -- node {interface})"
@@ -321,7 +344,7 @@ fn outcome_line(o: &Outcome, entry: &Entry, dt: f64) -> (bool, String) {
     )
 }
 
-fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
+fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box<dyn Error>> {
     let ScenarioFile {
         scenario: s,
         entries,
@@ -329,11 +352,14 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);
     let name = s.name.as_str();
-    let cfg = SimConfig::default();
+    let cfg = SimConfig {
+        node: robot.node_config(),
+        ..SimConfig::default()
+    };
     let dt = cfg.node.params.dt;
     let sim = simulate(&s, &cfg).map_err(|e| format!("{name}: {e}"))?;
     let run = &sim.run;
-    let mb = evaluate(&Hrp2::default(), &run.trajectory, dt)
+    let mb = evaluate(&robot.model, &run.trajectory, dt)
         .map_err(|e| format!("multi-body model: {e:?}"))?;
     let mb_error = max_zmp_error(&run.trajectory, &mb);
     create_dir(out)?;
@@ -382,6 +408,7 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
     let summary = json!({
         "scenario": name,
         "about": s.about,
+        "robot": robot.name(),
         "duration_s": (run.trajectory.len() - 1) as f64 * dt,
         "ended_by_max_time": sim.cut,
         "adjust_s": run.adjustments.iter().map(|a| a.adjust_s).collect::<Vec<_>>(),
@@ -410,9 +437,11 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         println!("{name}: {}", s.about);
     }
     println!(
-        "  {:.2} s simulated in {} ticks of 5 ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
+        "  {}: {:.2} s simulated in {} ticks of {} ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
+        robot.name(),
         (run.trajectory.len() - 1) as f64 * dt,
         run.trajectory.len() - 1,
+        dt * 1e3,
         cfg.bitrate / 1000,
         sim.bus_load * 100.0,
         if sim.cut { ", ended by max_time_s" } else { "" }
@@ -432,7 +461,8 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         across * 1e3
     );
     println!(
-        "  largest multi-body ZMP error (HRP-2 model): {:.1} mm",
+        "  largest multi-body ZMP error ({} model): {:.1} mm",
+        robot.name(),
         mb_error * 1e3
     );
     println!(
@@ -465,7 +495,7 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
 /// support in which the modification takes effect \[m\] (the paper's "maximum ZMP error");
 /// `None` when the model's legs cannot reach the footsteps.
 fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
-    let mb = evaluate(&Hrp2::default(), &m.trajectory, dt).ok()?;
+    let mb = evaluate(&Model::hrp2(), &m.trajectory, dt).ok()?;
     let start = paper::MODIFICATION_TICK as usize;
     let support = (m.before * 3.0, -0.1);
     let mut worst: f64 = 0.0;

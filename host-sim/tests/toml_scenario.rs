@@ -42,7 +42,7 @@ fn assert_same_scenario(file: &Scenario, built: &Scenario) {
     assert_eq!(file.name, built.name);
     assert_eq!(file.about, built.about);
     assert_eq!(file.max_ticks, built.max_ticks);
-    assert_eq!(file.feet, built.feet);
+    assert_eq!(file.start_feet(0.2), built.start_feet(0.2));
     assert_eq!(
         file.timeline.len(),
         built.timeline.len(),
@@ -169,8 +169,10 @@ y = -1.0
     .unwrap();
     assert_eq!(s.about, "");
     assert_eq!(s.max_ticks, (DEFAULT_MAX_TIME_S / TICK_S) as u64);
+    // No [feet]: the robot's stance (HRP-2: 0.2 m apart).
+    assert_eq!(s.feet, None);
     assert_eq!(
-        s.feet,
+        s.start_feet(0.2),
         [
             Footstep::new(Side::Left, 0.0, 0.1, 0.0),
             Footstep::new(Side::Right, 0.0, -0.1, 0.0)
