@@ -4,6 +4,7 @@
 //! host-sim                         the default demo (the `straight` scenario into out/demo)
 //! host-sim list                    the built-in scenarios
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
+//! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
@@ -30,7 +31,7 @@ use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
-use host_sim::{plot, toml_scenario};
+use host_sim::{plot, replay, toml_scenario};
 use planner_core::gait::{Footstep, GaitParams, Phase, Side};
 use serde_json::json;
 
@@ -63,6 +64,19 @@ enum Cmd {
         /// The output directory [default: out/<scenario name>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+    },
+    /// Replay a candump log of a controller's frames into the node (as canplayer does); print
+    /// every refused command, exit 1 if one was refused.
+    Replay {
+        /// The candump -l log (the times from host-sim's epoch 2026-01-01T00:00:00Z).
+        #[arg(value_name = "LOG")]
+        log: PathBuf,
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/replay")]
+        out: PathBuf,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
@@ -132,6 +146,9 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             out,
             robot,
         }) => run_scenario(&scenario, out.as_deref(), &load_robot(robot.as_deref())?),
+        Some(Cmd::Replay { log, out, robot }) => {
+            replay_log(&log, &out, &load_robot(robot.as_deref())?)
+        }
         Some(Cmd::Tables { out }) => tables(&out),
         Some(Cmd::Node {
             interface,
@@ -485,6 +502,89 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
             "{name}: {unexpected} command{} failed, or did not fail, against the scenario's \
              expectations (listed above; a TOML entry that should fail says so with `expect`)",
             if unexpected == 1 { "" } else { "s" }
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error>> {
+    let text =
+        fs::read_to_string(log).map_err(|e| format!("cannot read {}: {e}", log.display()))?;
+    let cfg = robot.node_config();
+    let dt = cfg.params.dt;
+    let frames = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
+    let r = replay::replay(&frames, &cfg, SimConfig::default().bitrate)?;
+    let run = Run {
+        trajectory: r.trajectory,
+        events: Vec::new(),
+        adjustments: Vec::new(),
+        footsteps: Vec::new(),
+    };
+    let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_default();
+    create_dir(out)?;
+    write_trajectory(&out.join("trajectory.csv"), &run, &mb, dt)?;
+    write_file(&out.join("can.log"), r.can_log.join("\n") + "\n")?;
+    let refused: Vec<_> = r
+        .acks
+        .iter()
+        .filter_map(|(k, a)| a.reason.map(|reason| (k, a, reason)))
+        .map(|(k, a, reason)| {
+            json!({
+                "t_s": *k as f64 * dt,
+                "command": format!("0x{:02x}", a.command),
+                "seq": a.seq,
+                "reason": host_sim::sim::reason_name(reason),
+            })
+        })
+        .collect();
+    let summary = json!({
+        "log": log.display().to_string(),
+        "robot": robot.name(),
+        "frames_replayed": r.replayed,
+        "answers": r.acks.len(),
+        "refused": refused,
+        "duration_s": (run.trajectory.len() - 1) as f64 * dt,
+        "ended_standing": !r.cut,
+    });
+    write_file(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    println!(
+        "{}: {} frames replayed into the {} node, {} answers, {:.2} s{}; results in {}",
+        log.display(),
+        r.replayed,
+        robot.name(),
+        r.acks.len(),
+        (run.trajectory.len() - 1) as f64 * dt,
+        if r.cut {
+            " (cut: not standing at the end)"
+        } else {
+            ""
+        },
+        out.display()
+    );
+    for v in &refused {
+        println!(
+            "  refused at {:.3} s: command {} seq/id {}: {}",
+            v["t_s"].as_f64().unwrap_or(f64::NAN),
+            v["command"].as_str().unwrap_or(""),
+            v["seq"],
+            v["reason"].as_str().unwrap_or("")
+        );
+    }
+    if !refused.is_empty() || r.cut {
+        return Err(Unexpected(format!(
+            "{}: {} command{} refused{}",
+            log.display(),
+            refused.len(),
+            if refused.len() == 1 { "" } else { "s" },
+            if r.cut {
+                ", and the robot was still moving at the end"
+            } else {
+                ""
+            }
         ))
         .into());
     }
