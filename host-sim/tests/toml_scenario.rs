@@ -325,3 +325,23 @@ fn load_names_the_file() {
     assert!(e.starts_with(&path.display().to_string()), "{e}");
     assert!(e.contains("unknown field `speed`"), "{e}");
 }
+
+/// The example scenario file in the README is valid and walks as written.
+#[test]
+fn the_readme_example_walks() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
+        .expect("README.md");
+    let start = readme
+        .find("name = \"my-walk\"")
+        .expect("the README's scenario example");
+    let end = start + readme[start..].find("```").expect("end of the example");
+    let file = host_sim::toml_scenario::parse_file(&readme[start..end]).expect("valid example");
+    let sim = host_sim::sim::simulate(&file.scenario, &host_sim::sim::SimConfig::default())
+        .expect("runs");
+    let outcomes = host_sim::sim::outcomes(&file.scenario, &sim);
+    assert_eq!(outcomes.len(), 5);
+    for o in outcomes {
+        assert_eq!(o.failure, None, "{:?}: {}", o.command, o.detail);
+    }
+    assert!(!sim.cut);
+}
