@@ -746,6 +746,9 @@ pub struct Gait<T: Real, const Q: usize> {
     /// tick takes the spare buffer as it is if all of these are still the same (the plan is a
     /// function of them: bit for bit what it would compute again).
     predicted: Option<Predicted<T>>,
+    /// The worst first-interval excursion (eq. 17) of the predicted plan, for the re-plan
+    /// that takes it (valid while `predicted` is `Some`).
+    predicted_worst: [T; 2],
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
@@ -843,6 +846,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             gen: 0,
             serial: 0,
             predicted: None,
+            predicted_worst: [T::ZERO; 2],
             target: None,
             tick: 0,
             last: Reference {
@@ -1262,7 +1266,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.predicted = None;
         self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
         self.predicted = Some(self.prediction(at, inputs, cog, zmp));
-        Ok(Some(self.wins[spare].worst_first()))
+        self.predicted_worst = self.wins[spare].worst_first();
+        Ok(Some(self.predicted_worst))
     }
 
     /// The key under which a plan of `inputs` from `(cog, zmp)` at window tick `at` is kept.
@@ -1534,6 +1539,12 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             return self.plan_stop(c, j, cog, zmp);
         }
         self.failed = false;
+        // Eq. 17 of this plan: computed already if it is the predicted one.
+        let worst_zmp = if planned {
+            self.predicted_worst
+        } else {
+            self.wins[spare].worst_first()
+        };
         self.cur = Some(spare);
         self.serial = self.serial.wrapping_add(1);
         self.swing = Some(swing);
@@ -1545,7 +1556,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             adjust_ticks: adjust,
             ratio,
             plane,
-            worst_zmp: self.wins[spare].worst_first(),
+            worst_zmp,
         });
         true
     }
