@@ -7,9 +7,11 @@ and sends a heartbeat every 100 ms throughout (the node stops a moving robot aft
 without one). Every frame is encoded by cantools from ``host-sim/can/walking.dbc``; the
 CRC-8 the commands end with is the one the DBC's comment on CONTROL describes (AUTOSAR:
 polynomial 0x2F, initial value and final XOR 0xFF, over the identifier as two little-endian
-bytes and the data before the CRC). All CONTROL frames (heartbeats, start, stop) share one
-sequence number that counts up by one per frame, so that every heartbeat is new and every
-start is ahead of the last control command.
+bytes and the data before the CRC). All CONTROL frames (heartbeats, start, stop) take their
+sequence numbers from one counter, so that every heartbeat is new and the start is ahead of
+the control commands before it. cantools rounds exact half units to even where the node's
+own encoder rounds them away from zero: a coordinate exactly between two 0.5 mm steps may go
+out one step apart (0.5 mm), which the node takes as given.
 
 Three ways to run it:
 
@@ -121,6 +123,9 @@ def check(db, path, poses):
     acks, feet, state = [], {}, None
     for m in read_log(path):
         if m.arbitration_id == ack.frame_id:
+            if crc8(m.arbitration_id, m.data[:-1]) != m.data[-1]:
+                problems.append(f"ACK with a bad CRC: {m.data.hex()}")
+                continue
             acks.append(db.decode_message(m.arbitration_id, m.data))
         elif m.arbitration_id in (0x210, 0x211, 0x300):
             d = db.decode_message(m.arbitration_id, m.data)
@@ -169,6 +174,8 @@ def main():
     p.add_argument("--width", type=float, default=0.2)
     p.add_argument("--seconds", type=float, default=9.0)
     a = p.parse_args()
+    if a.steps < 1:
+        p.error("--steps must be at least 1")
     db = cantools.database.load_file(DBC, strict=True)
     frames, poses = plan(db, a.steps, a.length, a.width, a.seconds)
     if a.mode == "plan":

@@ -366,6 +366,16 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         scenario: s,
         entries,
     } = load_scenario(name)?;
+    let hrp2_width = host_sim::robot::Robot::hrp2().planner.params.step_width;
+    if !name.ends_with(".toml") && robot.planner.params.step_width != hrp2_width {
+        return Err(format!(
+            "{name}: the built-in scenarios are HRP-2's footsteps (feet {hrp2_width} m apart), \
+             and {} stands {} m apart: write a scenario file for it",
+            robot.name(),
+            robot.planner.params.step_width
+        )
+        .into());
+    }
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);
     let name = s.name.as_str();
@@ -376,9 +386,17 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     let dt = cfg.node.params.dt;
     let sim = simulate(&s, &cfg).map_err(|e| format!("{name}: {e}"))?;
     let run = &sim.run;
-    let mb = evaluate(&robot.model, &run.trajectory, dt)
-        .map_err(|e| format!("multi-body model: {e:?}"))?;
-    let mb_error = max_zmp_error(&run.trajectory, &mb);
+    // A walk the model's legs cannot follow still writes its results (without the multi-body
+    // columns), then fails.
+    let (mb, mb_failure) = match evaluate(&robot.model, &run.trajectory, dt) {
+        Ok(mb) => (mb, None),
+        Err(e) => (Vec::new(), Some(e)),
+    };
+    let mb_error = if mb.is_empty() {
+        f64::NAN
+    } else {
+        max_zmp_error(&run.trajectory, &mb)
+    };
     create_dir(out)?;
     let traj = out.join("trajectory.csv");
     write_trajectory(&traj, run, &mb, dt)?;
@@ -446,7 +464,8 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))
+    let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
+    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), mb_plot)
         .map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
         println!("{name}");
@@ -497,6 +516,14 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
             println!("{l}");
         }
     }
+    if let Some(e) = mb_failure {
+        return Err(Unexpected(format!(
+            "{name}: the {} multi-body model cannot follow the walk: {e} (results written \
+             without the multi-body columns)",
+            robot.name()
+        ))
+        .into());
+    }
     if unexpected > 0 {
         return Err(Unexpected(format!(
             "{name}: {unexpected} command{} failed, or did not fail, against the scenario's \
@@ -521,7 +548,10 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         adjustments: Vec::new(),
         footsteps: Vec::new(),
     };
-    let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_default();
+    let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_else(|e| {
+        println!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
+        Vec::new()
+    });
     create_dir(out)?;
     write_trajectory(&out.join("trajectory.csv"), &run, &mb, dt)?;
     write_file(&out.join("can.log"), r.can_log.join("\n") + "\n")?;
@@ -542,6 +572,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         "log": log.display().to_string(),
         "robot": robot.name(),
         "frames_replayed": r.replayed,
+        "frames_lost": r.lost,
         "answers": r.acks.len(),
         "refused": refused,
         "duration_s": (run.trajectory.len() - 1) as f64 * dt,
@@ -574,12 +605,16 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
             v["reason"].as_str().unwrap_or("")
         );
     }
-    if !refused.is_empty() || r.cut {
+    if r.lost > 0 {
+        println!("  {} frames lost: a receive FIFO was full", r.lost);
+    }
+    if !refused.is_empty() || r.cut || r.lost > 0 {
         return Err(Unexpected(format!(
-            "{}: {} command{} refused{}",
+            "{}: {} command{} refused, {} frames lost{}",
             log.display(),
             refused.len(),
             if refused.len() == 1 { "" } else { "s" },
+            r.lost,
             if r.cut {
                 ", and the robot was still moving at the end"
             } else {

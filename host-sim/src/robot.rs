@@ -14,7 +14,8 @@
 //! | `waist_height` | waist origin above the floor while walking \[m\] |
 //! | `[multibody.<body>]` for trunk, waist, hip, thigh, shank, foot | `mass` \[kg\], `com` \[m\] in the body's link frame (see [`Model`]), and one of `box = [x, y, z]` (sides of a homogeneous box), `cylinder = [radius, length]` (a solid cylinder along z) or `inertia = [Ixx, Iyy, Izz]` (principal moments about the COM) |
 //!
-//! Checks, each naming its key: the control period the simulator's scenarios and bus run at
+//! Checks, each naming its key: the reach limits and the swing height within the legs'
+//! reach at the walking height (`check_legs`); the control period the simulator's scenarios and bus run at
 //! ([`TICK_S`], 5 ms); lengths and masses finite and positive (the hip housing may be
 //! massless), inertias non-negative; the stance reachable by the legs; and the stance COG of
 //! the link table (feet `step_width` apart, waist at `waist_height`) within
@@ -145,14 +146,55 @@ impl BodySpec {
     }
 }
 
+/// What the legs can reach at the walking height: the feet at most
+/// `2 √(L² − h²)` apart (each ankle `√(L² − h²)` from below its hip, `L` the leg length, `h`
+/// the hip-to-ankle height while walking), and a swing height that leaves the knee a tenth of
+/// the leg length before it folds completely (`h − step_height ≥ |thigh − shank| + L/10`).
+fn check_legs(planner: &PlannerRobot, m: &Model) -> Result<(), RobotError> {
+    let leg = m.thigh_length + m.shank_length;
+    let h = m.waist_height - m.ankle_height;
+    if !(h > 0.0 && h < leg) {
+        return Err(invalid(
+            "multibody.waist_height",
+            format!(
+                "{} m puts the ankles {h:.4} m below the hips: the legs ({leg} m) cannot reach",
+                m.waist_height
+            ),
+        ));
+    }
+    let across = 2.0 * (leg * leg - h * h).sqrt();
+    let d = planner.reach.max_feet_distance;
+    if d > across {
+        return Err(invalid(
+            "reach.max_feet_distance",
+            format!(
+                "{d} m: the legs reach feet at most {across:.4} m apart at the walking height \
+                 (multibody.waist_height)"
+            ),
+        ));
+    }
+    let lift = h - (m.thigh_length - m.shank_length).abs() - leg / 10.0;
+    let sh = planner.params.step_height;
+    if sh > lift {
+        return Err(invalid(
+            "feet.step_height",
+            format!("{sh} m: the legs lift the foot at most {lift:.4} m at the walking height"),
+        ));
+    }
+    Ok(())
+}
+
 impl Robot {
     /// HRP-2 from the file shipped in the repository.
     pub fn hrp2() -> Self {
-        match Self::from_toml(HRP2_TOML) {
+        // Read once per process (the check computes the preview gains).
+        static HRP2: std::sync::OnceLock<Robot> = std::sync::OnceLock::new();
+        HRP2.get_or_init(|| match Self::from_toml(HRP2_TOML) {
             Ok(r) => r,
             // The shipped file is checked by the tests (host-sim/tests/robot.rs).
             Err(e) => unreachable!("the built-in robot file is invalid: {e}"),
-        }
+        })
+        .clone()
     }
 
     /// Reads a robot file.
@@ -198,6 +240,7 @@ impl Robot {
             shank: links.shank.body("multibody.shank", false)?,
             foot: links.foot.body("multibody.foot", false)?,
         };
+        check_legs(&planner, &model)?;
         let width = planner.params.step_width;
         let z = model.stance_cog_height(width).map_err(|e| {
             invalid(

@@ -44,6 +44,16 @@ fn the_shipped_hrp2_file_is_the_code_default() {
 /// `(what is replaced, by what, a text the error must contain)`: each an inconsistent HRP-2
 /// file.
 const BROKEN: &[(&str, &str, &str)] = &[
+    (
+        "max_feet_distance = 0.361",
+        "max_feet_distance = 0.6",
+        "reach.max_feet_distance",
+    ),
+    (
+        "step_height = 0.05",
+        "step_height = 0.6",
+        "feet.step_height",
+    ),
     ("cog_height = 0.814", "cog_hieght = 0.814", "cog_hieght"),
     ("gravity = 9.8 ", "", "gravity"),
     ("cog_height = 0.814", "cog_height = \"high\"", "cog_height"),
@@ -132,7 +142,18 @@ const BROKEN: &[(&str, &str, &str)] = &[
 
 #[test]
 fn an_inconsistent_robot_file_is_refused_naming_the_key() {
-    for &(from, to, key) in BROKEN {
+    for &(from, to, key) in BROKEN_FOR_THE_PLANNER {
+        let text = HRP2_TOML.replacen(from, to, 1);
+        assert_ne!(text, HRP2_TOML, "{from:?} is not in hrp2.toml");
+        let e = planner_core::robot::Robot::from_toml(&text)
+            .err()
+            .unwrap_or_else(|| panic!("{from:?} → {to:?} accepted by the planner's reader"));
+        assert!(
+            e.to_string().contains(key),
+            "{from:?} → {to:?}: {e} does not name {key}"
+        );
+    }
+    for &(from, to, key) in BROKEN.iter().chain(BROKEN_FOR_THE_PLANNER) {
         assert!(HRP2_TOML.contains(from), "{from:?} is not in hrp2.toml");
         let text = HRP2_TOML.replacen(from, to, 1);
         match Robot::from_toml(&text) {
@@ -153,6 +174,40 @@ fn an_inconsistent_robot_file_is_refused_naming_the_key() {
     let e = Robot::from_toml(cut).unwrap_err().to_string();
     assert!(e.contains("[multibody]"), "{e}");
 }
+
+/// Files the firmware's reader (the planner's part alone) must refuse as well: values that
+/// would start no node, or one that cannot walk.
+const BROKEN_FOR_THE_PLANNER: &[(&str, &str, &str)] = &[
+    ("r = 1e-6", "r = 1e30", "preview.r"),
+    ("qe = 1.0", "qe = 1e-20", "preview.r"),
+    (
+        "cog_height = 0.814",
+        "cog_height = 1e-300",
+        "pendulum.cog_height",
+    ),
+    (
+        "cog_height = 0.814",
+        "cog_height = 1e-10",
+        "pendulum.cog_height",
+    ),
+    ("gravity = 9.8 ", "gravity = 1e308 ", "pendulum.gravity"),
+    ("gravity = 9.8 ", "gravity = 1e-6 ", "pendulum.gravity"),
+    (
+        "control_period = 0.005",
+        "control_period = 1e-300",
+        "timing.control_period",
+    ),
+    (
+        "sole_length = 0.24",
+        "sole_length = 1e300",
+        "feet.sole_length",
+    ),
+    (
+        "step_width = 0.2 ",
+        "step_width = 1e-300 ",
+        "feet.step_width",
+    ),
+];
 
 /// The small robot's file, read: every value differs from HRP-2's.
 #[test]

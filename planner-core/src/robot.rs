@@ -16,11 +16,13 @@
 //! | `[preview]` | `qe`, `r`, `shaping` | Kajita's preview weights `Q_e` \[1/m²\] and `R`; `shaping` on or off |
 //! | `[multibody]` | free-form here | host-sim's link table (host-sim reads it; the planner ignores it) |
 //!
-//! [`Robot::from_toml`] checks the file's consistency and names the key at fault:
+//! [`Robot::from_toml`] checks the file's consistency and names the key at fault: values in
+//! plausible ranges for a legged robot ([`RANGES`]: `z_c` 0.05 … 5 m, `g` 0.5 … 50 m/s², …),
 //! durations on the control grid and in the planner's range, `ΔT_min ≤ 0 ≤ ΔT_max` with the
 //! adjusted single support at least one period, positive sizes and weights, feet that do not
 //! overlap (`step_width ≥ sole_width`), and a stance inside the reach limits
-//! (`min_width ≤ step_width ≤ max_width`). The node built from a robot
+//! (`min_width ≤ step_width ≤ max_width`), and preview gains that the node can compute
+//! (the Riccati iteration converges for `qe`, `r`). The node built from a robot
 //! ([`Robot::node_config`]) stands with the feet `step_width` apart at the origin.
 //!
 //! [`node_config_source`] writes a [`NodeConfig`] as a Rust constant expression with every
@@ -34,8 +36,11 @@ use std::string::{String, ToString};
 
 use serde::Deserialize;
 
-use crate::gait::{GaitParams, Tail};
+use std::boxed::Box;
+
+use crate::gait::{GaitParams, Tail, PREVIEW};
 use crate::node::{NodeConfig, Reach};
+use crate::shaping::{CartTable, Law, PreviewConfig, PreviewGains};
 
 /// A robot, as read from its file.
 #[derive(Clone, Debug, PartialEq)]
@@ -149,6 +154,30 @@ fn positive(key: &'static str, v: f64, zero: bool) -> Result<f64, RobotError> {
 /// Shortest and longest interval the planner takes \[s\].
 const SPAN: (f64, f64) = (0.005, 10.0);
 
+/// Plausible ranges for a legged robot (a value outside is a unit error or a typo, and would
+/// drive the planner far outside what it is tested on): `(key, min, max)`.
+pub const RANGES: [(&str, f64, f64); 8] = [
+    ("pendulum.cog_height", 0.05, 5.0),
+    ("pendulum.gravity", 0.5, 50.0),
+    ("timing.control_period", 1e-4, 0.1),
+    ("feet.sole_length", 0.01, 2.0),
+    ("feet.sole_width", 0.01, 2.0),
+    ("feet.step_width", 0.01, 2.0),
+    ("feet.step_height", 0.0, 1.0),
+    ("reach.max_feet_distance", 0.01, 5.0),
+];
+
+/// `v` inside its plausible range ([`RANGES`]).
+fn plausible(key: &'static str, v: f64) -> Result<f64, RobotError> {
+    match RANGES.iter().find(|r| r.0 == key) {
+        Some(&(_, lo, hi)) if !(lo..=hi).contains(&v) => Err(invalid(
+            key,
+            format!("{v} is outside the plausible {lo} … {hi} (SI units)"),
+        )),
+        _ => Ok(v),
+    }
+}
+
 /// A duration as a whole number of control periods.
 fn ticks(key: &'static str, seconds: f64, dt: f64, signed: bool) -> Result<i64, RobotError> {
     if !seconds.is_finite() {
@@ -198,9 +227,12 @@ impl Robot {
     pub fn from_toml(text: &str) -> Result<Self, RobotError> {
         let f: File = toml::from_str(text).map_err(|e| RobotError::Syntax(e.to_string()))?;
         let z_c = positive("pendulum.cog_height", f.pendulum.cog_height, false)?;
+        let z_c = plausible("pendulum.cog_height", z_c)?;
         let g = positive("pendulum.gravity", f.pendulum.gravity, false)?;
+        let g = plausible("pendulum.gravity", g)?;
         let t = &f.timing;
         let dt = positive("timing.control_period", t.control_period, false)?;
+        let dt = plausible("timing.control_period", dt)?;
         if dt > SPAN.1 {
             return Err(invalid(
                 "timing.control_period",
@@ -252,10 +284,22 @@ impl Robot {
             ));
         }
         let feet = &f.feet;
-        let sole_length = positive("feet.sole_length", feet.sole_length, false)?;
-        let sole_width = positive("feet.sole_width", feet.sole_width, false)?;
-        let step_width = positive("feet.step_width", feet.step_width, false)?;
-        let step_height = positive("feet.step_height", feet.step_height, true)?;
+        let sole_length = plausible(
+            "feet.sole_length",
+            positive("feet.sole_length", feet.sole_length, false)?,
+        )?;
+        let sole_width = plausible(
+            "feet.sole_width",
+            positive("feet.sole_width", feet.sole_width, false)?,
+        )?;
+        let step_width = plausible(
+            "feet.step_width",
+            positive("feet.step_width", feet.step_width, false)?,
+        )?;
+        let step_height = plausible(
+            "feet.step_height",
+            positive("feet.step_height", feet.step_height, true)?,
+        )?;
         if step_width < sole_width {
             return Err(invalid(
                 "feet.step_width",
@@ -292,14 +336,34 @@ impl Robot {
             preview_qe: qe,
             preview_r: r,
         };
-        // Everything validate() checks has been checked above with the key named; this is
-        // the planner's own word on it.
+        // Everything validate() checks has been checked above with the key named (ω from
+        // z_c and g in their plausible ranges is finite); this is the planner's own word.
         params.validate().map_err(|_| {
             invalid(
-                "timing",
+                "pendulum.cog_height",
                 "the gait parameters are not accepted by the planner".into(),
             )
         })?;
+        // The preview controller's gains exist for these weights (the node computes them at
+        // start-up: a file that passes here starts a node).
+        if params.shaping {
+            let config = PreviewConfig {
+                model: CartTable { dt, z_c, g },
+                qe,
+                r,
+                ..PreviewConfig::default()
+            };
+            let mut gains = Box::new(PreviewGains::<f64, PREVIEW>::zeroed());
+            gains.compute(&config, Law::FromRest).map_err(|e| {
+                invalid(
+                    "preview.r",
+                    format!(
+                        "the preview gains cannot be computed for qe = {qe}, r = {r} ({e:?}): \
+                         the ratio qe / r is out of the Riccati iteration's reach"
+                    ),
+                )
+            })?;
+        }
         Ok(Self {
             name: f.name,
             params,
@@ -321,6 +385,7 @@ fn check_reach(r: &Reach, step_width: f64, sole_width: f64) -> Result<Reach, Rob
     positive("reach.max_width", r.max_width, false)?;
     positive("reach.max_yaw", r.max_yaw, true)?;
     positive("reach.max_feet_distance", r.max_feet_distance, false)?;
+    plausible("reach.max_feet_distance", r.max_feet_distance)?;
     positive("reach.yaw_cost", r.yaw_cost, true)?;
     positive("reach.max_stride", r.max_stride, false)?;
     positive("reach.max_growth", r.max_growth, false)?;
