@@ -38,11 +38,42 @@ fn main() {
         ));
     }
     let cfg = planner_core::robot::node_config_source(&robot.node_config());
+    // The preview gains, computed here once (the reader has checked that they can be), so
+    // that the image copies them at start-up instead of iterating the Riccati equation.
+    let gains = if robot.params.shaping {
+        let p = &robot.params;
+        let config = planner_core::shaping::PreviewConfig {
+            model: planner_core::shaping::CartTable {
+                dt: p.dt,
+                z_c: p.cog_height,
+                g: p.gravity,
+            },
+            qe: p.preview_qe,
+            r: p.preview_r,
+            ..planner_core::shaping::PreviewConfig::default()
+        };
+        let mut g = Box::new(planner_core::shaping::PreviewGains::<
+            f64,
+            { planner_core::gait::PREVIEW },
+        >::zeroed());
+        if let Err(e) = g.compute(&config, planner_core::shaping::Law::FromRest) {
+            fail(&format!(
+                "robot file {}: preview gains: {e:?}",
+                path.display()
+            ));
+        }
+        g.source()
+    } else {
+        "::planner_core::shaping::PreviewGains::zeroed()".to_string()
+    };
     let out = format!(
         "/// The robot's name (`name` in its file).\n\
          pub const NAME: &str = {name:?};\n\
          /// The node's configuration for the robot file.\n\
-         pub const NODE_CONFIG: ::planner_core::node::NodeConfig = {cfg};\n",
+         pub const NODE_CONFIG: ::planner_core::node::NodeConfig = {cfg};\n\
+         /// The preview-control gains of the robot file (in flash), for\n\
+         /// `Node::with_gains(NODE_CONFIG, &GAINS)`.\n\
+         pub static GAINS: ::planner_core::shaping::PreviewGains<f64, {{ ::planner_core::gait::PREVIEW }}> = {gains};\n",
         name = robot.name,
     );
     let dest = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo")).join("robot.rs");

@@ -819,6 +819,42 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         left: Footstep<T>,
         right: Footstep<T>,
     ) -> Result<Self, GaitError> {
+        Self::build(params, left, right, None)
+    }
+
+    /// [`Gait::new`] with preview gains computed beforehand (the firmware compiles them into
+    /// flash from the robot file): they are copied, not computed. `Gains(BadConfig)` unless
+    /// they are the gains [`Gait::new`] would compute for `params`
+    /// ([`PreviewGains::are_for`]); not used when `params.shaping` is off.
+    pub fn with_gains(
+        params: GaitParams<T>,
+        left: Footstep<T>,
+        right: Footstep<T>,
+        gains: &PreviewGains<T, PREVIEW>,
+    ) -> Result<Self, GaitError> {
+        Self::build(params, left, right, Some(gains))
+    }
+
+    /// The preview controller of `params`.
+    fn preview_config(params: &GaitParams<T>) -> PreviewConfig {
+        PreviewConfig {
+            model: CartTable {
+                dt: params.dt.f64(),
+                z_c: params.cog_height,
+                g: params.gravity,
+            },
+            qe: params.preview_qe,
+            r: params.preview_r,
+            ..PreviewConfig::default()
+        }
+    }
+
+    fn build(
+        params: GaitParams<T>,
+        left: Footstep<T>,
+        right: Footstep<T>,
+        gains: Option<&PreviewGains<T, PREVIEW>>,
+    ) -> Result<Self, GaitError> {
         let mut left = left;
         let mut right = right;
         left.side = Side::Left;
@@ -865,19 +901,15 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         }
         params.validate()?;
         if params.shaping {
-            let config = PreviewConfig {
-                model: CartTable {
-                    dt: params.dt.f64(),
-                    z_c: params.cog_height,
-                    g: params.gravity,
-                },
-                qe: params.preview_qe,
-                r: params.preview_r,
-                ..PreviewConfig::default()
-            };
-            g.gains
-                .compute(&config, Law::FromRest)
-                .map_err(GaitError::Gains)?;
+            let config = Self::preview_config(&params);
+            match gains {
+                Some(given) if given.are_for(&config, Law::FromRest) => g.gains.copy_from(given),
+                Some(_) => return Err(GaitError::Gains(GainError::BadConfig)),
+                None => g
+                    .gains
+                    .compute(&config, Law::FromRest)
+                    .map_err(GaitError::Gains)?,
+            }
         }
         Ok(g)
     }

@@ -18,6 +18,10 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+// The robot file reader and the build-time table writers (feature `robot`) are std code.
+#[cfg(feature = "robot")]
+extern crate std;
+
 pub mod gait;
 pub mod lipm;
 pub mod node;

@@ -28,8 +28,6 @@
 //! [`node_config_source`] writes a [`NodeConfig`] as a Rust constant expression with every
 //! float given by its bits, so that the firmware's build script compiles exactly the
 //! configuration the host parsed (`tests/tests/robot.rs` compares them).
-extern crate std;
-
 use std::fmt;
 use std::format;
 use std::string::{String, ToString};

@@ -259,6 +259,45 @@ impl Default for PreviewConfig {
     }
 }
 
+#[cfg(feature = "robot")]
+impl<const NL: usize> PreviewGains<f64, NL> {
+    /// These gains as a Rust constant expression ([`PreviewGains::from_parts`], every float by
+    /// its bits), for a build script (feature `robot`, std).
+    pub fn source(&self) -> std::string::String {
+        use core::fmt::Write;
+        let mut s = std::string::String::new();
+        let f = |v: f64| std::format!("f64::from_bits({:#018x})", v.to_bits());
+        let list = |vs: &[f64]| {
+            let items: std::vec::Vec<_> = vs.iter().map(|&v| f(v)).collect();
+            std::format!("[{}]", items.join(", "))
+        };
+        let tables = |t: &[[f64; NL]; MOMENTS]| {
+            let rows: std::vec::Vec<_> = t.iter().map(|r| list(r)).collect();
+            std::format!("[{}]", rows.join(",\n"))
+        };
+        let law = match self.law {
+            Law::FromRest => "FromRest",
+            Law::Integral => "Integral",
+        };
+        let _ = write!(
+            s,
+            "::planner_core::shaping::PreviewGains::from_parts(\n\
+             ::planner_core::shaping::Law::{law},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{})",
+            list(&self.made_for),
+            list(&self.dt),
+            f(self.zg),
+            f(self.k_int),
+            list(&self.k_state),
+            f(self.tail),
+            list(&self.preview),
+            tables(&self.moments),
+            tables(&self.moments_lo),
+            self.iterations
+        );
+        s
+    }
+}
+
 /// Which preview-control law the gains implement (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -349,9 +388,11 @@ pub fn solve_dare<const S: usize>(
 ///
 /// `11·NL` scalars (28 KB for `f64`, 14 KB for `f32`, `NL = 320`): compute once and share
 /// between the x and y compensators (they take the gains by reference on every step).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PreviewGains<T, const NL: usize> {
     law: Law,
+    /// What the gains were computed for: `dt, z_c, g, Q_e, R` (zero: not computed).
+    made_for: [f64; 5],
     /// `dt, dt²/2, dt³/6, z_c/g` in `T`.
     dt: [T; 3],
     zg: T,
@@ -372,6 +413,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
     pub const fn zeroed() -> Self {
         Self {
             law: Law::FromRest,
+            made_for: [0.0; 5],
             dt: [T::ZERO; 3],
             zg: T::ZERO,
             k_int: T::ZERO,
@@ -478,6 +520,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
         }
         self.fill_preview(&f);
         self.law = law;
+        self.made_for = [m.dt, m.z_c, m.g, config.qe, config.r];
         let dt = m.dt;
         self.dt = [T::of(dt), T::of(dt * dt / 2.0), T::of(dt * dt * dt / 6.0)];
         self.zg = T::of(m.z_c / m.g);
@@ -545,6 +588,70 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
     pub fn iterations(&self) -> u32 {
         self.iterations
     }
+    /// What these gains were computed for: `[dt, z_c, g, Q_e, R]` (all zero for
+    /// [`zeroed`](Self::zeroed) gains).
+    pub fn made_for(&self) -> [f64; 5] {
+        self.made_for
+    }
+
+    /// Whether these are the gains of `law` for `config` (its plant and weights; the solver
+    /// settings aside).
+    pub fn are_for(&self, config: &PreviewConfig, law: Law) -> bool {
+        let m = &config.model;
+        self.law == law && self.made_for == [m.dt, m.z_c, m.g, config.qe, config.r]
+    }
+
+    /// Copies `other` into `self` in place (the tables are 28 KB: no temporary copy).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.law = other.law;
+        self.made_for = other.made_for;
+        self.dt = other.dt;
+        self.zg = other.zg;
+        self.k_int = other.k_int;
+        self.k_state = other.k_state;
+        self.tail = other.tail;
+        self.preview.copy_from_slice(&other.preview);
+        for q in 0..MOMENTS {
+            self.moments[q].copy_from_slice(&other.moments[q]);
+            self.moments_lo[q].copy_from_slice(&other.moments_lo[q]);
+        }
+        self.iterations = other.iterations;
+    }
+
+    /// Gains from their parts, as [`source`](PreviewGains::source) writes them: for tables
+    /// computed before the program runs (the firmware's build script computes them from the
+    /// robot file and compiles them into flash). Anything else should call
+    /// [`compute`](Self::compute); [`Gait::with_gains`](crate::gait::Gait::with_gains) checks
+    /// what the gains were made for.
+    #[allow(clippy::too_many_arguments)]
+    pub const fn from_parts(
+        law: Law,
+        made_for: [f64; 5],
+        dt: [T; 3],
+        zg: T,
+        k_int: T,
+        k_state: [T; 3],
+        tail: T,
+        preview: [T; NL],
+        moments: [[T; NL]; MOMENTS],
+        moments_lo: [[T; NL]; MOMENTS],
+        iterations: u32,
+    ) -> Self {
+        Self {
+            law,
+            made_for,
+            dt,
+            zg,
+            k_int,
+            k_state,
+            tail,
+            preview,
+            moments,
+            moments_lo,
+            iterations,
+        }
+    }
+
     /// `z_c / g` \[s²\].
     pub fn zmp_factor(&self) -> T {
         self.zg

@@ -70,3 +70,37 @@ fn the_generated_source_is_the_configuration_it_was_made_from() {
         assert!(src.contains(&int), "{int}");
     }
 }
+
+#[test]
+fn the_compiled_in_gains_are_the_ones_the_node_computes() {
+    use planner_core::node::{Node, NodeConfig};
+    let cfg = Robot::hrp2().node_config();
+    let computed: Node<16> = Node::new(cfg).unwrap();
+    let copied: Node<16> = Node::with_gains(cfg, &walk_robot::GAINS).unwrap();
+    assert!(copied.same_state(&computed));
+    // Every table entry, bit for bit (the build script computed them on the build machine).
+    let p = cfg.params;
+    let config = planner_core::shaping::PreviewConfig {
+        model: planner_core::shaping::CartTable {
+            dt: p.dt,
+            z_c: p.cog_height,
+            g: p.gravity,
+        },
+        qe: p.preview_qe,
+        r: p.preview_r,
+        ..Default::default()
+    };
+    let gains = planner_core::shaping::PreviewGains::<f64, { planner_core::gait::PREVIEW }>::new(
+        &config,
+        planner_core::shaping::Law::FromRest,
+    )
+    .unwrap();
+    assert!(gains == walk_robot::GAINS);
+    // Gains made for another robot are refused.
+    let mut other = NodeConfig::hrp2();
+    other.params.preview_r *= 2.0;
+    assert!(Node::<16>::with_gains(other, &walk_robot::GAINS).is_err());
+    other = NodeConfig::hrp2();
+    other.params.cog_height = 0.8;
+    assert!(Node::<16>::with_gains(other, &walk_robot::GAINS).is_err());
+}

@@ -142,7 +142,7 @@ impl<const P: char, const N: u8> OutputPin for BusyPin<P, N> {
 /// once the node is in place, instead of staying reserved in `main`'s frame forever.
 #[inline(never)]
 fn place_node(cfg: NodeConfig) -> Result<&'static mut Node<QUEUE>, GaitError> {
-    let node = Node::new(cfg)?;
+    let node = Node::with_gains(cfg, &walk_robot::GAINS)?;
     match cortex_m::singleton!(: Node<QUEUE> = node) {
         Some(n) => Ok(n),
         None => panic!("place_node called twice"),

@@ -169,7 +169,7 @@ mod stand_in {
 /// if called twice; here `None`).
 #[inline(never)]
 fn place_node(cfg: NodeConfig) -> Result<Option<&'static mut Node<QUEUE>>, GaitError> {
-    let node = Node::new(cfg)?;
+    let node = Node::with_gains(cfg, &walk_robot::GAINS)?;
     Ok(cortex_m::singleton!(: Node<QUEUE> = node))
 }
 

@@ -224,7 +224,7 @@ type Slot = Result<Node<QUEUE>, GaitError>;
 /// preview-gain computation, the node returned by value) live in this frame only while it runs.
 #[inline(never)]
 fn place_node(cfg: NodeConfig) -> &'static mut Slot {
-    match cortex_m::singleton!(: Slot = Node::new(cfg)) {
+    match cortex_m::singleton!(: Slot = Node::with_gains(cfg, &walk_robot::GAINS)) {
         Some(slot) => slot,
         None => panic!("place_node called twice"),
     }
@@ -234,7 +234,7 @@ fn place_node(cfg: NodeConfig) -> &'static mut Slot {
 /// of its own like [`place_node`].
 #[inline(never)]
 fn renew_node(slot: &mut Slot, cfg: NodeConfig) {
-    *slot = Node::new(cfg);
+    *slot = Node::with_gains(cfg, &walk_robot::GAINS);
 }
 
 /// Plays one scenario against `node` (just created); returns `false` if a command was refused

@@ -1,6 +1,8 @@
 //! # walk-robot
 //!
-//! The robot the firmware is built for: [`NODE_CONFIG`], the node's configuration, generated
+//! The robot the firmware is built for: [`NODE_CONFIG`], the node's configuration, and
+//! [`GAINS`], its preview-control gains (in flash: `Node::with_gains(NODE_CONFIG, &GAINS)`
+//! copies them at start-up instead of computing them), generated
 //! at build time (`build.rs`) from a robot file: HRP-2's `host-sim/robots/hrp2.toml`, or the
 //! file named by the `WALK_ROBOT` environment variable
 //! (`WALK_ROBOT=/path/robot.toml cargo build --release`). The file is read by

@@ -86,7 +86,8 @@ pub use reach::Reach;
 pub use steps::HISTORY;
 use steps::{Record, Steps};
 
-use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side};
+use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side, PREVIEW};
+use crate::shaping::PreviewGains;
 use crate::wire::{
     ids, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream, WireModify, WireStep,
 };
@@ -236,9 +237,30 @@ impl<const Q: usize> Node<Q> {
 
     /// A node standing still (computes the preview gains).
     pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
+        Self::build(cfg, None)
+    }
+
+    /// [`Node::new`] with the preview gains computed beforehand ([`Gait::with_gains`]: the
+    /// firmware compiles them into flash from the robot file, and start-up copies them instead
+    /// of running the Riccati iteration).
+    pub fn with_gains(
+        cfg: NodeConfig,
+        gains: &PreviewGains<f64, PREVIEW>,
+    ) -> Result<Self, GaitError> {
+        Self::build(cfg, Some(gains))
+    }
+
+    fn build(
+        cfg: NodeConfig,
+        gains: Option<&PreviewGains<f64, PREVIEW>>,
+    ) -> Result<Self, GaitError> {
         let () = Self::CAPACITY_OK;
+        let gait = match gains {
+            Some(g) => Gait::with_gains(cfg.params, cfg.left, cfg.right, g)?,
+            None => Gait::new(cfg.params, cfg.left, cfg.right)?,
+        };
         Ok(Self {
-            gait: Gait::new(cfg.params, cfg.left, cfg.right)?,
+            gait,
             cfg,
             tx: Deque::new(),
             steps: Steps::new(),
