@@ -340,6 +340,16 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
     let traj = out.join("trajectory.csv");
     write_trajectory(&traj, run, &mb, dt)?;
     write_file(&out.join("can.log"), sim.can_log.join("\n") + "\n")?;
+    let mcap = out.join("walk.mcap");
+    host_sim::mcap_log::write_mcap(
+        &mcap,
+        &host_sim::mcap_log::McapInput {
+            trajectory: &run.trajectory,
+            dt,
+            mb: &mb,
+            can_log: &sim.can_log,
+        },
+    )?;
     let (along, across) = max_fluctuation(run);
     let results = outcomes(&s, &sim);
     let mut lines = Vec::new();
@@ -436,7 +446,7 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         mb_error * 1e3
     );
     println!(
-        "  results: {}, summary.json, can.log and {} plots in {}",
+        "  results: {}, summary.json, can.log, walk.mcap and {} plots in {}",
         traj.display(),
         plots.len(),
         out.display()
