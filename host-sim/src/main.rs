@@ -30,7 +30,7 @@ use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, toml_scenario};
-use planner_core::gait::{Footstep, GaitParams, Phase, Side};
+use planner_core::gait::{GaitParams, Phase, Side};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -228,26 +228,6 @@ fn max_fluctuation(run: &Run) -> (f64, f64) {
     (along, across)
 }
 
-/// The footprints actually stood on: every new ground pose of a foot in the trajectory.
-fn footprints(run: &Run) -> Vec<Footstep<f64>> {
-    let mut out: Vec<Footstep<f64>> = Vec::new();
-    let mut last: [Option<(f64, f64, f64)>; 2] = [None, None];
-    for r in &run.trajectory {
-        for (k, f) in r.feet.iter().enumerate() {
-            if f.z != 0.0 {
-                continue;
-            }
-            let pose = (f.x, f.y, f.yaw);
-            if last[k] != Some(pose) {
-                last[k] = Some(pose);
-                let side = if k == 0 { Side::Left } else { Side::Right };
-                out.push(Footstep::new(side, f.x, f.y, f.yaw));
-            }
-        }
-    }
-    out
-}
-
 /// A command in words: `step 3 (append, left at (0.4000, 0.1000) m)`, `start`.
 fn describe(c: &Command) -> String {
     let side = |s: Side| if s == Side::Left { "left" } else { "right" };
@@ -412,8 +392,9 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))
-        .map_err(|e| format!("plots in {}: {e}", out.display()))?;
+    let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, Some(&mb))?;
+    let plots =
+        plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
         println!("{name}");
     } else {
