@@ -1,7 +1,9 @@
 //! `walk.mcap` of `host-sim run`, read back with the `mcap` crate's reader: the channel set,
 //! a JSON schema on every channel, one message per row of `trajectory.csv` (and per line of
 //! `can.log`), non-decreasing log times, and values equal to the CSV and the log within the
-//! CSV's rounding.
+//! CSV's rounding. Then read again by an independent reader, PyPI's `mcap` package, with every
+//! message validated against its schema (`jsonschema`); `tests/run-all.sh` installs both and
+//! sets `WALK_REQUIRE_MCAP_TOOLS=1`, without which a missing reader skips that test.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
@@ -15,8 +17,9 @@ use serde_json::Value;
 /// of the last place, plus the binary rounding of the printed decimal.
 const CSV_TOL: f64 = 0.5e-6 + 1e-12;
 
-fn run(scenario: &str) -> PathBuf {
-    let out = std::env::temp_dir().join(format!("host-sim-mcap-{}-{scenario}", std::process::id()));
+/// `host-sim run <scenario>` into a fresh directory named by `tag`.
+fn run(scenario: &str, tag: &str) -> PathBuf {
+    let out = std::env::temp_dir().join(format!("host-sim-mcap-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args(["run", scenario, "--out", out.to_str().expect("UTF-8 path")])
@@ -108,7 +111,7 @@ fn f(v: &Value, path: &[&str]) -> f64 {
 
 #[test]
 fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
-    let out = run("fig4");
+    let out = run("fig4", "rust");
     let csv = Csv::read(&out.join("trajectory.csv"));
     let log: Vec<_> = std::fs::read_to_string(out.join("can.log"))
         .expect("can.log")
@@ -298,4 +301,117 @@ fn bad_log_lines_are_refused_with_the_line_quoted() {
     let ok = parse_log_line("(1767225600.000085) can0 2A0#00FF").expect("valid line");
     assert_eq!(ok.unix_us, 1_767_225_600_000_085);
     assert_eq!((ok.id, ok.data), (0x2A0, vec![0x00, 0xFF]));
+}
+
+/// Set by `tests/run-all.sh`: a missing Python MCAP reader fails the test instead of skipping.
+const REQUIRE: &str = "WALK_REQUIRE_MCAP_TOOLS";
+
+/// An independent reader: PyPI's `mcap` (summary, then every message in file order), each
+/// message validated against its channel's JSON schema with `jsonschema`. Prints, per topic
+/// (sorted): topic, schema name, schema encoding, message encoding, count, first and last log
+/// time; then the number of log times that went back, the number of schema violations, and
+/// `cog.x` of /reference message 800.
+const PYTHON: &str = r#"
+import json, sys
+import jsonschema
+from mcap.reader import make_reader
+with open(sys.argv[1], "rb") as f:
+    reader = make_reader(f)
+    summary = reader.get_summary()
+    validators = {}
+    for cid, ch in summary.channels.items():
+        schema = summary.schemas[ch.schema_id]
+        validators[ch.topic] = jsonschema.Draft202012Validator(json.loads(schema.data))
+    seen = {}
+    back = bad = 0
+    last = -1
+    cog_800 = None
+    for schema, ch, msg in reader.iter_messages(log_time_order=False):
+        if msg.log_time < last:
+            back += 1
+        last = msg.log_time
+        value = json.loads(msg.data)
+        if not validators[ch.topic].is_valid(value):
+            bad += 1
+        s = seen.setdefault(ch.topic, [schema.name, schema.encoding, ch.message_encoding, 0, msg.log_time, 0])
+        if ch.topic == "/reference" and s[3] == 800:
+            cog_800 = value["cog"]["x"]
+        s[3] += 1
+        s[5] = msg.log_time
+for topic in sorted(seen):
+    print(topic, *seen[topic])
+print(back)
+print(bad)
+print(repr(cog_800))
+"#;
+
+#[test]
+fn python_mcap_reads_the_file_and_every_message_fits_its_schema() {
+    let has = Command::new("python3")
+        .args(["-c", "import mcap.reader, zstandard, jsonschema"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has {
+        assert!(
+            !std::env::var(REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0"),
+            "the Python MCAP reader is missing and {REQUIRE}=1 (pip install mcap zstandard \
+             jsonschema)"
+        );
+        eprintln!("mcap: SKIPPED the Python reader check: not installed ({REQUIRE}=1 makes this a failure)");
+        return;
+    }
+    let out = run("fig4", "python");
+    let path = out.join("walk.mcap");
+    let o = Command::new("python3")
+        .args(["-c", PYTHON])
+        .arg(&path)
+        .output()
+        .expect("run python3");
+    assert!(
+        o.status.success(),
+        "python mcap: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = String::from_utf8(o.stdout).expect("UTF-8");
+    let lines: Vec<&str> = text.lines().collect();
+    // What the Rust reader sees, in the same form.
+    let (msgs, summary) = read_mcap(&path);
+    let mut want: Vec<String> = Vec::new();
+    let mut topics: Vec<&str> = TOPICS.to_vec();
+    topics.sort_unstable();
+    for topic in &topics {
+        let ch = summary
+            .channels
+            .values()
+            .find(|c| c.topic == *topic)
+            .expect("channel");
+        let schema = ch.schema.as_ref().expect("schema");
+        let on: Vec<&Msg> = msgs.iter().filter(|m| m.topic == *topic).collect();
+        want.push(format!(
+            "{topic} {} {} {} {} {} {}",
+            schema.name,
+            schema.encoding,
+            ch.message_encoding,
+            on.len(),
+            on[0].log_time,
+            on[on.len() - 1].log_time
+        ));
+    }
+    assert_eq!(
+        lines[..topics.len()],
+        want,
+        "python mcap against the Rust reader"
+    );
+    assert_eq!(lines[topics.len()], "0", "log times that went back");
+    assert_eq!(
+        lines[topics.len() + 1],
+        "0",
+        "messages that do not fit their schema"
+    );
+    let csv = Csv::read(&out.join("trajectory.csv"));
+    let cog: f64 = lines[topics.len() + 2]
+        .parse()
+        .expect("cog.x of message 800");
+    assert!((cog - csv.num(800, "cog_x")).abs() <= CSV_TOL, "{cog}");
+    eprintln!("mcap: Python reader: {}", want.join("; "));
 }
