@@ -73,10 +73,11 @@ pub fn landings(run: &Run) -> Vec<Landing> {
         .collect()
 }
 
-/// The instants at which accepted modifications took effect: one mark per control cycle with
-/// modifications, at the first reference they change (the command applied in tick `k` shapes
-/// the reference of row `k + 1`), labelled with the steps moved and the single-support
-/// adjustment of that re-plan.
+/// The instants of the accepted modifications: one mark per control cycle with modifications,
+/// at the first reference computed after them (a command applied in tick `k` can shape the
+/// reference of row `k + 1` on; a modification of a step that is not the next to swing
+/// changes the walk only once that step lifts off), labelled with the steps moved and the
+/// single-support adjustment of the re-plan in that row, if any.
 pub fn modification_marks(run: &Run, dt: f64) -> Vec<Mark> {
     let mut ticks: Vec<(u64, Vec<u16>)> = Vec::new();
     for e in &run.events {

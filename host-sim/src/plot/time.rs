@@ -106,32 +106,42 @@ fn draw_panel(area: &Area<'_>, px: Px, p: &Panel<'_>) -> Result<(), Box<dyn Erro
         .font(15)
         .color(&MARK_COLOR)
         .pos(Pos::new(HPos::Left, VPos::Top));
-    for m in p.marks {
-        if !p.t.contains(&m.t) {
-            continue;
-        }
+    let marks: Vec<&Mark> = p.marks.iter().filter(|m| p.t.contains(&m.t)).collect();
+    for m in &marks {
         chart.draw_series(std::iter::once(DashedPathElement::new(
             vec![(m.t, p.y.start), (m.t, p.y.end)],
             px.i(6),
             px.i(4),
             MARK_COLOR.stroke_width(px.u(2)),
         )))?;
-        if p.mark_labels {
+    }
+    if p.mark_labels {
+        let plot = chart.plotting_area().strip_coord_spec();
+        let (ox, oy) = plot.get_base_pixel();
+        let (w, _) = plot.dim_in_pixel();
+        let gap = px.i(5);
+        // Placed label boxes (x0, y0, x1, y1): a label that would overlap one goes a line
+        // lower.
+        let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+        for m in &marks {
             let (x, y) = chart.backend_coord(&(m.t, p.y.end));
-            let plot = chart.plotting_area().strip_coord_spec();
-            let (ox, oy) = (plot.get_base_pixel().0, plot.get_base_pixel().1);
-            let (w, _) = plot.dim_in_pixel();
+            let (tw, th) = plot.estimate_text_size(&m.label, &label_style)?;
+            let (tw, th) = (tw as i32, th as i32);
             // Right of the line, or left of it when the label would leave the panel.
-            let (tw, _) = plot.estimate_text_size(&m.label, &label_style)?;
-            let tw = tw as i32;
-            // Right of the line, or left of it when the label would leave the panel.
-            let gap = px.i(5);
             let lx = if x - ox + gap + tw < w as i32 {
                 x - ox + gap
             } else {
                 x - ox - gap - tw
             };
-            boxed_text(&plot, px, &m.label, (lx, y - oy + gap), &label_style)?;
+            let mut ly = y - oy + gap;
+            while placed
+                .iter()
+                .any(|b| lx < b.2 && lx + tw > b.0 && ly < b.3 && ly + th > b.1)
+            {
+                ly += th + gap;
+            }
+            placed.push((lx - gap, ly - gap, lx + tw + gap, ly + th + gap));
+            boxed_text(&plot, px, &m.label, (lx, ly), &label_style)?;
         }
     }
     if let Some(note) = &p.note {

@@ -35,11 +35,45 @@ const INSIDE: f64 = 0.04;
 /// A first planned pose's step number: just beyond the sole's outer edge.
 const OUTSIDE: f64 = 0.5 * SOLE_WIDTH + 0.022;
 
-/// Where a sole's step number goes: `out` m from its centre towards its outer side.
-fn label_point(f: &Footstep<f64>, out: f64) -> (f64, f64) {
+/// Where a sole's step number goes: `out` m from its centre towards its outer side and
+/// `ahead` m towards its toe.
+fn label_point(f: &Footstep<f64>, out: f64, ahead: f64) -> (f64, f64) {
     let out = if f.side == Side::Left { out } else { -out };
     let (s, c) = f.yaw.sin_cos();
-    (f.x - s * out, f.y + c * out)
+    (f.x + c * ahead - s * out, f.y + s * ahead + c * out)
+}
+
+/// Places the numbers of the first planned poses: beyond the sole's outer edge, or else
+/// beyond its heel or its toe, whichever first keeps clear of the numbers already placed
+/// (`taken`, to which it adds them); `px_per_m` converts to the figure's pixels.
+fn place_planned_labels(
+    planned: &[Footstep<f64>],
+    taken: &mut Vec<(f64, f64)>,
+    px_per_m: f64,
+) -> Vec<(f64, f64)> {
+    // A number with its brackets is about 35 × 15 px.
+    let clear = |p: (f64, f64), q: &(f64, f64)| {
+        ((p.0 - q.0) * px_per_m).abs() > 38.0 || ((p.1 - q.1) * px_per_m).abs() > 18.0
+    };
+    let end = 0.5 * SOLE_LENGTH + 0.035;
+    planned
+        .iter()
+        .map(|p| {
+            let candidates = [
+                label_point(p, OUTSIDE, 0.0),
+                label_point(p, 0.0, -end),
+                label_point(p, 0.0, end),
+                label_point(p, OUTSIDE + 0.03, 0.0),
+            ];
+            let at = candidates
+                .iter()
+                .copied()
+                .find(|c| taken.iter().all(|t| clear(*c, t)))
+                .unwrap_or(candidates[0]);
+            taken.push(at);
+            at
+        })
+        .collect()
 }
 
 fn side_color(side: Side) -> &'static RGBColor {
@@ -125,9 +159,33 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
         .filter_map(|l| l.planned.map(|p| (l.id, p, sole_outline(p.x, p.y, p.yaw))))
         .collect();
     // The multi-body ZMP is left out of the bounds: its finite-difference ends may jump.
-    let labels: Vec<_> = planned
+    // The scale before the labels are placed (they hardly change it).
+    let scale_of = |pts: &mut dyn Iterator<Item = (f64, f64)>| {
+        let pts: Vec<_> = pts.collect();
+        let (x_lo, x_hi) = bounds(pts.iter().map(|p| p.0));
+        let (y_lo, y_hi) = bounds(pts.iter().map(|p| p.1));
+        (1100.0 / (x_hi - x_lo + 0.1)).min(800.0 / (y_hi - y_lo + 0.1))
+    };
+    let rough = scale_of(
+        &mut stance
+            .iter()
+            .chain(&landed)
+            .chain(planned.iter().map(|p| &p.2))
+            .flatten()
+            .copied(),
+    );
+    let mut taken: Vec<(f64, f64)> = walk
+        .landings
         .iter()
-        .map(|(_, p, _)| label_point(p, OUTSIDE + 0.02))
+        .filter(|l| l.id.is_some())
+        .map(|l| label_point(&l.foot, INSIDE, 0.0))
+        .collect();
+    let planned_poses: Vec<_> = planned.iter().map(|p| p.1).collect();
+    let labels = place_planned_labels(&planned_poses, &mut taken, rough);
+    // Room for the numbers themselves (about 0.02 m beyond their centres).
+    let label_box: Vec<(f64, f64)> = labels
+        .iter()
+        .flat_map(|&(x, y)| [(x - 0.03, y - 0.02), (x + 0.03, y + 0.02)])
         .collect();
     let all = || {
         stance
@@ -136,7 +194,7 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
             .chain(planned.iter().map(|p| &p.2))
             .flatten()
             .chain(series[..2].iter().flat_map(|s| s.points.iter()))
-            .chain(&labels)
+            .chain(&label_box)
             .copied()
     };
     let (x_lo, x_hi) = bounds(all().map(|p| p.0));
@@ -196,14 +254,13 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
         };
         for l in &walk.landings {
             if let Some(id) = l.id {
-                let at = label_point(&l.foot, INSIDE);
+                let at = label_point(&l.foot, INSIDE, 0.0);
                 let style = number(side_color(l.foot.side));
                 chart.draw_series(std::iter::once(Text::new(id.to_string(), at, style)))?;
             }
         }
-        for (id, p, _) in &planned {
+        for ((id, _, _), &at) in planned.iter().zip(&labels) {
             if let Some(id) = id {
-                let at = label_point(p, OUTSIDE);
                 let style = number(&PLANNED_COLOR);
                 chart.draw_series(std::iter::once(Text::new(format!("({id})"), at, style)))?;
             }
