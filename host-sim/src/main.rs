@@ -328,6 +328,7 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
             dt,
             mb: &mb,
             can_log: &sim.can_log,
+            cog_height: cfg.node.params.cog_height,
         },
     )?;
     let (along, across) = max_fluctuation(run);

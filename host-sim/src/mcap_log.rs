@@ -10,6 +10,7 @@
 //! | `/multibody/zmp` | `host_sim.MultibodyZmp` | row with a multi-body ZMP: the ZMP of the multi-body model |
 //! | `/feet/left`, `/feet/right` | `foxglove.PoseInFrame` | row: the foot's pose in frame `world` (Foxglove's 3D panel draws it) |
 //! | `/can` | `host_sim.CanFrame` | line of `can.log`: identifier, data, the log line's time |
+//! | `/scene` | `foxglove.SceneUpdate` | row: entity `walk` in frame `world`: the soles (cubes of [`SOLE_SIZE`], left blue, right red, lifted with the foot), the COG (blue sphere at the COG height), the planned ZMP (red sphere on the floor), the multi-body ZMP (green) |
 //!
 //! **Times.** A message's log time (and publish time) is in nanoseconds since the Unix epoch,
 //! on the clock of `can.log` ([`crate::bus::LOG_EPOCH_S`] is simulated time 0): a trajectory
@@ -37,16 +38,24 @@ use crate::bus::LOG_EPOCH_S;
 use crate::multibody::MbSample;
 
 /// The topics of the file, in the order of their channel ids.
-pub const TOPICS: [&str; 5] = [
+pub const TOPICS: [&str; 6] = [
     "/reference",
     "/multibody/zmp",
     "/feet/left",
     "/feet/right",
     "/can",
+    "/scene",
 ];
 
-/// The frame id of the pose messages.
+/// The frame id of the pose and scene messages.
 pub const WORLD_FRAME: &str = "world";
+
+/// The sole cubes of `/scene`: length, width, thickness \[m\].
+pub const SOLE_SIZE: [f64; 3] = [crate::plot::SOLE_LENGTH, crate::plot::SOLE_WIDTH, 0.01];
+/// Diameter of the COG sphere of `/scene` \[m\].
+pub const COG_DIAMETER: f64 = 0.06;
+/// Diameter of the ZMP spheres of `/scene` \[m\].
+pub const ZMP_DIAMETER: f64 = 0.03;
 
 /// What goes into the file.
 #[derive(Clone, Copy, Debug)]
@@ -59,6 +68,8 @@ pub struct McapInput<'a> {
     pub mb: &'a [MbSample],
     /// The lines of `can.log` (`candump -l` format, see [`crate::bus`]).
     pub can_log: &'a [String],
+    /// The COG height of the pendulum, where `/scene` draws the COG \[m\].
+    pub cog_height: f64,
 }
 
 /// A frame of `can.log`: time \[µs since the Unix epoch\], identifier, data.
@@ -235,30 +246,169 @@ fn can_schema() -> Value {
     )
 }
 
+fn scene_schema() -> Value {
+    let xyz = |w: bool| {
+        let mut p = json!({ "x": number(""), "y": number(""), "z": number("") });
+        if w {
+            p["w"] = number("");
+        }
+        p
+    };
+    let pose = object(
+        "pose",
+        "position [m] and orientation (unit quaternion)",
+        json!({
+            "position": object("position", "[m]", xyz(false)),
+            "orientation": object("orientation", "quaternion", xyz(true)),
+        }),
+    );
+    let color = object(
+        "color",
+        "RGBA, 0 … 1",
+        json!({ "r": number(""), "g": number(""), "b": number(""), "a": number("") }),
+    );
+    let primitive = |title: &str| {
+        object(
+            title,
+            "a box or an ellipsoid",
+            json!({
+                "pose": pose.clone(),
+                "size": object("size", "extent along its axes [m]", xyz(false)),
+                "color": color.clone(),
+            }),
+        )
+    };
+    let time = object(
+        "time",
+        "seconds and nanoseconds",
+        json!({
+            "sec": { "type": "integer", "minimum": 0 },
+            "nsec": { "type": "integer", "minimum": 0, "maximum": 999_999_999 },
+        }),
+    );
+    let empty = json!({ "type": "array", "maxItems": 0 });
+    let entity = object(
+        "entity",
+        "one entity of the scene, replaced by the next message with the same id",
+        json!({
+            "timestamp": time.clone(),
+            "frame_id": { "type": "string" },
+            "id": { "type": "string" },
+            "lifetime": time,
+            "frame_locked": { "type": "boolean" },
+            "metadata": empty.clone(),
+            "arrows": empty.clone(),
+            "cubes": { "type": "array", "items": primitive("cube") },
+            "spheres": { "type": "array", "items": primitive("sphere") },
+            "cylinders": empty.clone(),
+            "lines": empty.clone(),
+            "triangles": empty.clone(),
+            "texts": empty.clone(),
+            "models": empty.clone(),
+        }),
+    );
+    object(
+        "foxglove.SceneUpdate",
+        "Entities of a 3D scene (Foxglove's well-known schema; the parts this file uses)",
+        json!({
+            "deletions": empty,
+            "entities": { "type": "array", "items": entity },
+        }),
+    )
+}
+
+fn quaternion(yaw: f64) -> Value {
+    let (s, c) = (0.5 * yaw).sin_cos();
+    json!({ "x": 0.0, "y": 0.0, "z": s, "w": c })
+}
+
+/// A cube or a sphere: centre, heading, size \[m\], colour (RGBA, 0 … 1).
+fn shape(centre: [f64; 3], yaw: f64, size: [f64; 3], rgba: [f64; 4]) -> Value {
+    json!({
+        "pose": {
+            "position": { "x": centre[0], "y": centre[1], "z": centre[2] },
+            "orientation": quaternion(yaw),
+        },
+        "size": { "x": size[0], "y": size[1], "z": size[2] },
+        "color": { "r": rgba[0], "g": rgba[1], "b": rgba[2], "a": rgba[3] },
+    })
+}
+
+fn scene_json(log_ns: u64, r: &Reference<f64>, mb: Option<&MbSample>, cog_height: f64) -> Value {
+    let colours = [[0.19, 0.19, 0.56, 0.8], [0.56, 0.19, 0.19, 0.8]];
+    let cubes: Vec<Value> = r
+        .feet
+        .iter()
+        .zip(colours)
+        .map(|(f, c)| shape([f.x, f.y, f.z + 0.5 * SOLE_SIZE[2]], f.yaw, SOLE_SIZE, c))
+        .collect();
+    let mut spheres = vec![
+        shape(
+            [r.x.cog, r.y.cog, cog_height],
+            0.0,
+            [COG_DIAMETER; 3],
+            [0.12, 0.37, 0.75, 1.0],
+        ),
+        shape(
+            [r.x.zmp, r.y.zmp, 0.0],
+            0.0,
+            [ZMP_DIAMETER; 3],
+            [0.84, 0.15, 0.16, 1.0],
+        ),
+    ];
+    if let Some(m) = mb {
+        spheres.push(shape(
+            [m.mb_zmp_x, m.mb_zmp_y, 0.0],
+            0.0,
+            [ZMP_DIAMETER; 3],
+            [0.17, 0.63, 0.17, 1.0],
+        ));
+    }
+    let time = json!({ "sec": log_ns / 1_000_000_000, "nsec": log_ns % 1_000_000_000 });
+    json!({
+        "deletions": [],
+        "entities": [{
+            "timestamp": time,
+            "frame_id": WORLD_FRAME,
+            "id": "walk",
+            "lifetime": { "sec": 0, "nsec": 0 },
+            "frame_locked": false,
+            "metadata": [],
+            "arrows": [],
+            "cubes": cubes,
+            "spheres": spheres,
+            "cylinders": [],
+            "lines": [],
+            "triangles": [],
+            "texts": [],
+            "models": [],
+        }],
+    })
+}
+
 fn foot_json(f: &FootPose<f64>) -> Value {
     json!({ "x": f.x, "y": f.y, "z": f.z, "yaw": f.yaw })
 }
 
 fn pose_json(log_ns: u64, f: &FootPose<f64>) -> Value {
-    let (s, c) = (0.5 * f.yaw).sin_cos();
     json!({
         "timestamp": { "sec": log_ns / 1_000_000_000, "nsec": log_ns % 1_000_000_000 },
         "frame_id": WORLD_FRAME,
         "pose": {
             "position": { "x": f.x, "y": f.y, "z": f.z },
-            "orientation": { "x": 0.0, "y": 0.0, "z": s, "w": c },
+            "orientation": quaternion(f.yaw),
         },
     })
 }
 
-/// The log time of CSV time `t` \[ns since the Unix epoch\].
+/// The log time of CSV time `t` \[ns since the Unix epoch\] (saturating).
 pub fn log_time_ns(t: f64) -> u64 {
-    LOG_EPOCH_S * 1_000_000_000 + (t * 1e9).round().max(0.0) as u64
+    (LOG_EPOCH_S * 1_000_000_000).saturating_add((t * 1e9).round().max(0.0) as u64)
 }
 
 /// Writes the MCAP file at `path` (see the module documentation); the error names the file.
 ///
-/// Errors: a `dt` that is not positive and finite, a line of `can.log` that does not parse, a
+/// Errors: a `dt` or a `cog_height` that is not positive and finite, a line of `can.log` that does not parse, a
 /// multi-body evaluation longer than the trajectory, or an I/O error.
 pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Error>> {
     let named = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
@@ -266,6 +416,13 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
         return Err(format!(
             "write_mcap: dt must be positive and finite, got {}",
             input.dt
+        )
+        .into());
+    }
+    if !(input.cog_height > 0.0 && input.cog_height.is_finite()) {
+        return Err(format!(
+            "write_mcap: cog_height must be positive and finite, got {}",
+            input.cog_height
         )
         .into());
     }
@@ -292,8 +449,8 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
         .map_err(|e| named(&e))?;
     let mut out = Out {
         w: writer,
-        channels: [0; 5],
-        seq: [0; 5],
+        channels: [0; 6],
+        seq: [0; 6],
     };
     let schemas = [
         reference_schema(),
@@ -301,6 +458,7 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
         pose_schema(),
         pose_schema(),
         can_schema(),
+        scene_schema(),
     ];
     for (i, (topic, schema)) in TOPICS.iter().zip(&schemas).enumerate() {
         let name = schema["title"].as_str().unwrap_or("unnamed");
@@ -339,6 +497,8 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
             out.put(ch, ns, &pose_json(ns, foot))
                 .map_err(|e| named(&e))?;
         }
+        let scene = scene_json(ns, r, input.mb.get(k), input.cog_height);
+        out.put(SCENE, ns, &scene).map_err(|e| named(&e))?;
     }
     for f in frames {
         out.put(CAN, f.unix_us * 1000, &frame_json(f))
@@ -353,12 +513,13 @@ const MULTIBODY: usize = 1;
 const LEFT: usize = 2;
 const RIGHT: usize = 3;
 const CAN: usize = 4;
+const SCENE: usize = 5;
 
 /// The writer and its channels.
 struct Out<W: std::io::Write + std::io::Seek> {
     w: mcap::Writer<W>,
-    channels: [u16; 5],
-    seq: [u32; 5],
+    channels: [u16; 6],
+    seq: [u32; 6],
 }
 
 impl<W: std::io::Write + std::io::Seek> Out<W> {

@@ -1,4 +1,5 @@
-//! `walk.mcap` of `host-sim run`, read back with the `mcap` crate's reader: the channel set,
+//! `walk.mcap` of `host-sim run`, read back with the `mcap` crate's reader: the channel set
+//! (with Foxglove's scene and pose schemas),
 //! a JSON schema on every channel, one message per row of `trajectory.csv` (and per line of
 //! `can.log`), non-decreasing log times, and values equal to the CSV and the log within the
 //! CSV's rounding. Then read again by an independent reader, PyPI's `mcap` package, with every
@@ -10,7 +11,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use host_sim::bus::LOG_EPOCH_S;
-use host_sim::mcap_log::{parse_log_line, TOPICS, WORLD_FRAME};
+use host_sim::mcap_log::{parse_log_line, SOLE_SIZE, TOPICS, WORLD_FRAME};
 use serde_json::Value;
 
 /// The CSV has 6 decimals (1 µm, 1 µrad): a value read back differs by at most half a unit
@@ -161,6 +162,7 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
         schema_of("/feet/right").as_deref(),
         Some("foxglove.PoseInFrame")
     );
+    assert_eq!(schema_of("/scene").as_deref(), Some("foxglove.SceneUpdate"));
 
     // Message counts: a row of the CSV is one message on every trajectory channel; every
     // row has a multi-body ZMP in a fault-free run of fig4; a line of can.log is a frame.
@@ -177,6 +179,7 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
     assert_eq!(count["/multibody/zmp"], mb_rows);
     assert_eq!(count["/feet/left"], rows);
     assert_eq!(count["/feet/right"], rows);
+    assert_eq!(count["/scene"], rows);
     assert_eq!(count["/can"], log.len());
     assert!(log.len() > 5 * rows, "{} frames for {rows} rows", log.len());
     let stats = summary.stats.as_ref().expect("statistics record");
@@ -259,6 +262,53 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
                 (yaw - b).abs() <= CSV_TOL,
                 "{topic} row {r} yaw {yaw} csv {b}"
             );
+        }
+    }
+    // The scene: the soles at the feet (cube centres half a sole thickness above the sole),
+    // the COG at the pendulum's height, the planned and the multi-body ZMP on the floor.
+    let cog_height = planner_core::gait::GaitParams::<f64>::hrp2().cog_height;
+    for (r, m) in on("/scene").enumerate() {
+        let e = &m.json["entities"][0];
+        assert_eq!(e["frame_id"], WORLD_FRAME);
+        assert_eq!(e["id"], "walk");
+        let ts = f(e, &["timestamp", "sec"]) as u64 * 1_000_000_000
+            + f(e, &["timestamp", "nsec"]) as u64;
+        assert_eq!(ts, m.log_time, "/scene row {r}: timestamp");
+        let at = |shape: &Value, k: &str| f(shape, &["pose", "position", k]);
+        let cubes = e["cubes"].as_array().expect("cubes");
+        assert_eq!(cubes.len(), 2, "/scene row {r}");
+        for (cube, side) in cubes.iter().zip(["left", "right"]) {
+            assert_eq!(f(cube, &["size", "x"]), SOLE_SIZE[0]);
+            assert_eq!(f(cube, &["size", "y"]), SOLE_SIZE[1]);
+            for k in ["x", "y"] {
+                let b = csv.num(r, &format!("{side}_{k}"));
+                assert!(
+                    (at(cube, k) - b).abs() <= CSV_TOL,
+                    "/scene row {r} {side} {k}"
+                );
+            }
+            let z = csv.num(r, &format!("{side}_z")) + 0.5 * SOLE_SIZE[2];
+            assert!(
+                (at(cube, "z") - z).abs() <= CSV_TOL,
+                "/scene row {r} {side} z"
+            );
+        }
+        let spheres = e["spheres"].as_array().expect("spheres");
+        assert_eq!(spheres.len(), 3, "/scene row {r}: COG, ZMP, multi-body ZMP");
+        for (sphere, (cx, cy, z)) in spheres.iter().zip([
+            ("cog_x", "cog_y", cog_height),
+            ("zmp_x", "zmp_y", 0.0),
+            ("mb_zmp_x", "mb_zmp_y", 0.0),
+        ]) {
+            assert!(
+                (at(sphere, "x") - csv.num(r, cx)).abs() <= CSV_TOL,
+                "row {r} {cx}"
+            );
+            assert!(
+                (at(sphere, "y") - csv.num(r, cy)).abs() <= CSV_TOL,
+                "row {r} {cy}"
+            );
+            assert!((at(sphere, "z") - z).abs() < 1e-12, "row {r} {cx} z");
         }
     }
     // The frames equal can.log, line by line (time to the log's 1 µs, identifier, data).
