@@ -59,7 +59,8 @@ enum Cmd {
         /// A built-in scenario (see `host-sim list`) or a file ending in .toml.
         #[arg(value_name = "SCENARIO|FILE.toml")]
         scenario: String,
-        /// The output directory [default: out/<scenario name>].
+        /// The output directory, for trajectory.csv, summary.json, can.log, walk.mcap and the
+        /// PNG figures [default: out/<scenario name>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
     },
