@@ -20,7 +20,7 @@ const CSV_TOL: f64 = 0.5e-6 + 1e-12;
 
 /// `host-sim run <scenario>` into a fresh directory named by `tag`.
 fn run(scenario: &str, tag: &str) -> PathBuf {
-    let out = std::env::temp_dir().join(format!("host-sim-mcap-{}-{tag}", std::process::id()));
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("mcap-{tag}"));
     let _ = std::fs::remove_dir_all(&out);
     let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args(["run", scenario, "--out", out.to_str().expect("UTF-8 path")])
