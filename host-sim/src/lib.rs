@@ -10,6 +10,8 @@ pub mod mcap_log;
 pub mod multibody;
 pub mod paper;
 pub mod plot;
+pub mod replay;
+pub mod robot;
 pub mod scenario;
 pub mod sim;
 #[cfg(feature = "socketcan")]

@@ -9,7 +9,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use host_sim::multibody::{evaluate, Hrp2, MbSample};
+use host_sim::multibody::{evaluate, MbSample, Model};
 use host_sim::plot::{
     fluctuation, landings, modification_marks, sole_limits, walked_landings, write_plots, Walk,
     COMPARISON_FILE, FILES, SOLE_LENGTH,
@@ -168,7 +168,7 @@ fn fig4_figures_are_valid_pngs() {
 #[test]
 fn fig4_figures_with_multibody_zmp() {
     let (s, run) = play("fig4");
-    let mb: Vec<MbSample> = evaluate(&Hrp2::default(), &run.trajectory, DT).unwrap();
+    let mb: Vec<MbSample> = evaluate(&Model::hrp2(), &run.trajectory, DT).unwrap();
     let dir = out_dir("fig4-mb");
     let written = write_plots(&dir, &walk("fig4", &s, &run, Some(&mb))).unwrap();
     check_files(&written, &dir, true, true);

@@ -17,7 +17,7 @@
 //! cycle bookkeeping (`board/src/cycle.rs`: overruns, statistics), both compiled into this crate
 //! from the board's source:
 //!
-//! * `Node::<16>::new(NodeConfig::hrp2())` in a frame of its own, moved into a `static` by
+//! * `Node::<16>::new(walk_robot::NODE_CONFIG)` in a frame of its own, moved into a `static` by
 //!   `cortex_m::singleton!` (the board's `place_node`); an error idles instead of panicking;
 //! * per cycle: busy pin high, DWT CYCCNT, `node.poll(now_ms, &mut bus)`, busy pin low, the
 //!   overrun test (cycles spent or TIM2's update flag already set), `cycle::Stats::record`
@@ -204,7 +204,7 @@ fn main() -> ! {
     #[cfg(feature = "mock-can")]
     let mut bus = Bus::default();
 
-    let cfg = NodeConfig::hrp2();
+    let cfg = walk_robot::NODE_CONFIG;
     let node = match place_node(cfg) {
         Ok(Some(n)) => n,
         Ok(None) | Err(_) => idle(),

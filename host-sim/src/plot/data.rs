@@ -138,7 +138,8 @@ pub(super) fn comparison(
     let bare = without_adjustment(params);
     // scenario::run expects parameters the gait accepts: check them here.
     for p in [params, bare] {
-        Gait::<f64, 64>::new(p, s.feet[0], s.feet[1])
+        let [left, right] = s.start_feet(p.step_width);
+        Gait::<f64, 64>::new(p, left, right)
             .map_err(|e| format!("comparison runs of {}: gait parameters: {e:?}", s.name))?;
     }
     let mut first = s.clone();

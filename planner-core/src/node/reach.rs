@@ -6,6 +6,11 @@ use crate::wire::Reason;
 
 /// Leg reach limits (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "robot",
+    derive(serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct Reach {
     /// Largest forward step \[m\].
     pub max_forward: f64,
