@@ -373,6 +373,10 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
             mb: &mb,
             can_log: &sim.can_log,
             cog_height: cfg.node.params.cog_height,
+            sole: [
+                2.0 * cfg.node.params.sole_half_length,
+                2.0 * cfg.node.params.sole_half_width,
+            ],
         },
     )?;
     let (along, across) = max_fluctuation(run);

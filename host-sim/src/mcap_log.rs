@@ -10,7 +10,7 @@
 //! | `/multibody/zmp` | `host_sim.MultibodyZmp` | row with a multi-body ZMP: the ZMP of the multi-body model |
 //! | `/feet/left`, `/feet/right` | `foxglove.PoseInFrame` | row: the foot's pose in frame `world` (Foxglove's 3D panel draws it) |
 //! | `/can` | `host_sim.CanFrame` | line of `can.log`: identifier, data, the log line's time |
-//! | `/scene` | `foxglove.SceneUpdate` | row: entity `walk` in frame `world`: the soles (cubes of [`SOLE_SIZE`], left blue, right red, lifted with the foot), the COG (blue sphere at the COG height), the planned ZMP (red sphere on the floor), the multi-body ZMP (green) |
+//! | `/scene` | `foxglove.SceneUpdate` | row: entity `walk` in frame `world`: the soles (cubes of the sole's length and width and [`SOLE_THICKNESS`], left blue, right red, lifted with the foot), the COG (blue sphere at the COG height), the planned ZMP (red sphere on the floor), the multi-body ZMP (green) |
 //!
 //! **Times.** A message's log time (and publish time) is in nanoseconds since the Unix epoch,
 //! on the clock of `can.log` ([`crate::bus::LOG_EPOCH_S`] is simulated time 0): a trajectory
@@ -50,8 +50,8 @@ pub const TOPICS: [&str; 6] = [
 /// The frame id of the pose and scene messages.
 pub const WORLD_FRAME: &str = "world";
 
-/// The sole cubes of `/scene`: length, width, thickness \[m\].
-pub const SOLE_SIZE: [f64; 3] = [crate::plot::SOLE_LENGTH, crate::plot::SOLE_WIDTH, 0.01];
+/// The thickness of the sole cubes of `/scene` \[m\].
+pub const SOLE_THICKNESS: f64 = 0.01;
 /// Diameter of the COG sphere of `/scene` \[m\].
 pub const COG_DIAMETER: f64 = 0.06;
 /// Diameter of the ZMP spheres of `/scene` \[m\].
@@ -70,6 +70,8 @@ pub struct McapInput<'a> {
     pub can_log: &'a [String],
     /// The COG height of the pendulum, where `/scene` draws the COG \[m\].
     pub cog_height: f64,
+    /// The sole: length and width \[m\] (the cubes of `/scene`).
+    pub sole: [f64; 2],
 }
 
 /// A frame of `can.log`: time \[µs since the Unix epoch\], identifier, data.
@@ -334,13 +336,20 @@ fn shape(centre: [f64; 3], yaw: f64, size: [f64; 3], rgba: [f64; 4]) -> Value {
     })
 }
 
-fn scene_json(log_ns: u64, r: &Reference<f64>, mb: Option<&MbSample>, cog_height: f64) -> Value {
+fn scene_json(
+    log_ns: u64,
+    r: &Reference<f64>,
+    mb: Option<&MbSample>,
+    cog_height: f64,
+    sole: [f64; 2],
+) -> Value {
+    let size = [sole[0], sole[1], SOLE_THICKNESS];
     let colours = [[0.19, 0.19, 0.56, 0.8], [0.56, 0.19, 0.19, 0.8]];
     let cubes: Vec<Value> = r
         .feet
         .iter()
         .zip(colours)
-        .map(|(f, c)| shape([f.x, f.y, f.z + 0.5 * SOLE_SIZE[2]], f.yaw, SOLE_SIZE, c))
+        .map(|(f, c)| shape([f.x, f.y, f.z + 0.5 * SOLE_THICKNESS], f.yaw, size, c))
         .collect();
     let mut spheres = vec![
         shape(
@@ -408,7 +417,7 @@ pub fn log_time_ns(t: f64) -> u64 {
 
 /// Writes the MCAP file at `path` (see the module documentation); the error names the file.
 ///
-/// Errors: a `dt` or a `cog_height` that is not positive and finite, a line of `can.log` that does not parse, a
+/// Errors: a `dt`, a `cog_height` or a sole size that is not positive and finite, a line of `can.log` that does not parse, a
 /// multi-body evaluation longer than the trajectory, or an I/O error.
 pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Error>> {
     let named = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
@@ -423,6 +432,13 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
         return Err(format!(
             "write_mcap: cog_height must be positive and finite, got {}",
             input.cog_height
+        )
+        .into());
+    }
+    if !input.sole.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        return Err(format!(
+            "write_mcap: sole size {:?} is not positive and finite",
+            input.sole
         )
         .into());
     }
@@ -497,7 +513,7 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
             out.put(ch, ns, &pose_json(ns, foot))
                 .map_err(|e| named(&e))?;
         }
-        let scene = scene_json(ns, r, input.mb.get(k), input.cog_height);
+        let scene = scene_json(ns, r, input.mb.get(k), input.cog_height, input.sole);
         out.put(SCENE, ns, &scene).map_err(|e| named(&e))?;
     }
     for f in frames {

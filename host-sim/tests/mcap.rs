@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use host_sim::bus::LOG_EPOCH_S;
-use host_sim::mcap_log::{parse_log_line, SOLE_SIZE, TOPICS, WORLD_FRAME};
+use host_sim::mcap_log::{parse_log_line, SOLE_THICKNESS, TOPICS, WORLD_FRAME};
 use serde_json::Value;
 
 /// The CSV has 6 decimals (1 µm, 1 µrad): a value read back differs by at most half a unit
@@ -266,7 +266,11 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
     }
     // The scene: the soles at the feet (cube centres half a sole thickness above the sole),
     // the COG at the pendulum's height, the planned and the multi-body ZMP on the floor.
-    let cog_height = planner_core::gait::GaitParams::<f64>::hrp2().cog_height;
+    let hrp2 = planner_core::gait::GaitParams::<f64>::hrp2();
+    let (cog_height, sole) = (
+        hrp2.cog_height,
+        [2.0 * hrp2.sole_half_length, 2.0 * hrp2.sole_half_width],
+    );
     for (r, m) in on("/scene").enumerate() {
         let e = &m.json["entities"][0];
         assert_eq!(e["frame_id"], WORLD_FRAME);
@@ -278,8 +282,9 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
         let cubes = e["cubes"].as_array().expect("cubes");
         assert_eq!(cubes.len(), 2, "/scene row {r}");
         for (cube, side) in cubes.iter().zip(["left", "right"]) {
-            assert_eq!(f(cube, &["size", "x"]), SOLE_SIZE[0]);
-            assert_eq!(f(cube, &["size", "y"]), SOLE_SIZE[1]);
+            assert_eq!(f(cube, &["size", "x"]), sole[0]);
+            assert_eq!(f(cube, &["size", "y"]), sole[1]);
+            assert_eq!(f(cube, &["size", "z"]), SOLE_THICKNESS);
             for k in ["x", "y"] {
                 let b = csv.num(r, &format!("{side}_{k}"));
                 assert!(
@@ -287,7 +292,7 @@ fn fig4_mcap_reads_back_like_the_csv_and_the_can_log() {
                     "/scene row {r} {side} {k}"
                 );
             }
-            let z = csv.num(r, &format!("{side}_z")) + 0.5 * SOLE_SIZE[2];
+            let z = csv.num(r, &format!("{side}_z")) + 0.5 * SOLE_THICKNESS;
             assert!(
                 (at(cube, "z") - z).abs() <= CSV_TOL,
                 "/scene row {r} {side} z"

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use host_sim::multibody::{evaluate, MbSample, Model};
 use host_sim::plot::{
     fluctuation, landings, modification_marks, sole_limits, walked_landings, write_plots, Walk,
-    COMPARISON_FILE, FILES, SOLE_LENGTH,
+    COMPARISON_FILE, FILES, SOLE_LENGTH, SOLE_WIDTH,
 };
 use host_sim::scenario::{self, Run, Scenario};
 use planner_core::gait::{GaitParams, Phase, Side};
@@ -313,7 +313,7 @@ fn sole_limits_hold_the_planned_zmp() {
         let (_, run) = play(name);
         for (k, r) in run.trajectory.iter().enumerate() {
             for (plane, zmp) in [(0, r.x.zmp), (1, r.y.zmp)] {
-                let (lo, hi) = sole_limits(r, plane);
+                let (lo, hi) = sole_limits(r, plane, [SOLE_LENGTH, SOLE_WIDTH]);
                 assert!(lo < hi, "{name} row {k}");
                 assert!(
                     (lo - 1e-9..=hi + 1e-9).contains(&zmp),
@@ -385,4 +385,35 @@ fn bad_inputs_are_refused() {
     let e = write_plots(&dir, &w).unwrap_err();
     assert!(e.to_string().contains("plane 2"), "{e}");
     assert!(!dir.exists(), "nothing written on bad input");
+}
+
+#[test]
+fn the_figures_use_the_robots_sole() {
+    // The second robot of host-sim/tests/robots (0.16 × 0.09 m soles): the walk, its sole
+    // limits and the footprints follow its file, not HRP-2's constants.
+    let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    let robot = host_sim::robot::Robot::load(&robots.join("small.toml")).unwrap();
+    let p = robot.planner.params;
+    let file = host_sim::toml_scenario::load_file(&robots.join("small-walk.toml")).unwrap();
+    let s = &file.scenario;
+    let run = scenario::run(s, p);
+    let w = Walk::from_run("small", s, &run, p.dt, p, None).unwrap();
+    assert_eq!(w.sole, [2.0 * p.sole_half_length, 2.0 * p.sole_half_width]);
+    assert!((w.sole[0] - 0.16).abs() < 1e-12 && (w.sole[1] - 0.09).abs() < 1e-12);
+    let hrp2 = walk("fig4", &play("fig4").0, &play("fig4").1, None).sole;
+    assert_eq!(hrp2, [SOLE_LENGTH, SOLE_WIDTH]);
+    for (k, r) in run.trajectory.iter().enumerate() {
+        if matches!(r.phase, Phase::Single(_)) {
+            let (lo, hi) = sole_limits(r, 0, w.sole);
+            assert!((hi - lo - 0.16).abs() < 1e-9, "row {k}: {lo} … {hi}");
+            assert!((lo - 1e-9..=hi + 1e-9).contains(&r.x.zmp), "row {k}");
+        }
+    }
+    let dir = out_dir("small");
+    let written = write_plots(&dir, &w).unwrap();
+    assert_eq!(written.len(), 3);
+    let mut bad = w.clone();
+    bad.sole = [0.16, 0.0];
+    let e = write_plots(&out_dir("small-bad"), &bad).unwrap_err();
+    assert!(e.to_string().contains("sole size"), "{e}");
 }

@@ -4,7 +4,7 @@
 
 use planner_core::gait::{Footstep, Gait, GaitParams, Phase, Reference, Side};
 
-use super::{Column, Landing, Mark, SOLE_LENGTH, SOLE_WIDTH};
+use super::{Column, Landing, Mark};
 use crate::paper::without_adjustment;
 use crate::scenario::{self, Command, Run, Scenario};
 
@@ -184,10 +184,10 @@ fn plane_of(x: f64, y: f64, plane: usize) -> f64 {
     }
 }
 
-/// Half the extent of a sole with heading `yaw` along axis `plane`.
-fn half_extent(yaw: f64, plane: usize) -> f64 {
+/// Half the extent of a sole (length, width) with heading `yaw` along axis `plane`.
+fn half_extent(yaw: f64, plane: usize, sole: [f64; 2]) -> f64 {
     let (s, c) = yaw.sin_cos();
-    let (a, b) = (0.5 * SOLE_LENGTH, 0.5 * SOLE_WIDTH);
+    let (a, b) = (0.5 * sole[0], 0.5 * sole[1]);
     if plane == 0 {
         a * c.abs() + b * s.abs()
     } else {
@@ -196,8 +196,9 @@ fn half_extent(yaw: f64, plane: usize) -> f64 {
 }
 
 /// The extent of the support polygon along axis `plane` (0: x, otherwise y), as (lowest,
-/// highest) coordinate \[m\]: the support sole in single support, both soles otherwise.
-pub fn sole_limits(r: &Reference<f64>, plane: usize) -> (f64, f64) {
+/// highest) coordinate \[m\]: the support sole in single support, both soles otherwise;
+/// `sole`: its length and width \[m\].
+pub fn sole_limits(r: &Reference<f64>, plane: usize, sole: [f64; 2]) -> (f64, f64) {
     let feet: &[usize] = match r.phase {
         Phase::Single(Side::Left) => &[0],
         Phase::Single(Side::Right) => &[1],
@@ -206,7 +207,7 @@ pub fn sole_limits(r: &Reference<f64>, plane: usize) -> (f64, f64) {
     feet.iter()
         .map(|&k| {
             let f = &r.feet[k];
-            let (c, h) = (plane_of(f.x, f.y, plane), half_extent(f.yaw, plane));
+            let (c, h) = (plane_of(f.x, f.y, plane), half_extent(f.yaw, plane, sole));
             (c - h, c + h)
         })
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (a, b)| {

@@ -8,7 +8,7 @@
 //!   fluctuation (the planned ZMP minus the support-sole centre during single support, in mm),
 //!   as the paper's Fig. 4 shows it;
 //! * `footprints.png`: the walk seen from above (Fig. 6c): COG and ZMP paths and the sole
-//!   rectangles (0.24 × 0.14 m, rotated by their yaw) with their step numbers, the same scale
+//!   rectangles (the robot's sole, HRP-2's 0.24 × 0.14 m, rotated by their yaw) with their step numbers, the same scale
 //!   on both axes; a landing that a modification moved is drawn dashed at its first planned
 //!   pose, with its number in brackets;
 //! * `modification.png`, for a walk whose footsteps were modified (the `fig4` scenario): the
@@ -39,9 +39,9 @@ use crate::scenario::{Run, Scenario};
 pub use canvas::SUPERSAMPLE;
 pub use data::{fluctuation, landings, modification_marks, sole_limits, walked_landings};
 
-/// Sole length (x in the foot frame) \[m\].
+/// HRP-2's sole length (x in the foot frame), the default of [`Walk::sole`] \[m\].
 pub const SOLE_LENGTH: f64 = 0.24;
-/// Sole width (y in the foot frame) \[m\].
+/// HRP-2's sole width (y in the foot frame) \[m\].
 pub const SOLE_WIDTH: f64 = 0.14;
 
 /// Environment variable naming a TrueType font to use instead of DejaVu Sans.
@@ -110,11 +110,13 @@ pub struct Walk<'a> {
     pub title: String,
     /// The plane of `modification.png` (0: x, 1: y).
     pub plane: usize,
+    /// The sole: length (x in the foot frame) and width \[m\].
+    pub sole: [f64; 2],
 }
 
 impl<'a> Walk<'a> {
     /// A walk with nothing but its trajectory: the landings found in it (without step
-    /// numbers), no multi-body ZMP, no marks, no comparison.
+    /// numbers), no multi-body ZMP, no marks, no comparison, HRP-2's sole.
     pub fn new(name: &'a str, trajectory: &'a [Reference<f64>], dt: f64) -> Self {
         Walk {
             name,
@@ -133,6 +135,7 @@ impl<'a> Walk<'a> {
             columns: Vec::new(),
             title: "as walked".into(),
             plane: 0,
+            sole: [SOLE_LENGTH, SOLE_WIDTH],
         }
     }
 
@@ -140,7 +143,7 @@ impl<'a> Walk<'a> {
     /// step numbers and first planned poses, the modification instants, and, if a
     /// modification was accepted, the comparison columns of `modification.png` (the scenario
     /// without its modifications, and with them but without the time adjustment, both played
-    /// against the gait with `params`).
+    /// against the gait with `params`); the sole of `params`.
     ///
     /// Errors: `params` that the gait refuses.
     pub fn from_run(
@@ -155,6 +158,7 @@ impl<'a> Walk<'a> {
         w.landings = landings(run);
         w.marks = modification_marks(run, dt);
         w.mb = mb;
+        w.sole = [2.0 * params.sole_half_length, 2.0 * params.sole_half_width];
         let (columns, plane) = data::comparison(s, run, params)?;
         if !columns.is_empty() {
             w.columns = columns;
@@ -169,7 +173,7 @@ impl<'a> Walk<'a> {
 /// columns, `modification.png` into `out` (created if needed) and returns their paths.
 ///
 /// Errors: an empty trajectory (or comparison column), a `dt` that is not positive and finite,
-/// a plane other than 0 or 1, no usable font (see the module documentation), or an I/O or
+/// a plane other than 0 or 1, a sole size that is not positive and finite, no usable font (see the module documentation), or an I/O or
 /// drawing error.
 pub fn write_plots(out: &Path, walk: &Walk<'_>) -> Result<Vec<PathBuf>, Box<dyn Error>> {
     if walk.trajectory.is_empty() || walk.columns.iter().any(|c| c.trajectory.is_empty()) {
@@ -186,6 +190,13 @@ pub fn write_plots(out: &Path, walk: &Walk<'_>) -> Result<Vec<PathBuf>, Box<dyn 
         return Err(format!(
             "write_plots: plane {} is neither 0 (x) nor 1 (y)",
             walk.plane
+        )
+        .into());
+    }
+    if !walk.sole.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        return Err(format!(
+            "write_plots: sole size {:?} is not positive and finite",
+            walk.sole
         )
         .into());
     }

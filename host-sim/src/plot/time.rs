@@ -13,7 +13,7 @@ use super::canvas::{
     bounds, configure_mesh, draw_legend, draw_series, padded, render, Area, Key, Px, Series,
 };
 use super::data::{cog, fluctuation, phase_spans, sole_limits, zmp, Span};
-use super::{Mark, Walk, SOLE_LENGTH, SOLE_WIDTH};
+use super::{Mark, Walk};
 use planner_core::gait::{Phase, Reference};
 
 pub(super) const COG_COLOR: RGBColor = RGBColor(0x1f, 0x5f, 0xbf);
@@ -198,11 +198,11 @@ fn plane_series(tr: &[Reference<f64>], dt: f64, plane: usize, axis: &str) -> Vec
     ]
 }
 
-fn limit_lines(tr: &[Reference<f64>], dt: f64, plane: usize) -> Limits {
+fn limit_lines(tr: &[Reference<f64>], dt: f64, plane: usize, sole: [f64; 2]) -> Limits {
     let l: Vec<(f64, (f64, f64))> = tr
         .iter()
         .enumerate()
-        .map(|(k, r)| (time_of(k, dt), sole_limits(r, plane)))
+        .map(|(k, r)| (time_of(k, dt), sole_limits(r, plane, sole)))
         .collect();
     (
         l.iter().map(|&(t, (lo, _))| (t, lo)).collect(),
@@ -291,7 +291,7 @@ pub(super) fn plane_figure(
             dashed: false,
         });
     }
-    let limits = limit_lines(tr, dt, plane);
+    let limits = limit_lines(tr, dt, plane, walk.sole);
     // The multi-body ZMP is left out of the range (its finite-difference ends may jump); it
     // is cut where it leaves the panel.
     let y = upper_range(&series[..2], &[&limits]);
@@ -341,8 +341,8 @@ pub(super) fn plane_figure(
                 mark_labels: false,
                 note: Some(format!(
                     "single support: planned ZMP {axis} − support-sole centre (sole {:.0} × {:.0} mm)",
-                    SOLE_LENGTH * 1e3,
-                    SOLE_WIDTH * 1e3
+                    walk.sole[0] * 1e3,
+                    walk.sole[1] * 1e3
                 )),
             },
         )?;
@@ -372,7 +372,7 @@ pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<
         .collect();
     let limits: Vec<_> = cols
         .iter()
-        .map(|(_, tr)| limit_lines(tr, dt, plane))
+        .map(|(_, tr)| limit_lines(tr, dt, plane, walk.sole))
         .collect();
     let zooms: Vec<Series> = cols
         .iter()

@@ -11,7 +11,7 @@ use super::canvas::{
     bounds, configure_mesh, draw_legend, draw_series, render, Area, Key, Px, Series, SUPERSAMPLE,
 };
 use super::time::{COG_COLOR, LEGEND_W, MB_COLOR, ZMP_COLOR};
-use super::{Walk, SOLE_LENGTH, SOLE_WIDTH};
+use super::Walk;
 use planner_core::gait::{Footstep, Side};
 
 const LEFT_COLOR: RGBColor = RGBColor(0x30, 0x30, 0x90);
@@ -20,9 +20,9 @@ const START_COLOR: RGBColor = RGBColor(0x80, 0x80, 0x80);
 const PLANNED_COLOR: RGBColor = RGBColor(0xe0, 0x7b, 0x00);
 
 /// Corners of a sole centred at (x, y) with heading `yaw`, closed (5 points).
-fn sole_outline(x: f64, y: f64, yaw: f64) -> Vec<(f64, f64)> {
+fn sole_outline(x: f64, y: f64, yaw: f64, sole: [f64; 2]) -> Vec<(f64, f64)> {
     let (s, c) = yaw.sin_cos();
-    let (a, b) = (0.5 * SOLE_LENGTH, 0.5 * SOLE_WIDTH);
+    let (a, b) = (0.5 * sole[0], 0.5 * sole[1]);
     [(a, b), (-a, b), (-a, -b), (a, -b), (a, b)]
         .iter()
         .map(|&(u, v)| (x + c * u - s * v, y + s * u + c * v))
@@ -31,9 +31,13 @@ fn sole_outline(x: f64, y: f64, yaw: f64) -> Vec<(f64, f64)> {
 
 /// A landing's step number: inside the sole, near its outer edge (away from the other foot,
 /// where the COG and ZMP paths do not pass) \[m from the centre\].
-const INSIDE: f64 = 0.04;
+fn inside(sole: [f64; 2]) -> f64 {
+    0.3 * sole[1]
+}
 /// A first planned pose's step number: just beyond the sole's outer edge.
-const OUTSIDE: f64 = 0.5 * SOLE_WIDTH + 0.022;
+fn outside(sole: [f64; 2]) -> f64 {
+    0.5 * sole[1] + 0.022
+}
 
 /// Where a sole's step number goes: `out` m from its centre towards its outer side and
 /// `ahead` m towards its toe.
@@ -48,6 +52,7 @@ fn label_point(f: &Footstep<f64>, out: f64, ahead: f64) -> (f64, f64) {
 /// (`taken`, to which it adds them); `px_per_m` converts to the figure's pixels.
 fn place_planned_labels(
     planned: &[Footstep<f64>],
+    sole: [f64; 2],
     taken: &mut Vec<(f64, f64)>,
     px_per_m: f64,
 ) -> Vec<(f64, f64)> {
@@ -55,15 +60,15 @@ fn place_planned_labels(
     let clear = |p: (f64, f64), q: &(f64, f64)| {
         ((p.0 - q.0) * px_per_m).abs() > 38.0 || ((p.1 - q.1) * px_per_m).abs() > 18.0
     };
-    let end = 0.5 * SOLE_LENGTH + 0.035;
+    let end = 0.5 * sole[0] + 0.035;
     planned
         .iter()
         .map(|p| {
             let candidates = [
-                label_point(p, OUTSIDE, 0.0),
+                label_point(p, outside(sole), 0.0),
                 label_point(p, 0.0, -end),
                 label_point(p, 0.0, end),
-                label_point(p, OUTSIDE + 0.03, 0.0),
+                label_point(p, outside(sole) + 0.03, 0.0),
             ];
             let at = candidates
                 .iter()
@@ -121,7 +126,7 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
     let start = &tr[0].feet;
     let stance: Vec<_> = start
         .iter()
-        .map(|f| sole_outline(f.x, f.y, f.yaw))
+        .map(|f| sole_outline(f.x, f.y, f.yaw, walk.sole))
         .collect();
     let mut series = vec![
         Series {
@@ -151,12 +156,15 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
     let landed: Vec<_> = walk
         .landings
         .iter()
-        .map(|l| sole_outline(l.foot.x, l.foot.y, l.foot.yaw))
+        .map(|l| sole_outline(l.foot.x, l.foot.y, l.foot.yaw, walk.sole))
         .collect();
     let planned: Vec<_> = walk
         .landings
         .iter()
-        .filter_map(|l| l.planned.map(|p| (l.id, p, sole_outline(p.x, p.y, p.yaw))))
+        .filter_map(|l| {
+            l.planned
+                .map(|p| (l.id, p, sole_outline(p.x, p.y, p.yaw, walk.sole)))
+        })
         .collect();
     // The multi-body ZMP is left out of the bounds: its finite-difference ends may jump.
     // The scale before the labels are placed (they hardly change it).
@@ -178,10 +186,10 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
         .landings
         .iter()
         .filter(|l| l.id.is_some())
-        .map(|l| label_point(&l.foot, INSIDE, 0.0))
+        .map(|l| label_point(&l.foot, inside(walk.sole), 0.0))
         .collect();
     let planned_poses: Vec<_> = planned.iter().map(|p| p.1).collect();
-    let labels = place_planned_labels(&planned_poses, &mut taken, rough);
+    let labels = place_planned_labels(&planned_poses, walk.sole, &mut taken, rough);
     // Room for the numbers themselves (about 0.02 m beyond their centres).
     let label_box: Vec<(f64, f64)> = labels
         .iter()
@@ -254,7 +262,7 @@ pub(super) fn footprint_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<d
         };
         for l in &walk.landings {
             if let Some(id) = l.id {
-                let at = label_point(&l.foot, INSIDE, 0.0);
+                let at = label_point(&l.foot, inside(walk.sole), 0.0);
                 let style = number(side_color(l.foot.side));
                 chart.draw_series(std::iter::once(Text::new(id.to_string(), at, style)))?;
             }
