@@ -8,10 +8,10 @@
 //!   fluctuation (the planned ZMP minus the support-sole centre during single support, in mm),
 //!   as the paper's Fig. 4 shows it;
 //! * `footprints.png`: the walk seen from above (Fig. 6c): COG and ZMP paths and the sole
-//!   rectangles (the robot's sole, HRP-2's 0.24 × 0.14 m, rotated by their yaw) with their step numbers, the same scale
-//!   on both axes; a landing that a modification moved is drawn dashed at its first planned
-//!   pose, with its number in brackets;
-//! * `modification.png`, for a walk whose footsteps were modified (the `fig4` scenario): the
+//!   rectangles (the robot's sole, HRP-2's 0.24 × 0.14 m, rotated by their yaw) with their
+//!   step numbers, the same scale on both axes; a landing that a modification moved is drawn
+//!   dashed at its first planned pose, with its number in brackets;
+//! * `modification.png`, for a walk whose footsteps were modified (`fig4`, `lateral`): the
 //!   plan as first sent (no modification), the modified walk without the single-support
 //!   time adjustment (the paper's Fig. 4 a) and the walk as it went, with the adjustment
 //!   (Fig. 4 b), side by side on the same axes, in the plane of the adjustment.
