@@ -5,7 +5,8 @@
 #
 # 1. installs what rustup can provide and the build needs (the thumbv7em-none-eabihf target,
 #    clippy, rustfmt) if it is missing, QEMU (qemu-system-arm, apt-get), and the CAN tools the
-#    can.log test reads with (can-utils, apt-get; python-can and cantools, pip);
+#    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), and the Python
+#    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip);
 # 2. the host workspace: unit, integration and bench targets, then the doctests;
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
 # 4. the firmware images: the STM32H743 one (workspace firmware/) and the QEMU one
@@ -95,6 +96,16 @@ if ! python3 -c "import can, cantools" >/dev/null 2>&1; then
 fi
 export WALK_REQUIRE_CAN_TOOLS=1
 # --- end CAN tools --------------------------------------------------------------------------
+
+# --- the Python MCAP reader that reads host-sim's walk.mcap (host-sim/tests/mcap.rs) --------
+# PyPI's mcap (with zstandard for the chunks) and jsonschema (each message against its
+# channel's schema). With WALK_REQUIRE_MCAP_TOOLS=1 the test fails instead of skipping.
+if ! python3 -c "import mcap.reader, zstandard, jsonschema" >/dev/null 2>&1; then
+    echo "installing the Python mcap reader and jsonschema"
+    python3 -m pip install -q mcap zstandard jsonschema
+fi
+export WALK_REQUIRE_MCAP_TOOLS=1
+# --- end MCAP reader ------------------------------------------------------------------------
 
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT

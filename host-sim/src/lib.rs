@@ -2,9 +2,11 @@
 //!
 //! * [`paper`]: the paper's modification experiments (Fig. 4, Tables I and II) through the gait
 //!   API.
+//! * [`mcap_log`]: the walk as an MCAP file for robotics viewers (Foxglove).
 //! * [`scenario`]: timelines of footstep commands and the built-in HRP-2 scenarios.
 pub mod bus;
 pub mod faults;
+pub mod mcap_log;
 pub mod multibody;
 pub mod paper;
 pub mod plot;

@@ -32,7 +32,7 @@ use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, replay, toml_scenario};
-use planner_core::gait::{Footstep, GaitParams, Phase, Side};
+use planner_core::gait::{GaitParams, Phase, Side};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -61,7 +61,8 @@ enum Cmd {
         /// A built-in scenario (see `host-sim list`) or a file ending in .toml.
         #[arg(value_name = "SCENARIO|FILE.toml")]
         scenario: String,
-        /// The output directory [default: out/<scenario name>].
+        /// The output directory, for trajectory.csv, summary.json, can.log, walk.mcap and the
+        /// PNG figures [default: out/<scenario name>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
@@ -268,26 +269,6 @@ fn max_fluctuation(run: &Run) -> (f64, f64) {
     (along, across)
 }
 
-/// The footprints actually stood on: every new ground pose of a foot in the trajectory.
-fn footprints(run: &Run) -> Vec<Footstep<f64>> {
-    let mut out: Vec<Footstep<f64>> = Vec::new();
-    let mut last: [Option<(f64, f64, f64)>; 2] = [None, None];
-    for r in &run.trajectory {
-        for (k, f) in r.feet.iter().enumerate() {
-            if f.z != 0.0 {
-                continue;
-            }
-            let pose = (f.x, f.y, f.yaw);
-            if last[k] != Some(pose) {
-                last[k] = Some(pose);
-                let side = if k == 0 { Side::Left } else { Side::Right };
-                out.push(Footstep::new(side, f.x, f.y, f.yaw));
-            }
-        }
-    }
-    out
-}
-
 /// A command in words: `step 3 (append, left at (0.4000, 0.1000) m)`, `start`.
 fn describe(c: &Command) -> String {
     let side = |s: Side| if s == Side::Left { "left" } else { "right" };
@@ -401,6 +382,21 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     let traj = out.join("trajectory.csv");
     write_trajectory(&traj, run, &mb, dt)?;
     write_file(&out.join("can.log"), sim.can_log.join("\n") + "\n")?;
+    let mcap = out.join("walk.mcap");
+    host_sim::mcap_log::write_mcap(
+        &mcap,
+        &host_sim::mcap_log::McapInput {
+            trajectory: &run.trajectory,
+            dt,
+            mb: &mb,
+            can_log: &sim.can_log,
+            cog_height: cfg.node.params.cog_height,
+            sole: [
+                2.0 * cfg.node.params.sole_half_length,
+                2.0 * cfg.node.params.sole_half_width,
+            ],
+        },
+    )?;
     let (along, across) = max_fluctuation(run);
     let results = outcomes(&s, &sim);
     let mut lines = Vec::new();
@@ -465,8 +461,9 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         serde_json::to_string_pretty(&summary)?,
     )?;
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
-    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), mb_plot)
-        .map_err(|e| format!("plots in {}: {e}", out.display()))?;
+    let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;
+    let plots =
+        plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
         println!("{name}");
     } else {
@@ -502,7 +499,7 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         mb_error * 1e3
     );
     println!(
-        "  results: {}, summary.json, can.log and {} plots in {}",
+        "  results: {}, summary.json, can.log, walk.mcap and {} plots in {}",
         traj.display(),
         plots.len(),
         out.display()

@@ -1,21 +1,33 @@
-//! Tests of `host_sim::plot`: the three PNGs of the paper's figures are written for the `fig4`
-//! walk, are valid PNGs of a sensible size, and show the plotted series (their colours are
-//! found in the decoded pixels).
+//! Tests of `host_sim::plot`: the PNGs of the paper's figures for the `fig4` walk are valid
+//! PNGs of a sensible size that show the plotted series (their colours are found in the
+//! decoded pixels), anti-aliased; the support phases are shaded in proportion to their
+//! durations; the modification is marked, and `modification.png` and the moved landings appear
+//! only for a walk with a modification; the data behind the figures (step numbers, first
+//! planned poses, the modification instant, sole limits, the ZMP fluctuation of the
+//! comparison columns) is what the scenario says.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
 use host_sim::multibody::{evaluate, MbSample, Model};
-use host_sim::plot::write_plots;
-use host_sim::scenario::{self, Run};
-use planner_core::gait::{Footstep, GaitParams};
+use host_sim::plot::{
+    fluctuation, landings, modification_marks, sole_limits, walked_landings, write_plots, Walk,
+    COMPARISON_FILE, FILES, SOLE_LENGTH, SOLE_WIDTH,
+};
+use host_sim::scenario::{self, Run, Scenario};
+use planner_core::gait::{GaitParams, Phase, Side};
 
-const FILES: [&str; 3] = ["sagittal.png", "frontal.png", "footprints.png"];
-
-/// The plotted colours (see `plot.rs`): COG, planned ZMP, multi-body ZMP.
+/// The colours of `plot/time.rs` and `plot/top.rs`: COG, planned ZMP, multi-body ZMP, the
+/// modification mark, the shades of single and double support, a first planned pose.
 const COG: [u8; 3] = [0x1f, 0x5f, 0xbf];
 const ZMP: [u8; 3] = [0xd6, 0x27, 0x28];
 const MB: [u8; 3] = [0x2c, 0xa0, 0x2c];
+const MARK: [u8; 3] = [0x7b, 0x2d, 0x8e];
+const SINGLE: [u8; 3] = [0xe4, 0xec, 0xf7];
+const DOUBLE: [u8; 3] = [0xfb, 0xed, 0xd2];
+const PLANNED: [u8; 3] = [0xe0, 0x7b, 0x00];
+const WHITE: [u8; 3] = [0xff; 3];
+const DT: f64 = 0.005;
 
 fn out_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
@@ -25,11 +37,14 @@ fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn fig4() -> (Run, Vec<Footstep<f64>>) {
-    let s = scenario::built_in("fig4").unwrap();
+fn play(name: &str) -> (Scenario, Run) {
+    let s = scenario::built_in(name).unwrap();
     let run = scenario::run(&s, GaitParams::hrp2());
-    let steps = run.footsteps.iter().map(|&(_, f)| f).collect();
-    (run, steps)
+    (s, run)
+}
+
+fn walk<'a>(name: &'a str, s: &Scenario, run: &'a Run, mb: Option<&'a [MbSample]>) -> Walk<'a> {
+    Walk::from_run(name, s, run, DT, GaitParams::hrp2(), mb).unwrap()
 }
 
 /// Width and height from the IHDR chunk, after checking the signature and the chunk layout.
@@ -55,58 +70,79 @@ fn png_size(bytes: &[u8]) -> (u32, u32) {
 }
 
 /// Decoded RGB pixels (with the png crate).
-fn pixels(path: &Path) -> (u32, u32, Vec<u8>) {
+fn pixels(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
     let decoder = png::Decoder::new(fs::File::open(path).unwrap());
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
     assert_eq!(info.color_type, png::ColorType::Rgb);
     buf.truncate(info.buffer_size());
-    (info.width, info.height, buf)
+    let px = buf.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    (info.width, info.height, px)
 }
 
-fn count_colour(rgb: &[u8], c: [u8; 3]) -> usize {
-    rgb.chunks_exact(3).filter(|p| *p == c).count()
+fn count(rgb: &[[u8; 3]], c: [u8; 3]) -> usize {
+    rgb.iter().filter(|p| **p == c).count()
 }
 
-fn non_white_fraction(rgb: &[u8]) -> f64 {
-    let n = rgb
-        .chunks_exact(3)
-        .filter(|p| *p != [255, 255, 255])
-        .count();
-    n as f64 / (rgb.len() / 3) as f64
+/// Pixels that are `a·c + (1 − a)·bg` for one of the backgrounds, `a` within `alpha`, each
+/// channel within 2 of it: the edge pixels of an anti-aliased line of colour `c`.
+fn blends(rgb: &[[u8; 3]], c: [u8; 3], alpha: (f64, f64)) -> usize {
+    let backgrounds = [WHITE, SINGLE, DOUBLE];
+    rgb.iter()
+        .filter(|p| {
+            backgrounds.iter().any(|bg| {
+                // The channel with the largest contrast gives a; the others must agree.
+                let k = (0..3)
+                    .max_by_key(|&k| (i32::from(c[k]) - i32::from(bg[k])).abs())
+                    .unwrap();
+                let d = f64::from(c[k]) - f64::from(bg[k]);
+                if d.abs() < 60.0 {
+                    return false;
+                }
+                let a = (f64::from(p[k]) - f64::from(bg[k])) / d;
+                a > alpha.0
+                    && a < alpha.1
+                    && (0..3).all(|j| {
+                        let want = a * f64::from(c[j]) + (1.0 - a) * f64::from(bg[j]);
+                        (f64::from(p[j]) - want).abs() <= 2.0
+                    })
+            })
+        })
+        .count()
 }
 
-fn check_files(written: &[PathBuf], dir: &Path, with_mb: bool) {
-    assert_eq!(written.len(), 3);
-    for (path, name) in written.iter().zip(FILES) {
+fn check_files(written: &[PathBuf], dir: &Path, with_mb: bool, comparison: bool) {
+    let mut names: Vec<&str> = FILES.to_vec();
+    if comparison {
+        names.push(COMPARISON_FILE);
+    }
+    assert_eq!(written.len(), names.len());
+    for (path, name) in written.iter().zip(names) {
         assert_eq!(path, &dir.join(name));
         let bytes = fs::read(path).unwrap();
         let (w, h) = png_size(&bytes);
         let (dw, dh, rgb) = pixels(path);
         assert_eq!((w, h), (dw, dh));
-        let ink = non_white_fraction(&rgb);
-        let (cog, zmp, mb) = (
-            count_colour(&rgb, COG),
-            count_colour(&rgb, ZMP),
-            count_colour(&rgb, MB),
-        );
+        let white = count(&rgb, WHITE) as f64 / rgb.len() as f64;
+        let (cog, zmp, mb) = (count(&rgb, COG), count(&rgb, ZMP), count(&rgb, MB));
         println!(
-            "{name}: {w} x {h} px, {} bytes, {:.1} % ink, COG {cog} px, ZMP {zmp} px, MB {mb} px",
+            "{name}: {w} x {h} px, {} bytes, {:.1} % white, COG {cog} px, ZMP {zmp} px, MB {mb} px",
             bytes.len(),
-            100.0 * ink
+            100.0 * white
         );
         assert!((600..=2400).contains(&w), "{name}: width {w}");
         assert!((400..=1400).contains(&h), "{name}: height {h}");
         assert!(bytes.len() > 20_000, "{name}: only {} bytes", bytes.len());
         assert!(
-            (0.01..0.5).contains(&ink),
-            "{name}: {ink} of the pixels drawn"
+            (0.1..0.99).contains(&white),
+            "{name}: {white} of the pixels white"
         );
-        assert!(cog > 500, "{name}: COG line missing ({cog} px)");
-        assert!(zmp > 500, "{name}: ZMP line missing ({zmp} px)");
-        if with_mb {
-            assert!(mb > 300, "{name}: multi-body ZMP line missing ({mb} px)");
+        assert!(cog > 300, "{name}: COG line missing ({cog} px)");
+        assert!(zmp > 300, "{name}: ZMP line missing ({zmp} px)");
+        // The comparison figure has no multi-body line.
+        if with_mb && name != COMPARISON_FILE {
+            assert!(mb > 100, "{name}: multi-body ZMP line missing ({mb} px)");
         } else {
             assert_eq!(mb, 0, "{name}: multi-body colour without multi-body data");
         }
@@ -114,35 +150,221 @@ fn check_files(written: &[PathBuf], dir: &Path, with_mb: bool) {
 }
 
 #[test]
-fn fig4_plots_are_valid_pngs() {
-    let (run, steps) = fig4();
+fn fig4_figures_are_valid_pngs() {
+    let (s, run) = play("fig4");
     let dir = out_dir("fig4");
-    let written = write_plots(&dir, "fig4", &run.trajectory, 0.005, &steps, None).unwrap();
-    check_files(&written, &dir, false);
-    // Time plots have the fixed size; the footprint plot has equal axis scaling, so a walk
-    // of about 1.6 m along x by 0.4 m across is much wider than tall.
-    assert_eq!(png_size(&fs::read(&written[0]).unwrap()), (1200, 600));
+    let written = write_plots(&dir, &walk("fig4", &s, &run, None)).unwrap();
+    check_files(&written, &dir, false, true);
+    // Plane figures have a fixed size; the footprint plot has equal axis scaling, so a walk
+    // of about 1.6 m along x by 0.5 m across is much wider than tall; the comparison has
+    // three columns.
+    assert_eq!(png_size(&fs::read(&written[0]).unwrap()), (1200, 880));
     let (w, h) = png_size(&fs::read(&written[2]).unwrap());
     assert!(w > 2 * h, "footprints {w} x {h}");
+    let (w, _) = png_size(&fs::read(&written[3]).unwrap());
+    assert!(w > 1600, "comparison width {w}");
 }
 
 #[test]
-fn fig4_plots_with_multibody_zmp() {
-    let (run, steps) = fig4();
-    let mb: Vec<MbSample> = evaluate(&Model::hrp2(), &run.trajectory, 0.005).unwrap();
+fn fig4_figures_with_multibody_zmp() {
+    let (s, run) = play("fig4");
+    let mb: Vec<MbSample> = evaluate(&Model::hrp2(), &run.trajectory, DT).unwrap();
     let dir = out_dir("fig4-mb");
-    let written = write_plots(&dir, "fig4", &run.trajectory, 0.005, &steps, Some(&mb)).unwrap();
-    check_files(&written, &dir, true);
+    let written = write_plots(&dir, &walk("fig4", &s, &run, Some(&mb))).unwrap();
+    check_files(&written, &dir, true, true);
 }
 
 #[test]
-fn lateral_turn_footprints_keep_equal_scaling() {
+fn lines_are_anti_aliased() {
+    let (s, run) = play("fig4");
+    let dir = out_dir("aa");
+    let written = write_plots(&dir, &walk("fig4", &s, &run, None)).unwrap();
+    for path in &written {
+        let (_, _, rgb) = pixels(path);
+        let (cog, zmp) = (count(&rgb, COG), count(&rgb, ZMP));
+        // Partly covered pixels at the edges of the lines: without anti-aliasing a line is
+        // drawn in its exact colour only.
+        let (cog_edge, zmp_edge) = (
+            blends(&rgb, COG, (0.15, 0.85)),
+            blends(&rgb, ZMP, (0.15, 0.85)),
+        );
+        println!(
+            "{}: COG {cog} px + {cog_edge} edge px, ZMP {zmp} px + {zmp_edge} edge px",
+            path.display()
+        );
+        assert!(
+            cog_edge > cog / 4,
+            "{}: COG edges {cog_edge}",
+            path.display()
+        );
+        assert!(
+            zmp_edge > zmp / 4,
+            "{}: ZMP edges {zmp_edge}",
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn support_phases_are_shaded_in_proportion() {
+    let (s, run) = play("fig4");
+    let dir = out_dir("shade");
+    let written = write_plots(&dir, &walk("fig4", &s, &run, None)).unwrap();
+    let ticks = |f: fn(Phase) -> bool| run.trajectory.iter().filter(|r| f(r.phase)).count();
+    let single = ticks(|p| matches!(p, Phase::Single(_)));
+    let double = ticks(|p| p == Phase::Double);
+    let t_ratio = single as f64 / double as f64;
+    for path in &written[..2] {
+        let (_, _, rgb) = pixels(path);
+        let (a, b) = (count(&rgb, SINGLE), count(&rgb, DOUBLE));
+        let px_ratio = a as f64 / b as f64;
+        println!(
+            "{}: single {a} px, double {b} px, ratio {px_ratio:.2} (time {t_ratio:.2})",
+            path.display()
+        );
+        assert!(a > 100_000 && b > 20_000, "{}", path.display());
+        // Both shades fill the same panel heights (less the lines over them, and the legend).
+        assert!(
+            (0.8..1.25).contains(&(px_ratio / t_ratio)),
+            "{}: shade ratio {px_ratio} vs time ratio {t_ratio}",
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn only_a_modified_walk_has_the_mark_the_comparison_and_moved_landings() {
+    for (name, modified) in [("fig4", true), ("straight", false)] {
+        let (s, run) = play(name);
+        let dir = out_dir(&format!("mark-{name}"));
+        let w = walk(name, &s, &run, None);
+        assert_eq!(w.columns.len(), if modified { 2 } else { 0 }, "{name}");
+        let written = write_plots(&dir, &w).unwrap();
+        assert_eq!(dir.join(COMPARISON_FILE).exists(), modified, "{name}");
+        assert_eq!(written.len(), 3 + usize::from(modified), "{name}");
+        for path in &written[..2] {
+            let (_, _, rgb) = pixels(path);
+            let m = count(&rgb, MARK);
+            println!("{}: mark {m} px", path.display());
+            assert_eq!(m > 200, modified, "{}: {m} mark pixels", path.display());
+        }
+        let (_, _, rgb) = pixels(&written[2]);
+        let p = count(&rgb, PLANNED);
+        println!("{}: planned outlines {p} px", written[2].display());
+        assert_eq!(p > 200, modified, "{name}: {p} px of first planned poses");
+    }
+}
+
+#[test]
+fn fig4_landings_have_step_numbers_and_first_planned_poses() {
+    let (_, run) = play("fig4");
+    let l = landings(&run);
+    let ids: Vec<u16> = l
+        .iter()
+        .map(|l| l.id.expect("every landing has an id"))
+        .collect();
+    assert_eq!(ids, (0..=11).collect::<Vec<_>>());
+    for l in &l {
+        let id = l.id.unwrap();
+        let (_, queued) = run.footsteps.iter().find(|(i, _)| *i == id).unwrap();
+        assert!((l.foot.x - queued.x).abs() < 1e-9, "step {id}");
+        match l.planned {
+            // Steps 0 to 2 were not modified; from step 3 on, each moved 0.2 m ahead.
+            None => assert!(id < 3, "step {id} has no planned pose"),
+            Some(p) => {
+                assert!(id >= 3, "step {id}");
+                assert!((l.foot.x - p.x - 0.2).abs() < 1e-9, "step {id}: {p:?}");
+                assert_eq!((p.side, p.y), (l.foot.side, l.foot.y));
+            }
+        }
+    }
+    // The initial stance is not a landing.
+    let walked = walked_landings(&run.trajectory);
+    assert_eq!(walked.len(), 12);
+    assert_eq!(walked[0].side, Side::Right);
+}
+
+#[test]
+fn fig4_modification_is_marked_at_its_effect() {
+    let (_, run) = play("fig4");
+    let marks = modification_marks(&run, DT);
+    assert_eq!(marks.len(), 1, "{marks:?}");
+    // Sent in the tick before the single support at 4.0 s, in effect from that tick on.
+    let sent = run
+        .events
+        .iter()
+        .find(|e| matches!(e.command, scenario::Command::Modify(..)))
+        .unwrap()
+        .tick;
+    assert!((marks[0].t - (sent + 1) as f64 * DT).abs() < 1e-12);
+    assert!((marks[0].t - 4.0).abs() < 1e-9, "{}", marks[0].t);
+    let adj = run.adjustments[0].adjust_s;
+    assert!(adj > 0.2, "ΔT {adj}");
+    let label = &marks[0].label;
+    assert!(label.contains("steps 3–11"), "{label}");
+    assert!(label.contains(&format!("ΔT {adj:+.3} s")), "{label}");
+    let (_, straight) = play("straight");
+    assert!(modification_marks(&straight, DT).is_empty());
+}
+
+#[test]
+fn sole_limits_hold_the_planned_zmp() {
+    for name in ["fig4", "turn", "lateral"] {
+        let (_, run) = play(name);
+        for (k, r) in run.trajectory.iter().enumerate() {
+            for (plane, zmp) in [(0, r.x.zmp), (1, r.y.zmp)] {
+                let (lo, hi) = sole_limits(r, plane, [SOLE_LENGTH, SOLE_WIDTH]);
+                assert!(lo < hi, "{name} row {k}");
+                assert!(
+                    (lo - 1e-9..=hi + 1e-9).contains(&zmp),
+                    "{name} row {k} plane {plane}: ZMP {zmp} outside {lo} … {hi}"
+                );
+                if name == "fig4" && plane == 0 && matches!(r.phase, Phase::Single(_)) {
+                    assert!((hi - lo - SOLE_LENGTH).abs() < 1e-12, "{name} row {k}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn fig4_comparison_shows_what_the_time_adjustment_does() {
+    // The paper's Fig. 4: without the adjustment the ZMP leaves the sole centre by about
+    // 26 mm in the single support after the modification; with it, by about 1 mm.
+    let (s, run) = play("fig4");
+    let w = walk("fig4", &s, &run, None);
+    assert_eq!(w.plane, 0);
+    let peak = |tr: &[planner_core::gait::Reference<f64>]| {
+        tr.iter()
+            .filter_map(|r| fluctuation(r, 0))
+            .fold(0.0_f64, |m, v| m.max(v.abs()))
+    };
+    let (first, bare, walked) = (
+        peak(&w.columns[0].trajectory),
+        peak(&w.columns[1].trajectory),
+        peak(&run.trajectory),
+    );
+    println!("largest sagittal fluctuation: first plan {first}, without adjustment {bare}, walked {walked}");
+    assert!(bare > 0.015, "{bare}");
+    assert!(walked < 0.002 && first < 0.002, "{walked} {first}");
+    // The first plan lands step 3 at 0.4 m, the walk at 0.6 m.
+    let left_x = |tr| {
+        walked_landings(tr)
+            .iter()
+            .filter(|f| f.side == Side::Left)
+            .map(|f| f.x)
+            .collect::<Vec<_>>()
+    };
+    assert!((left_x(&w.columns[0].trajectory)[1] - 0.4).abs() < 1e-9);
+    assert!((left_x(&run.trajectory)[1] - 0.6).abs() < 1e-9);
+}
+
+#[test]
+fn turn_footprints_keep_equal_scaling() {
     // A quarter turn spans about 1 m in both x and y: the plot is roughly square.
-    let s = scenario::built_in("turn").unwrap();
-    let run = scenario::run(&s, GaitParams::hrp2());
-    let steps: Vec<_> = run.footsteps.iter().map(|&(_, f)| f).collect();
+    let (s, run) = play("turn");
     let dir = out_dir("turn");
-    let written = write_plots(&dir, "turn", &run.trajectory, 0.005, &steps, None).unwrap();
+    let written = write_plots(&dir, &walk("turn", &s, &run, None)).unwrap();
     let (w, h) = png_size(&fs::read(&written[2]).unwrap());
     println!("turn footprints: {w} x {h} px");
     assert!((0.8..1.5).contains(&(w as f64 / h as f64)), "{w} x {h}");
@@ -150,13 +372,48 @@ fn lateral_turn_footprints_keep_equal_scaling() {
 
 #[test]
 fn bad_inputs_are_refused() {
-    let (run, steps) = fig4();
+    let (_, run) = play("fig4");
     let dir = out_dir("bad");
-    let e = write_plots(&dir, "x", &[], 0.005, &steps, None).unwrap_err();
+    let e = write_plots(&dir, &Walk::new("x", &[], DT)).unwrap_err();
     assert!(e.to_string().contains("empty trajectory"), "{e}");
     for dt in [0.0, -0.005, f64::NAN, f64::INFINITY] {
-        let e = write_plots(&dir, "x", &run.trajectory, dt, &steps, None).unwrap_err();
+        let e = write_plots(&dir, &Walk::new("x", &run.trajectory, dt)).unwrap_err();
         assert!(e.to_string().contains("dt must be positive"), "{e}");
     }
+    let mut w = Walk::new("x", &run.trajectory, DT);
+    w.plane = 2;
+    let e = write_plots(&dir, &w).unwrap_err();
+    assert!(e.to_string().contains("plane 2"), "{e}");
     assert!(!dir.exists(), "nothing written on bad input");
+}
+
+#[test]
+fn the_figures_use_the_robots_sole() {
+    // The second robot of host-sim/tests/robots (0.16 × 0.09 m soles): the walk, its sole
+    // limits and the footprints follow its file, not HRP-2's constants.
+    let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    let robot = host_sim::robot::Robot::load(&robots.join("small.toml")).unwrap();
+    let p = robot.planner.params;
+    let file = host_sim::toml_scenario::load_file(&robots.join("small-walk.toml")).unwrap();
+    let s = &file.scenario;
+    let run = scenario::run(s, p);
+    let w = Walk::from_run("small", s, &run, p.dt, p, None).unwrap();
+    assert_eq!(w.sole, [2.0 * p.sole_half_length, 2.0 * p.sole_half_width]);
+    assert!((w.sole[0] - 0.16).abs() < 1e-12 && (w.sole[1] - 0.09).abs() < 1e-12);
+    let hrp2 = walk("fig4", &play("fig4").0, &play("fig4").1, None).sole;
+    assert_eq!(hrp2, [SOLE_LENGTH, SOLE_WIDTH]);
+    for (k, r) in run.trajectory.iter().enumerate() {
+        if matches!(r.phase, Phase::Single(_)) {
+            let (lo, hi) = sole_limits(r, 0, w.sole);
+            assert!((hi - lo - 0.16).abs() < 1e-9, "row {k}: {lo} … {hi}");
+            assert!((lo - 1e-9..=hi + 1e-9).contains(&r.x.zmp), "row {k}");
+        }
+    }
+    let dir = out_dir("small");
+    let written = write_plots(&dir, &w).unwrap();
+    assert_eq!(written.len(), 3);
+    let mut bad = w.clone();
+    bad.sole = [0.16, 0.0];
+    let e = write_plots(&out_dir("small-bad"), &bad).unwrap_err();
+    assert!(e.to_string().contains("sole size"), "{e}");
 }
