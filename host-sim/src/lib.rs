@@ -7,6 +7,7 @@ pub mod bus;
 pub mod faults;
 pub mod multibody;
 pub mod paper;
+pub mod physics;
 pub mod plot;
 pub mod scenario;
 pub mod sim;

@@ -5,6 +5,7 @@
 //! host-sim list                    the built-in scenarios
 //! host-sim run <scenario|file.toml> [--out DIR]
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
+//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
 //! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -69,6 +70,19 @@ enum Cmd {
         #[arg(long, value_name = "DIR", default_value = "out/tables")]
         out: PathBuf,
     },
+    /// Run a scenario in the MuJoCo physics engine under the stabilizer (needs
+    /// `python3 -m pip install mujoco==3.2.7`); writes DIR/physics.json, physics.csv and plots.
+    Physics {
+        /// A built-in scenario (see `host-sim list`) or a file ending in .toml.
+        #[arg(value_name = "SCENARIO|FILE.toml")]
+        scenario: String,
+        /// The output directory [default: out/physics/<scenario>].
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Play the pattern open loop (the stabilizer off).
+        #[arg(long)]
+        open_loop: bool,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -122,6 +136,11 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         }
         Some(Cmd::Run { scenario, out }) => run_scenario(&scenario, out.as_deref()),
         Some(Cmd::Tables { out }) => tables(&out),
+        Some(Cmd::Physics {
+            scenario,
+            out,
+            open_loop,
+        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop),
         Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
     }
 }

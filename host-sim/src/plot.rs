@@ -470,3 +470,27 @@ pub fn write_plots(
     written.push(path);
     Ok(written)
 }
+
+/// One curve of [`write_time_plot`]: a label, an RGB colour and the (t, value) points.
+pub type Curve = (String, (u8, u8, u8), Vec<(f64, f64)>);
+
+/// Writes a time plot of `curves` (in the style of the other plots) to `path`; `axis` labels
+/// the value axis. Errors: no usable font, an I/O or drawing error.
+pub fn write_time_plot(
+    path: &Path,
+    caption: &str,
+    axis: &str,
+    curves: &[Curve],
+) -> Result<(), Box<dyn Error>> {
+    ensure_font()?;
+    let series: Vec<Series> = curves
+        .iter()
+        .map(|(label, (r, g, b), points)| Series {
+            label: label.clone(),
+            color: RGBColor(*r, *g, *b),
+            width: 2,
+            points: points.clone(),
+        })
+        .collect();
+    time_plot(path, caption, axis, &series)
+}
