@@ -32,6 +32,31 @@ pub const MUJOCO_VERSION: &str = "3.2.7";
 /// The bridge script.
 const SCRIPT: &str = include_str!("bridge.py");
 
+/// The Python interpreter the bridge runs on: `HOST_SIM_PYTHON`, or `python3`.
+pub fn python() -> String {
+    std::env::var("HOST_SIM_PYTHON").unwrap_or_else(|_| "python3".into())
+}
+
+/// The version of the MuJoCo that `python` imports, or why there is none (the message names
+/// what to install).
+pub fn installed_version(python: &str) -> Result<String, String> {
+    let out = Command::new(python)
+        .args(["-c", "import mujoco; print(mujoco.__version__)"])
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| {
+            format!("cannot run {python} ({e}): install Python 3 and python3 -m pip install mujoco=={MUJOCO_VERSION}")
+        })?;
+    if out.status.success() {
+        Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
+    } else {
+        Err(format!(
+            "{python} cannot import mujoco: install it with python3 -m pip install \
+             mujoco=={MUJOCO_VERSION}"
+        ))
+    }
+}
+
 /// What the engine reports after a step.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Observation {
@@ -72,8 +97,12 @@ impl Engine {
     /// MJCF `xml`. Fails with a message naming what to install when Python or MuJoCo is
     /// missing, or the engine's own message when it rejects the model.
     pub fn start(xml: &str) -> Result<Self, String> {
-        let python = std::env::var("HOST_SIM_PYTHON").unwrap_or_else(|_| "python3".into());
-        let mut child = Command::new(&python)
+        Self::start_with(&python(), xml)
+    }
+
+    /// [`Engine::start`] with the Python interpreter `python`.
+    pub fn start_with(python: &str, xml: &str) -> Result<Self, String> {
+        let mut child = Command::new(python)
             .arg("-c")
             .arg(SCRIPT)
             .stdin(Stdio::piped())

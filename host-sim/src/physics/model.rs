@@ -409,7 +409,7 @@ mod tests {
     #[test]
     fn mjcf_names_every_joint_and_sensor() {
         let x = Robot::default().mjcf();
-        assert_eq!(x.matches("<position ").count(), 12);
+        assert_eq!(x.matches("<position name=").count(), 12);
         assert_eq!(x.matches("<jointpos ").count(), 12);
         assert_eq!(x.matches("type=\"hinge\"").count(), 12);
         assert!(x.contains("size=\"0.120000 0.070000 0.040000\""));

@@ -194,18 +194,6 @@ pub fn cli(
 ) -> Result<(), Box<dyn std::error::Error>> {
     let mut cfg = PhysicsConfig::default();
     cfg.gains.enabled = !open_loop;
-    // TEMP tuning hooks
-    let env = |k: &str, d: f64| {
-        std::env::var(k)
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(d)
-    };
-    cfg.gains.k_dcm = env("HS_KDCM", cfg.gains.k_dcm);
-    cfg.gains.damping = env("HS_D", cfg.gains.damping);
-    cfg.gains.k_force = env("HS_KF", cfg.gains.k_force);
-    cfg.gains.k_cog = env("HS_KC", cfg.gains.k_cog);
-    cfg.gains.ankle_return_s = env("HS_TA", cfg.gains.ankle_return_s);
     let default_out;
     let out = match out {
         Some(o) => o,

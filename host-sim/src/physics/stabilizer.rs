@@ -156,6 +156,27 @@ const SWING_RETURN_S: f64 = 0.05;
 /// The sole rectangle's half sizes used for clamping (a 1 cm margin inside 0.24 × 0.14).
 const SOLE_CLAMP: [f64; 2] = [0.11, 0.06];
 
+/// The ground's vertical force on a flat foot \[N\] and its centre of pressure in the foot
+/// frame (x, y from below the ankle) \[m\], from the ankle sensor `ft` (force then torque).
+///
+/// MuJoCo's force/torque sensors give the action of the parent (the shank) on the foot, at the
+/// ankle, in the foot frame. A foot at rest is balanced by the ground: ground force
+/// `F = −f − m_foot g`, ground moment about the ankle `M = −τ` (the foot's centre of mass is
+/// straight below the ankle); the CoP `r` on the sole (`r_z = −ankle_height`) solves
+/// `M = r × F`: `r_x = (r_z F_x − M_y) / F_z`, `r_y = (M_x + r_z F_y) / F_z`. No CoP below
+/// [`MIN_LOAD_N`].
+pub fn sole_cop(ft: &[f64; 6], foot_weight: f64, ankle_height: f64) -> (f64, Option<[f64; 2]>) {
+    let gf = [-ft[0], -ft[1], -ft[2] + foot_weight];
+    let m = [-ft[3], -ft[4]];
+    let rz = -ankle_height;
+    let cop =
+        (gf[2] > MIN_LOAD_N).then(|| [(rz * gf[0] - m[1]) / gf[2], (m[0] + rz * gf[1]) / gf[2]]);
+    (gf[2], cop)
+}
+
+/// Smallest vertical force with which a foot's CoP is computed \[N\].
+pub const MIN_LOAD_N: f64 = 20.0;
+
 impl Stabilizer {
     /// A stabilizer for `robot` at the control period `dt` with the LIPM height `z_c`.
     pub fn new(robot: Robot, gains: Gains, dt: f64, z_c: f64) -> Self {
@@ -185,21 +206,17 @@ impl Stabilizer {
         // 3. Force sensors: local CoP and vertical force per foot.
         let mut fz = [0.0; 2];
         let mut local = [[f64::NAN; 2]; 2];
-        let rz = -self.robot.ankle_height();
-        let wf = self.robot.foot_mass() * self.robot.gravity();
         for k in 0..2 {
             let o = sensor::FT + 6 * k;
-            // MuJoCo's force/torque sensors give the action of the parent (the shank) on the
-            // foot, at the ankle, in the foot frame. A foot at rest is balanced by the ground:
-            // ground force = −sensor force − foot weight, ground moment about the ankle
-            // = −sensor torque (the foot's centre of mass is straight below the ankle).
-            let f = [sensors[o], sensors[o + 1], sensors[o + 2]];
-            let t = [sensors[o + 3], sensors[o + 4], sensors[o + 5]];
-            let gf = [-f[0], -f[1], -f[2] + wf];
-            let m = [-t[0], -t[1]];
-            fz[k] = gf[2];
-            if gf[2] > 20.0 {
-                local[k] = [(rz * gf[0] - m[1]) / gf[2], (m[0] + rz * gf[1]) / gf[2]];
+            let ft: [f64; 6] = core::array::from_fn(|i| sensors[o + i]);
+            let (f, cop) = sole_cop(
+                &ft,
+                self.robot.foot_mass() * self.robot.gravity(),
+                self.robot.ankle_height(),
+            );
+            fz[k] = f;
+            if let Some(c) = cop {
+                local[k] = c;
             }
         }
         // 1. State estimate.
@@ -374,5 +391,157 @@ impl Stabilizer {
             out[6 * k..6 * k + 6].copy_from_slice(&qk);
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sensor reading of a foot at rest on the ground force `fg` at `r` (from the ankle,
+    /// foot frame), with the foot weight `w` (the inverse of [`sole_cop`]'s balance).
+    fn reading(fg: [f64; 3], r: [f64; 3], w: f64) -> [f64; 6] {
+        let m = [
+            r[1] * fg[2] - r[2] * fg[1],
+            r[2] * fg[0] - r[0] * fg[2],
+            r[0] * fg[1] - r[1] * fg[0],
+        ];
+        [-fg[0], -fg[1], -(fg[2] - w), -m[0], -m[1], -m[2]]
+    }
+
+    #[test]
+    fn cop_from_the_ankle_sensor() {
+        let (h, w) = (0.105, 14.7);
+        for (fg, r) in [
+            ([0.0, 0.0, 300.0], [0.03, -0.02, -h]),
+            ([25.0, -10.0, 500.0], [-0.08, 0.05, -h]),
+        ] {
+            let (fz, cop) = sole_cop(&reading(fg, r, w), w, h);
+            let cop = cop.expect("loaded");
+            assert!((fz - fg[2]).abs() < 1e-9);
+            assert!(
+                (cop[0] - r[0]).abs() < 1e-12 && (cop[1] - r[1]).abs() < 1e-12,
+                "{cop:?}"
+            );
+        }
+        // Unloaded (a swing foot: the sensor carries only the foot's weight).
+        let (fz, cop) = sole_cop(&[0.0, 0.0, w, 0.0, 0.0, 0.0], w, h);
+        assert!(fz.abs() < 1e-12 && cop.is_none());
+    }
+
+    #[test]
+    fn standing_still_leaves_the_pattern_alone() {
+        // Sensors of a robot standing exactly on its reference: the DCM error is zero only if
+        // the measured COG equals the reference; the commanded pose is then the IK of the
+        // reference (no ankle, height or COG correction in the first tick).
+        use planner_core::gait::{FootPose, Reference};
+        let robot = Robot::default();
+        let feet = [
+            FootPose {
+                x: 0.0,
+                y: 0.1,
+                z: 0.0,
+                yaw: 0.0,
+            },
+            FootPose {
+                x: 0.0,
+                y: -0.1,
+                z: 0.0,
+                yaw: 0.0,
+            },
+        ];
+        let soles = [Pose::sole(&feet[0]), Pose::sole(&feet[1])];
+        let (_, q) = robot
+            .solve_waist(
+                Pose::upright(0.0, 0.0, robot.waist_height(), 0.0),
+                &soles,
+                [0.0, 0.0],
+            )
+            .unwrap();
+        let mut r = Reference {
+            x: Default::default(),
+            y: Default::default(),
+            phase: Phase::Double,
+            feet,
+        };
+        r.x.cog = 0.0;
+        let mut s = vec![0.0; sensor::LEN];
+        s[sensor::QUAT] = 1.0;
+        for k in 0..2 {
+            s[sensor::QPOS + 6 * k..sensor::QPOS + 6 * k + 6].copy_from_slice(&q[k]);
+            // Half the weight on each sole centre.
+            let half = 0.5 * robot.total_mass() * robot.gravity();
+            let ft = reading([0.0, 0.0, half], [0.0, 0.0, -robot.ankle_height()], 14.7);
+            s[sensor::FT + 6 * k..sensor::FT + 6 * k + 6].copy_from_slice(&ft);
+        }
+        let mut st = Stabilizer::new(robot, Gains::default(), 0.001, 0.814);
+        let out = st.step(&r, &s).unwrap();
+        for k in 0..2 {
+            for j in 0..6 {
+                assert!((out[6 * k + j] - q[k][j]).abs() < 1e-6, "{out:?} {q:?}");
+            }
+        }
+        let i = st.internals;
+        assert!(
+            i.zmp_measured[0].abs() < 1e-9 && i.zmp_measured[1].abs() < 1e-9,
+            "{i:?}"
+        );
+        assert!(i.cog[0].abs() < 1e-9 && i.cog[1].abs() < 1e-9, "{i:?}");
+    }
+
+    #[test]
+    fn damping_control_moves_the_ankle_against_a_toe_load() {
+        // The measured CoP 5 cm ahead of the desired one: the ankle pitch target goes toe up
+        // (negative pitch), and back to zero when the load goes.
+        let robot = Robot::default();
+        let feet = [
+            planner_core::gait::FootPose {
+                x: 0.0,
+                y: 0.1,
+                z: 0.0,
+                yaw: 0.0,
+            },
+            planner_core::gait::FootPose {
+                x: 0.0,
+                y: -0.1,
+                z: 0.0,
+                yaw: 0.0,
+            },
+        ];
+        let soles = [Pose::sole(&feet[0]), Pose::sole(&feet[1])];
+        let (_, q) = robot
+            .solve_waist(
+                Pose::upright(0.0, 0.0, robot.waist_height(), 0.0),
+                &soles,
+                [0.0, 0.0],
+            )
+            .unwrap();
+        let mut r = Reference {
+            x: Default::default(),
+            y: Default::default(),
+            phase: Phase::Single(planner_core::gait::Side::Left),
+            feet,
+        };
+        // The reference ZMP at the left sole centre.
+        r.y.zmp = 0.1;
+        let mut s = vec![0.0; sensor::LEN];
+        s[sensor::QUAT] = 1.0;
+        for k in 0..2 {
+            s[sensor::QPOS + 6 * k..sensor::QPOS + 6 * k + 6].copy_from_slice(&q[k]);
+        }
+        let weight = robot.total_mass() * robot.gravity();
+        let ft = reading([0.0, 0.0, weight], [0.05, 0.0, -robot.ankle_height()], 14.7);
+        s[sensor::FT..sensor::FT + 6].copy_from_slice(&ft);
+        s[sensor::FT + 6..sensor::FT + 12].copy_from_slice(&[0.0, 0.0, 14.7, 0.0, 0.0, 0.0]);
+        let mut st = Stabilizer::new(robot, Gains::default(), 0.001, 0.814);
+        for _ in 0..20 {
+            st.step(&r, &s).unwrap();
+        }
+        let [pitch, roll] = st.ankle[0];
+        // 20 ms at F_z (x_m − x_d) / D = 570 N × 0.05 m / 1000 = 0.028 rad/s.
+        assert!(pitch < -4e-4 && pitch > -6e-4, "{pitch}");
+        assert!(roll.abs() < 1e-9, "{roll}");
+        // The swing (right) foot has no correction.
+        assert_eq!(st.ankle[1], [0.0, 0.0]);
     }
 }
