@@ -6,6 +6,7 @@
 //! host-sim run <scenario|file.toml> [--out DIR]
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
 //! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
+//! host-sim physics-tables [--out DIR] [--cells all|r,c;...]   Tables I/II in MuJoCo
 //! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -82,6 +83,19 @@ enum Cmd {
         /// Play the pattern open loop (the stabilizer off).
         #[arg(long)]
         open_loop: bool,
+        /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
+        #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
+        push: Option<String>,
+    },
+    /// The paper's Tables I and II in MuJoCo: each modification cell with the plain re-plan
+    /// and with the proposed method; writes DIR/physics_tables.json and .md.
+    PhysicsTables {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/physics_tables")]
+        out: PathBuf,
+        /// The cells to run: `all` (98 engine runs) or `row,col;row,col` (indices 0..7).
+        #[arg(long, value_name = "CELLS", default_value = "all")]
+        cells: String,
     },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
@@ -140,7 +154,11 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             scenario,
             out,
             open_loop,
-        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop),
+            push,
+        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop, push.as_deref()),
+        Some(Cmd::PhysicsTables { out, cells }) => {
+            host_sim::physics::output::tables_cli(&out, &cells)
+        }
         Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
     }
 }

@@ -24,6 +24,7 @@ pub mod metrics;
 pub mod model;
 pub mod output;
 pub mod stabilizer;
+pub mod tables;
 
 use crate::multibody::{mean_yaw, Pose};
 use bridge::Engine;

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use super::{run, PhysicsConfig, PhysicsRun};
+use super::{run, PhysicsConfig, PhysicsRun, Push};
 use crate::plot::{write_time_plot, Curve};
 use crate::scenario::{self, BUILT_IN};
 use crate::sim::{simulate, SimConfig};
@@ -62,6 +62,7 @@ pub fn report_json(name: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
         "stabilizer": cfg.gains.enabled,
         "engine": format!("MuJoCo {}", p.engine),
         "physics_dt_s": super::PHYSICS_DT,
+        "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
     })
 }
 
@@ -186,14 +187,36 @@ pub fn physics_command(name: &str, out: &Path, cfg: &PhysicsConfig) -> Result<Va
     Ok(report_json(&sname, cfg, &r))
 }
 
+/// Parses `--push T,FX,FY`: a push of 0.1 s starting at `T` (trajectory time) \[s\] with the
+/// horizontal force `(FX, FY)` \[N\].
+pub fn parse_push(s: &str) -> Result<Push, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--push {s:?}: expected T,FX,FY (numbers)"))?;
+    match v[..] {
+        [t, fx, fy] if v.iter().all(|x| x.is_finite()) => Ok(Push {
+            t_s: t,
+            duration_s: 0.1,
+            force: [fx, fy],
+        }),
+        _ => Err(format!(
+            "--push {s:?}: expected T,FX,FY (three finite numbers)"
+        )),
+    }
+}
+
 /// The command line's `physics` subcommand: runs, writes, prints the figures.
 pub fn cli(
     name: &str,
     out: Option<&Path>,
     open_loop: bool,
+    push: Option<&str>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let mut cfg = PhysicsConfig::default();
     cfg.gains.enabled = !open_loop;
+    cfg.push = push.map(parse_push).transpose()?;
     let default_out;
     let out = match out {
         Some(o) => o,
@@ -233,4 +256,70 @@ pub fn cli(
     );
     println!("  results: {}", out.join("physics.json").display());
     Ok(())
+}
+
+/// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
+/// `DIR/physics_tables.json` and `DIR/physics_tables.md`.
+pub fn tables_cli(out: &Path, cells: &str) -> Result<(), Box<dyn std::error::Error>> {
+    use super::tables::{cell, cell_text, markdown, parse_cells, tables_json};
+    let list = parse_cells(cells)?;
+    let cfg = PhysicsConfig::default();
+    let mut done = Vec::new();
+    for (i, &(r, c)) in list.iter().enumerate() {
+        eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
+        done.push(cell(r, c, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?);
+    }
+    eprintln!();
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let path = out.join("physics_tables.json");
+    fs::write(&path, serde_json::to_string_pretty(&tables_json(&done))?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut md = markdown(
+        "Plain re-plan (Table I: no adjustment, no shaping) in MuJoCo: fell / ok, and the \
+         kinematic multi-body ZMP error [cm]",
+        &done,
+        |c| cell_text(&c.plain, c.mb_error_plain_m),
+    );
+    md += "\n";
+    md += &markdown(
+        "Proposed method (Table II: adjustment and shaping) in MuJoCo: fell / ok, and the \
+         kinematic multi-body ZMP error [cm]",
+        &done,
+        |c| cell_text(&c.proposed, c.mb_error_proposed_m),
+    );
+    let count = |f: &dyn Fn(&super::tables::Cell) -> bool| done.iter().filter(|c| f(c)).count();
+    md += &format!(
+        "\n{} cells simulated; falls: plain {}, proposed {}.\n",
+        done.len(),
+        count(&|c| c.plain.as_ref().is_some_and(|r| r.fell)),
+        count(&|c| c.proposed.as_ref().is_some_and(|r| r.fell))
+    );
+    let mdpath = out.join("physics_tables.md");
+    fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
+    println!("{md}");
+    println!("results: {} and {}", path.display(), mdpath.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_parses() {
+        let p = parse_push("3.0,150,-20").unwrap();
+        assert_eq!((p.t_s, p.force, p.duration_s), (3.0, [150.0, -20.0], 0.1));
+        assert!(parse_push("3.0,150").is_err());
+        assert!(parse_push("x,1,2").is_err());
+        assert!(parse_push("inf,1,2").is_err());
+    }
+
+    #[test]
+    fn smoothing_is_a_50_ms_mean() {
+        let pts: Vec<(f64, f64)> = (0..12).map(|k| (k as f64 * 0.005, k as f64)).collect();
+        let s = smoothed(&pts);
+        assert_eq!(s.len(), 3);
+        assert!((s[0].1 - 4.5).abs() < 1e-12 && (s[0].0 - 0.045).abs() < 1e-12);
+    }
 }
