@@ -96,6 +96,9 @@ enum Cmd {
         /// The cells to run: `all` (98 engine runs) or `row,col;row,col` (indices 0..7).
         #[arg(long, value_name = "CELLS", default_value = "all")]
         cells: String,
+        /// Play the patterns open loop (the stabilizer off).
+        #[arg(long)]
+        open_loop: bool,
     },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
@@ -156,9 +159,11 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             open_loop,
             push,
         }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop, push.as_deref()),
-        Some(Cmd::PhysicsTables { out, cells }) => {
-            host_sim::physics::output::tables_cli(&out, &cells)
-        }
+        Some(Cmd::PhysicsTables {
+            out,
+            cells,
+            open_loop,
+        }) => host_sim::physics::output::tables_cli(&out, &cells, open_loop),
         Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
     }
 }

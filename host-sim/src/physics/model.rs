@@ -47,6 +47,8 @@ pub const SERVO_KP: f64 = 20_000.0;
 pub const SERVO_KD: f64 = 600.0;
 /// Reflected rotor inertia per joint \[kg m²\].
 pub const ARMATURE: f64 = 0.3;
+/// Largest hip–ankle distance the IK is asked for, as a fraction of `thigh + shank`.
+pub const REACH_FRACTION: f64 = 0.9995;
 /// Half-extents of the sole box \[m\]: 0.24 × 0.14 × 0.08.
 pub const SOLE_HALF: Vec3 = [0.12, 0.07, 0.04];
 
@@ -289,11 +291,25 @@ impl Robot {
         x
     }
 
-    /// Inverse kinematics of one leg (see [`Hrp2::leg_ik`]).
+    /// Inverse kinematics of one leg (see [`Hrp2::leg_ik`]); a sole beyond the leg's reach
+    /// is pulled towards the hip along the hip–ankle line until the ankle is at
+    /// [`REACH_FRACTION`] of the reach (the knee nearly stretched), as a joint-space servo of a
+    /// real robot would saturate, instead of failing.
     pub fn leg_ik(&self, side: Side, waist: &Pose, sole: &Pose) -> Result<LegAngles, String> {
-        self.hrp2
-            .leg_ik(side, waist, sole)
-            .map_err(|e| e.to_string())
+        let h = &self.hrp2;
+        let reach = REACH_FRACTION * (h.thigh_length + h.shank_length);
+        let lift = [sole.r[0][2], sole.r[1][2], sole.r[2][2]];
+        let ankle: Vec3 = core::array::from_fn(|i| sole.p[i] + h.ankle_height * lift[i]);
+        let hip = h.hip_joint(side, waist);
+        let d: Vec3 = core::array::from_fn(|i| ankle[i] - hip[i]);
+        let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let mut target = *sole;
+        if dist > reach {
+            for i in 0..3 {
+                target.p[i] = hip[i] + d[i] * reach / dist - h.ankle_height * lift[i];
+            }
+        }
+        h.leg_ik(side, waist, &target).map_err(|e| e.to_string())
     }
 
     /// Forward kinematics: the sole centres and the ankle joint centres (left, right) and the
@@ -404,6 +420,30 @@ mod tests {
             assert!((c[i] - c2[i]).abs() < 1e-12);
             assert!((s[0].p[i] - soles[0].p[i]).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn ik_beyond_reach_saturates() {
+        let hrp2 = Hrp2::default();
+        let robot = Robot::new(hrp2);
+        let waist = Pose::upright(0.0, 0.0, hrp2.waist_height, 0.0);
+        // 0.45 m ahead: beyond the 0.6 m reach at this waist height.
+        let far = Pose::upright(0.45, 0.06, 0.0, 0.0);
+        assert!(hrp2.leg_ik(Side::Left, &waist, &far).is_err());
+        let q = robot.leg_ik(Side::Left, &waist, &far).expect("saturated");
+        let fk = hrp2.leg_fk(Side::Left, &waist, &q);
+        let hip = hrp2.hip_joint(Side::Left, &waist);
+        let d = (0..3)
+            .map(|i| (fk.foot.p[i] - hip[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((d - REACH_FRACTION * 0.6).abs() < 1e-9, "{d}");
+        // Within reach: unchanged.
+        let near = Pose::upright(0.1, 0.06, 0.0, 0.0);
+        assert_eq!(
+            robot.leg_ik(Side::Left, &waist, &near).unwrap(),
+            hrp2.leg_ik(Side::Left, &waist, &near).unwrap()
+        );
     }
 
     #[test]

@@ -260,10 +260,16 @@ pub fn cli(
 
 /// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
 /// `DIR/physics_tables.json` and `DIR/physics_tables.md`.
-pub fn tables_cli(out: &Path, cells: &str) -> Result<(), Box<dyn std::error::Error>> {
+pub fn tables_cli(
+    out: &Path,
+    cells: &str,
+    open_loop: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
     use super::tables::{cell, cell_text, markdown, parse_cells, tables_json};
     let list = parse_cells(cells)?;
-    let cfg = PhysicsConfig::default();
+    let mut cfg = PhysicsConfig::default();
+    cfg.gains.enabled = !open_loop;
+    let mode = if open_loop { "open loop" } else { "stabilized" };
     let mut done = Vec::new();
     for (i, &(r, c)) in list.iter().enumerate() {
         eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
@@ -273,20 +279,32 @@ pub fn tables_cli(out: &Path, cells: &str) -> Result<(), Box<dyn std::error::Err
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_tables.json");
-    fs::write(&path, serde_json::to_string_pretty(&tables_json(&done))?)
+    let mut json = tables_json(&done);
+    json["stabilizer"] = serde_json::Value::Bool(!open_loop);
+    fs::write(&path, serde_json::to_string_pretty(&json)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let mut md = markdown(
-        "Plain re-plan (Table I: no adjustment, no shaping) in MuJoCo: fell / ok, and the \
-         kinematic multi-body ZMP error [cm]",
+        &format!(
+            "Plain re-plan (Table I: no adjustment, no shaping) in MuJoCo, {mode}: fell / ok, \
+             worst 50 ms CoP error of the modified step [cm] / kinematic multi-body ZMP error [cm]"
+        ),
         &done,
-        |c| cell_text(&c.plain, c.mb_error_plain_m),
+        |c| cell_text(&c.plain, c.cop_err_modified_plain_m, c.mb_error_plain_m),
     );
     md += "\n";
     md += &markdown(
-        "Proposed method (Table II: adjustment and shaping) in MuJoCo: fell / ok, and the \
-         kinematic multi-body ZMP error [cm]",
+        &format!(
+            "Proposed method (Table II: adjustment and shaping) in MuJoCo, {mode}: fell / ok, \
+             worst 50 ms CoP error of the modified step [cm] / kinematic multi-body ZMP error [cm]"
+        ),
         &done,
-        |c| cell_text(&c.proposed, c.mb_error_proposed_m),
+        |c| {
+            cell_text(
+                &c.proposed,
+                c.cop_err_modified_proposed_m,
+                c.mb_error_proposed_m,
+            )
+        },
     );
     let count = |f: &dyn Fn(&super::tables::Cell) -> bool| done.iter().filter(|c| f(c)).count();
     md += &format!(

@@ -37,6 +37,11 @@ pub struct Cell {
     pub plain: Option<PhysicsReport>,
     /// Proposed method.
     pub proposed: Option<PhysicsReport>,
+    /// Plain re-plan: the worst 50 ms CoP error in the modified single support and the double
+    /// support after it ([`MODIFIED_WINDOW_S`]) \[m\].
+    pub cop_err_modified_plain_m: Option<f64>,
+    /// The same for the proposed method \[m\].
+    pub cop_err_modified_proposed_m: Option<f64>,
     /// Kinematic multi-body ZMP error of the plain trajectory \[m\].
     pub mb_error_plain_m: Option<f64>,
     /// The same for the proposed trajectory \[m\].
@@ -59,6 +64,20 @@ fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
     Some(worst)
 }
 
+/// The time window of the modified step in trajectory time \[s\]: from the re-plan at 4.0 s
+/// to 1.0 s later (the single support of 0.7 s ± the adjustment and the double support).
+pub const MODIFIED_WINDOW_S: (f64, f64) = (4.0, 5.0);
+
+/// The worst logged 50 ms CoP error within [`MODIFIED_WINDOW_S`] \[m\].
+fn window_error(samples: &[super::PhysicsSample]) -> f64 {
+    samples
+        .iter()
+        .filter(|s| s.t >= MODIFIED_WINDOW_S.0 && s.t <= MODIFIED_WINDOW_S.1)
+        .map(|s| s.cop_err)
+        .filter(|e| e.is_finite())
+        .fold(0.0, f64::max)
+}
+
 /// The plain re-plan's parameters: no adjustment, no shaping (Table I).
 pub fn plain_params() -> GaitParams<f64> {
     let mut p = without_adjustment(GaitParams::<f64>::hrp2());
@@ -76,6 +95,8 @@ pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String>
         col,
         plain: None,
         proposed: None,
+        cop_err_modified_plain_m: None,
+        cop_err_modified_proposed_m: None,
         mb_error_plain_m: None,
         mb_error_proposed_m: None,
     };
@@ -83,14 +104,25 @@ pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String>
         let m = paper::modification(params, before, after);
         let mb = modified_support_error(&m, dt);
         // Out of reach kinematically: no engine run either.
-        let report = match mb {
-            Some(_) => Some(run(&m.trajectory, dt, cfg)?.report),
-            None => None,
+        let (report, window) = match mb {
+            Some(_) => {
+                let r = run(&m.trajectory, dt, cfg)?;
+                (Some(r.report), Some(window_error(&r.samples)))
+            }
+            None => (None, None),
         };
         if plain {
-            (out.plain, out.mb_error_plain_m) = (report, mb);
+            (
+                out.plain,
+                out.cop_err_modified_plain_m,
+                out.mb_error_plain_m,
+            ) = (report, window, mb);
         } else {
-            (out.proposed, out.mb_error_proposed_m) = (report, mb);
+            (
+                out.proposed,
+                out.cop_err_modified_proposed_m,
+                out.mb_error_proposed_m,
+            ) = (report, window, mb);
         }
     }
     Ok(out)
@@ -129,6 +161,9 @@ pub fn tables_json(cells: &[Cell]) -> Value {
         "max_tilt_proposed_deg": grid(cells, |c| fig(&c.proposed, "tilt")),
         "cop_err_max_plain_m": grid(cells, |c| fig(&c.plain, "cop")),
         "cop_err_max_proposed_m": grid(cells, |c| fig(&c.proposed, "cop")),
+        "cop_err_modified_plain_m": grid(cells, |c| c.cop_err_modified_plain_m),
+        "cop_err_modified_proposed_m": grid(cells, |c| c.cop_err_modified_proposed_m),
+        "modified_window_s": [MODIFIED_WINDOW_S.0, MODIFIED_WINDOW_S.1],
         "mb_zmp_error_plain_m": grid(cells, |c| c.mb_error_plain_m),
         "mb_zmp_error_proposed_m": grid(cells, |c| c.mb_error_proposed_m),
         "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
@@ -165,13 +200,16 @@ pub fn markdown(title: &str, cells: &[Cell], f: impl Fn(&Cell) -> String) -> Str
     md
 }
 
-/// One cell as text: `fell` (at t) or `ok`, and the kinematic error in cm.
-pub fn cell_text(r: &Option<PhysicsReport>, mb: Option<f64>) -> String {
-    match (r, mb) {
-        (Some(r), Some(e)) if r.fell => {
-            format!("**fell** {:.1}", e * 100.0)
-        }
-        (Some(_), Some(e)) => format!("ok {:.1}", e * 100.0),
+/// One cell as text: `fell` or `ok`, the worst CoP error of the modified step and the
+/// kinematic multi-body error, in cm: `ok 3.1 / 7.5`.
+pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>) -> String {
+    match (r, window, mb) {
+        (Some(r), Some(w), Some(e)) => format!(
+            "{} {:.1} / {:.1}",
+            if r.fell { "**fell**" } else { "ok" },
+            w * 100.0,
+            e * 100.0
+        ),
         _ => "n/a".into(),
     }
 }
@@ -217,6 +255,8 @@ mod tests {
             col: 2,
             plain: None,
             proposed: None,
+            cop_err_modified_plain_m: None,
+            cop_err_modified_proposed_m: None,
             mb_error_plain_m: Some(0.05),
             mb_error_proposed_m: None,
         };
