@@ -236,7 +236,9 @@ fn physics_tables_reduced_grid() {
         }
     }
     let mb_plain = j["mb_zmp_error_plain_m"][5][1].as_f64().expect("mb plain");
-    let mb_prop = j["mb_zmp_error_proposed_m"][5][1].as_f64().expect("mb proposed");
+    let mb_prop = j["mb_zmp_error_proposed_m"][5][1]
+        .as_f64()
+        .expect("mb proposed");
     assert!(mb_plain > 0.07 && mb_prop < 0.07, "{text}");
     for key in ["cop_err_modified_plain_m", "cop_err_modified_proposed_m"] {
         let e = j[key][5][1].as_f64().expect(key);
