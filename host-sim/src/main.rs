@@ -7,6 +7,7 @@
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
 //! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
 //! host-sim physics-tables [--out DIR] [--cells all|r,c;...]   Tables I/II in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N]   fault sweep in MuJoCo
 //! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -100,6 +101,19 @@ enum Cmd {
         #[arg(long)]
         open_loop: bool,
     },
+    /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
+    /// DIR/physics_faults.json and .md.
+    PhysicsFaults {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/physics_faults")]
+        out: PathBuf,
+        /// The rows: `all` or comma-separated indices (0 = no fault).
+        #[arg(long, value_name = "ROWS", default_value = "all")]
+        rows: String,
+        /// The seed of every row.
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        seed: u64,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -164,6 +178,9 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             cells,
             open_loop,
         }) => host_sim::physics::output::tables_cli(&out, &cells, open_loop),
+        Some(Cmd::PhysicsFaults { out, rows, seed }) => {
+            host_sim::physics::output::faults_cli(&out, &rows, seed)
+        }
         Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
     }
 }

@@ -246,3 +246,38 @@ fn physics_tables_reduced_grid() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `host-sim physics-faults --rows 19` (the first heavy mixed row: 30 % each of 600 ms delays,
+/// drops and corruptions, seed 1, on both sweep scenarios): `physics_faults.json` has one entry
+/// per scenario with the kinematic and the engine verdicts; neither falls.
+#[test]
+fn physics_faults_heavy_row() {
+    if !engine_here("physics_faults_heavy_row") {
+        return;
+    }
+    let dir = temp_dir("faults");
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["physics-faults", "--rows", "19", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("physics_faults.json")).expect("json");
+    let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let runs = j.as_array().expect("array");
+    assert_eq!(runs.len(), 2, "{text}");
+    for (r, scenario) in runs.iter().zip(["straight", "fig4"]) {
+        assert_eq!(r["scenario"], scenario);
+        assert_eq!(r["fault"], "mixed");
+        assert_eq!(r["kinematic_fell"], false, "{text}");
+        assert_eq!(r["fell"], false, "{text}");
+        assert!(r["fall_time_s"].is_null());
+        let e = r["cop_err_max_m"].as_f64().expect("cop error");
+        assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

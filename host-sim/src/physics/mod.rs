@@ -20,6 +20,7 @@
 //! ([`metrics`]); the run stops at the first fall.
 
 pub mod bridge;
+pub mod fault_sweep;
 pub mod metrics;
 pub mod model;
 pub mod output;

@@ -320,6 +320,31 @@ pub fn tables_cli(
     Ok(())
 }
 
+/// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) with
+/// `seed` through the node and the engine; `DIR/physics_faults.json` and `.md`.
+pub fn faults_cli(out: &Path, rows: &str, seed: u64) -> Result<(), Box<dyn std::error::Error>> {
+    use super::fault_sweep::{json, markdown, parse_rows, sweep};
+    let idx = parse_rows(rows)?;
+    let runs = sweep(&idx, seed, &PhysicsConfig::default())?;
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let path = out.join("physics_faults.json");
+    fs::write(&path, serde_json::to_string_pretty(&json(&runs))?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let md = markdown(&runs);
+    let mdpath = out.join("physics_faults.md");
+    fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
+    println!("{md}");
+    let falls = runs.iter().filter(|r| r.report.fell).count();
+    println!(
+        "{} runs, {falls} fell in the engine; results: {} and {}",
+        runs.len(),
+        path.display(),
+        mdpath.display()
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
