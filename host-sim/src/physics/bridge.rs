@@ -118,13 +118,25 @@ impl Engine {
             })?;
         let mut stdin = child.stdin.take().ok_or("MuJoCo bridge: no stdin")?;
         let mut stdout = BufReader::new(child.stdout.take().ok_or("MuJoCo bridge: no stdout")?);
-        stdin
+        // A bridge that ended at once (no Python, no MuJoCo) closes its pipes: the write or
+        // the read fails, and the answer is empty.
+        let not_started = |what: String| {
+            format!(
+                "the MuJoCo bridge did not start ({what}): install MuJoCo with python3 -m pip \
+                 install mujoco=={MUJOCO_VERSION}"
+            )
+        };
+        let sent = stdin
             .write_all(&(xml.len() as u32).to_le_bytes())
             .and_then(|_| stdin.write_all(xml.as_bytes()))
-            .and_then(|_| stdin.flush())
-            .map_err(io_err)?;
+            .and_then(|_| stdin.flush());
         let mut line = String::new();
-        stdout.read_line(&mut line).map_err(io_err)?;
+        let read = stdout.read_line(&mut line);
+        if let Err(e) = sent.and(read.map(|_| ())) {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(not_started(e.to_string()));
+        }
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.first() {
             Some(&"OK") if words.len() == 5 => {}
@@ -137,12 +149,9 @@ impl Engine {
                 ));
             }
             _ => {
+                let _ = child.kill();
                 let _ = child.wait();
-                return Err(format!(
-                    "the MuJoCo bridge did not start (answer {:?}): install MuJoCo with \
-                     python3 -m pip install mujoco=={MUJOCO_VERSION}",
-                    line.trim()
-                ));
+                return Err(not_started(format!("answer {:?}", line.trim())));
             }
         }
         let num = |i: usize| -> Result<usize, String> {
