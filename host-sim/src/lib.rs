@@ -2,6 +2,8 @@
 //!
 //! * [`paper`]: the paper's modification experiments (Fig. 4, Tables I and II) through the gait
 //!   API.
+//! * [`physics`]: the walk in the MuJoCo physics engine under a stabilizer (`host-sim
+//!   physics`).
 //! * [`scenario`]: timelines of footstep commands and the built-in HRP-2 scenarios.
 pub mod bus;
 pub mod faults;

@@ -6,7 +6,10 @@
 //! * [`bridge`]: MuJoCo behind a small Python process (the reasons are in its documentation);
 //! * [`stabilizer`]: the DCM/ZMP stabilizer between the pattern and the servos (Kajita et al.
 //!   2010), fed with the simulated sensors only;
-//! * [`metrics`]: the definitions of a fall and of the CoP tracking.
+//! * [`metrics`]: the definitions of a fall and of the CoP tracking;
+//! * [`output`]: the `physics` command and its files (`physics.json` …);
+//! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
+//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`).
 //!
 //! # A run
 //!

@@ -23,13 +23,16 @@
 //! collision.
 //!
 //! Contact (stated): friction 1.0 (sliding), condim 3, `solref 0.004 1` (a 4 ms time
-//! constant, critically damped), `solimp 0.95 0.99 0.001`: a 58 kg robot sinks about 1 mm.
+//! constant, critically damped), `solimp 0.95 0.99 0.001`: standing, the soles sink about
+//! 0.01 mm into the floor.
 //!
 //! Physics: `timestep` 1 ms, the `implicitfast` integrator, gravity `−g` of the link table.
 //!
-//! Joint servos: a `position` actuator per joint, `kp` = [`SERVO_KP`] N m/rad, joint damping
-//! [`SERVO_KD`] N m s/rad and reflected rotor inertia (`armature`) [`ARMATURE`] kg m² (stated
-//! assumptions of an HRP-2-class harmonic-drive joint; no torque limit).
+//! Joint servos: a `position` actuator per joint, `τ = kp (q_target − q)` with `kp` =
+//! [`SERVO_KP`] N m/rad, a viscous joint damping `−kd q̇` with `kd` = [`SERVO_KD`] N m s/rad,
+//! and a reflected rotor inertia (`armature`) of [`ARMATURE`] kg m² (stated assumptions of an
+//! HRP-2-class harmonic-drive joint; no torque limit). With `kd` = 150 the ankle mode of the
+//! standing robot (about 4 Hz) is barely damped and the open-loop playback rocks; 600 damps it.
 //!
 //! Sensors (what the real robot measures, nothing else reaches the controller): a trunk IMU
 //! (site `imu` at the waist origin: `framequat` as the attitude estimate, `gyro`,
@@ -89,8 +92,14 @@ pub struct Robot {
 
 impl Default for Robot {
     fn default() -> Self {
-        Self::new(Hrp2::default())
+        Self::new(link_table())
     }
+}
+
+/// The link table the physics module uses (host-sim's HRP-2 model; the kinematic evaluation
+/// of [`super::tables`] takes the same one from here).
+pub fn link_table() -> Hrp2 {
+    Hrp2::default()
 }
 
 fn f(v: f64) -> String {

@@ -49,7 +49,9 @@ use super::model::{sensor, Robot};
 use crate::multibody::{mean_yaw, rot_z, LegAngles, Mat3, Pose};
 use planner_core::gait::{Phase, Reference};
 
-/// The stabilizer's gains (every one stated here, tuned on the `straight` scenario).
+/// The stabilizer's gains (every one stated here; `k_dcm` ∈ {0, 1, 2}, `D` ∈ {400, 1000} and
+/// `K_c` ∈ {3, 5, 8} were tried on the `fig4` scenario: every combination walked, the mean CoP
+/// error was 6.7–9.8 mm and the worst 33–51 mm; these gave 8.2 / 33.5 mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gains {
     /// The feedback is on (false: open-loop playback through the IK).

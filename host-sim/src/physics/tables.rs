@@ -15,8 +15,9 @@
 
 use serde_json::{json, Value};
 
+use super::model::link_table;
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::multibody::{evaluate, Hrp2};
+use crate::multibody::evaluate;
 use crate::paper::{
     self, without_adjustment, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
@@ -51,7 +52,7 @@ pub struct Cell {
 /// Largest distance between the multi-body ZMP and the support-foot centre during the single
 /// support in which the modification takes effect \[m\] (as `host-sim tables` reports it).
 fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
-    let mb = evaluate(&Hrp2::default(), &m.trajectory, dt).ok()?;
+    let mb = evaluate(&link_table(), &m.trajectory, dt).ok()?;
     let start = paper::MODIFICATION_TICK as usize;
     let support = (m.before * 3.0, -0.1);
     let mut worst: f64 = 0.0;
