@@ -5,8 +5,9 @@
 #
 # 1. installs what rustup can provide and the build needs (the thumbv7em-none-eabihf target,
 #    clippy, rustfmt) if it is missing, QEMU (qemu-system-arm, apt-get), and the CAN tools the
-#    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), and the Python
-#    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip);
+#    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), the Python
+#    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip), and the
+#    physics engine (MuJoCo 3.2.7, pip);
 # 2. the host workspace: unit, integration and bench targets, then the doctests;
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
 # 4. the firmware images: the STM32H743 one (workspace firmware/) and the QEMU one
@@ -106,6 +107,17 @@ if ! python3 -c "import mcap.reader, zstandard, jsonschema" >/dev/null 2>&1; the
 fi
 export WALK_REQUIRE_MCAP_TOOLS=1
 # --- end MCAP reader ------------------------------------------------------------------------
+# --- MuJoCo, the physics engine of `host-sim physics` (host-sim/tests/physics.rs) ------------
+# PyPI's mujoco wheel (it ships libmujoco and numpy comes with it) for the python3 on PATH,
+# pinned to the version host-sim/src/physics/bridge.rs is written for. With
+# WALK_REQUIRE_MUJOCO=1 the physics tests fail instead of skipping when it is missing.
+MUJOCO_VERSION=3.2.7
+if [ "$(python3 -c 'import mujoco; print(mujoco.__version__)' 2>/dev/null)" != "$MUJOCO_VERSION" ]; then
+    echo "installing mujoco==$MUJOCO_VERSION"
+    python3 -m pip install -q "mujoco==$MUJOCO_VERSION"
+fi
+export WALK_REQUIRE_MUJOCO=1
+# --- end MuJoCo -------------------------------------------------------------------------------
 
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT

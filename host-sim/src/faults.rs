@@ -222,6 +222,8 @@ pub struct CaseResult {
     pub landings: usize,
     /// Fraction of the time the bus was busy.
     pub bus_load: f64,
+    /// The references the node published, one per tick (for the physics engine run).
+    pub trajectory: Vec<Reference<f64>>,
 }
 
 /// The node's port, recording what the node hands to the bus in a cycle.
@@ -890,6 +892,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         stream_gaps,
         landings: walked.len(),
         bus_load: bus.load(),
+        trajectory,
     })
 }
 

@@ -6,6 +6,9 @@
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
+//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
+//! host-sim physics-tables [--out DIR] [--cells all|r,c;...]   Tables I/II in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N]   fault sweep in MuJoCo
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -88,6 +91,48 @@ enum Cmd {
         #[arg(long, value_name = "DIR", default_value = "out/tables")]
         out: PathBuf,
     },
+    /// Run a scenario in the MuJoCo physics engine under the stabilizer (needs
+    /// `python3 -m pip install mujoco==3.2.7`); writes DIR/physics.json, physics.csv and plots.
+    Physics {
+        /// A built-in scenario (see `host-sim list`) or a file ending in .toml.
+        #[arg(value_name = "SCENARIO|FILE.toml")]
+        scenario: String,
+        /// The output directory [default: out/physics/<scenario>].
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Play the pattern open loop (the stabilizer off).
+        #[arg(long)]
+        open_loop: bool,
+        /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
+        #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
+        push: Option<String>,
+    },
+    /// The paper's Tables I and II in MuJoCo: each modification cell with the plain re-plan
+    /// and with the proposed method; writes DIR/physics_tables.json and .md.
+    PhysicsTables {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/physics_tables")]
+        out: PathBuf,
+        /// The cells to run: `all` (98 engine runs) or `row,col;row,col` (indices 0..7).
+        #[arg(long, value_name = "CELLS", default_value = "all")]
+        cells: String,
+        /// Play the patterns open loop (the stabilizer off).
+        #[arg(long)]
+        open_loop: bool,
+    },
+    /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
+    /// DIR/physics_faults.json and .md.
+    PhysicsFaults {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/physics_faults")]
+        out: PathBuf,
+        /// The rows: `all` or comma-separated indices (0 = no fault).
+        #[arg(long, value_name = "ROWS", default_value = "all")]
+        rows: String,
+        /// The seed of every row.
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        seed: u64,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -151,6 +196,20 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             replay_log(&log, &out, &load_robot(robot.as_deref())?)
         }
         Some(Cmd::Tables { out }) => tables(&out),
+        Some(Cmd::Physics {
+            scenario,
+            out,
+            open_loop,
+            push,
+        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop, push.as_deref()),
+        Some(Cmd::PhysicsTables {
+            out,
+            cells,
+            open_loop,
+        }) => host_sim::physics::output::tables_cli(&out, &cells, open_loop),
+        Some(Cmd::PhysicsFaults { out, rows, seed }) => {
+            host_sim::physics::output::faults_cli(&out, &rows, seed)
+        }
         Some(Cmd::Node {
             interface,
             seconds,

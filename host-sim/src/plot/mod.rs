@@ -23,6 +23,7 @@
 //! named by the environment variable `HOST_SIM_FONT`.
 
 mod canvas;
+mod curves;
 mod data;
 mod time;
 mod top;
@@ -37,6 +38,7 @@ use crate::multibody::MbSample;
 use crate::scenario::{Run, Scenario};
 
 pub use canvas::SUPERSAMPLE;
+pub use curves::{write_time_plot, Curve};
 pub use data::{fluctuation, landings, modification_marks, sole_limits, walked_landings};
 
 /// HRP-2's sole length (x in the foot frame), the default of [`Walk::sole`] \[m\].

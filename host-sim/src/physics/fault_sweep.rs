@@ -1,0 +1,170 @@
+//! The fault sweep's "fall" measured in the engine: every row of [`crate::faults`] (each fault
+//! kind at each rate, and the heavy mixed rows) played through the bus and the node with one
+//! seed, the node's references then run in MuJoCo under the stabilizer. Beside the engine's
+//! verdict ([`super::metrics`]) each row keeps the sweep's kinematic one (the multi-body ZMP
+//! more than 20 mm outside the support polygon).
+//!
+//! `host-sim physics-faults --out DIR [--rows all|i,j,...] [--seed N]` writes
+//! `DIR/physics_faults.json` (one object per row and scenario: `fault`, `rate`, `scenario`,
+//! `seed`, `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`, `cop_err_mean_m`,
+//! `cop_err_max_m`, `safety_stop`, `lost`) and `DIR/physics_faults.md`.
+
+use serde_json::{json, Value};
+
+use super::{run, PhysicsConfig, PhysicsReport};
+use crate::faults::{run_case, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::scenario;
+
+/// Every row of the sweep in its order: the [`SWEEP`] rates, then the [`HEAVY`] mixes.
+pub fn rows() -> Vec<(FaultKind, f64)> {
+    let mut v: Vec<(FaultKind, f64)> = SWEEP
+        .iter()
+        .flat_map(|(k, rates)| rates.iter().map(move |r| (*k, *r)))
+        .collect();
+    v.extend((0..HEAVY.len()).map(|i| (FaultKind::Mixed(i), 0.0)));
+    v
+}
+
+/// One row and scenario run in the engine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaultRun {
+    /// The fault.
+    pub kind: FaultKind,
+    /// Its rate.
+    pub rate: f64,
+    /// The scenario.
+    pub scenario: String,
+    /// The seed.
+    pub seed: u64,
+    /// The sweep's kinematic verdict.
+    pub kinematic_fell: bool,
+    /// The node stopped on its own.
+    pub safety_stop: bool,
+    /// Lost commands.
+    pub lost: usize,
+    /// The engine's report.
+    pub report: PhysicsReport,
+}
+
+/// Runs row `(kind, rate)` of the sweep on `scenario` with `seed`, then in the engine.
+pub fn fault_run(
+    scenario_name: &str,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    cfg: &PhysicsConfig,
+) -> Result<FaultRun, String> {
+    let s =
+        scenario::built_in(scenario_name).ok_or_else(|| format!("no scenario {scenario_name}"))?;
+    let case = run_case(&s, kind, rate, seed)?;
+    let dt = planner_core::gait::GaitParams::<f64>::hrp2().dt;
+    let report = run(&case.trajectory, dt, cfg)?.report;
+    Ok(FaultRun {
+        kind,
+        rate,
+        scenario: scenario_name.to_string(),
+        seed,
+        kinematic_fell: case.fell,
+        safety_stop: case.safety_stop,
+        lost: case.lost,
+        report,
+    })
+}
+
+/// Runs the rows with the given indices (into [`rows`]) on every sweep scenario.
+pub fn sweep(indices: &[usize], seed: u64, cfg: &PhysicsConfig) -> Result<Vec<FaultRun>, String> {
+    let all = rows();
+    let mut out = Vec::new();
+    for &i in indices {
+        let (kind, rate) = *all
+            .get(i)
+            .ok_or_else(|| format!("row {i}: the sweep has rows 0..{}", all.len()))?;
+        for s in SCENARIOS {
+            out.push(
+                fault_run(s, kind, rate, seed, cfg).map_err(|e| {
+                    format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate))
+                })?,
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// The JSON of the runs.
+pub fn json(runs: &[FaultRun]) -> Value {
+    Value::Array(
+        runs.iter()
+            .map(|r| {
+                json!({
+                    "fault": r.kind.name(),
+                    "rate": r.kind.rate_label(r.rate),
+                    "scenario": r.scenario,
+                    "seed": r.seed,
+                    "kinematic_fell": r.kinematic_fell,
+                    "fell": r.report.fell,
+                    "fall_time_s": r.report.fall_time_s,
+                    "fall_cause": r.report.fall_cause.map(|c| c.name()),
+                    "max_tilt_deg": r.report.max_tilt_deg,
+                    "cop_err_mean_m": r.report.cop_err_mean_m,
+                    "cop_err_max_m": r.report.cop_err_max_m,
+                    "safety_stop": r.safety_stop,
+                    "lost": r.lost,
+                })
+            })
+            .collect(),
+    )
+}
+
+/// The runs as a Markdown table.
+pub fn markdown(runs: &[FaultRun]) -> String {
+    let mut md = String::from(
+        "| fault | rate | scenario | kinematic fall | engine: fell | max tilt (°) | CoP error mean / worst (mm) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in runs {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {:.2} | {:.1} / {:.1} |\n",
+            r.kind.name(),
+            r.kind.rate_label(r.rate),
+            r.scenario,
+            if r.kinematic_fell { "yes" } else { "no" },
+            match r.report.fall_time_s {
+                Some(t) => format!("**yes** ({t:.2} s)"),
+                None => "no".into(),
+            },
+            r.report.max_tilt_deg,
+            r.report.cop_err_mean_m * 1e3,
+            r.report.cop_err_max_m * 1e3
+        );
+    }
+    md
+}
+
+/// Parses `--rows`: `all` or comma-separated indices into [`rows`].
+pub fn parse_rows(s: &str) -> Result<Vec<usize>, String> {
+    let n = rows().len();
+    if s == "all" {
+        return Ok((0..n).collect());
+    }
+    s.split(',')
+        .map(|x| match x.trim().parse::<usize>() {
+            Ok(i) if i < n => Ok(i),
+            _ => Err(format!("--rows: {x:?} is not a row index 0..{n}")),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_cover_the_sweep() {
+        let r = rows();
+        assert_eq!(r.len(), 19 + HEAVY.len());
+        assert_eq!(r[0], (FaultKind::None, 0.0));
+        assert_eq!(r[r.len() - 1], (FaultKind::Mixed(HEAVY.len() - 1), 0.0));
+        assert_eq!(parse_rows("all").unwrap().len(), r.len());
+        assert_eq!(parse_rows("0, 3").unwrap(), vec![0, 3]);
+        assert!(parse_rows("99").is_err());
+    }
+}

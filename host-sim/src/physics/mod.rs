@@ -1,0 +1,326 @@
+//! Dynamic validation in a physics engine (MuJoCo): does the generated pattern keep the HRP-2
+//! model walking once it has mass, contacts and servos?
+//!
+//! * [`model`]: the MJCF generated from the multi-body link table (the one place that reads
+//!   it), 1 kHz physics, joint position servos, IMU, encoders, ankle force/torque sensors;
+//! * [`bridge`]: MuJoCo behind a small Python process (the reasons are in its documentation);
+//! * [`stabilizer`]: the DCM/ZMP stabilizer between the pattern and the servos (Kajita et al.
+//!   2010), fed with the simulated sensors only;
+//! * [`metrics`]: the definitions of a fall and of the CoP tracking;
+//! * [`output`]: the `physics` command and its files (`physics.json` …);
+//! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
+//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`).
+//!
+//! # A run
+//!
+//! The planner's references (one every `dt` = 5 ms) are linearly interpolated to the 1 ms
+//! control period (COG, its velocity, ZMP, foot poses; the phase of the earlier tick). The
+//! robot starts at rest in the pose of the first reference (its joint angles from the same
+//! waist search and IK the stabilizer uses), stands for [`PhysicsConfig::settle_s`] on it,
+//! plays the trajectory, then stands for [`PhysicsConfig::tail_s`] on the last reference. At
+//! every 1 ms tick the stabilizer reads the sensors and sets the twelve servo targets, the
+//! engine steps once, the evaluation reads the engine's ground truth and checks for a fall
+//! ([`metrics`]); the run stops at the first fall.
+
+pub mod bridge;
+pub mod fault_sweep;
+pub mod metrics;
+pub mod model;
+pub mod output;
+pub mod stabilizer;
+pub mod tables;
+
+use crate::multibody::{mean_yaw, Pose};
+use bridge::Engine;
+use metrics::{fall_check, tilt_deg, FallCause, Tracking};
+use model::{sensor, Robot};
+use planner_core::gait::{FootPose, Reference};
+use planner_core::lipm::Sample;
+use stabilizer::{Gains, Stabilizer};
+
+/// Physics (and control) period \[s\].
+pub const PHYSICS_DT: f64 = 0.001;
+
+/// A horizontal push on the trunk (for the fall tests).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Push {
+    /// Start, in trajectory time \[s\].
+    pub t_s: f64,
+    /// Duration \[s\].
+    pub duration_s: f64,
+    /// Force (x, y) \[N\], world frame.
+    pub force: [f64; 2],
+}
+
+/// How to run the engine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhysicsConfig {
+    /// The stabilizer's gains (`enabled = false`: open-loop playback).
+    pub gains: Gains,
+    /// Standing time before the trajectory \[s\].
+    pub settle_s: f64,
+    /// Standing time after it \[s\].
+    pub tail_s: f64,
+    /// An optional push.
+    pub push: Option<Push>,
+    /// LIPM height z_c \[m\].
+    pub z_c: f64,
+}
+
+impl Default for PhysicsConfig {
+    fn default() -> Self {
+        Self {
+            gains: Gains::default(),
+            settle_s: 1.0,
+            tail_s: 1.0,
+            push: None,
+            z_c: planner_core::HRP2_COG_HEIGHT,
+        }
+    }
+}
+
+/// One logged sample (every 5 ms).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhysicsSample {
+    /// Trajectory time \[s\] (negative while settling).
+    pub t: f64,
+    /// Waist tilt \[deg\].
+    pub tilt_deg: f64,
+    /// Measured CoP of the floor contacts (x, y) \[m\] (NaN when airborne).
+    pub cop: [f64; 2],
+    /// Reference ZMP \[m\].
+    pub zmp_ref: [f64; 2],
+    /// Desired ZMP of the stabilizer \[m\].
+    pub zmp_desired: [f64; 2],
+    /// ZMP the stabilizer measured with the ankle force sensors \[m\].
+    pub zmp_sensed: [f64; 2],
+    /// The 50 ms CoP tracking error \[m\] (NaN before the first full window).
+    pub cop_err: f64,
+    /// True whole-body COG (x, y) \[m\].
+    pub cog: [f64; 2],
+    /// Reference COG \[m\].
+    pub cog_ref: [f64; 2],
+    /// Waist height \[m\].
+    pub base_z: f64,
+}
+
+/// The outcome of a run (the figures of `physics.json`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhysicsReport {
+    /// The robot fell.
+    pub fell: bool,
+    /// When, in trajectory time \[s\].
+    pub fall_time_s: Option<f64>,
+    /// Why.
+    pub fall_cause: Option<FallCause>,
+    /// Largest waist tilt \[deg\].
+    pub max_tilt_deg: f64,
+    /// Mean 50 ms CoP tracking error \[m\].
+    pub cop_err_mean_m: f64,
+    /// Worst 50 ms CoP tracking error \[m\].
+    pub cop_err_max_m: f64,
+    /// When the worst error happened \[s\].
+    pub cop_err_max_t_s: f64,
+    /// Largest horizontal COG error against the reference \[m\].
+    pub cog_drift_max_m: f64,
+    /// Largest distance of a supporting sole from its reference \[m\].
+    pub foot_drift_max_m: f64,
+    /// Simulated trajectory time \[s\].
+    pub simulated_s: f64,
+    /// The MuJoCo version.
+    pub engine: String,
+}
+
+/// A run: the report and the log.
+#[derive(Clone, Debug)]
+pub struct PhysicsRun {
+    /// The figures.
+    pub report: PhysicsReport,
+    /// Every 5 ms.
+    pub samples: Vec<PhysicsSample>,
+}
+
+fn lerp(a: f64, b: f64, s: f64) -> f64 {
+    a + (b - a) * s
+}
+
+fn lerp_sample(a: &Sample<f64>, b: &Sample<f64>, s: f64) -> Sample<f64> {
+    Sample {
+        cog: lerp(a.cog, b.cog, s),
+        cog_vel: lerp(a.cog_vel, b.cog_vel, s),
+        cog_acc: lerp(a.cog_acc, b.cog_acc, s),
+        zmp: lerp(a.zmp, b.zmp, s),
+        zmp_vel: lerp(a.zmp_vel, b.zmp_vel, s),
+    }
+}
+
+fn lerp_foot(a: &FootPose<f64>, b: &FootPose<f64>, s: f64) -> FootPose<f64> {
+    let mut f = *a;
+    f.x = lerp(a.x, b.x, s);
+    f.y = lerp(a.y, b.y, s);
+    f.z = lerp(a.z, b.z, s);
+    let dy = (b.yaw - a.yaw).sin().atan2((b.yaw - a.yaw).cos());
+    f.yaw = a.yaw + dy * s;
+    f
+}
+
+/// The reference at trajectory time `t` (held before the start and after the end).
+pub fn reference_at(trajectory: &[Reference<f64>], dt: f64, t: f64) -> Reference<f64> {
+    let n = trajectory.len();
+    let u = (t / dt).max(0.0);
+    let k = (u.floor() as usize).min(n - 1);
+    if k + 1 >= n {
+        return trajectory[n - 1];
+    }
+    let s = u - k as f64;
+    let (a, b) = (&trajectory[k], &trajectory[k + 1]);
+    Reference {
+        x: lerp_sample(&a.x, &b.x, s),
+        y: lerp_sample(&a.y, &b.y, s),
+        phase: a.phase,
+        feet: [
+            lerp_foot(&a.feet[0], &b.feet[0], s),
+            lerp_foot(&a.feet[1], &b.feet[1], s),
+        ],
+    }
+}
+
+fn quat_to_mat(q: [f64; 4]) -> crate::multibody::Mat3 {
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// Runs a trajectory of references (period `dt`) in MuJoCo. Errors: the engine could not be
+/// started (the message names what to install), the bridge ended, or the IK failed.
+pub fn run(
+    trajectory: &[Reference<f64>],
+    dt: f64,
+    cfg: &PhysicsConfig,
+) -> Result<PhysicsRun, String> {
+    if trajectory.is_empty() {
+        return Err("empty trajectory".into());
+    }
+    let robot = Robot::default();
+    let mut engine = Engine::start(&robot.mjcf())?;
+    let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
+    // Initial pose: the first reference through the waist search and the IK.
+    let r0 = &trajectory[0];
+    let yaw0 = mean_yaw(&r0.feet);
+    let soles0 = [Pose::sole(&r0.feet[0]), Pose::sole(&r0.feet[1])];
+    let (waist0, q0) = robot.solve_waist(
+        Pose::upright(r0.x.cog, r0.y.cog, robot.waist_height(), yaw0),
+        &soles0,
+        [r0.x.cog, r0.y.cog],
+    )?;
+    let mut qpos = vec![
+        waist0.p[0],
+        waist0.p[1],
+        waist0.p[2],
+        (yaw0 / 2.0).cos(),
+        0.0,
+        0.0,
+        (yaw0 / 2.0).sin(),
+    ];
+    qpos.extend(q0.iter().flatten());
+    let mut obs = engine.reset(&qpos)?;
+    let end_t = (trajectory.len() - 1) as f64 * dt;
+    let steps = ((cfg.settle_s + end_t + cfg.tail_s) / PHYSICS_DT).round() as usize;
+    let mut tracking = Tracking::default();
+    let mut samples = Vec::new();
+    let mut report = PhysicsReport {
+        fell: false,
+        fall_time_s: None,
+        fall_cause: None,
+        max_tilt_deg: 0.0,
+        cop_err_mean_m: 0.0,
+        cop_err_max_m: 0.0,
+        cop_err_max_t_s: 0.0,
+        cog_drift_max_m: 0.0,
+        foot_drift_max_m: 0.0,
+        simulated_s: 0.0,
+        engine: engine.version.clone(),
+    };
+    for k in 0..steps {
+        let t = k as f64 * PHYSICS_DT - cfg.settle_s;
+        let r = reference_at(trajectory, dt, t);
+        let ctrl = stab.step(&r, &obs.sensors)?;
+        let mut wrench = [0.0; 6];
+        if let Some(p) = cfg.push {
+            if t >= p.t_s && t < p.t_s + p.duration_s {
+                wrench[0] = p.force[0];
+                wrench[1] = p.force[1];
+            }
+        }
+        obs = engine.step(1, &ctrl, wrench)?;
+        // Evaluation at the time the engine reached.
+        let t1 = t + PHYSICS_DT;
+        let r1 = reference_at(trajectory, dt, t1);
+        let tilt = tilt_deg(obs.base_quat);
+        report.max_tilt_deg = report.max_tilt_deg.max(tilt);
+        let err = tracking.push(t1, obs.cop, [r1.x.zmp, r1.y.zmp]);
+        let mut q = [[0.0; 6]; 2];
+        for (j, leg) in q.iter_mut().enumerate() {
+            leg.copy_from_slice(&obs.sensors[sensor::QPOS + 6 * j..sensor::QPOS + 6 * j + 6]);
+        }
+        let base = Pose {
+            p: obs.base_pos,
+            r: quat_to_mat(obs.base_quat),
+        };
+        let (soles, _, cog) = robot.fk(&base, &q);
+        let cog_err = (cog[0] - r1.x.cog).hypot(cog[1] - r1.y.cog);
+        report.cog_drift_max_m = report.cog_drift_max_m.max(cog_err);
+        for (s, f) in soles.iter().zip(&r1.feet) {
+            if f.z == 0.0 {
+                let d = (s.p[0] - f.x).hypot(s.p[1] - f.y);
+                report.foot_drift_max_m = report.foot_drift_max_m.max(d);
+            }
+        }
+        if (k + 1) % 5 == 0 {
+            samples.push(PhysicsSample {
+                t: t1,
+                tilt_deg: tilt,
+                cop: obs.cop,
+                zmp_ref: [r1.x.zmp, r1.y.zmp],
+                zmp_desired: stab.internals.zmp_desired,
+                zmp_sensed: stab.internals.zmp_measured,
+                cop_err: err.unwrap_or(f64::NAN),
+                cog: [cog[0], cog[1]],
+                cog_ref: [r1.x.cog, r1.y.cog],
+                base_z: obs.base_pos[2],
+            });
+        }
+        report.simulated_s = t1.max(0.0);
+        if let Some(cause) = fall_check(
+            obs.base_quat,
+            obs.base_pos[2],
+            waist0.p[2],
+            obs.other_contact,
+        ) {
+            report.fell = true;
+            report.fall_time_s = Some(t1);
+            report.fall_cause = Some(cause);
+            break;
+        }
+    }
+    report.cop_err_mean_m = tracking.mean();
+    report.cop_err_max_m = tracking.max;
+    report.cop_err_max_t_s = tracking.max_t;
+    Ok(PhysicsRun { report, samples })
+}

@@ -1,0 +1,467 @@
+//! The MuJoCo model (MJCF) generated from host-sim's HRP-2 link table, and the kinematics the
+//! stabilizer needs from it.
+//!
+//! This is the **only** place of the physics module that reads the link table
+//! ([`crate::multibody::Model`] and its [`Body`] fields): the rest goes through [`Robot`].
+//!
+//! # The MJCF
+//!
+//! One MuJoCo body per body of the link table, with exactly its mass, centre of mass and
+//! principal moments of inertia (an explicit `<inertial>`, so the collision shapes carry no
+//! mass): `waist` (floating, a free joint) with `trunk` welded to it, and per leg `hip` (joints
+//! hip yaw about z then hip roll about x, both at the hip joint centre `(0, ±hip_offset, 0)`),
+//! `thigh` (hip pitch about y), `shank` (knee about y, `thigh_length` below), `foot` (ankle
+//! pitch about y then ankle roll about x, `shank_length` below the knee). MuJoCo composes the
+//! joints of a body in the order written, so the frames are those of
+//! [`crate::multibody`]: `R_w R_z(q1) R_x(q2) R_y(q3) R_y(q4) R_y(q5) R_x(q6)`.
+//!
+//! Collision shapes: the **soles** are boxes 0.24 × 0.14 × 0.08 m (the foot box of the link
+//! table, its bottom face `ankle_height` below the ankle, the sole centre straight below it);
+//! every other body has the box of equal inertia (`a² = 6 (I_y + I_z − I_x) / m`, and so on),
+//! so that a fall can touch the floor with a knee, a hip or the trunk. Robot geoms collide
+//! with the floor only (`contype 2, conaffinity 1` against the floor's `1, 2`): no self
+//! collision.
+//!
+//! Contact (stated): friction 1.0 (sliding), condim 3, `solref 0.004 1` (a 4 ms time
+//! constant, critically damped), `solimp 0.95 0.99 0.001`: standing, the soles sink about
+//! 0.01 mm into the floor.
+//!
+//! Physics: `timestep` 1 ms, the `implicitfast` integrator, gravity `−g` of the link table.
+//!
+//! Joint servos: a `position` actuator per joint, `τ = kp (q_target − q)` with `kp` =
+//! [`SERVO_KP`] N m/rad, a viscous joint damping `−kd q̇` with `kd` = [`SERVO_KD`] N m s/rad,
+//! and a reflected rotor inertia (`armature`) of [`ARMATURE`] kg m² (stated assumptions of an
+//! HRP-2-class harmonic-drive joint; no torque limit). With `kd` = 150 the ankle mode of the
+//! standing robot (about 4 Hz) is barely damped and the open-loop playback rocks; 600 damps it.
+//!
+//! Sensors (what the real robot measures, nothing else reaches the controller): a trunk IMU
+//! (site `imu` at the waist origin: `framequat` as the attitude estimate, `gyro`,
+//! `accelerometer`), the twelve joint encoders (`jointpos`, `jointvel`), and a 6-axis
+//! force/torque sensor at each ankle (`force`, `torque` at the site at the ankle joint centre,
+//! in the foot frame).
+
+use crate::multibody::{Body, LegAngles, Model, Pose, Vec3};
+use planner_core::gait::Side;
+use std::fmt::Write;
+
+/// Servo stiffness of every joint \[N m/rad\].
+pub const SERVO_KP: f64 = 20_000.0;
+/// Joint damping \[N m s/rad\].
+pub const SERVO_KD: f64 = 600.0;
+/// Reflected rotor inertia per joint \[kg m²\].
+pub const ARMATURE: f64 = 0.3;
+/// Largest hip–ankle distance the IK is asked for, as a fraction of `thigh + shank`.
+pub const REACH_FRACTION: f64 = 0.9995;
+/// Half-extents of the sole box \[m\]: 0.24 × 0.14 × 0.08.
+pub const SOLE_HALF: Vec3 = [0.12, 0.07, 0.04];
+
+/// Joint names in actuator (and qpos) order: left leg then right leg, each hip yaw, hip roll,
+/// hip pitch, knee, ankle pitch, ankle roll.
+pub const JOINTS: [&str; 6] = [
+    "hip_yaw",
+    "hip_roll",
+    "hip_pitch",
+    "knee",
+    "ankle_pitch",
+    "ankle_roll",
+];
+
+/// Layout of the sensor data the MJCF declares, in order.
+pub mod sensor {
+    /// IMU orientation quaternion (w, x, y, z).
+    pub const QUAT: usize = 0;
+    /// IMU angular velocity (body frame).
+    pub const GYRO: usize = 4;
+    /// IMU linear acceleration (body frame).
+    pub const ACC: usize = 7;
+    /// Twelve joint angles.
+    pub const QPOS: usize = 10;
+    /// Twelve joint velocities.
+    pub const QVEL: usize = 22;
+    /// Left ankle force (3) and torque (3), then the right ones.
+    pub const FT: usize = 34;
+    /// Number of values.
+    pub const LEN: usize = 46;
+}
+
+/// The robot as the physics module sees it: the link table and what follows from it.
+#[derive(Clone, Copy, Debug)]
+pub struct Robot {
+    hrp2: Model,
+}
+
+impl Default for Robot {
+    fn default() -> Self {
+        Self::new(link_table())
+    }
+}
+
+/// The link table the physics module uses (host-sim's HRP-2 model; the kinematic evaluation
+/// of [`super::tables`] takes the same one from here).
+pub fn link_table() -> Model {
+    Model::hrp2()
+}
+
+fn f(v: f64) -> String {
+    format!("{v:.6}")
+}
+
+fn v3(v: Vec3) -> String {
+    format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]))
+}
+
+/// Half-extents of the box with the same principal moments as `b`.
+fn equivalent_box(b: &Body) -> Vec3 {
+    let [ix, iy, iz] = b.inertia;
+    let side = |s: f64| (6.0 * s / b.mass).max(1e-6).sqrt() / 2.0;
+    [side(iy + iz - ix), side(ix + iz - iy), side(ix + iy - iz)]
+}
+
+fn mirrored(b: &Body, side: Side) -> Body {
+    let mut b = *b;
+    if side == Side::Right {
+        b.com[1] = -b.com[1];
+    }
+    b
+}
+
+fn inertial(b: &Body) -> String {
+    format!(
+        "<inertial pos=\"{}\" mass=\"{}\" diaginertia=\"{}\"/>",
+        v3(b.com),
+        f(b.mass),
+        v3([
+            b.inertia[0].max(1e-6),
+            b.inertia[1].max(1e-6),
+            b.inertia[2].max(1e-6)
+        ])
+    )
+}
+
+fn collision_box(name: &str, b: &Body) -> String {
+    format!(
+        "<geom name=\"{name}\" type=\"box\" pos=\"{}\" size=\"{}\" class=\"robot\"/>",
+        v3(b.com),
+        v3(equivalent_box(b))
+    )
+}
+
+impl Robot {
+    /// The robot of a link table.
+    pub fn new(hrp2: Model) -> Self {
+        Self { hrp2 }
+    }
+
+    /// Gravity \[m/s²\].
+    pub fn gravity(&self) -> f64 {
+        self.hrp2.gravity
+    }
+
+    /// Total mass \[kg\].
+    pub fn total_mass(&self) -> f64 {
+        self.hrp2.total_mass()
+    }
+
+    /// Mass of one foot \[kg\].
+    pub fn foot_mass(&self) -> f64 {
+        self.hrp2.foot.mass
+    }
+
+    /// Ankle joint centre above the sole \[m\].
+    pub fn ankle_height(&self) -> f64 {
+        self.hrp2.ankle_height
+    }
+
+    /// Height of the waist origin in the walking posture \[m\].
+    pub fn waist_height(&self) -> f64 {
+        self.hrp2.waist_height
+    }
+
+    /// The MJCF document.
+    pub fn mjcf(&self) -> String {
+        let h = &self.hrp2;
+        let mut x = String::new();
+        let _ = writeln!(x, "<mujoco model=\"hrp2-host-sim\">");
+        let _ = writeln!(
+            x,
+            "  <option timestep=\"0.001\" integrator=\"implicitfast\" gravity=\"0 0 {}\"/>",
+            f(-h.gravity)
+        );
+        let _ = writeln!(
+            x,
+            "  <default><joint damping=\"{}\" armature=\"{}\"/><position kp=\"{}\"/>\
+             <default class=\"robot\"><geom contype=\"2\" conaffinity=\"1\" condim=\"3\" \
+             friction=\"1 0.005 0.0001\" solref=\"0.004 1\" solimp=\"0.95 0.99 0.001\"/></default>\
+             </default>",
+            f(SERVO_KD),
+            f(ARMATURE),
+            f(SERVO_KP)
+        );
+        let _ = writeln!(x, "  <worldbody>");
+        let _ = writeln!(
+            x,
+            "    <geom name=\"floor\" type=\"plane\" size=\"50 50 0.1\" contype=\"1\" \
+             conaffinity=\"2\" condim=\"3\" friction=\"1 0.005 0.0001\" solref=\"0.004 1\" \
+             solimp=\"0.95 0.99 0.001\"/>"
+        );
+        let _ = writeln!(
+            x,
+            "    <body name=\"waist\" pos=\"0 0 {}\"><freejoint name=\"root\"/>{}{}\
+             <site name=\"imu\" pos=\"0 0 0\"/>",
+            f(h.waist_height),
+            inertial(&h.waist),
+            collision_box("waist_geom", &h.waist)
+        );
+        let _ = writeln!(
+            x,
+            "      <body name=\"trunk\">{}{}</body>",
+            inertial(&h.trunk),
+            collision_box("trunk_geom", &h.trunk)
+        );
+        for side in [Side::Left, Side::Right] {
+            let (p, s) = match side {
+                Side::Left => ("l", 1.0),
+                Side::Right => ("r", -1.0),
+            };
+            let j = |k: usize, axis: &str| {
+                format!(
+                    "<joint name=\"{p}_{}\" type=\"hinge\" axis=\"{axis}\"/>",
+                    JOINTS[k]
+                )
+            };
+            let _ = writeln!(
+                x,
+                "      <body name=\"{p}_hip\" pos=\"0 {} 0\">{}{}{}{}",
+                f(s * h.hip_offset),
+                j(0, "0 0 1"),
+                j(1, "1 0 0"),
+                inertial(&mirrored(&h.hip, side)),
+                collision_box(&format!("{p}_hip_geom"), &mirrored(&h.hip, side))
+            );
+            let _ = writeln!(
+                x,
+                "        <body name=\"{p}_thigh\">{}{}{}",
+                j(2, "0 1 0"),
+                inertial(&mirrored(&h.thigh, side)),
+                collision_box(&format!("{p}_thigh_geom"), &mirrored(&h.thigh, side))
+            );
+            let _ = writeln!(
+                x,
+                "          <body name=\"{p}_shank\" pos=\"0 0 {}\">{}{}{}",
+                f(-h.thigh_length),
+                j(3, "0 1 0"),
+                inertial(&mirrored(&h.shank, side)),
+                collision_box(&format!("{p}_shank_geom"), &mirrored(&h.shank, side))
+            );
+            let _ = writeln!(
+                x,
+                "            <body name=\"{p}_foot\" pos=\"0 0 {}\">{}{}{}\
+                 <geom name=\"{p}_sole\" type=\"box\" pos=\"0 0 {}\" size=\"{}\" class=\"robot\"/>\
+                 <site name=\"{p}_ankle\" pos=\"0 0 0\"/></body>",
+                f(-h.shank_length),
+                j(4, "0 1 0"),
+                j(5, "1 0 0"),
+                inertial(&mirrored(&h.foot, side)),
+                f(-h.ankle_height + SOLE_HALF[2]),
+                v3(SOLE_HALF)
+            );
+            let _ = writeln!(x, "          </body></body></body>");
+        }
+        let _ = writeln!(x, "    </body>\n  </worldbody>\n  <actuator>");
+        for p in ["l", "r"] {
+            for name in JOINTS {
+                let _ = writeln!(
+                    x,
+                    "    <position name=\"{p}_{name}_servo\" joint=\"{p}_{name}\"/>"
+                );
+            }
+        }
+        let _ = writeln!(x, "  </actuator>\n  <sensor>");
+        let _ = writeln!(
+            x,
+            "    <framequat name=\"imu_quat\" objtype=\"site\" objname=\"imu\"/>\n    \
+             <gyro name=\"imu_gyro\" site=\"imu\"/>\n    \
+             <accelerometer name=\"imu_acc\" site=\"imu\"/>"
+        );
+        for kind in ["jointpos", "jointvel"] {
+            for p in ["l", "r"] {
+                for name in JOINTS {
+                    let _ = writeln!(x, "    <{kind} joint=\"{p}_{name}\"/>");
+                }
+            }
+        }
+        for p in ["l", "r"] {
+            let _ = writeln!(
+                x,
+                "    <force site=\"{p}_ankle\"/>\n    <torque site=\"{p}_ankle\"/>"
+            );
+        }
+        let _ = writeln!(x, "  </sensor>\n</mujoco>");
+        x
+    }
+
+    /// Inverse kinematics of one leg (see [`Model::leg_ik`]); a sole beyond the leg's reach
+    /// is pulled towards the hip along the hip–ankle line until the ankle is at
+    /// [`REACH_FRACTION`] of the reach (the knee nearly stretched), as a joint-space servo of a
+    /// real robot would saturate, instead of failing.
+    pub fn leg_ik(&self, side: Side, waist: &Pose, sole: &Pose) -> Result<LegAngles, String> {
+        let h = &self.hrp2;
+        let reach = REACH_FRACTION * (h.thigh_length + h.shank_length);
+        let lift = [sole.r[0][2], sole.r[1][2], sole.r[2][2]];
+        let ankle: Vec3 = core::array::from_fn(|i| sole.p[i] + h.ankle_height * lift[i]);
+        let hip = h.hip_joint(side, waist);
+        let d: Vec3 = core::array::from_fn(|i| ankle[i] - hip[i]);
+        let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let mut target = *sole;
+        if dist > reach {
+            for i in 0..3 {
+                target.p[i] = hip[i] + d[i] * reach / dist - h.ankle_height * lift[i];
+            }
+        }
+        h.leg_ik(side, waist, &target).map_err(|e| e.to_string())
+    }
+
+    /// Forward kinematics: the sole centres and the ankle joint centres (left, right) and the
+    /// whole-body COG for a waist pose and the joint angles.
+    pub fn fk(&self, waist: &Pose, q: &[LegAngles; 2]) -> ([Pose; 2], [Pose; 2], Vec3) {
+        let h = &self.hrp2;
+        let mut m = h.trunk.mass + h.waist.mass;
+        let mut s = [0.0; 3];
+        let mut acc = |mass: f64, p: Vec3| {
+            for (a, b) in s.iter_mut().zip(p) {
+                *a += mass * b;
+            }
+        };
+        acc(h.trunk.mass, waist.apply(h.trunk.com));
+        acc(h.waist.mass, waist.apply(h.waist.com));
+        let mut soles = [*waist; 2];
+        let mut ankles = [*waist; 2];
+        for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+            let fr = h.leg_fk(side, waist, &q[k]);
+            for (frame, body) in [
+                (&fr.hip, &h.hip),
+                (&fr.thigh, &h.thigh),
+                (&fr.shank, &h.shank),
+                (&fr.foot, &h.foot),
+            ] {
+                let b = mirrored(body, side);
+                acc(b.mass, frame.apply(b.com));
+                m += b.mass;
+            }
+            soles[k] = fr.sole;
+            ankles[k] = fr.foot;
+        }
+        (soles, ankles, [s[0] / m, s[1] / m, s[2] / m])
+    }
+
+    /// Finds the waist position (orientation `r`, at height `z`) that puts the whole-body COG
+    /// at `target` (x, y) with the soles at `soles`: Newton's method as in
+    /// [`Model::solve_waist`], but for any waist orientation. Returns the waist pose and the
+    /// joint angles.
+    pub fn solve_waist(
+        &self,
+        waist: Pose,
+        soles: &[Pose; 2],
+        target: [f64; 2],
+    ) -> Result<(Pose, [LegAngles; 2]), String> {
+        const H: f64 = 1e-6;
+        let cog = |w: &Pose| -> Result<(Vec3, [LegAngles; 2]), String> {
+            let q = [
+                self.leg_ik(Side::Left, w, &soles[0])?,
+                self.leg_ik(Side::Right, w, &soles[1])?,
+            ];
+            Ok((self.fk(w, &q).2, q))
+        };
+        let mut w = waist;
+        for _ in 0..8 {
+            let (c, q) = cog(&w)?;
+            let e = [target[0] - c[0], target[1] - c[1]];
+            if e[0].hypot(e[1]) < 1e-9 {
+                return Ok((w, q));
+            }
+            let mut wx = w;
+            wx.p[0] += H;
+            let mut wy = w;
+            wy.p[1] += H;
+            let (cx, _) = cog(&wx)?;
+            let (cy, _) = cog(&wy)?;
+            let j = [
+                [(cx[0] - c[0]) / H, (cy[0] - c[0]) / H],
+                [(cx[1] - c[1]) / H, (cy[1] - c[1]) / H],
+            ];
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            if det.abs() < 1e-9 || !det.is_finite() {
+                return Err("waist search: singular COG Jacobian".into());
+            }
+            w.p[0] += (j[1][1] * e[0] - j[0][1] * e[1]) / det;
+            w.p[1] += (-j[1][0] * e[0] + j[0][0] * e[1]) / det;
+        }
+        let (_, q) = cog(&w)?;
+        Ok((w, q))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equivalent_box_of_a_box_is_the_box() {
+        let b = Body::cuboid(28.0, [0.0; 3], [0.30, 0.50, 0.60]);
+        let h = equivalent_box(&b);
+        for (got, want) in h.iter().zip([0.15, 0.25, 0.30]) {
+            assert!((got - want).abs() < 1e-12, "{h:?}");
+        }
+    }
+
+    #[test]
+    fn fk_cog_matches_the_multibody_model() {
+        let hrp2 = Model::hrp2();
+        let robot = Robot::new(hrp2);
+        let soles = [
+            Pose::upright(0.0, 0.1, 0.0, 0.0),
+            Pose::upright(0.0, -0.1, 0.0, 0.0),
+        ];
+        let waist = Pose::upright(0.01, 0.02, hrp2.waist_height, 0.0);
+        let (c, q) = hrp2.cog(&waist, &soles).unwrap();
+        let (s, _, c2) = robot.fk(&waist, &q);
+        for i in 0..3 {
+            assert!((c[i] - c2[i]).abs() < 1e-12);
+            assert!((s[0].p[i] - soles[0].p[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn ik_beyond_reach_saturates() {
+        let hrp2 = Model::hrp2();
+        let robot = Robot::new(hrp2);
+        let waist = Pose::upright(0.0, 0.0, hrp2.waist_height, 0.0);
+        // 0.45 m ahead: beyond the 0.6 m reach at this waist height.
+        let far = Pose::upright(0.45, 0.06, 0.0, 0.0);
+        assert!(hrp2.leg_ik(Side::Left, &waist, &far).is_err());
+        let q = robot.leg_ik(Side::Left, &waist, &far).expect("saturated");
+        let fk = hrp2.leg_fk(Side::Left, &waist, &q);
+        let hip = hrp2.hip_joint(Side::Left, &waist);
+        let d = (0..3)
+            .map(|i| (fk.foot.p[i] - hip[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((d - REACH_FRACTION * 0.6).abs() < 1e-9, "{d}");
+        // Within reach: unchanged.
+        let near = Pose::upright(0.1, 0.06, 0.0, 0.0);
+        assert_eq!(
+            robot.leg_ik(Side::Left, &waist, &near).unwrap(),
+            hrp2.leg_ik(Side::Left, &waist, &near).unwrap()
+        );
+    }
+
+    #[test]
+    fn mjcf_names_every_joint_and_sensor() {
+        let x = Robot::default().mjcf();
+        assert_eq!(x.matches("<position name=").count(), 12);
+        assert_eq!(x.matches("<jointpos ").count(), 12);
+        assert_eq!(x.matches("type=\"hinge\"").count(), 12);
+        assert!(x.contains("size=\"0.120000 0.070000 0.040000\""));
+        assert!(x.contains("timestep=\"0.001\""));
+    }
+}

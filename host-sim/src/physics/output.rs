@@ -1,0 +1,368 @@
+//! The `physics` command: a scenario through the node and the engine, and its files.
+//!
+//! `host-sim physics <scenario|file.toml> --out DIR` writes:
+//!
+//! * `DIR/physics.json`: `fell` (bool), `fall_time_s` (trajectory time, null if none),
+//!   `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
+//!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
+//!   `simulated_s`, `stabilizer`, `engine` (the MuJoCo version), `scenario`;
+//! * `DIR/physics.csv`: the log every 5 ms (time, tilt, CoP, reference and desired ZMP, the
+//!   50 ms tracking error, true and reference COG, waist height);
+//! * `DIR/physics_tilt.png`, `DIR/physics_cop_x.png`, `DIR/physics_cop_y.png`: the tilt, and
+//!   the measured CoP against the reference ZMP.
+
+use std::fs;
+use std::io::Write;
+use std::path::Path;
+
+use serde_json::{json, Value};
+
+use super::{run, PhysicsConfig, PhysicsRun, Push};
+use crate::plot::{write_time_plot, Curve};
+use crate::scenario::{self, BUILT_IN};
+use crate::sim::{simulate, SimConfig};
+use crate::toml_scenario;
+
+/// The planner's trajectory for a scenario (built-in name or `.toml` file) through the virtual
+/// CAN bus and the node, and its tick \[s\].
+pub fn scenario_trajectory(
+    name: &str,
+) -> Result<(String, Vec<planner_core::gait::Reference<f64>>, f64), String> {
+    let s = if name.ends_with(".toml") {
+        toml_scenario::load_file(Path::new(name))?.scenario
+    } else {
+        scenario::built_in(name).ok_or_else(|| {
+            format!(
+                "unknown scenario {name:?}; built-in: {} (or a .toml file)",
+                BUILT_IN.join(", ")
+            )
+        })?
+    };
+    let cfg = SimConfig::default();
+    let dt = cfg.node.params.dt;
+    let sim = simulate(&s, &cfg).map_err(|e| format!("{}: {e}", s.name))?;
+    Ok((s.name.clone(), sim.run.trajectory, dt))
+}
+
+/// The JSON of a run.
+pub fn report_json(name: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
+    let p = &r.report;
+    json!({
+        "scenario": name,
+        "fell": p.fell,
+        "fall_time_s": p.fall_time_s,
+        "fall_cause": p.fall_cause.map(|c| c.name()),
+        "max_tilt_deg": p.max_tilt_deg,
+        "cop_err_mean_m": p.cop_err_mean_m,
+        "cop_err_max_m": p.cop_err_max_m,
+        "cop_err_max_t_s": p.cop_err_max_t_s,
+        "cog_drift_max_m": p.cog_drift_max_m,
+        "foot_drift_max_m": p.foot_drift_max_m,
+        "simulated_s": p.simulated_s,
+        "stabilizer": cfg.gains.enabled,
+        "engine": format!("MuJoCo {}", p.engine),
+        "physics_dt_s": super::PHYSICS_DT,
+        "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
+    })
+}
+
+fn write_csv(path: &Path, r: &PhysicsRun) -> Result<(), String> {
+    let named = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let mut f = std::io::BufWriter::new(fs::File::create(path).map_err(named)?);
+    writeln!(
+        f,
+        "t,tilt_deg,cop_x,cop_y,zmp_ref_x,zmp_ref_y,zmp_des_x,zmp_des_y,zmp_ft_x,zmp_ft_y,cop_err,cog_x,cog_y,cog_ref_x,cog_ref_y,base_z"
+    )
+    .map_err(named)?;
+    for s in &r.samples {
+        writeln!(
+            f,
+            "{:.3},{:.4},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5}",
+            s.t,
+            s.tilt_deg,
+            s.cop[0],
+            s.cop[1],
+            s.zmp_ref[0],
+            s.zmp_ref[1],
+            s.zmp_desired[0],
+            s.zmp_desired[1],
+            s.zmp_sensed[0],
+            s.zmp_sensed[1],
+            s.cop_err,
+            s.cog[0],
+            s.cog[1],
+            s.cog_ref[0],
+            s.cog_ref[1],
+            s.base_z
+        )
+        .map_err(named)?;
+    }
+    f.flush().map_err(named)
+}
+
+/// The 50 ms moving average of the CoP samples (every 5 ms: 10 samples), as plotted.
+fn smoothed(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for i in 9..points.len() {
+        let w = &points[i - 9..=i];
+        if w.iter().all(|p| p.1.is_finite()) {
+            out.push((points[i].0, w.iter().map(|p| p.1).sum::<f64>() / 10.0));
+        }
+    }
+    out
+}
+
+/// Writes `physics.json`, `physics.csv` and the plots into `out`.
+pub fn write_outputs(
+    out: &Path,
+    name: &str,
+    cfg: &PhysicsConfig,
+    r: &PhysicsRun,
+) -> Result<(), String> {
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let json =
+        serde_json::to_string_pretty(&report_json(name, cfg, r)).map_err(|e| e.to_string())?;
+    let path = out.join("physics.json");
+    fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    write_csv(&out.join("physics.csv"), r)?;
+    let mode = if cfg.gains.enabled {
+        "stabilized"
+    } else {
+        "open loop"
+    };
+    let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
+    let limit: Vec<(f64, f64)> = r
+        .samples
+        .iter()
+        .map(|s| (s.t, super::metrics::FALL_TILT_DEG))
+        .step_by(20)
+        .collect();
+    let plot = |file: &str, caption: String, axis: &str, curves: &[Curve]| {
+        let p = out.join(file);
+        write_time_plot(&p, &caption, axis, curves).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    plot(
+        "physics_tilt.png",
+        format!("{name} in MuJoCo ({mode}): waist tilt"),
+        "tilt [deg]",
+        &[
+            ("waist tilt".into(), (0x1f, 0x5f, 0xbf), tilt),
+            ("fall threshold".into(), (0x80, 0x80, 0x80), limit),
+        ],
+    )?;
+    for (q, axis) in ["x", "y"].iter().enumerate() {
+        let cop: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.cop[q])).collect();
+        plot(
+            &format!("physics_cop_{axis}.png"),
+            format!("{name} in MuJoCo ({mode}): CoP {axis} against the reference ZMP"),
+            &format!("{axis} [m]"),
+            &[
+                (
+                    format!("ZMP {axis} (reference)"),
+                    (0xd6, 0x27, 0x28),
+                    r.samples.iter().map(|s| (s.t, s.zmp_ref[q])).collect(),
+                ),
+                (
+                    format!("CoP {axis} (engine, 50 ms)"),
+                    (0x2c, 0xa0, 0x2c),
+                    smoothed(&cop),
+                ),
+                (
+                    format!("COG {axis} (engine)"),
+                    (0x1f, 0x5f, 0xbf),
+                    r.samples.iter().map(|s| (s.t, s.cog[q])).collect(),
+                ),
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+/// The `physics` command: runs the scenario, writes the files, returns the JSON.
+pub fn physics_command(name: &str, out: &Path, cfg: &PhysicsConfig) -> Result<Value, String> {
+    let (sname, trajectory, dt) = scenario_trajectory(name)?;
+    let r = run(&trajectory, dt, cfg).map_err(|e| format!("{sname} in MuJoCo: {e}"))?;
+    write_outputs(out, &sname, cfg, &r)?;
+    Ok(report_json(&sname, cfg, &r))
+}
+
+/// Parses `--push T,FX,FY`: a push of 0.1 s starting at `T` (trajectory time) \[s\] with the
+/// horizontal force `(FX, FY)` \[N\].
+pub fn parse_push(s: &str) -> Result<Push, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--push {s:?}: expected T,FX,FY (numbers)"))?;
+    match v[..] {
+        [t, fx, fy] if v.iter().all(|x| x.is_finite()) => Ok(Push {
+            t_s: t,
+            duration_s: 0.1,
+            force: [fx, fy],
+        }),
+        _ => Err(format!(
+            "--push {s:?}: expected T,FX,FY (three finite numbers)"
+        )),
+    }
+}
+
+/// The command line's `physics` subcommand: runs, writes, prints the figures.
+pub fn cli(
+    name: &str,
+    out: Option<&Path>,
+    open_loop: bool,
+    push: Option<&str>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut cfg = PhysicsConfig::default();
+    cfg.gains.enabled = !open_loop;
+    cfg.push = push.map(parse_push).transpose()?;
+    let default_out;
+    let out = match out {
+        Some(o) => o,
+        None => {
+            let stem = Path::new(name)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| name.to_string());
+            default_out = Path::new("out/physics").join(stem);
+            &default_out
+        }
+    };
+    let j = physics_command(name, out, &cfg)?;
+    let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
+    println!(
+        "{}: {} in MuJoCo ({}), {:.2} s simulated",
+        j["scenario"].as_str().unwrap_or(name),
+        if j["fell"].as_bool() == Some(true) {
+            format!(
+                "FELL at {:.3} s ({})",
+                num("fall_time_s"),
+                j["fall_cause"].as_str().unwrap_or("?")
+            )
+        } else {
+            "walked through, no fall".to_string()
+        },
+        if open_loop { "open loop" } else { "stabilized" },
+        num("simulated_s")
+    );
+    println!(
+        "  max tilt {:.2} deg; CoP vs reference ZMP (50 ms): mean {:.1} mm, worst {:.1} mm; COG drift {:.1} mm, foot drift {:.1} mm",
+        num("max_tilt_deg"),
+        num("cop_err_mean_m") * 1e3,
+        num("cop_err_max_m") * 1e3,
+        num("cog_drift_max_m") * 1e3,
+        num("foot_drift_max_m") * 1e3
+    );
+    println!("  results: {}", out.join("physics.json").display());
+    Ok(())
+}
+
+/// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
+/// `DIR/physics_tables.json` and `DIR/physics_tables.md`.
+pub fn tables_cli(
+    out: &Path,
+    cells: &str,
+    open_loop: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use super::tables::{cell, cell_text, markdown, parse_cells, tables_json};
+    let list = parse_cells(cells)?;
+    let mut cfg = PhysicsConfig::default();
+    cfg.gains.enabled = !open_loop;
+    let mode = if open_loop { "open loop" } else { "stabilized" };
+    let mut done = Vec::new();
+    for (i, &(r, c)) in list.iter().enumerate() {
+        eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
+        done.push(cell(r, c, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?);
+    }
+    eprintln!();
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let path = out.join("physics_tables.json");
+    let mut json = tables_json(&done);
+    json["stabilizer"] = serde_json::Value::Bool(!open_loop);
+    fs::write(&path, serde_json::to_string_pretty(&json)?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut md = markdown(
+        &format!(
+            "Plain re-plan (Table I: no adjustment, no shaping) in MuJoCo, {mode}: fell / ok, \
+             worst 50 ms CoP error of the modified step [cm] / kinematic multi-body ZMP error [cm]"
+        ),
+        &done,
+        |c| cell_text(&c.plain, c.cop_err_modified_plain_m, c.mb_error_plain_m),
+    );
+    md += "\n";
+    md += &markdown(
+        &format!(
+            "Proposed method (Table II: adjustment and shaping) in MuJoCo, {mode}: fell / ok, \
+             worst 50 ms CoP error of the modified step [cm] / kinematic multi-body ZMP error [cm]"
+        ),
+        &done,
+        |c| {
+            cell_text(
+                &c.proposed,
+                c.cop_err_modified_proposed_m,
+                c.mb_error_proposed_m,
+            )
+        },
+    );
+    let count = |f: &dyn Fn(&super::tables::Cell) -> bool| done.iter().filter(|c| f(c)).count();
+    md += &format!(
+        "\n{} cells simulated; falls: plain {}, proposed {}.\n",
+        done.len(),
+        count(&|c| c.plain.as_ref().is_some_and(|r| r.fell)),
+        count(&|c| c.proposed.as_ref().is_some_and(|r| r.fell))
+    );
+    let mdpath = out.join("physics_tables.md");
+    fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
+    println!("{md}");
+    println!("results: {} and {}", path.display(), mdpath.display());
+    Ok(())
+}
+
+/// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) with
+/// `seed` through the node and the engine; `DIR/physics_faults.json` and `.md`.
+pub fn faults_cli(out: &Path, rows: &str, seed: u64) -> Result<(), Box<dyn std::error::Error>> {
+    use super::fault_sweep::{json, markdown, parse_rows, sweep};
+    let idx = parse_rows(rows)?;
+    let runs = sweep(&idx, seed, &PhysicsConfig::default())?;
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let path = out.join("physics_faults.json");
+    fs::write(&path, serde_json::to_string_pretty(&json(&runs))?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let md = markdown(&runs);
+    let mdpath = out.join("physics_faults.md");
+    fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
+    println!("{md}");
+    let falls = runs.iter().filter(|r| r.report.fell).count();
+    println!(
+        "{} runs, {falls} fell in the engine; results: {} and {}",
+        runs.len(),
+        path.display(),
+        mdpath.display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_parses() {
+        let p = parse_push("3.0,150,-20").unwrap();
+        assert_eq!((p.t_s, p.force, p.duration_s), (3.0, [150.0, -20.0], 0.1));
+        assert!(parse_push("3.0,150").is_err());
+        assert!(parse_push("x,1,2").is_err());
+        assert!(parse_push("inf,1,2").is_err());
+    }
+
+    #[test]
+    fn smoothing_is_a_50_ms_mean() {
+        let pts: Vec<(f64, f64)> = (0..12).map(|k| (k as f64 * 0.005, k as f64)).collect();
+        let s = smoothed(&pts);
+        assert_eq!(s.len(), 3);
+        assert!((s[0].1 - 4.5).abs() < 1e-12 && (s[0].0 - 0.045).abs() < 1e-12);
+    }
+}
