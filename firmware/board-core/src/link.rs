@@ -94,6 +94,12 @@ pub enum BusState {
     BusOff = 3,
 }
 
+impl BusState {
+    /// Every state, in the order of its code (checked against `LINK`'s `bus_state` value
+    /// table in host-sim/can/walking.dbc).
+    pub const ALL: [BusState; 4] = [Self::Active, Self::Warning, Self::Passive, Self::BusOff];
+}
+
 /// What the board publishes about the link (counters saturating).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Health {

@@ -53,6 +53,21 @@ pub const MARK_FAULT: u32 = FAULT_MARK | 1;
 pub const MARK_CLOCK: u32 = FAULT_MARK | 2;
 
 impl ResetReason {
+    /// Every reason, in the order of its code (the `reset` value table of `LINK` in
+    /// host-sim/can/walking.dbc is checked against it).
+    pub const ALL: [ResetReason; 10] = [
+        Self::Unknown,
+        Self::PowerOn,
+        Self::Pin,
+        Self::BrownOut,
+        Self::Software,
+        Self::IndependentWatchdog,
+        Self::WindowWatchdog,
+        Self::Fault,
+        Self::ClockFailure,
+        Self::LowPower,
+    ];
+
     /// The reason from `RCC_RSR` and the fault handler's `mark` (the no-init word, garbage
     /// after a power-on). The watchdogs come first (a pin reset flag accompanies every reset
     /// on the STM32H7: the reset circuit drives NRST), then a software reset marked by the
@@ -112,6 +127,9 @@ mod tests {
                 want,
                 "rsr {rsr:#x} mark {mark:#x}"
             );
+        }
+        for (code, r) in ResetReason::ALL.iter().enumerate() {
+            assert_eq!(*r as usize, code);
         }
         // A power-on leaves garbage in the mark's word: never read as a fault.
         assert_eq!(
