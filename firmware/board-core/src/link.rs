@@ -32,7 +32,7 @@
 
 use embedded_can::nb::Can;
 use heapless::Deque;
-use planner_core::wire::ids;
+use planner_core::wire::{ids, LinkHealth};
 
 use crate::frame::ClassicFrame;
 
@@ -121,6 +121,23 @@ pub struct Health {
     pub replaced: u16,
     /// Received elements that were not classic standard data frames (dropped).
     pub rx_foreign: u16,
+}
+
+impl Health {
+    /// The `LINK` frame's content: this health, the reset reason and the missed slots
+    /// (saturating at 255).
+    pub fn to_wire(&self, reset: crate::ResetReason, missed_slots: u32) -> LinkHealth {
+        LinkHealth {
+            tec: self.tec,
+            rec: self.rec,
+            rx_passive: self.rx_passive,
+            bus_state: self.state as u8,
+            reset: reset as u8,
+            bus_offs: self.bus_offs,
+            passive_episodes: self.passive_episodes,
+            missed_slots: missed_slots.min(255) as u8,
+        }
+    }
 }
 
 /// The receive error: frames were lost (RX FIFO0 overflowed) since the last report.

@@ -259,3 +259,18 @@ fn a_node_keeps_publishing_through_a_bus_off() {
     }
     assert_eq!(link.health().bus_offs, 1);
 }
+
+#[test]
+fn health_goes_into_link_as_published() {
+    let mut link = Link::new(MockFdcan::new(64));
+    let hw = link.peripheral_mut();
+    hw.ecr = 140 | (3 << 8);
+    hw.psr = psr::EP;
+    link.service();
+    let w = link
+        .health()
+        .to_wire(board_core::ResetReason::IndependentWatchdog, 300);
+    let back = planner_core::wire::LinkHealth::decode(&w.encode()).unwrap();
+    assert_eq!((back.tec, back.rec, back.bus_state), (140, 3, 2));
+    assert_eq!((back.reset, back.missed_slots, back.passive_episodes), (5, 255, 1));
+}
