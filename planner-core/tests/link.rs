@@ -46,3 +46,17 @@ fn link_is_sent_only_once_reported_with_status_and_the_latest_values() {
         [59, 79, 99]
     );
 }
+
+/// The heartbeats firmware/README.md's bring-up checklist sends with `cansend`.
+#[test]
+fn the_bring_up_heartbeats_are_these_bytes() {
+    use planner_core::wire::{Command, ControlOp};
+    for (seq, bytes) in [(1, [1, 0, 0x17]), (2, [2, 0, 0x03]), (3, [3, 0, 0xEA])] {
+        let f = Command::Control {
+            seq,
+            op: ControlOp::Heartbeat,
+        }
+        .encode();
+        assert_eq!((f.id, f.bytes()), (ids::CONTROL, &bytes[..]));
+    }
+}

@@ -207,13 +207,13 @@ fn main() -> ! {
         panic!("device peripherals taken twice");
     };
 
-    // Why we started (before anything can reset again), then the brown-out level, then the
-    // watchdog, so that every later start-up step is bounded by it too.
+    // Why we started (before anything can reset again), then the watchdog, so that every
+    // later start-up step is bounded by it too, then the brown-out level.
     let reset = fault::take_reset_reason(&dp.RCC);
-    let bor_programmed = hw::ensure_bor_level(&dp.FLASH, BOR_LEVEL);
     hw::freeze_iwdg_in_debug(&dp.DBGMCU);
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.start(WATCHDOG_MS.millis());
+    let bor_programmed = hw::ensure_bor_level(&dp.FLASH, BOR_LEVEL);
 
     // 480 MHz needs voltage scale 0, and a wide-range VCO (960 MHz): the PLL's default
     // ("normal") strategy stays in the 150-420 MHz medium range and cannot reach it. The HAL
