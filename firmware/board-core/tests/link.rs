@@ -272,5 +272,8 @@ fn health_goes_into_link_as_published() {
         .to_wire(board_core::ResetReason::IndependentWatchdog, 300);
     let back = planner_core::wire::LinkHealth::decode(&w.encode()).unwrap();
     assert_eq!((back.tec, back.rec, back.bus_state), (140, 3, 2));
-    assert_eq!((back.reset, back.missed_slots, back.passive_episodes), (5, 255, 1));
+    assert_eq!(
+        (back.reset, back.missed_slots, back.passive_episodes),
+        (5, 255, 1)
+    );
 }
