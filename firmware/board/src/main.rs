@@ -37,7 +37,6 @@
 #![no_main]
 #![deny(unsafe_code)]
 
-mod cycle;
 mod fault;
 mod fdcan1;
 mod hw;
@@ -46,7 +45,7 @@ mod logger;
 use core::convert::Infallible;
 use core::num::{NonZeroU16, NonZeroU8};
 
-use board_core::{Link, Pacer};
+use board_core::{cycle, Link, Pacer};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
 use embedded_hal::digital::{ErrorType, OutputPin};

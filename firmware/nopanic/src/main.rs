@@ -27,7 +27,7 @@
 //! * per cycle: `wait_slot` (`Link::service` until `Pacer::due`), `Node::set_link_health`
 //!   with `Health::to_wire`, busy pin high, DWT CYCCNT, `node.poll(slot.now_ms, &mut bus)`,
 //!   busy pin low, the overrun test (cycles spent or `Pacer::behind`), `cycle::Stats::record`
-//!   (`board/src/cycle.rs`), the watchdog feed (the HAL's `IndependentWatchdog::feed`: one
+//!   (board-core's `cycle`), the watchdog feed (the HAL's `IndependentWatchdog::feed`: one
 //!   write of `IWDG_KR`), and every defmt call of the board's loop through the board's logger
 //!   (`board/src/logger.rs`: non-blocking RTT; its reentrancy is handled without panics).
 //!
@@ -50,9 +50,6 @@
 #![no_main]
 #![deny(unsafe_code)]
 
-/// The board's cycle bookkeeping, compiled from its source.
-#[path = "../../board/src/cycle.rs"]
-mod cycle;
 /// The board's FDCAN1 accesses, compiled from its source.
 #[path = "../../board/src/fdcan1.rs"]
 #[allow(dead_code)] // `layout` and `silence` are start-up and fault-handler code
@@ -70,7 +67,7 @@ mod mock;
 
 use core::hint::black_box;
 
-use board_core::{Pacer, ResetReason, Slot};
+use board_core::{cycle, Pacer, ResetReason, Slot};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
 use stm32h7xx_hal::pac;
