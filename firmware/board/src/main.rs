@@ -41,6 +41,7 @@ mod fault;
 mod fdcan1;
 mod hw;
 mod logger;
+mod stack;
 
 use core::convert::Infallible;
 use core::num::{NonZeroU16, NonZeroU8};
@@ -292,10 +293,14 @@ fn main() -> ! {
     };
     watchdog.feed();
     defmt::info!(
-        "node ready ({=usize} bytes) in {=u32} cycles",
+        "node ready ({=usize} bytes) in {=u32} cycles; start-up stack {=u32} bytes",
         core::mem::size_of::<Node<QUEUE>>(),
-        DWT::cycle_count().wrapping_sub(t0)
+        DWT::cycle_count().wrapping_sub(t0),
+        stack::high_water()
     );
+    // From here on the high-water mark is the control loop's.
+    stack::repaint_below_sp();
+    watchdog.feed();
 
     // The microsecond counter; slot 0 begins one period from now.
     ccdr.peripheral.TIM2.enable().reset();
@@ -351,7 +356,7 @@ fn main() -> ! {
         if let Some(w) = outcome.summary {
             let h = bus.health();
             defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}",
+                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
                 node.cycles(),
                 w.worst,
                 w.mean(),
@@ -368,7 +373,8 @@ fn main() -> ! {
                 h.passive_episodes,
                 h.rx_lost,
                 h.replaced,
-                logger::dropped()
+                logger::dropped(),
+                stack::high_water()
             );
         }
     }

@@ -29,7 +29,8 @@
 //!   busy pin low, the overrun test (cycles spent or `Pacer::behind`), `cycle::Stats::record`
 //!   (board-core's `cycle`), the watchdog feed (the HAL's `IndependentWatchdog::feed`: one
 //!   write of `IWDG_KR`), and every defmt call of the board's loop through the board's logger
-//!   (`board/src/logger.rs`: non-blocking RTT; its reentrancy is handled without panics).
+//!   (`board/src/logger.rs`: non-blocking RTT; its reentrancy is handled without panics), the
+//!   summary's stack high-water mark (`board/src/stack.rs`) included.
 //!
 //! TIM2, GPIOE, IWDG, FDCAN1 and DWT are registers (volatile): the optimiser knows none of the
 //! inputs.
@@ -64,6 +65,10 @@ mod hw;
 mod logger;
 #[cfg(feature = "mock-can")]
 mod mock;
+/// The board's stack high-water mark, compiled from its source.
+#[path = "../../board/src/stack.rs"]
+#[allow(dead_code)] // `repaint_below_sp` is start-up code
+mod stack;
 
 use core::hint::black_box;
 
@@ -223,10 +228,10 @@ fn main() -> ! {
         if let Some(w) = outcome.summary {
             let h = bus.health();
             #[cfg(feature = "no-log")]
-            black_box((w.mean(), w, h));
+            black_box((w.mean(), w, h, stack::high_water()));
             #[cfg(not(feature = "no-log"))]
             defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}",
+                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
                 node.cycles(),
                 w.worst,
                 w.mean(),
@@ -243,7 +248,8 @@ fn main() -> ! {
                 h.passive_episodes,
                 h.rx_lost,
                 h.replaced,
-                logger::dropped()
+                logger::dropped(),
+                stack::high_water()
             );
         }
     }
