@@ -8,6 +8,7 @@
 //! * [`frame`]: the classic frame and the message-RAM element format;
 //! * [`pace`]: the 5 ms slots from a free-running 32-bit counter, missed slots counted;
 //! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
+//! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
 //!   statistics window summarised once per second).
 //!
@@ -23,6 +24,7 @@ pub mod frame;
 pub mod link;
 pub mod pace;
 pub mod reset;
+pub mod rtt;
 
 pub use frame::ClassicFrame;
 pub use link::{BusState, Fdcan, Health, Link, RxLost};

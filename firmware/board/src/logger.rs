@@ -3,8 +3,8 @@
 //! defmt-rtt blocks when its channel is in blocking mode, and `probe-rs run` puts it there on
 //! attach: after the probe detaches, the 1 KiB buffer fills and the next log call waits for
 //! ever. This logger ignores the channel's mode flags: each log frame is staged whole
-//! ([`STAGE`] bytes) and copied into the RTT ring only if it fits; otherwise it is dropped and
-//! counted ([`dropped`]), so the host decoder never sees a torn frame and the loop never
+//! ([`STAGE`] bytes) and copied into the RTT ring only if it fits (board-core's `rtt`,
+//! host-tested); otherwise it is dropped and counted ([`dropped`]), so the host decoder never sees a torn frame and the loop never
 //! waits. A log call made while another is in progress (a fault handler, if one ever logged)
 //! is dropped too, instead of defmt-rtt's panic.
 //!
@@ -15,6 +15,8 @@
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU32, Ordering};
+
+use board_core::rtt::{self, Stage};
 
 /// Bytes of the RTT ring.
 const RING: usize = 1024;
@@ -69,9 +71,7 @@ struct State {
     nested: bool,
     restore_interrupts: bool,
     encoder: defmt::Encoder,
-    stage: [u8; STAGE],
-    len: usize,
-    overflow: bool,
+    stage: Stage<STAGE>,
 }
 
 struct Shared(UnsafeCell<State>);
@@ -83,9 +83,7 @@ static STATE: Shared = Shared(UnsafeCell::new(State {
     nested: false,
     restore_interrupts: false,
     encoder: defmt::Encoder::new(),
-    stage: [0; STAGE],
-    len: 0,
-    overflow: false,
+    stage: Stage::new(),
 }));
 
 static DROPPED: AtomicU32 = AtomicU32::new(0);
@@ -95,38 +93,24 @@ pub fn dropped() -> u32 {
     DROPPED.load(Ordering::Relaxed)
 }
 
-fn stage(st: &mut State, bytes: &[u8]) {
-    for &b in bytes {
-        match st.stage.get_mut(st.len) {
-            Some(slot) => {
-                *slot = b;
-                st.len += 1;
-            }
-            None => st.overflow = true,
+/// Copies the staged frame into the ring if it fits whole (board-core's `rtt::commit`).
+fn commit(stage: &Stage<STAGE>) {
+    let up = &_SEGGER_RTT.up;
+    let read = up.read.load(Ordering::Acquire) as usize;
+    let write = up.write.load(Ordering::Relaxed) as usize;
+    // SAFETY: interrupts are off and only this function writes the ring; the host reads only
+    // the bytes between the read and write offsets, which `rtt::commit` does not touch, and
+    // sees the new bytes only after the write offset is published (Release) below.
+    let ring = unsafe { &mut *RING_BUF.0.get() };
+    match stage
+        .frame()
+        .and_then(|f| rtt::commit(ring, read, write, f))
+    {
+        Some(at) => up.write.store(at as u32, Ordering::Release),
+        None => {
+            DROPPED.fetch_add(1, Ordering::Relaxed);
         }
     }
-}
-
-/// Copies the staged frame into the ring if it fits whole.
-fn commit(st: &State) {
-    let up = &_SEGGER_RTT.up;
-    let read = up.read.load(Ordering::Acquire) as usize % RING;
-    let write = up.write.load(Ordering::Relaxed) as usize % RING;
-    // One byte stays free to tell a full ring from an empty one.
-    let free = (read + RING - write - 1) % RING;
-    let frame = st.stage.get(..st.len).unwrap_or(&[]);
-    if st.overflow || frame.len() > free {
-        DROPPED.fetch_add(1, Ordering::Relaxed);
-        return;
-    }
-    let base = RING_BUF.0.get() as *mut u8;
-    let mut at = write;
-    for &b in frame {
-        // SAFETY: `at` < RING; the bytes between the write and read offsets are ours.
-        unsafe { base.add(at).write_volatile(b) };
-        at = (at + 1) % RING;
-    }
-    up.write.store(at as u32, Ordering::Release);
 }
 
 #[defmt::global_logger]
@@ -147,10 +131,9 @@ unsafe impl defmt::Logger for Logger {
         }
         st.busy = true;
         st.restore_interrupts = active;
-        st.len = 0;
-        st.overflow = false;
+        st.stage.clear();
         let mut enc = core::mem::replace(&mut st.encoder, defmt::Encoder::new());
-        enc.start_frame(|b| stage(st, b));
+        enc.start_frame(|b| st.stage.push(b));
         st.encoder = enc;
     }
 
@@ -164,9 +147,9 @@ unsafe impl defmt::Logger for Logger {
             return;
         }
         let mut enc = core::mem::replace(&mut st.encoder, defmt::Encoder::new());
-        enc.end_frame(|b| stage(st, b));
+        enc.end_frame(|b| st.stage.push(b));
         st.encoder = enc;
-        commit(st);
+        commit(&st.stage);
         st.busy = false;
         if st.restore_interrupts {
             // SAFETY: interrupts were enabled when the frame began.
@@ -181,7 +164,7 @@ unsafe impl defmt::Logger for Logger {
             return;
         }
         let mut enc = core::mem::replace(&mut st.encoder, defmt::Encoder::new());
-        enc.write(bytes, |b| stage(st, b));
+        enc.write(bytes, |b| st.stage.push(b));
         st.encoder = enc;
     }
 }
