@@ -234,7 +234,10 @@ impl<P: Fdcan> Link<P> {
         } else {
             BusState::Active
         };
-        if state == BusState::BusOff && h.state != BusState::BusOff {
+        // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
+        // bus-off that came before this adapter saw the recovery end).
+        let in_init = state == BusState::BusOff && self.hw.in_init();
+        if state == BusState::BusOff && (h.state != BusState::BusOff || in_init) {
             h.bus_offs = h.bus_offs.saturating_add(1);
             // What waits in the TX buffers is old by the time the bus is back.
             let pending = self.hw.tx_pending() & ALL_SLOTS;
@@ -247,7 +250,7 @@ impl<P: Fdcan> Link<P> {
             h.passive_episodes = h.passive_episodes.saturating_add(1);
         }
         h.state = state;
-        if state == BusState::BusOff && self.hw.in_init() {
+        if in_init {
             // Recovery: the core re-joins after 129 × 11 recessive bits.
             self.hw.leave_init();
         }

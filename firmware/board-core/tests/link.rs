@@ -175,6 +175,14 @@ fn bus_off_is_counted_and_recovered_and_old_frames_are_dropped() {
     link.service();
     assert_eq!(link.health().bus_offs, 2);
     assert_eq!(link.peripheral().leave_init_calls, 2);
+    // A third one before the adapter saw the recovery end (INIT set again, BO never cleared
+    // in between): counted and recovered too.
+    link.service();
+    assert_eq!(link.health().bus_offs, 2, "recovering: not a new event");
+    link.peripheral_mut().init = true;
+    link.service();
+    assert_eq!(link.health().bus_offs, 3);
+    assert_eq!(link.peripheral().leave_init_calls, 3);
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //!
 //! * board settings ([`HSE`], [`BOR_LEVEL`], [`WATCHDOG_MS`]) at the top of this file;
 //! * start-up: the reset reason (`RCC_RSR` and the fault handler's mark, [`fault`]), the
-//!   brown-out level (an option byte, programmed once), the independent watchdog, then the
+//!   independent watchdog, the brown-out level (an option byte, programmed once), then the
 //!   clocks: 480 MHz from the **HSE** through PLL1 (VOS0, rev V silicon), the HSE clock
 //!   security system on (its NMI is the safe state), I- and D-cache; PLL1Q = 80 MHz is the
 //!   FDCAN kernel clock;
@@ -32,7 +32,9 @@
 //!
 //! The node (`Node<16>`, ~47 KB: the gait's two plan windows and preview gains) is built once
 //! in a function of its own and moved into a `static` in .bss (DTCM) by
-//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator.
+//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator. The stack is the
+//! 512 KiB AXI SRAM (board/stack.x), painted at reset; its high-water mark is logged
+//! ([`stack`]).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
