@@ -5,7 +5,7 @@
 #
 # 1. installs what rustup can provide and the build needs (the thumbv7em-none-eabihf target,
 #    clippy, rustfmt) if it is missing, QEMU (qemu-system-arm, apt-get), and the CAN tools the
-#    can.log test reads with (can-utils, apt-get; python-can, pip);
+#    can.log test reads with (can-utils, apt-get; python-can and cantools, pip);
 # 2. the host workspace: unit, integration and bench targets, then the doctests (this includes
 #    firmware/board-core, the board's CAN adapter, pacer and reset reason on a mock FDCAN);
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
@@ -81,7 +81,8 @@ fi
 # --- end host-sim plots ------------------------------------------------------------------
 
 # --- the real CAN tools that read host-sim's can.log (host-sim/tests/canlog.rs) -----------
-# Debian's can-utils (log2asc, asc2log) and python-can (for the python3 on PATH). With
+# Debian's can-utils (log2asc, asc2log), python-can and cantools (for the python3 on PATH;
+# cantools for the example controller, host-sim/tests/controller.rs). With
 # WALK_REQUIRE_CAN_TOOLS=1 the test fails instead of skipping when one is missing.
 if ! command -v log2asc >/dev/null 2>&1 || ! command -v asc2log >/dev/null 2>&1; then
     echo "installing can-utils"
@@ -90,9 +91,9 @@ if ! command -v log2asc >/dev/null 2>&1 || ! command -v asc2log >/dev/null 2>&1;
     $SUDO apt-get update -q
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q can-utils
 fi
-if ! python3 -c "import can" >/dev/null 2>&1; then
-    echo "installing python-can"
-    python3 -m pip install -q python-can
+if ! python3 -c "import can, cantools" >/dev/null 2>&1; then
+    echo "installing python-can and cantools"
+    python3 -m pip install -q python-can cantools
 fi
 export WALK_REQUIRE_CAN_TOOLS=1
 # --- end CAN tools --------------------------------------------------------------------------

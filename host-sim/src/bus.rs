@@ -376,6 +376,12 @@ impl Bus {
         self.0.borrow_mut().advance(t_ns);
     }
 
+    /// When the bus is next free for arbitration \[ns\] (now, if it is idle).
+    pub fn free_at(&self) -> u64 {
+        let b = self.0.borrow();
+        b.busy_until.max(b.now_ns)
+    }
+
     /// Counters.
     pub fn stats(&self) -> BusStats {
         self.0.borrow().stats
@@ -389,6 +395,18 @@ impl Bus {
         } else {
             i.stats.busy_ns as f64 / i.now_ns as f64
         }
+    }
+}
+
+impl Port {
+    /// Frames waiting in this port's transmit mailbox (not yet on the wire).
+    pub fn pending(&self) -> usize {
+        self.bus.borrow().ports[self.index].mailbox.len()
+    }
+
+    /// Frames waiting in this port's receive FIFO.
+    pub fn received(&self) -> usize {
+        self.bus.borrow().ports[self.index].rx.len()
     }
 }
 

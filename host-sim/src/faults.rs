@@ -54,7 +54,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream};
 
 use crate::bus::{Bus, BusError, Faults, Port, VFrame};
-use crate::multibody::{evaluate, max_zmp_error, Hrp2, MbError};
+use crate::multibody::{evaluate, max_zmp_error, MbError, Model};
 use crate::scenario::{self, Scenario};
 
 /// How far the multi-body ZMP may leave the support polygon before the run counts as a fall
@@ -848,7 +848,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
     let dt = cfg.params.dt;
     // If the model cannot follow from tick `e` on (a leg out of reach), the ZMP is evaluated
     // on the ticks up to 50 ms before it.
-    let model = Hrp2::default();
+    let model = Model::hrp2();
     let mut model_error = None;
     let mut evaluated = evaluate(&model, &trajectory, dt);
     if let Err(MbError::OutOfReach(e, _) | MbError::NoConvergence(e, _) | MbError::NonFinite(e)) =

@@ -8,6 +8,8 @@ pub mod faults;
 pub mod multibody;
 pub mod paper;
 pub mod plot;
+pub mod replay;
+pub mod robot;
 pub mod scenario;
 pub mod sim;
 #[cfg(feature = "socketcan")]

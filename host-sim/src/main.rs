@@ -3,9 +3,10 @@
 //! ```text
 //! host-sim                         the default demo (the `straight` scenario into out/demo)
 //! host-sim list                    the built-in scenarios
-//! host-sim run <scenario|file.toml> [--out DIR]
+//! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
+//! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
-//! host-sim node <interface> [--seconds S]   the node on SocketCAN (feature `socketcan`)
+//! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
 //! `run` prints every command that failed (refused by the node, never answered, or accepted
@@ -21,15 +22,16 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::multibody::{evaluate, max_zmp_error, Hrp2, MbSample};
+use host_sim::multibody::{evaluate, max_zmp_error, MbSample, Model};
 use host_sim::paper::{
     self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
     PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
+use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
-use host_sim::{plot, toml_scenario};
+use host_sim::{plot, replay, toml_scenario};
 use planner_core::gait::{Footstep, GaitParams, Phase, Side};
 use serde_json::json;
 
@@ -62,6 +64,22 @@ enum Cmd {
         /// The output directory [default: out/<scenario name>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+    },
+    /// Replay a candump log of a controller's frames into the node (as canplayer does); print
+    /// every refused command, exit 1 if one was refused.
+    Replay {
+        /// The candump -l log (the times from host-sim's epoch 2026-01-01T00:00:00Z).
+        #[arg(value_name = "LOG")]
+        log: PathBuf,
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/replay")]
+        out: PathBuf,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// Recompute the paper's Tables I and II (and the Fig. 4 adjustment).
     Tables {
@@ -76,6 +94,9 @@ enum Cmd {
         /// Stop after this many seconds (default: run until killed).
         #[arg(long, value_name = "S", value_parser = positive_seconds, allow_negative_numbers = true)]
         seconds: Option<f64>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
 }
 
@@ -112,7 +133,7 @@ fn main() -> ExitCode {
 
 fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
     match command {
-        None => run_scenario("straight", Some(Path::new("out/demo"))),
+        None => run_scenario("straight", Some(Path::new("out/demo")), &Robot::hrp2()),
         Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
@@ -120,20 +141,39 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             }
             Ok(())
         }
-        Some(Cmd::Run { scenario, out }) => run_scenario(&scenario, out.as_deref()),
+        Some(Cmd::Run {
+            scenario,
+            out,
+            robot,
+        }) => run_scenario(&scenario, out.as_deref(), &load_robot(robot.as_deref())?),
+        Some(Cmd::Replay { log, out, robot }) => {
+            replay_log(&log, &out, &load_robot(robot.as_deref())?)
+        }
         Some(Cmd::Tables { out }) => tables(&out),
-        Some(Cmd::Node { interface, seconds }) => node(&interface, seconds),
+        Some(Cmd::Node {
+            interface,
+            seconds,
+            robot,
+        }) => node(&interface, seconds, &load_robot(robot.as_deref())?),
     }
 }
 
+/// The robot file at `path`, or HRP-2.
+fn load_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
+    Ok(match path {
+        Some(p) => Robot::load(p)?,
+        None => Robot::hrp2(),
+    })
+}
+
 #[cfg(feature = "socketcan")]
-fn node(interface: &str, seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
-    host_sim::socketcan_link::run_node(interface, seconds)
+fn node(interface: &str, seconds: Option<f64>, robot: &Robot) -> Result<(), Box<dyn Error>> {
+    host_sim::socketcan_link::run_node(interface, seconds, robot.node_config())
         .map_err(|e| format!("CAN interface {interface}: {e}").into())
 }
 
 #[cfg(not(feature = "socketcan"))]
-fn node(interface: &str, _seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
+fn node(interface: &str, _seconds: Option<f64>, _robot: &Robot) -> Result<(), Box<dyn Error>> {
     Err(format!(
         "cannot run the node on {interface}: this host-sim was built without SocketCAN \
          (cargo run -p host-sim --features socketcan -- node {interface})"
@@ -321,21 +361,42 @@ fn outcome_line(o: &Outcome, entry: &Entry, dt: f64) -> (bool, String) {
     )
 }
 
-fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
+fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box<dyn Error>> {
     let ScenarioFile {
         scenario: s,
         entries,
     } = load_scenario(name)?;
+    let hrp2_width = host_sim::robot::Robot::hrp2().planner.params.step_width;
+    if !name.ends_with(".toml") && robot.planner.params.step_width != hrp2_width {
+        return Err(format!(
+            "{name}: the built-in scenarios are HRP-2's footsteps (feet {hrp2_width} m apart), \
+             and {} stands {} m apart: write a scenario file for it",
+            robot.name(),
+            robot.planner.params.step_width
+        )
+        .into());
+    }
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);
     let name = s.name.as_str();
-    let cfg = SimConfig::default();
+    let cfg = SimConfig {
+        node: robot.node_config(),
+        ..SimConfig::default()
+    };
     let dt = cfg.node.params.dt;
     let sim = simulate(&s, &cfg).map_err(|e| format!("{name}: {e}"))?;
     let run = &sim.run;
-    let mb = evaluate(&Hrp2::default(), &run.trajectory, dt)
-        .map_err(|e| format!("multi-body model: {e:?}"))?;
-    let mb_error = max_zmp_error(&run.trajectory, &mb);
+    // A walk the model's legs cannot follow still writes its results (without the multi-body
+    // columns), then fails.
+    let (mb, mb_failure) = match evaluate(&robot.model, &run.trajectory, dt) {
+        Ok(mb) => (mb, None),
+        Err(e) => (Vec::new(), Some(e)),
+    };
+    let mb_error = if mb.is_empty() {
+        f64::NAN
+    } else {
+        max_zmp_error(&run.trajectory, &mb)
+    };
     create_dir(out)?;
     let traj = out.join("trajectory.csv");
     write_trajectory(&traj, run, &mb, dt)?;
@@ -382,6 +443,7 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
     let summary = json!({
         "scenario": name,
         "about": s.about,
+        "robot": robot.name(),
         "duration_s": (run.trajectory.len() - 1) as f64 * dt,
         "ended_by_max_time": sim.cut,
         "adjust_s": run.adjustments.iter().map(|a| a.adjust_s).collect::<Vec<_>>(),
@@ -402,7 +464,8 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), Some(&mb))
+    let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
+    let plots = plot::write_plots(out, name, &run.trajectory, dt, &footprints(run), mb_plot)
         .map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
         println!("{name}");
@@ -410,9 +473,11 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         println!("{name}: {}", s.about);
     }
     println!(
-        "  {:.2} s simulated in {} ticks of 5 ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
+        "  {}: {:.2} s simulated in {} ticks of {} ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
+        robot.name(),
         (run.trajectory.len() - 1) as f64 * dt,
         run.trajectory.len() - 1,
+        dt * 1e3,
         cfg.bitrate / 1000,
         sim.bus_load * 100.0,
         if sim.cut { ", ended by max_time_s" } else { "" }
@@ -432,7 +497,8 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
         across * 1e3
     );
     println!(
-        "  largest multi-body ZMP error (HRP-2 model): {:.1} mm",
+        "  largest multi-body ZMP error ({} model): {:.1} mm",
+        robot.name(),
         mb_error * 1e3
     );
     println!(
@@ -450,6 +516,14 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
             println!("{l}");
         }
     }
+    if let Some(e) = mb_failure {
+        return Err(Unexpected(format!(
+            "{name}: the {} multi-body model cannot follow the walk: {e} (results written \
+             without the multi-body columns)",
+            robot.name()
+        ))
+        .into());
+    }
     if unexpected > 0 {
         return Err(Unexpected(format!(
             "{name}: {unexpected} command{} failed, or did not fail, against the scenario's \
@@ -461,11 +535,102 @@ fn run_scenario(name: &str, out: Option<&Path>) -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error>> {
+    let text =
+        fs::read_to_string(log).map_err(|e| format!("cannot read {}: {e}", log.display()))?;
+    let cfg = robot.node_config();
+    let dt = cfg.params.dt;
+    let frames = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
+    let r = replay::replay(&frames, &cfg, SimConfig::default().bitrate)?;
+    let run = Run {
+        trajectory: r.trajectory,
+        events: Vec::new(),
+        adjustments: Vec::new(),
+        footsteps: Vec::new(),
+    };
+    let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_else(|e| {
+        println!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
+        Vec::new()
+    });
+    create_dir(out)?;
+    write_trajectory(&out.join("trajectory.csv"), &run, &mb, dt)?;
+    write_file(&out.join("can.log"), r.can_log.join("\n") + "\n")?;
+    let refused: Vec<_> = r
+        .acks
+        .iter()
+        .filter_map(|(k, a)| a.reason.map(|reason| (k, a, reason)))
+        .map(|(k, a, reason)| {
+            json!({
+                "t_s": *k as f64 * dt,
+                "command": format!("0x{:02x}", a.command),
+                "seq": a.seq,
+                "reason": host_sim::sim::reason_name(reason),
+            })
+        })
+        .collect();
+    let summary = json!({
+        "log": log.display().to_string(),
+        "robot": robot.name(),
+        "frames_replayed": r.replayed,
+        "frames_lost": r.lost,
+        "answers": r.acks.len(),
+        "refused": refused,
+        "duration_s": (run.trajectory.len() - 1) as f64 * dt,
+        "ended_standing": !r.cut,
+    });
+    write_file(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    println!(
+        "{}: {} frames replayed into the {} node, {} answers, {:.2} s{}; results in {}",
+        log.display(),
+        r.replayed,
+        robot.name(),
+        r.acks.len(),
+        (run.trajectory.len() - 1) as f64 * dt,
+        if r.cut {
+            " (cut: not standing at the end)"
+        } else {
+            ""
+        },
+        out.display()
+    );
+    for v in &refused {
+        println!(
+            "  refused at {:.3} s: command {} seq/id {}: {}",
+            v["t_s"].as_f64().unwrap_or(f64::NAN),
+            v["command"].as_str().unwrap_or(""),
+            v["seq"],
+            v["reason"].as_str().unwrap_or("")
+        );
+    }
+    if r.lost > 0 {
+        println!("  {} frames lost: a receive FIFO was full", r.lost);
+    }
+    if !refused.is_empty() || r.cut || r.lost > 0 {
+        return Err(Unexpected(format!(
+            "{}: {} command{} refused, {} frames lost{}",
+            log.display(),
+            refused.len(),
+            if refused.len() == 1 { "" } else { "s" },
+            r.lost,
+            if r.cut {
+                ", and the robot was still moving at the end"
+            } else {
+                ""
+            }
+        ))
+        .into());
+    }
+    Ok(())
+}
+
 /// Largest distance between the multi-body ZMP and the support-foot centre during the single
 /// support in which the modification takes effect \[m\] (the paper's "maximum ZMP error");
 /// `None` when the model's legs cannot reach the footsteps.
 fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
-    let mb = evaluate(&Hrp2::default(), &m.trajectory, dt).ok()?;
+    let mb = evaluate(&Model::hrp2(), &m.trajectory, dt).ok()?;
     let start = paper::MODIFICATION_TICK as usize;
     let support = (m.before * 3.0, -0.1);
     let mut worst: f64 = 0.0;

@@ -40,16 +40,16 @@
 //!
 //! * the **feet** follow the references exactly, soles flat (roll = pitch = 0);
 //! * the **waist** is kept upright (roll = pitch = 0) at the constant height
-//!   [`Hrp2::waist_height`], with yaw = the mean of the two feet yaws;
+//!   [`Model::waist_height`], with yaw = the mean of the two feet yaws;
 //! * its **horizontal position** is found at every tick so that the whole-body COG (all ten
 //!   bodies) equals the reference COG `(x, y)`: Newton's method on the two unknowns, Jacobian by
 //!   forward differences (step 1e-7 m), warm-started from the previous tick, iterated until the
 //!   COG residual is below 1e-13 m (at most [`MAX_ITERATIONS`] iterations), then one more step
 //!   with the same Jacobian if it reduces the residual further (usually to ~1e-16 m);
-//! * the **joint angles** follow from the analytic inverse kinematics ([`Hrp2::leg_ik`]).
+//! * the **joint angles** follow from the analytic inverse kinematics ([`Model::leg_ik`]).
 //!
 //! The whole-body COG **height** is not controlled: it is about z_c in the initial stance
-//! ([`Hrp2::default`] chooses the waist height for that) and varies by a few millimetres as the
+//! ([`Model::hrp2`] chooses the waist height for that) and varies by a few millimetres as the
 //! legs bend and the swing foot lifts. This, the leg masses swinging, and the angular momentum
 //! of the links are what the linear inverted pendulum ignores, and what the multi-body ZMP sees.
 //!
@@ -86,7 +86,7 @@
 //! and summing to 58 kg. Inertia tensors are those of homogeneous boxes
 //! (`I_xx = m (b² + c²) / 12` for a box `a × b × c` along x, y, z) and solid cylinders along
 //! the link (`I_xx = I_yy = m (3 r² + l²) / 12`, `I_zz = m r² / 2`), diagonal in the body
-//! frame, about the body's centre of mass. [`Hrp2::default`]:
+//! frame, about the body's centre of mass. [`Model::hrp2`]:
 //!
 //! | symbol / body | value | source |
 //! |---------------|-------|--------|
@@ -319,9 +319,10 @@ impl Body {
     }
 }
 
-/// The HRP-2 model. Link bodies are given for the left leg; the right leg mirrors them.
+/// The multi-body model of a biped (read from the robot file's `[multibody]` table,
+/// [`crate::robot`]). Link bodies are given for the left leg; the right leg mirrors them.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hrp2 {
+pub struct Model {
     /// Hip joint centre to knee \[m\].
     pub thigh_length: f64,
     /// Knee to ankle joint centre \[m\].
@@ -346,27 +347,6 @@ pub struct Hrp2 {
     pub shank: Body,
     /// Foot with the ankle housings, in the foot frame (origin: ankle joint centre).
     pub foot: Body,
-}
-
-impl Default for Hrp2 {
-    /// The HRP-2 model used for the figures: the table and the sources are in the module
-    /// documentation ("Parameters and their sources").
-    fn default() -> Self {
-        Self {
-            thigh_length: 0.30,
-            shank_length: 0.30,
-            hip_offset: 0.06,
-            ankle_height: 0.105,
-            waist_height: 0.6523,
-            gravity: planner_core::GRAVITY,
-            trunk: Body::cuboid(28.0, [0.0, 0.0, 0.50], [0.30, 0.50, 0.60]),
-            waist: Body::cuboid(10.0, [0.0, 0.0, 0.05], [0.20, 0.30, 0.15]),
-            hip: Body::cuboid(1.5, [0.0, 0.0, 0.0], [0.10, 0.10, 0.10]),
-            thigh: Body::cylinder(4.5, [0.0, 0.0, -0.15], 0.06, 0.30),
-            shank: Body::cylinder(2.5, [0.0, 0.0, -0.15], 0.05, 0.30),
-            foot: Body::cuboid(1.5, [0.0, 0.0, -0.065], [0.24, 0.14, 0.08]),
-        }
-    }
 }
 
 /// The frames of one leg from forward kinematics.
@@ -496,7 +476,12 @@ fn side_sign(side: Side) -> f64 {
     }
 }
 
-impl Hrp2 {
+impl Model {
+    /// HRP-2, from the robot file shipped in the repository (`host-sim/robots/hrp2.toml`).
+    pub fn hrp2() -> Self {
+        crate::robot::Robot::hrp2().model
+    }
+
     /// Total mass \[kg\].
     pub fn total_mass(&self) -> f64 {
         self.trunk.mass
@@ -612,12 +597,13 @@ impl Hrp2 {
         Ok((cog_of(&self.place_all(waist, &q)), q))
     }
 
-    /// The whole-body COG height in the standing pose: soles at `(0, ±0.1, 0)`, waist at
-    /// `(0, 0, waist_height)` \[m\].
-    pub fn stance_cog_height(&self) -> Result<f64, IkError> {
+    /// The whole-body COG height in the standing pose: soles at `(0, ±step_width/2, 0)`,
+    /// waist at `(0, 0, waist_height)` \[m\].
+    pub fn stance_cog_height(&self, step_width: f64) -> Result<f64, IkError> {
+        let half = step_width / 2.0;
         let soles = [
-            Pose::upright(0.0, 0.1, 0.0, 0.0),
-            Pose::upright(0.0, -0.1, 0.0, 0.0),
+            Pose::upright(0.0, half, 0.0, 0.0),
+            Pose::upright(0.0, -half, 0.0, 0.0),
         ];
         let waist = Pose::upright(0.0, 0.0, self.waist_height, 0.0);
         Ok(self.cog(&waist, &soles)?.0[2])
@@ -698,7 +684,7 @@ impl Hrp2 {
     }
 }
 
-/// Why [`Hrp2::solve_waist`] failed.
+/// Why [`Model::solve_waist`] failed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum WaistError {
     /// A foot is out of reach.
@@ -733,7 +719,7 @@ fn finite(r: &Reference<f64>) -> bool {
 /// Evaluates a trajectory of references on the multi-body model: one [`MbSample`] per
 /// reference (see the module documentation for the method).
 pub fn evaluate(
-    model: &Hrp2,
+    model: &Model,
     trajectory: &[Reference<f64>],
     dt: f64,
 ) -> Result<Vec<MbSample>, MbError> {

@@ -28,13 +28,24 @@ pub struct Scenario {
     pub name: String,
     /// One-line description.
     pub about: String,
-    /// Left and right foot at the start.
-    pub feet: [Footstep<f64>; 2],
+    /// Left and right foot at the start; `None`: the robot's stance ([`Scenario::start_feet`]).
+    pub feet: Option<[Footstep<f64>; 2]>,
     /// `(tick, command)`: applied, in order, once `tick` control periods have elapsed (at
     /// `tick · 5 ms`), before the next reference is computed.
     pub timeline: Vec<(u64, Command)>,
     /// Ticks to run at most (the run ends earlier once standing after the last command).
     pub max_ticks: u64,
+}
+
+impl Scenario {
+    /// Where the feet start: [`Scenario::feet`], or the robot's stance (`step_width` apart
+    /// at the origin, heading along x, as [`planner_core::node::NodeConfig::for_robot`]).
+    pub fn start_feet(&self, step_width: f64) -> [Footstep<f64>; 2] {
+        self.feet.unwrap_or([
+            Footstep::new(Side::Left, 0.0, step_width / 2.0, 0.0),
+            Footstep::new(Side::Right, 0.0, -step_width / 2.0, 0.0),
+        ])
+    }
 }
 
 /// What happened to a command.
@@ -76,8 +87,8 @@ pub struct Run {
 
 /// Plays a scenario against a gait with the given parameters.
 pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
-    let mut g: Gait<f64, 64> =
-        Gait::new(params, s.feet[0], s.feet[1]).expect("valid gait parameters");
+    let [left, right] = s.start_feet(params.step_width);
+    let mut g: Gait<f64, 64> = Gait::new(params, left, right).expect("valid gait parameters");
     let mut trajectory = vec![*g.last()];
     let mut events = Vec::new();
     let mut adjustments = Vec::new();
@@ -171,13 +182,6 @@ fn straight_steps(n: u16, step: f64) -> Vec<(u16, Footstep<f64>)> {
     out
 }
 
-fn standing_feet() -> [Footstep<f64>; 2] {
-    [
-        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
-        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
-    ]
-}
-
 fn pushes(steps: &[(u16, Footstep<f64>)]) -> Vec<(u64, Command)> {
     steps
         .iter()
@@ -190,7 +194,8 @@ pub const BUILT_IN: [&str; 5] = ["straight", "turn", "stop", "fig4", "lateral"];
 
 /// A built-in scenario by name.
 pub fn built_in(name: &str) -> Option<Scenario> {
-    let feet = standing_feet();
+    // The robot's stance: the built-in steps are HRP-2's (feet 0.2 m apart).
+    let feet = None;
     let s = match name {
         "straight" => {
             let mut timeline = pushes(&straight_steps(8, 0.2));

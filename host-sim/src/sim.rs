@@ -122,10 +122,22 @@ fn send(port: &mut crate::bus::Port, f: RawFrame) {
     let _ = port.transmit(&f);
 }
 
-/// Plays a scenario through the virtual bus and the node.
+/// The node's configuration for a run of `s`: `node`, standing where the scenario's feet
+/// start ([`Scenario::start_feet`]).
+pub fn start_config(s: &Scenario, node: &NodeConfig) -> NodeConfig {
+    let [left, right] = s.start_feet(node.params.step_width);
+    NodeConfig {
+        left,
+        right,
+        ..*node
+    }
+}
+
+/// Plays a scenario through the virtual bus and the node (standing, at the start, where the
+/// scenario's feet are: [`start_config`]).
 pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
-    let mut node: Node<64> =
-        Node::new(cfg.node).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    let mut node: Node<64> = Node::new(start_config(s, &cfg.node))
+        .map_err(|e| format!("node start-up failed: {e:?}"))?;
     let bus = Bus::new(cfg.bitrate, 2, cfg.faults, cfg.seed);
     if cfg.record {
         bus.record();

@@ -31,17 +31,20 @@ pub fn command_filters() -> [CanFilter; ids::COMMANDS.len()] {
     ids::COMMANDS.map(|id| CanFilter::new(u32::from(id), COMMAND_MASK))
 }
 
-/// Runs the node on `interface` for `seconds` (forever if `None`), printing the status every
-/// second.
-pub fn run_node(interface: &str, seconds: Option<f64>) -> Result<(), Box<dyn Error>> {
+/// Runs the node configured by `cfg` on `interface` for `seconds` (forever if `None`), one
+/// poll per control period of its gait, printing the status every 200 cycles.
+pub fn run_node(
+    interface: &str,
+    seconds: Option<f64>,
+    cfg: NodeConfig,
+) -> Result<(), Box<dyn Error>> {
     let mut socket = CanSocket::open(interface)?;
     // Frames that arrived between `open` and here are still queued; the node ignores those
     // that are not its own.
     socket.set_filters(&command_filters())?;
     socket.set_nonblocking(true)?;
-    let mut node: Node<64> =
-        Node::new(NodeConfig::hrp2()).map_err(|e| format!("node start-up failed: {e:?}"))?;
-    let period = Duration::from_millis(5);
+    let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    let period = Duration::from_secs_f64(cfg.params.dt);
     let start = Instant::now();
     let mut next = start;
     let mut cycles: u64 = 0;

@@ -5,7 +5,8 @@
 //! about = "one line"               # optional (default: empty)
 //! max_time_s = 20.0                # optional (default: 20 s): run at most this long
 //!
-//! [feet]                           # optional (default: left at (0, 0.1), right at (0, -0.1))
+//! [feet]                           # optional (default: the robot's stance, the feet
+//!                                  # `step_width` apart at the origin: HRP-2 (0, ±0.1))
 //! left = { x = 0.0, y = 0.1, yaw = 0.0 }
 //! right = { x = 0.0, y = -0.1 }    # yaw is optional everywhere (default 0)
 //!
@@ -283,14 +284,11 @@ pub fn parse_file(text: &str) -> Result<ScenarioFile, String> {
         ));
     }
     let feet = match &file.feet {
-        Some(f) => [
+        Some(f) => Some([
             footstep("feet.left", Side::Left, f.left.x, f.left.y, f.left.yaw)?,
             footstep("feet.right", Side::Right, f.right.x, f.right.y, f.right.yaw)?,
-        ],
-        None => [
-            Footstep::new(Side::Left, 0.0, 0.1, 0.0),
-            Footstep::new(Side::Right, 0.0, -0.1, 0.0),
-        ],
+        ]),
+        None => None,
     };
 
     // (tick, class, command, entry): class orders the kinds of entries within a tick.

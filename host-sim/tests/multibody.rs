@@ -3,8 +3,8 @@
 //! `--nocapture` to see the figures).
 
 use host_sim::multibody::{
-    evaluate, max_zmp_error, mean_yaw, rot_x, rot_y, rot_z, Body, Hrp2, IkError, LegAngles,
-    MbError, MbSample, Pose,
+    evaluate, max_zmp_error, mean_yaw, rot_x, rot_y, rot_z, Body, IkError, LegAngles, MbError,
+    MbSample, Model, Pose,
 };
 use host_sim::scenario;
 use planner_core::gait::{FootPose, GaitParams, Phase, Reference, Side};
@@ -59,7 +59,7 @@ fn random_pose(rng: &mut Lcg, p: [f64; 3], tilt: f64, yaw: f64) -> Pose {
 /// the IK returns (knee > 0, |hip roll| < π/2).
 #[test]
 fn ik_fk_round_trip() {
-    let m = Hrp2::default();
+    let m = Model::hrp2();
     let mut rng = Lcg(7);
     let mut worst_pose = 0.0f64;
     let mut solved = 0;
@@ -126,7 +126,7 @@ fn ik_fk_round_trip() {
 
 #[test]
 fn ik_reports_out_of_reach() {
-    let m = Hrp2::default();
+    let m = Model::hrp2();
     let waist = Pose::upright(0.0, 0.0, m.waist_height, 0.0);
     let far = Pose::upright(0.5, 0.1, 0.0, 0.0);
     let e: IkError = m.leg_ik(Side::Left, &waist, &far).unwrap_err();
@@ -156,9 +156,9 @@ fn ik_reports_out_of_reach() {
 /// to 0.1 mm), knees bent.
 #[test]
 fn stance_matches_hrp2() {
-    let m = Hrp2::default();
+    let m = Model::hrp2();
     assert!((m.total_mass() - 58.0).abs() < 1e-12);
-    let z = m.stance_cog_height().unwrap();
+    let z = m.stance_cog_height(0.2).unwrap();
     println!(
         "stance COG height {z:.5} m at waist height {} m",
         m.waist_height
@@ -203,7 +203,7 @@ fn reference(x: f64, y: f64, feet: [FootPose<f64>; 2]) -> Reference<f64> {
 /// (to 1e-9 m), at every tick including the first and last.
 #[test]
 fn static_stance_zmp_is_cog_projection() {
-    let m = Hrp2::default();
+    let m = Model::hrp2();
     let feet = [foot(0.05, 0.12, 0.1), foot(-0.04, -0.09, -0.05)];
     let traj = vec![reference(0.012, 0.017, feet); 20];
     let mb = evaluate(&m, &traj, DT).unwrap();
@@ -233,7 +233,7 @@ fn static_stance_zmp_is_cog_projection() {
 ///   `ẍ_fd = x · (2 cos Ωdt − 2) / dt²`: tolerance 1e-10 m (only rounding remains).
 #[test]
 fn massless_legs_give_the_lipm_zmp() {
-    let mut m = Hrp2::default();
+    let mut m = Model::hrp2();
     let z = 0.814;
     m.trunk = Body::point(30.0, [0.0, 0.0, z - m.waist_height]);
     m.waist = Body::NONE;
@@ -296,7 +296,7 @@ fn massless_legs_give_the_lipm_zmp() {
 /// axis or a wrong world inertia.
 #[test]
 fn yawing_trunk_does_not_move_the_zmp() {
-    let mut m = Hrp2::default();
+    let mut m = Model::hrp2();
     m.trunk = Body::cuboid(30.0, [0.0, 0.0, 0.8 - m.waist_height], [0.3, 0.5, 0.6]);
     m.waist = Body::NONE;
     m.hip = Body::NONE;
@@ -327,7 +327,7 @@ fn yawing_trunk_does_not_move_the_zmp() {
 /// (the signal is 0.1 m; the opposite sign would be off by 0.2 m).
 #[test]
 fn swinging_thigh_angular_momentum() {
-    let mut m = Hrp2::default();
+    let mut m = Model::hrp2();
     let inertia = 0.5;
     m.trunk = Body::NONE;
     m.waist = Body::NONE;
@@ -434,7 +434,7 @@ fn walk(name: &str) -> (Vec<Reference<f64>>, Vec<MbSample>) {
     let params = GaitParams::<f64>::hrp2();
     let traj = scenario::run(&s, params).trajectory;
     assert!(one_tick_foot_jumps(&traj).is_empty());
-    let mb = evaluate(&Hrp2::default(), &traj, params.dt).expect("multi-body run");
+    let mb = evaluate(&Model::hrp2(), &traj, params.dt).expect("multi-body run");
     (traj, mb)
 }
 

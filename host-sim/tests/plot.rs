@@ -5,7 +5,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use host_sim::multibody::{evaluate, Hrp2, MbSample};
+use host_sim::multibody::{evaluate, MbSample, Model};
 use host_sim::plot::write_plots;
 use host_sim::scenario::{self, Run};
 use planner_core::gait::{Footstep, GaitParams};
@@ -129,7 +129,7 @@ fn fig4_plots_are_valid_pngs() {
 #[test]
 fn fig4_plots_with_multibody_zmp() {
     let (run, steps) = fig4();
-    let mb: Vec<MbSample> = evaluate(&Hrp2::default(), &run.trajectory, 0.005).unwrap();
+    let mb: Vec<MbSample> = evaluate(&Model::hrp2(), &run.trajectory, 0.005).unwrap();
     let dir = out_dir("fig4-mb");
     let written = write_plots(&dir, "fig4", &run.trajectory, 0.005, &steps, Some(&mb)).unwrap();
     check_files(&written, &dir, true);

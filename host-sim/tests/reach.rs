@@ -4,7 +4,7 @@
 //! A limit is followable when, for every sequence of footsteps it admits, the gait's references
 //! keep every ankle joint centre at least [`MIN_MARGIN`] closer to its hip joint centre than
 //! thigh + shank (the knee never gets within that much of straight). The waist is placed as
-//! [`multibody::evaluate`](host_sim::multibody::evaluate) places it (`Hrp2::solve_waist`, warm
+//! [`multibody::evaluate`](host_sim::multibody::evaluate) places it (`Model::solve_waist`, warm
 //! started tick to tick), so a positive margin means `evaluate` does not fail with
 //! `MbError::OutOfReach`.
 //!
@@ -26,7 +26,7 @@
 //!   only **1.37 mm** (the landing of its 0.3 m step at 4.87 s): no limit that admits fig4 can
 //!   promise 5 mm. [`strict`] refuses exactly fig4's modification.
 
-use host_sim::multibody::{mean_yaw, Hrp2, Pose};
+use host_sim::multibody::{mean_yaw, Model, Pose};
 use host_sim::scenario::{self, Command, Run, Scenario};
 use planner_core::gait::{Footstep, GaitParams, Reference, Side};
 use planner_core::node::Reach;
@@ -237,7 +237,7 @@ fn walk(l: &Limits, rels: &[Rel], modify: Option<(usize, &[Rel])>) -> Option<Run
     let s = Scenario {
         name: "reach".into(),
         about: String::new(),
-        feet: standing(),
+        feet: Some(standing()),
         timeline,
         max_ticks: 6000,
     };
@@ -250,8 +250,8 @@ fn walk(l: &Limits, rels: &[Rel], modify: Option<(usize, &[Rel])>) -> Option<Run
 /// reach are measured with a long-legged copy (the negative margins are then approximate:
 /// the waist moves a little with the leg masses).
 fn leg_margin(traj: &[Reference<f64>]) -> (f64, usize) {
-    let model = Hrp2::default();
-    let long = Hrp2 {
+    let model = Model::hrp2();
+    let long = Model {
         thigh_length: 0.4,
         shank_length: 0.4,
         ..model
@@ -496,7 +496,7 @@ fn former_limits_were_too_wide() {
     let s = Scenario {
         name: "corner".into(),
         about: String::new(),
-        feet: standing(),
+        feet: Some(standing()),
         timeline,
         max_ticks: 6000,
     };
@@ -507,7 +507,7 @@ fn former_limits_were_too_wide() {
         m * 1e3
     );
     assert!(m < -0.05, "{m}");
-    let model = Hrp2::default();
+    let model = Model::hrp2();
     assert!(matches!(
         host_sim::multibody::evaluate(&model, &run.trajectory, 0.005),
         Err(host_sim::multibody::MbError::OutOfReach(..))
@@ -527,7 +527,7 @@ fn scenario_steps(s: &Scenario) -> Vec<Checked> {
             .iter()
             .rev()
             .find(|(_, f)| f.side == side)
-            .map_or(s.feet[index(side)], |&(_, f)| f)
+            .map_or(s.start_feet(0.2)[index(side)], |&(_, f)| f)
     };
     for e in run.events.iter().filter(|e| e.result.is_ok()) {
         let (id, f, what) = match e.command {

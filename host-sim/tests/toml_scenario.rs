@@ -42,7 +42,7 @@ fn assert_same_scenario(file: &Scenario, built: &Scenario) {
     assert_eq!(file.name, built.name);
     assert_eq!(file.about, built.about);
     assert_eq!(file.max_ticks, built.max_ticks);
-    assert_eq!(file.feet, built.feet);
+    assert_eq!(file.start_feet(0.2), built.start_feet(0.2));
     assert_eq!(
         file.timeline.len(),
         built.timeline.len(),
@@ -169,8 +169,10 @@ y = -1.0
     .unwrap();
     assert_eq!(s.about, "");
     assert_eq!(s.max_ticks, (DEFAULT_MAX_TIME_S / TICK_S) as u64);
+    // No [feet]: the robot's stance (HRP-2: 0.2 m apart).
+    assert_eq!(s.feet, None);
     assert_eq!(
-        s.feet,
+        s.start_feet(0.2),
         [
             Footstep::new(Side::Left, 0.0, 0.1, 0.0),
             Footstep::new(Side::Right, 0.0, -0.1, 0.0)
@@ -322,4 +324,24 @@ fn load_names_the_file() {
     let e = load(&path).unwrap_err();
     assert!(e.starts_with(&path.display().to_string()), "{e}");
     assert!(e.contains("unknown field `speed`"), "{e}");
+}
+
+/// The example scenario file in the README is valid and walks as written.
+#[test]
+fn the_readme_example_walks() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
+        .expect("README.md");
+    let start = readme
+        .find("name = \"my-walk\"")
+        .expect("the README's scenario example");
+    let end = start + readme[start..].find("```").expect("end of the example");
+    let file = host_sim::toml_scenario::parse_file(&readme[start..end]).expect("valid example");
+    let sim = host_sim::sim::simulate(&file.scenario, &host_sim::sim::SimConfig::default())
+        .expect("runs");
+    let outcomes = host_sim::sim::outcomes(&file.scenario, &sim);
+    assert_eq!(outcomes.len(), 5);
+    for o in outcomes {
+        assert_eq!(o.failure, None, "{:?}: {}", o.command, o.detail);
+    }
+    assert!(!sim.cut);
 }

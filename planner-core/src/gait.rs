@@ -202,13 +202,18 @@ pub struct GaitParams<T> {
     pub cog_height: f64,
     /// Gravity \[m/s²\].
     pub gravity: f64,
+    /// Weight `Q_e` of the squared ZMP error in the preview controller \[1/m²\].
+    pub preview_qe: f64,
+    /// Weight `R` of the squared COG jerk in the preview controller.
+    pub preview_r: f64,
 }
 
 impl<T: Real> GaitParams<T> {
     /// The HRP-2 defaults: z_c 0.814 m, g 9.8 m/s², 5 ms cycle, single support 0.7 s, double
     /// support 0.1 s, start 0.8 s, stop: settle 0.7 s and rest 0.5 s, adjustments
     /// −0.2 … +0.35 s, feet 0.2 m apart, sole
-    /// 0.24 × 0.14 m, step height 0.05 m.
+    /// 0.24 × 0.14 m, step height 0.05 m, preview weights `Q_e = 1`, `R = 1e-6`. The same
+    /// values as the robot file `host-sim/robots/hrp2.toml` (a test compares them).
     pub fn hrp2() -> Self {
         Self {
             omega: T::of(libm::sqrt(crate::GRAVITY / crate::HRP2_COG_HEIGHT)),
@@ -229,6 +234,8 @@ impl<T: Real> GaitParams<T> {
             shaping: true,
             cog_height: crate::HRP2_COG_HEIGHT,
             gravity: crate::GRAVITY,
+            preview_qe: crate::shaping::DEFAULT_QE,
+            preview_r: crate::shaping::DEFAULT_R,
         }
     }
 
@@ -237,7 +244,7 @@ impl<T: Real> GaitParams<T> {
     }
 
     /// Checks that every window this gait can build is one the planner accepts: the control
-    /// period, ω, COG height and gravity finite and positive; every interval (single, double,
+    /// period, ω, COG height, gravity and the preview weights finite and positive; every interval (single, double,
     /// start, settle, standing, rest, and the single support with either adjustment limit) on
     /// the planner's range of 5 ms … 10 s; `ΔT_min ≤ 0 ≤ ΔT_max`; the sole, the step width and
     /// height finite and positive (the height non-negative). `BadParams` otherwise.
@@ -253,6 +260,8 @@ impl<T: Real> GaitParams<T> {
             && pos(self.omega.f64())
             && pos(self.cog_height)
             && pos(self.gravity)
+            && pos(self.preview_qe)
+            && pos(self.preview_r)
             && [
                 single,
                 i64::from(self.double_ticks),
@@ -737,6 +746,9 @@ pub struct Gait<T: Real, const Q: usize> {
     /// tick takes the spare buffer as it is if all of these are still the same (the plan is a
     /// function of them: bit for bit what it would compute again).
     predicted: Option<Predicted<T>>,
+    /// The worst first-interval excursion (eq. 17) of the predicted plan, for the re-plan
+    /// that takes it (valid while `predicted` is `Some`).
+    predicted_worst: [T; 2],
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
@@ -834,6 +846,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             gen: 0,
             serial: 0,
             predicted: None,
+            predicted_worst: [T::ZERO; 2],
             target: None,
             tick: 0,
             last: Reference {
@@ -858,6 +871,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                     z_c: params.cog_height,
                     g: params.gravity,
                 },
+                qe: params.preview_qe,
+                r: params.preview_r,
                 ..PreviewConfig::default()
             };
             g.gains
@@ -1251,7 +1266,8 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         self.predicted = None;
         self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
         self.predicted = Some(self.prediction(at, inputs, cog, zmp));
-        Ok(Some(self.wins[spare].worst_first()))
+        self.predicted_worst = self.wins[spare].worst_first();
+        Ok(Some(self.predicted_worst))
     }
 
     /// The key under which a plan of `inputs` from `(cog, zmp)` at window tick `at` is kept.
@@ -1523,6 +1539,12 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             return self.plan_stop(c, j, cog, zmp);
         }
         self.failed = false;
+        // Eq. 17 of this plan: computed already if it is the predicted one.
+        let worst_zmp = if planned {
+            self.predicted_worst
+        } else {
+            self.wins[spare].worst_first()
+        };
         self.cur = Some(spare);
         self.serial = self.serial.wrapping_add(1);
         self.swing = Some(swing);
@@ -1534,7 +1556,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             adjust_ticks: adjust,
             ratio,
             plane,
-            worst_zmp: self.wins[spare].worst_first(),
+            worst_zmp,
         });
         true
     }

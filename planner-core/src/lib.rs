@@ -8,6 +8,7 @@
 //! * [`window`]: the 7-interval plan window, its 20×20 boundary-value matrix `Z`, factorised once
 //!   per timing and solved for the x and y planes.
 //! * [`timing`]: eq. 17, the time and size of the worst ZMP fluctuation in a quartic interval.
+//! * `robot` (feature `robot`, std): the robot file, one TOML file per robot.
 //! * [`real`]: the scalar type (`f64` or `f32`), all transcendental functions through `libm`.
 //!
 //! Symbols used throughout: `ω = √(g/z_c)`; `τ` local time in an interval of duration `D`;
@@ -21,6 +22,8 @@ pub mod gait;
 pub mod lipm;
 pub mod node;
 pub mod real;
+#[cfg(feature = "robot")]
+pub mod robot;
 pub mod shaping;
 pub mod timing;
 pub mod window;

@@ -396,8 +396,9 @@ impl<T: Real> Factorized<T> {
     /// lets a caller keep its matrices in place (no 3 KB moves on the control path).
     pub fn empty(basis: Basis) -> Self {
         Self {
+            // ω = 0 marks "not factorised" (no valid timing has it).
             timing: Timing {
-                omega: T::ONE,
+                omega: T::ZERO,
                 durations: [T::ONE; M],
             },
             basis,
@@ -409,9 +410,15 @@ impl<T: Real> Factorized<T> {
         }
     }
 
-    /// Builds and factorises `Z` for a new timing in place. On error the factorisation is
-    /// unusable until the next successful call.
+    /// Builds and factorises `Z` for a new timing in place; keeps the factorisation when the
+    /// timing is the one it was built for (`Z` depends on the timing alone, and the
+    /// factorisation of the same matrix is the same, bit for bit: steady walking re-plans
+    /// with the same timing every step). On error the factorisation is unusable until the
+    /// next successful call.
     pub fn refactor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
+        if self.timing == *timing && self.timing.omega > T::ZERO {
+            return Ok(());
+        }
         timing.validate()?;
         // Mark unusable until the end (a failed refactor must not look like the old timing).
         self.timing.omega = T::ZERO;

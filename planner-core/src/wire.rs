@@ -972,17 +972,19 @@ impl LinkHealth {
 }
 
 /// Saturating conversion to a fixed-point integer of `unit`.
-fn fixed(v: f64, unit: f64, min: i64, max: i64) -> i64 {
+fn fixed(v: f64, unit: f64, min: i32, max: i32) -> i32 {
     if !v.is_finite() {
         return 0;
     }
     let r = libm::round(v / unit);
-    if r < min as f64 {
+    if r < f64::from(min) {
         min
-    } else if r > max as f64 {
+    } else if r > f64::from(max) {
         max
     } else {
-        r as i64
+        // In range, so exact: one hardware conversion on the Cortex-M (a 64-bit integer
+        // would take a software routine).
+        r as i32
     }
 }
 
@@ -1006,7 +1008,7 @@ pub struct Stream {
 impl Stream {
     /// The five frames of one cycle, in identifier order.
     pub fn encode(&self) -> [RawFrame; 5] {
-        let um = |v: f64| fixed(v, 1e-6, i32::MIN as i64, i32::MAX as i64) as i32;
+        let um = |v: f64| fixed(v, 1e-6, i32::MIN, i32::MAX);
         let pos = |id: u16, p: [f64; 2]| {
             let (a, b) = (um(p[0]).to_le_bytes(), um(p[1]).to_le_bytes());
             RawFrame {
@@ -1015,16 +1017,16 @@ impl Stream {
                 data: [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]],
             }
         };
-        let vel = |v: f64| fixed(v, 1e-4, i16::MIN as i64, i16::MAX as i64) as i16;
+        let vel = |v: f64| fixed(v, 1e-4, i16::MIN.into(), i16::MAX.into()) as i16;
         let (vx, vy) = (
             vel(self.cog_vel[0]).to_le_bytes(),
             vel(self.cog_vel[1]).to_le_bytes(),
         );
         let foot = |id: u16, f: [f64; 4]| {
-            let x = fixed(f[0], FOOT_UNIT, -(I20_MAX as i64), I20_MAX as i64) as u64;
-            let y = fixed(f[1], FOOT_UNIT, -(I20_MAX as i64), I20_MAX as i64) as u64;
+            let x = fixed(f[0], FOOT_UNIT, -I20_MAX, I20_MAX) as u64;
+            let y = fixed(f[1], FOOT_UNIT, -I20_MAX, I20_MAX) as u64;
             let z = fixed(f[2], 5e-4, 0, 255) as u64;
-            let yaw = fixed(f[3], 1e-4, i16::MIN as i64, i16::MAX as i64) as u64;
+            let yaw = fixed(f[3], 1e-4, i16::MIN.into(), i16::MAX.into()) as u64;
             let bits =
                 (x & 0xF_FFFF) | (y & 0xF_FFFF) << 20 | (z & 0xFF) << 40 | (yaw & 0xFFFF) << 48;
             RawFrame {

@@ -289,7 +289,7 @@ fn main() -> ! {
     );
 
     let t0 = DWT::cycle_count();
-    let node = match place_node(NodeConfig::hrp2()) {
+    let node = match place_node(walk_robot::NODE_CONFIG) {
         Ok(n) => n,
         Err(e) => defmt::panic!("Node::new failed: {}", e),
     };

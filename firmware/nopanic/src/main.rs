@@ -16,7 +16,7 @@
 //! same per-cycle work and the board's own code, compiled into this crate from its source
 //! (`#[path]`) or taken from board-core:
 //!
-//! * `Node::<16>::new(NodeConfig::hrp2())` in a frame of its own, moved into a `static` by
+//! * `Node::<16>::new(walk_robot::NODE_CONFIG)` in a frame of its own, moved into a `static` by
 //!   `cortex_m::singleton!` (the board's `place_node`); an error idles instead of panicking;
 //! * the CAN link: board-core's `Link` (software queues, bus-off recovery, error counters,
 //!   stale-frame replacement) over the board's `fdcan1::Fdcan1` (`board/src/fdcan1.rs`: the
@@ -162,7 +162,7 @@ fn main() -> ! {
     #[cfg(feature = "mock-can")]
     let mut bus = Bus::default();
 
-    let cfg = NodeConfig::hrp2();
+    let cfg = walk_robot::NODE_CONFIG;
     let node = match place_node(cfg) {
         Ok(Some(n)) => n,
         Ok(None) | Err(_) => idle(),

@@ -368,9 +368,9 @@ fn main() -> ! {
         core::mem::size_of::<Gait<f64, QUEUE>>()
     );
 
-    // host-sim's `simulate` runs `NodeConfig::hrp2()` whatever the scenario's feet; both
-    // scenarios start from those feet.
-    let cfg = NodeConfig::hrp2();
+    // The robot file compiled in (walk-robot's build script): host-sim's default robot, whose
+    // stance both scenarios start from.
+    let cfg = walk_robot::NODE_CONFIG;
     let mut all = Stats::new();
     let mut ok = true;
     let mut placed: Option<&'static mut Slot> = None;

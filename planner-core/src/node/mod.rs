@@ -119,18 +119,28 @@ pub struct NodeConfig {
 }
 
 impl NodeConfig {
-    /// HRP-2 defaults: feet 0.2 m apart at the origin, 500 ms heartbeat timeout, 16 command
-    /// frames and 128 foreign frames per cycle (more than a 1 Mbit/s bus carries in 5 ms).
+    /// HRP-2 defaults: [`GaitParams::hrp2`], [`Reach::default`] and
+    /// [`NodeConfig::for_robot`]'s node settings.
     pub fn hrp2() -> Self {
+        Self::for_robot(GaitParams::hrp2(), Reach::default())
+    }
+
+    /// The node for a robot's gait parameters and reach limits (a robot file gives both: see
+    /// `planner_core::robot`, feature `robot`), with the node settings that do not depend on
+    /// the robot: the feet `step_width` apart at the origin, heading along x; 500 ms
+    /// heartbeat timeout; 16 command frames and 128 foreign frames per cycle (more than a
+    /// 1 Mbit/s bus carries in 5 ms); one planning command per cycle.
+    pub fn for_robot(params: GaitParams<f64>, reach: Reach) -> Self {
+        let half = params.step_width / 2.0;
         Self {
-            params: GaitParams::hrp2(),
-            left: Footstep::new(Side::Left, 0.0, 0.1, 0.0),
-            right: Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+            params,
+            left: Footstep::new(Side::Left, 0.0, half, 0.0),
+            right: Footstep::new(Side::Right, 0.0, -half, 0.0),
             heartbeat_timeout_ms: 500,
             max_rx: 16,
             max_foreign: 128,
             max_plans: 1,
-            reach: Reach::default(),
+            reach,
         }
     }
 }

@@ -6,6 +6,11 @@ use crate::wire::Reason;
 
 /// Leg reach limits (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "robot",
+    derive(serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct Reach {
     /// Largest forward step \[m\].
     pub max_forward: f64,
@@ -77,6 +82,13 @@ impl Frame {
     }
 }
 
+/// `v²`. The feet distance is compared squared (no `hypot` on the Cortex-M): for the
+/// reach's sizes (≤ 1e3 m) the squares neither overflow nor underflow to a different decision,
+/// and they differ from `hypot` only within a few ulps of the limit, inside its `EPS`.
+fn square(v: f64) -> f64 {
+    v * v
+}
+
 impl Reach {
     /// Whether the legs can take `step`, where `other` is the previous foot of the other side
     /// (the support foot of this step) and `same` the previous foot of the same side (where
@@ -121,9 +133,14 @@ impl Reach {
         if width < 0.0 {
             return Err(Reason::Crossing);
         }
-        // Heading change wrapped into [−π, π].
+        // Heading change wrapped into [−π, π] (without a libm call when it is inside: the
+        // wrap of an angle within ±π is itself, so both branches agree to the bit).
         let d = step.yaw - other.yaw;
-        let dyaw = libm::fabs(d - core::f64::consts::TAU * libm::round(d / core::f64::consts::TAU));
+        let dyaw = if libm::fabs(d) <= core::f64::consts::PI {
+            libm::fabs(d)
+        } else {
+            libm::fabs(d - core::f64::consts::TAU * libm::round(d / core::f64::consts::TAU))
+        };
         // The step before this one (`other` from `same`; none from rest), and where the
         // swinging foot was.
         let before = if from_rest {
@@ -137,7 +154,7 @@ impl Reach {
             && width >= self.min_width - EPS
             && width <= self.max_width + EPS
             && dyaw <= self.max_yaw + EPS
-            && libm::hypot(forward, width) <= self.max_feet_distance + EPS
+            && forward * forward + width * width <= square(self.max_feet_distance + EPS)
             && forward + self.yaw_cost * dyaw <= self.max_forward + EPS
             && libm::fabs(forward - lift) <= self.max_stride + EPS
             && forward - before <= self.max_growth + EPS;

@@ -1,0 +1,57 @@
+//! Generates `robot.rs`: the node configuration of the robot file, as constants.
+//!
+//! The file is `WALK_ROBOT` if set (a path, relative to this package or absolute), otherwise
+//! HRP-2's, `host-sim/robots/hrp2.toml`. It is read with the same reader as host-sim's
+//! (`planner_core::robot`), and every float is written by its bits, so the image's node is
+//! configured exactly as the simulator's for the same file. A file the reader refuses fails
+//! the build with its message (which names the key).
+use std::path::PathBuf;
+
+/// The control period of the firmware's loops (the board's TIM2 and the QEMU image's timer).
+const LOOP_PERIOD_S: f64 = 0.005;
+
+fn main() {
+    println!("cargo:rerun-if-env-changed=WALK_ROBOT");
+    let dir = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
+    let path = match std::env::var("WALK_ROBOT") {
+        Ok(p) if !p.is_empty() => dir.join(p),
+        _ => dir.join("../../host-sim/robots/hrp2.toml"),
+    };
+    println!("cargo:rerun-if-changed={}", path.display());
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) => fail(&format!(
+            "robot file {}: cannot be read: {e}",
+            path.display()
+        )),
+    };
+    let robot = match planner_core::robot::Robot::from_toml(&text) {
+        Ok(r) => r,
+        Err(e) => fail(&format!("robot file {}: {e}", path.display())),
+    };
+    let dt = robot.params.dt;
+    if (dt - LOOP_PERIOD_S).abs() > 1e-12 {
+        fail(&format!(
+            "robot file {}: key `timing.control_period`: {dt} s, but the firmware's loops run \
+             every {LOOP_PERIOD_S} s",
+            path.display()
+        ));
+    }
+    let cfg = planner_core::robot::node_config_source(&robot.node_config());
+    let out = format!(
+        "/// The robot's name (`name` in its file).\n\
+         pub const NAME: &str = {name:?};\n\
+         /// The node's configuration for the robot file.\n\
+         pub const NODE_CONFIG: ::planner_core::node::NodeConfig = {cfg};\n",
+        name = robot.name,
+    );
+    let dest = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo")).join("robot.rs");
+    if let Err(e) = std::fs::write(&dest, out) {
+        fail(&format!("cannot write {}: {e}", dest.display()));
+    }
+}
+
+fn fail(message: &str) -> ! {
+    eprintln!("error: {message}");
+    std::process::exit(1);
+}

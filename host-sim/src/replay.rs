@@ -1,0 +1,188 @@
+//! Record and replay: a candump log of a controller's frames played into the node, as
+//! `canplayer` plays a log onto a bus (`host-sim replay LOG`).
+//!
+//! The log is candump's `-l` format, `(SSSSSSSSSS.UUUUUU) IFACE ID#DATA`, one frame per line:
+//! the log `host-sim run` writes, a controller's (`host-sim/examples/controller.py`), or one
+//! recorded on a robot. Times count from the start of the control cycle of the first frame
+//! (cycles of `dt`, the robot's control period, on the grid of Unix time, which host-sim's
+//! epoch 2026-01-01T00:00:00Z is on), as canplayer plays a log from its first frame.
+//!
+//! **When a frame is played.** The log records a frame when it was delivered; the node polls
+//! in the middle of each cycle (`k·dt + dt/2`, as in `host_sim::sim`). A frame logged at `t`
+//! is for the first poll at or after `t`, cycle `k = ⌈(t − dt/2) / dt⌉`: it is sent from the
+//! start of that cycle, in log order, one at a time (the next goes into the mailbox when the
+//! one before is on the wire, so arbitration cannot reorder them). A frame that does not get
+//! onto the bus before the poll waits for the next cycle, as it would behind a busy bus. A
+//! host-sim log (its controller sends at the start of each cycle, and the log is in
+//! arbitration order) replays onto the same cycles at the same times, and the node answers
+//! it bit for bit as in the run that wrote it (`host-sim/tests/replay.rs`). Frames the node
+//! itself sends (`ACK`, the stream, `STATUS`, `DIAG`) are not replayed: the node sends its
+//! own. Every other frame is, the node's commands and foreign traffic alike.
+//!
+//! Accepted lines: any interface name, upper- or lower-case hexadecimal, standard (3-digit)
+//! identifiers, 0 to 8 data bytes; blank lines are skipped. A line that is none of these or a
+//! time going backwards is refused with its line number.
+//!
+//! The replay runs until every frame has been sent and read by the node and the node stands
+//! still, or for at most [`MAX_AFTER_S`] after the log's last frame. Frames the node's
+//! receive FIFO had no room for are counted ([`Replayed::lost`]).
+
+use planner_core::gait::Reference;
+use planner_core::node::{Node, NodeConfig};
+use planner_core::wire::{ids, Ack, RawFrame};
+
+use crate::bus::{parse_log_line, Bus, Faults, LOG_IFACE};
+use embedded_can::nb::Can;
+
+/// Longest replay after the log's last frame \[s\].
+pub const MAX_AFTER_S: f64 = 60.0;
+
+/// A frame to replay and the control cycle it is sent in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Timed {
+    /// The control cycle.
+    pub tick: u64,
+    /// The frame.
+    pub frame: RawFrame,
+}
+
+/// What a replay produced.
+#[derive(Clone, Debug)]
+pub struct Replayed {
+    /// The node's reference, one per cycle, from the standing state at cycle 0.
+    pub trajectory: Vec<Reference<f64>>,
+    /// Every frame delivered on the bus, as a candump log (the replayed ones and the node's).
+    pub can_log: Vec<String>,
+    /// The node's answers, with the cycle they arrived in.
+    pub acks: Vec<(u64, Ack)>,
+    /// Frames replayed (put on the bus).
+    pub replayed: usize,
+    /// Frames lost because a receive FIFO was full (the node's, or the player's own).
+    pub lost: u64,
+    /// Whether the replay ended at [`MAX_AFTER_S`] rather than standing and idle.
+    pub cut: bool,
+}
+
+/// Whether the node sends frames of this identifier (they are not replayed).
+pub fn node_sends(id: u16) -> bool {
+    matches!(
+        id,
+        ids::ACK
+            | ids::COG
+            | ids::ZMP
+            | ids::COG_VEL
+            | ids::FOOT_LEFT
+            | ids::FOOT_RIGHT
+            | ids::STATUS
+            | ids::DIAG
+    )
+}
+
+/// Reads a candump log (see the module docs) into the frames to replay, for a control period
+/// of `dt` seconds. The error names the line.
+pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
+    let period_us = (dt * 1e6).round() as u64;
+    if period_us < 2 {
+        return Err(format!("control period {dt} s is below 2 µs"));
+    }
+    let half = period_us / 2;
+    let mut out = Vec::new();
+    let mut base = None;
+    let mut last_us = 0;
+    for (i, line) in text.lines().enumerate() {
+        let n = i + 1;
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        // `(time) IFACE ID#DATA` → the strict form of host-sim's own log.
+        let bad =
+            || format!("line {n}: not a candump -l line with a standard identifier: {line:?}");
+        let mut parts = line.split_whitespace();
+        let (Some(time), Some(_iface), Some(frame), None) =
+            (parts.next(), parts.next(), parts.next(), parts.next())
+        else {
+            return Err(bad());
+        };
+        let strict = format!("{time} {LOG_IFACE} {}", frame.to_ascii_uppercase());
+        let entry = parse_log_line(&strict).ok_or_else(bad)?;
+        let us = entry.unix_us;
+        if us < last_us {
+            return Err(format!("line {n}: time goes backwards"));
+        }
+        last_us = us;
+        // The start of the first frame's cycle, on the grid of Unix time.
+        let base = *base.get_or_insert(us - us % period_us);
+        if !node_sends(entry.frame.id) {
+            let x = us - base;
+            let tick = if x <= half {
+                0
+            } else {
+                (x - half).div_ceil(period_us)
+            };
+            out.push(Timed {
+                tick,
+                frame: entry.frame,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Plays `frames` into a node configured by `cfg` over the virtual bus at `bitrate` (see the
+/// module docs).
+pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replayed, String> {
+    let mut node: Node<64> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    let bus = Bus::new(bitrate, 2, Faults::default(), 1);
+    bus.record();
+    let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
+    let period_ns = (cfg.params.dt * 1e9).round() as u64;
+    let last = frames.last().map_or(0, |f| f.tick);
+    let max_ticks = last + (MAX_AFTER_S / cfg.params.dt).ceil() as u64;
+    let mut trajectory = vec![*node.gait().last()];
+    let mut acks = Vec::new();
+    let mut next = 0;
+    let mut cut = true;
+    for k in 0..max_ticks {
+        let t0 = k * period_ns;
+        let poll = t0 + period_ns / 2;
+        bus.advance(t0);
+        // This cycle's frames, in log order, one at a time, while there is time before the
+        // poll.
+        while next < frames.len() && frames[next].tick <= k {
+            while ctl.pending() > 0 && bus.free_at() < poll {
+                bus.advance(bus.free_at() + 1);
+            }
+            if ctl.pending() > 0 || bus.free_at() >= poll {
+                break;
+            }
+            if ctl.transmit(&frames[next].frame).is_err() {
+                break;
+            }
+            next += 1;
+            bus.advance(bus.free_at().max(t0) + 1);
+        }
+        bus.advance(poll);
+        let now_ms = (poll / 1_000_000) as u32;
+        trajectory.push(node.poll(now_ms, &mut nport).reference);
+        bus.advance(t0 + period_ns);
+        while let Ok(f) = ctl.receive() {
+            if let Some(a) = Ack::decode(&f) {
+                acks.push((k, a));
+            }
+        }
+        let idle = next >= frames.len() && ctl.pending() == 0 && nport.received() == 0;
+        if k >= last && idle && node.gait().is_standing() {
+            cut = false;
+            break;
+        }
+    }
+    Ok(Replayed {
+        trajectory,
+        can_log: bus.log(),
+        acks,
+        replayed: next,
+        lost: bus.stats().rx_overflow,
+        cut,
+    })
+}

@@ -1,0 +1,112 @@
+//! The example controller (`host-sim/examples/controller.py`: python-can and cantools, the DBC
+//! alone) walks the robot through the host-sim node. This machine has no CAN interface, so the
+//! controller writes its frames as a candump log, `host-sim replay` plays them into the node,
+//! and the controller checks the node's answers and stream in the bus log: every command
+//! accepted, standing at the end with the feet on the last two steps. A plan the robot cannot
+//! walk (steps out of reach, or a heartbeat that ends mid-walk) is caught by the same check.
+//!
+//! Skipped (and said so) without python3, python-can and cantools, unless
+//! `WALK_REQUIRE_CAN_TOOLS=1` (set by tests/run-all.sh, which installs them).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn required() -> bool {
+    std::env::var("WALK_REQUIRE_CAN_TOOLS").is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+fn tools_present() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import can, cantools"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || !required(),
+        "python3 with python-can and cantools is missing and WALK_REQUIRE_CAN_TOOLS=1 \
+         (pip install python-can cantools)"
+    );
+    if !ok {
+        eprintln!("controller: SKIPPED: python3 with python-can and cantools not installed");
+    }
+    ok
+}
+
+fn controller(args: &[&str]) -> Output {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/controller.py");
+    Command::new("python3")
+        .arg(script)
+        .args(args)
+        .output()
+        .expect("python3")
+}
+
+fn host_sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("host-sim")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("host-sim-ctl-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Plans with `extra` options, replays, checks: (replay's exit code, check's exit code, the
+/// check's output).
+fn walk(name: &str, extra: &[&str]) -> (Option<i32>, Option<i32>, String) {
+    let d = dir(name);
+    let log = d.join("ctl.log");
+    let out = d.join("out");
+    let mut args = vec!["plan", "--out", log.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = controller(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = host_sim(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    // The check plans again with the same options, to know where the feet should end.
+    let bus_log = out.join("can.log");
+    let mut args = vec!["check", bus_log.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let c = controller(&args);
+    let text = String::from_utf8_lossy(&c.stdout).to_string() + &String::from_utf8_lossy(&c.stderr);
+    (r.status.code(), c.status.code(), text)
+}
+
+#[test]
+fn the_example_controller_walks_the_robot() {
+    if !tools_present() {
+        return;
+    }
+    let (replay, check, text) = walk("ok", &[]);
+    assert_eq!((replay, check), (Some(0), Some(0)), "{text}");
+    assert!(text.contains("every command accepted"), "{text}");
+    // A longer walk with shorter steps.
+    let (replay, check, text) = walk(
+        "short",
+        &["--steps", "10", "--length", "0.1", "--seconds", "12"],
+    );
+    assert_eq!((replay, check), (Some(0), Some(0)), "{text}");
+}
+
+#[test]
+fn the_check_catches_a_walk_that_went_wrong() {
+    if !tools_present() {
+        return;
+    }
+    // 0.5 m steps: refused as out of reach.
+    let (replay, check, text) = walk("reach", &["--length", "0.5"]);
+    assert_eq!((replay, check), (Some(1), Some(1)), "{text}");
+    assert!(text.contains("reach"), "{text}");
+    // The heartbeat stops after 2 s of a 9 s walk: the node stops the robot (controller
+    // lost), and the feet do not reach the last steps.
+    let (_, check, text) = walk("silent", &["--seconds", "2"]);
+    assert_eq!(check, Some(1), "{text}");
+    assert!(text.contains("foot at"), "{text}");
+}
