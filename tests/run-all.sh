@@ -8,9 +8,11 @@
 #    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), the Python
 #    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip), and the
 #    physics engine (MuJoCo 3.2.7, pip);
-# 2. the host workspace: unit, integration and bench targets, then the doctests;
+# 2. the host workspace: unit, integration and bench targets, then the doctests (this includes
+#    firmware/board-core, the board's CAN adapter, pacer and reset reason on a mock FDCAN);
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
-# 4. the firmware images: the STM32H743 one (workspace firmware/) and the QEMU one
+# 4. the firmware images: the STM32H743 one (workspace firmware/; its flash and RAM checked
+#    against firmware/README.md by firmware/size.sh) and the QEMU one
 #    (firmware/qemu; the walk-tests QEMU test in step 2 builds and runs it, which needs
 #    qemu-system-arm: step 1 installs it with apt-get);
 # 5. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
@@ -153,6 +155,14 @@ image_size() {
     test -f "$elf"
     image_size "$elf"
 )
+# The board image's flash and RAM as firmware/README.md quotes them (fails if they differ). The
+# size tool: llvm-size, else rustup's llvm-tools component (installed here if neither is there).
+if ! command -v llvm-size >/dev/null 2>&1 && ! command -v arm-none-eabi-size >/dev/null 2>&1 &&
+    ! ls "$(rustc --print sysroot)"/lib/rustlib/*/bin/llvm-size >/dev/null 2>&1; then
+    echo "installing component llvm-tools"
+    rustup component add llvm-tools
+fi
+bash firmware/size.sh --check
 (
     cd firmware/qemu
     cargo build --release

@@ -71,6 +71,11 @@
 //! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
 //! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 |
 //! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next side u8, last control seq u8 |
+//! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, reserved u2 (0), bus-offs u16, error-passive episodes u16, missed slots u8 |
+//!
+//! `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
+//! firmware has told it the link's health ([`crate::node::Node::set_link_health`]); a node
+//! without a CAN controller of its own (host-sim) never sends it.
 //!
 //! The node's own commands are [`ids::COMMANDS`]; a frame on any other identifier (or an
 //! extended or remote frame) is not the node's: it is counted and never answered (every CAN
@@ -104,6 +109,9 @@ pub mod ids {
     pub const STATUS: u16 = 0x300;
     /// Node diagnostics (foreign frames, bus errors, what the node expects next), every 100 ms.
     pub const DIAG: u16 = 0x301;
+    /// Link health of the board (CAN error counters, bus state, reset reason), every 100 ms
+    /// once the firmware reports it.
+    pub const LINK: u16 = 0x302;
 
     /// The identifiers the node receives: everything else on the bus is not its business.
     pub const COMMANDS: [u16; 4] = [ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY];
@@ -899,6 +907,70 @@ impl Diag {
     }
 }
 
+/// The CAN link's health as the board reports it (`LINK`, every 100 ms with `STATUS`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkHealth {
+    /// Transmit error counter.
+    pub tec: u8,
+    /// Receive error counter (0 … 127).
+    pub rec: u8,
+    /// The receive error counter has reached the error-passive level.
+    pub rx_passive: bool,
+    /// 0 error-active, 1 warning (a counter ≥ 96), 2 error-passive, 3 bus-off.
+    pub bus_state: u8,
+    /// Why the board last started: 0 unknown, 1 power-on, 2 pin, 3 brown-out, 4 software,
+    /// 5 independent watchdog, 6 window watchdog, 7 fault handler, 8 clock failure,
+    /// 9 low-power.
+    pub reset: u8,
+    /// Bus-off events since start-up (each recovered), saturating.
+    pub bus_offs: u16,
+    /// Entries into error-passive since start-up, saturating.
+    pub passive_episodes: u16,
+    /// 5 ms slots the control loop missed since start-up (an overrun longer than a period),
+    /// saturating at 255.
+    pub missed_slots: u8,
+}
+
+impl LinkHealth {
+    /// The frame (fields beyond their widths are cut to them).
+    pub fn encode(&self) -> RawFrame {
+        let [b0, b1] = self.bus_offs.to_le_bytes();
+        let [p0, p1] = self.passive_episodes.to_le_bytes();
+        RawFrame {
+            id: ids::LINK,
+            len: 8,
+            data: [
+                self.tec,
+                (self.rec & 0x7F) | (u8::from(self.rx_passive) << 7),
+                (self.bus_state & 0x3) | ((self.reset & 0xF) << 2),
+                b0,
+                b1,
+                p0,
+                p1,
+                self.missed_slots,
+            ],
+        }
+    }
+    /// Decodes a `LINK` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::LINK || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            tec: d[0],
+            rec: d[1] & 0x7F,
+            rx_passive: d[1] & 0x80 != 0,
+            bus_state: d[2] & 0x3,
+            reset: (d[2] >> 2) & 0xF,
+            bus_offs: u16::from_le_bytes([d[3], d[4]]),
+            passive_episodes: u16::from_le_bytes([d[5], d[6]]),
+            missed_slots: d[7],
+        })
+    }
+}
+
 /// Saturating conversion to a fixed-point integer of `unit`.
 fn fixed(v: f64, unit: f64, min: i32, max: i32) -> i32 {
     if !v.is_finite() {
@@ -1220,6 +1292,19 @@ mod tests {
             last_control: 9,
         };
         assert_eq!(Diag::decode(&d.encode()), Some(d));
+        let l = LinkHealth {
+            tec: 200,
+            rec: 127,
+            rx_passive: true,
+            bus_state: 3,
+            reset: 9,
+            bus_offs: 513,
+            passive_episodes: 40_000,
+            missed_slots: 255,
+        };
+        assert_eq!(LinkHealth::decode(&l.encode()), Some(l));
+        assert_eq!(l.encode().data[2], 3 | 9 << 2);
+        assert_eq!(l.encode().data[1], 0xFF);
         let s = Status {
             state: 1,
             queue: 4,

@@ -379,6 +379,26 @@ fn compare_scenario(q: &QemuRun, name: &str) -> f64 {
         host.acks.len(),
         "{name}: answers on the host"
     );
+    // The board's bookkeeping ran around every poll: a summary per 200 cycles, no overrun
+    // (the worst cycle is far below a 5 ms slot), and the node was told none.
+    let board = q
+        .all("BOARD")
+        .find(|r| r.get("scenario") == name)
+        .unwrap_or_else(|| panic!("no BOARD line for {name}"));
+    assert_eq!(
+        board.num::<usize>("summaries"),
+        ticks / 200,
+        "{name}: summaries"
+    );
+    assert_eq!(
+        (
+            board.num::<u32>("overruns"),
+            board.num::<u16>("status_overruns")
+        ),
+        (0, 0),
+        "{name}: overruns"
+    );
+    assert!(board.num::<u32>("worst") > 0, "{name}: worst cycle");
     let node = q
         .all("NODE")
         .find(|r| r.get("scenario") == name)

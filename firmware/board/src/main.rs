@@ -1,55 +1,94 @@
-//! The STM32H743 image: board set-up, then the CAN node at a fixed 5 ms cycle.
+//! The STM32H743 image: board set-up, then the CAN node in fixed 5 ms slots.
 //!
-//! * clocks: 480 MHz system clock (VOS0, rev V silicon), I- and D-cache on; PLL1Q = 80 MHz is
-//!   the FDCAN kernel clock;
+//! * board settings ([`HSE`], [`BOR_LEVEL`], [`WATCHDOG_MS`]) at the top of this file;
+//! * start-up: the reset reason (`RCC_RSR` and the fault handler's mark, [`fault`]), the
+//!   independent watchdog, the brown-out level (an option byte, programmed once), then the
+//!   clocks: 480 MHz from the **HSE** through PLL1 (VOS0, rev V silicon), the HSE clock
+//!   security system on (its NMI is the safe state), I- and D-cache; PLL1Q = 80 MHz is the
+//!   FDCAN kernel clock;
 //! * FDCAN1 in classic CAN mode at 1 Mbit/s on the pins of a Nucleo-H743ZI's CN9 (PD0 = RX,
-//!   PD1 = TX, AF9), behind `embedded_can::nb::Can` ([`can::FdcanBus`]); the acceptance
-//!   filters take exactly the node's command identifiers ([`ids::COMMANDS`], standard data
-//!   frames) into RX FIFO0 and reject every other frame in hardware ([`COMMAND_FILTERS`]);
-//! * TIM2 overflows every 5 ms: the loop waits for it (servicing the CAN FIFOs meanwhile) and
-//!   runs one [`Node::poll`] per overflow, never two: a late cycle still publishes its
-//!   reference once, and the next one starts at the next overflow;
-//! * DWT CYCCNT measures every cycle; a cycle is an overrun when it took longer than its 5 ms
-//!   slot or the next overflow had already happened when it was done. It is logged (defmt)
-//!   and counted by [`Node::note_overrun`], so the node's `STATUS` frame reports it;
+//!   PD1 = TX, AF9), configured by the `fdcan` crate (bit timing, the acceptance filters
+//!   [`COMMAND_FILTERS`] for exactly [`ids::COMMANDS`], mode), message RAM re-laid out and
+//!   driven at run time by [`fdcan1`] (64 RX FIFO elements, 32 dedicated TX buffers) behind
+//!   board-core's [`Link`] adapter (queues, bus-off recovery, error counters, stale frames
+//!   replaced);
+//! * TIM2 counts microseconds, free-running over 32 bits; board-core's [`Pacer`] cuts it into
+//!   5 ms slots. The loop waits for a slot (servicing the CAN meanwhile) and runs one
+//!   [`Node::poll`] in it with the slot's time as `now_ms`; slots missed by a long overrun are
+//!   counted (`LINK`) and skipped, so `now_ms` never lags the counter by a slot;
+//! * DWT CYCCNT measures every cycle; a cycle is an overrun when it took longer than its slot
+//!   or the next slot had already begun when it was done: counted by [`Node::note_overrun`]
+//!   (`STATUS`);
+//! * the watchdog is fed once per completed cycle (after the poll and its bookkeeping): a loop
+//!   that hangs resets the MCU within [`WATCHDOG_MS`] (+8 % LSI tolerance) of its last
+//!   completed cycle;
+//! * each cycle the link health (TEC, REC, bus state, bus-off and error-passive counts), the
+//!   reset reason and the missed slots go to the node ([`Node::set_link_health`]), which
+//!   publishes them in `LINK` every 100 ms;
 //! * PE1 (LD2 on the Nucleo-H743ZI) is held high while the node works, for a scope or a logic
-//!   analyser (through embedded-hal 1.0's `OutputPin`);
-//! * once a second a summary (worst and mean cycle, overruns, frames) goes out over RTT.
+//!   analyser (through embedded-hal 1.0's `OutputPin`); PB14 (LD3) is the fault pin;
+//! * logging (defmt over [`logger`], never blocking) happens after the timed part of the
+//!   cycle: warnings on overruns, missed slots and refusals, and a summary once a second.
 //!
 //! The node (`Node<16>`, ~47 KB: the gait's two plan windows and preview gains) is built once
 //! in a function of its own and moved into a `static` in .bss (DTCM) by
-//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator.
+//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator. The stack is the
+//! 512 KiB AXI SRAM (board/stack.x), painted at reset; its high-water mark is logged
+//! ([`stack`]).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
 
-mod can;
-mod cycle;
+mod fault;
+mod fdcan1;
+mod hw;
+mod logger;
+mod stack;
 
 use core::convert::Infallible;
 use core::num::{NonZeroU16, NonZeroU8};
 
+use board_core::{cycle, Link, Pacer};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
-use defmt_rtt as _; // global logger over RTT
 use embedded_hal::digital::{ErrorType, OutputPin};
 use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
 use fdcan::filter::{
     Action, ExtendedFilter, ExtendedFilterSlot, FilterType, StandardFilter, STANDARD_FILTER_MAX,
 };
 use fdcan::id::StandardId;
-use panic_probe as _; // panics print through defmt, then the core halts
 use stm32h7xx_hal::can::CanExt as _;
 use stm32h7xx_hal::gpio::{Output, Pin, PushPull, Speed};
+use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
+use stm32h7xx_hal::rcc::rec::ResetEnable as _;
 use stm32h7xx_hal::rcc::{rec, PllConfigStrategy};
-use stm32h7xx_hal::timer::Timer;
 use stm32h7xx_hal::{pac, prelude::*};
 
 use planner_core::gait::GaitError;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::ids;
 
-use crate::can::FdcanBus;
+use crate::fdcan1::Fdcan1;
+
+/// The board's external clock (a board setting).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hse {
+    /// An external clock signal on PH0 (OSC_IN), oscillator bypassed: the NUCLEO-H743ZI2's
+    /// 8 MHz MCO from its ST-LINK (the board's default solder bridges).
+    Bypass(u32),
+    /// A crystal or resonator between PH0 and PH1 (a robot board).
+    Crystal(u32),
+}
+
+/// The HSE of this board: NUCLEO-H743ZI2, ST-LINK MCO at 8 MHz. A robot board with a crystal:
+/// `Hse::Crystal(its frequency)`; the PLL set-up below derives 480 MHz and 80 MHz from it.
+pub const HSE: Hse = Hse::Bypass(8_000_000);
+/// Brown-out reset level (`BOR_LEV`): 3 = about 2.7 V rising (datasheet VBOR3), for a 3.3 V
+/// supply; programmed into the option bytes once if different.
+pub const BOR_LEVEL: u8 = 3;
+/// Independent watchdog period \[ms\] (10 control cycles; LSI 32 kHz nominal, 29.76-33.6 kHz
+/// over temperature: 47.6-53.8 ms).
+pub const WATCHDOG_MS: u32 = 50;
 
 /// System clock \[Hz\].
 const SYSCLK_HZ: u32 = 480_000_000;
@@ -59,6 +98,8 @@ const FDCAN_KER_HZ: u32 = 80_000_000;
 const CYCLE_HZ: u32 = 200;
 /// Control cycle \[ms\].
 const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
+/// Control cycle in ticks of the microsecond counter.
+const PERIOD_US: u32 = 1_000_000 / CYCLE_HZ;
 /// Core cycles in one control cycle.
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node.
@@ -149,13 +190,12 @@ fn place_node(cfg: NodeConfig) -> Result<&'static mut Node<QUEUE>, GaitError> {
     }
 }
 
-/// Waits for the next TIM2 overflow, moving CAN frames between the hardware and software
-/// FIFOs meanwhile.
-fn wait_tick<I: fdcan::Instance>(timer: &mut Timer<pac::TIM2>, bus: &mut FdcanBus<I>) {
+/// Waits for the next slot of `pacer`, servicing the CAN link meanwhile.
+fn wait_slot(tim2: &pac::TIM2, pacer: &mut Pacer, bus: &mut Link<Fdcan1>) -> board_core::Slot {
     loop {
         bus.service();
-        if timer.wait().is_ok() {
-            return;
+        if let Some(slot) = pacer.due(hw::now_us(tim2)) {
+            return slot;
         }
     }
 }
@@ -169,16 +209,28 @@ fn main() -> ! {
         panic!("device peripherals taken twice");
     };
 
+    // Why we started (before anything can reset again), then the watchdog, so that every
+    // later start-up step is bounded by it too, then the brown-out level.
+    let reset = fault::take_reset_reason(&dp.RCC);
+    hw::freeze_iwdg_in_debug(&dp.DBGMCU);
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.start(WATCHDOG_MS.millis());
+    let bor_programmed = hw::ensure_bor_level(&dp.FLASH, BOR_LEVEL);
+
     // 480 MHz needs voltage scale 0, and a wide-range VCO (960 MHz): the PLL's default
-    // ("normal") strategy stays in the 150-420 MHz medium range and cannot reach it.
+    // ("normal") strategy stays in the 150-420 MHz medium range and cannot reach it. The HAL
+    // waits for the HSE to be ready: without it, the watchdog resets the board.
     let pwrcfg = dp.PWR.constrain().vos0(&dp.SYSCFG).freeze();
-    let ccdr = dp
-        .RCC
-        .constrain()
+    let rcc = match HSE {
+        Hse::Bypass(hz) => dp.RCC.constrain().use_hse(hz.Hz()).bypass_hse(),
+        Hse::Crystal(hz) => dp.RCC.constrain().use_hse(hz.Hz()),
+    };
+    let ccdr = rcc
         .pll1_strategy(PllConfigStrategy::Iterative)
         .sys_ck(SYSCLK_HZ.Hz())
         .pll1_q_ck(FDCAN_KER_HZ.Hz())
         .freeze(pwrcfg, &dp.SYSCFG);
+    hw::enable_css();
     cp.SCB.enable_icache();
     cp.SCB.enable_dcache(&mut cp.CPUID);
     // The bit timing assumes exactly 80 MHz.
@@ -195,6 +247,10 @@ fn main() -> ! {
     let gpioe = dp.GPIOE.split(ccdr.peripheral.GPIOE);
     let mut busy = BusyPin(gpioe.pe1.into_push_pull_output());
     let _ = busy.set_low();
+    // The fault pin, low until `fault::fail_safe` raises it.
+    let gpiob = dp.GPIOB.split(ccdr.peripheral.GPIOB);
+    let mut fault_pin = gpiob.pb14.into_push_pull_output();
+    fault_pin.set_low();
 
     // FDCAN1 on PD0 (RX) / PD1 (TX), classic CAN, 1 Mbit/s.
     let gpiod = dp.GPIOD.split(ccdr.peripheral.GPIOD);
@@ -214,12 +270,22 @@ fn main() -> ! {
     fdcan.set_standard_filters(&COMMAND_FILTERS);
     fdcan.set_extended_filter(ExtendedFilterSlot::_0, ExtendedFilter::reject_all());
     fdcan.set_global_filter(GlobalFilter::reject_all());
-    let mut bus = FdcanBus::new(fdcan.into_normal());
+    // Still in configuration mode: 64 RX FIFO0 elements and 32 TX buffers (fdcan1.rs).
+    fdcan1::layout();
+    // From here on the run-time accesses are fdcan1.rs's; the driver is not used again.
+    let _normal = fdcan.into_normal();
+    let mut bus = Link::new(Fdcan1::new());
 
     defmt::info!(
-        "sysclk {=u32} Hz, control cycle {=u32} cycles, CAN 1 Mbit/s on PD0/PD1",
+        "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1",
+        reset as u8,
         ccdr.clocks.sys_ck().raw(),
-        PERIOD_CYCLES
+        BOR_LEVEL,
+        if bor_programmed {
+            " (programmed now)"
+        } else {
+            ""
+        },
     );
 
     let t0 = DWT::cycle_count();
@@ -227,35 +293,51 @@ fn main() -> ! {
         Ok(n) => n,
         Err(e) => defmt::panic!("Node::new failed: {}", e),
     };
+    watchdog.feed();
     defmt::info!(
-        "node ready ({=usize} bytes) in {=u32} cycles",
+        "node ready ({=usize} bytes) in {=u32} cycles; start-up stack {=u32} bytes",
         core::mem::size_of::<Node<QUEUE>>(),
-        DWT::cycle_count().wrapping_sub(t0)
+        DWT::cycle_count().wrapping_sub(t0),
+        stack::high_water()
     );
+    // From here on the high-water mark is the control loop's.
+    stack::repaint_below_sp();
+    watchdog.feed();
 
-    // Started once the node exists (building it takes ~1 ms): the first cycle then starts on
-    // a fresh overflow.
-    let mut timer = dp
-        .TIM2
-        .timer(CYCLE_HZ.Hz(), ccdr.peripheral.TIM2, &ccdr.clocks);
-
-    // A free-running millisecond clock: one control cycle = 5 ms. A cycle that overruns by
-    // more than a whole period loses that time (the timer only remembers one overflow).
-    let mut now_ms: u32 = 0;
+    // The microsecond counter; slot 0 begins one period from now.
+    ccdr.peripheral.TIM2.enable().reset();
+    hw::start_us_counter(&dp.TIM2, ccdr.clocks.timx_ker_ck().raw());
+    let mut pacer = Pacer::new(
+        hw::now_us(&dp.TIM2).wrapping_add(PERIOD_US),
+        PERIOD_US,
+        CYCLE_MS,
+    );
     let mut stats = cycle::Stats::default();
-    // Align the first cycle on a timer overflow.
-    wait_tick(&mut timer, &mut bus);
     loop {
+        let slot = wait_slot(&dp.TIM2, &mut pacer, &mut bus);
+        node.set_link_health(bus.health().to_wire(reset, pacer.missed()));
+
         let _ = busy.set_high();
         let t0 = DWT::cycle_count();
-        let report = node.poll(now_ms, &mut bus);
+        let report = node.poll(slot.now_ms, &mut bus);
         let spent = DWT::cycle_count().wrapping_sub(t0);
         let _ = busy.set_low();
 
-        // Late: the work did not fit the slot, or the overflow that ends this cycle has
-        // already happened (so the next cycle starts late).
-        let late = spent > PERIOD_CYCLES || !timer.is_irq_clear();
+        // Late: the work did not fit the slot, or the next slot has already begun.
+        let late = spent > PERIOD_CYCLES || pacer.behind(hw::now_us(&dp.TIM2));
         let outcome = stats.record(node, &report, spent, late);
+        // The cycle is complete.
+        watchdog.feed();
+
+        // Logging, outside the timed part (and never blocking).
+        if slot.skipped > 0 {
+            defmt::warn!(
+                "{=u32} slot(s) missed before slot {=u32} ({=u32} so far)",
+                slot.skipped,
+                slot.index,
+                pacer.missed()
+            );
+        }
         if outcome.overrun {
             defmt::warn!(
                 "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
@@ -274,9 +356,9 @@ fn main() -> ! {
             );
         }
         if let Some(w) = outcome.summary {
-            let c = bus.counters();
+            let h = bus.health();
             defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32}; rx FIFO overruns {=u32}",
+                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
                 node.cycles(),
                 w.worst,
                 w.mean(),
@@ -285,11 +367,17 @@ fn main() -> ! {
                 w.refused,
                 w.sent,
                 stats.overruns,
-                c.rx_overruns
+                pacer.missed(),
+                h.tec,
+                h.rec,
+                h.state as u8,
+                h.bus_offs,
+                h.passive_episodes,
+                h.rx_lost,
+                h.replaced,
+                logger::dropped(),
+                stack::high_water()
             );
         }
-
-        wait_tick(&mut timer, &mut bus);
-        now_ms = now_ms.wrapping_add(CYCLE_MS);
     }
 }

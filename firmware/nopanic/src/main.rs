@@ -10,76 +10,71 @@
 //! the handler, so that the image links and the panics can be found in its disassembly (the
 //! callers of `core::panicking::*`, `llvm-symbolizer -i` for the inlined source lines).
 //!
-//! # The whole board cycle (`--no-default-features`)
+//! # The whole board cycle (default features)
 //!
 //! `main` is the board's `main` (`board/src/main.rs`) from the node's construction on, with the
-//! same per-cycle work, the same types, the board's own CAN adapter (`board/src/can.rs`) and
-//! cycle bookkeeping (`board/src/cycle.rs`: overruns, statistics), both compiled into this crate
-//! from the board's source:
+//! same per-cycle work and the board's own code, compiled into this crate from its source
+//! (`#[path]`) or taken from board-core:
 //!
 //! * `Node::<16>::new(walk_robot::NODE_CONFIG)` in a frame of its own, moved into a `static` by
 //!   `cortex_m::singleton!` (the board's `place_node`); an error idles instead of panicking;
-//! * per cycle: busy pin high, DWT CYCCNT, `node.poll(now_ms, &mut bus)`, busy pin low, the
-//!   overrun test (cycles spent or TIM2's update flag already set), `cycle::Stats::record`
-//!   (`node.note_overrun()`, the statistics window and its summary once per 200 cycles), the
-//!   defmt warnings
-//!   (`bus.counters()`), then the wait for the next TIM2 update while `bus.service()` moves
-//!   frames between the FDCAN and the software FIFOs; `now_ms` advances by 5 per cycle;
-//! * the CAN adapter is `can::FdcanBus` over the `fdcan` crate's driver of FDCAN1 (the register
-//!   block and message RAM addresses the HAL gives it), so the frames the node receives are
-//!   whatever the message RAM holds. TIM2, GPIOE and DWT are the PAC's / cortex-m's registers
-//!   (volatile): the optimiser knows none of the inputs.
+//! * the CAN link: board-core's `Link` (software queues, bus-off recovery, error counters,
+//!   stale-frame replacement) over the board's `fdcan1::Fdcan1` (`board/src/fdcan1.rs`: the
+//!   register and message-RAM accesses of FDCAN1), so the frames the node receives are
+//!   whatever the message RAM holds and every register value is the hardware's;
+//! * the slot pacer (board-core's `Pacer`) over the board's microsecond counter
+//!   (`board/src/hw.rs`: TIM2's `CNT`);
+//! * per cycle: `wait_slot` (`Link::service` until `Pacer::due`), `Node::set_link_health`
+//!   with `Health::to_wire`, busy pin high, DWT CYCCNT, `node.poll(slot.now_ms, &mut bus)`,
+//!   busy pin low, the overrun test (cycles spent or `Pacer::behind`), `cycle::Stats::record`
+//!   (board-core's `cycle`), the watchdog feed (the HAL's `IndependentWatchdog::feed`: one
+//!   write of `IWDG_KR`), and every defmt call of the board's loop through the board's logger
+//!   (`board/src/logger.rs`: non-blocking RTT; its reentrancy is handled without panics), the
+//!   summary's stack high-water mark (`board/src/stack.rs`) included.
 //!
-//! Not here: the board's set-up (clocks, pins, the HAL's FDCAN and timer constructors). It
-//! asserts on the hardware (the `fdcan` crate's `into_config_mode` checks the core's release
-//! and endianness registers, the HAL's RCC `freeze` checks the clock tree): start-up code, not
-//! the cycle. The configured FDCAN driver is read from memory instead (`stand_in`); the timer
-//! and the busy pin are the PAC registers the HAL's `Timer::wait` / `is_irq_clear` and
-//! `set_high` / `set_low` use.
+//! TIM2, GPIOE, IWDG, FDCAN1 and DWT are registers (volatile): the optimiser knows none of the
+//! inputs.
 //!
-//! This build does not link today. The panics that remain are in libraries:
+//! Not here: the board's set-up (clocks, pins, the HAL's and the `fdcan` crate's FDCAN
+//! configuration, the option bytes): start-up code that asserts on the hardware (the `fdcan`
+//! crate's `into_config_mode` checks the core's release and endianness registers, the HAL's RCC
+//! `freeze` checks the clock tree), not the cycle; and the fault handlers (`board/src/fault.rs`:
+//! register writes and a reset). Nor what is not a panic: stack overflow, integer overflow
+//! (wraps in release builds), NaN.
 //!
-//! * the `fdcan` 0.2.1 driver under the board's adapter: `Mailbox::new`'s `unreachable!()`
-//!   (TX put index and RX FIFO get index read from the hardware, `& 3 == 3`), and
-//!   `StandardFilterSlot::from(u8)` / `ExtendedFilterSlot::from(u8)` on the filter index of a
-//!   received frame (panic above 27 / 7);
-//! * defmt-rtt 1.3: every log call's `acquire`/`release` panics when the logger is taken
-//!   reentrantly or released out of context (the board logs from `main` only).
-//!
-//! (`Node::poll` itself had one: `Deque::retain` of heapless 0.9, whose `expect`s and the
-//! `assert!`s of `Deque::swap` the optimiser could not discharge; the node now prunes its
-//! backlog with `pop_front`/`push_back`.)
-//!
-//! # The checked scope (default features: `scoped`)
-//!
-//! * `mock-can`: [`mock::VolatileBus`] instead of the FDCAN adapter: arbitrary received frames
-//!   (`black_box`), arbitrary transmit outcome;
-//! * `no-log`: the defmt calls (and defmt-rtt) left out.
-//!
-//! Everything else is the board cycle above, `Node::poll` included: frame decoding and
-//! validation, every command with its re-plan (eq. 17, eq. 18, the window solver, shaping),
-//! the gait's tick, the heartbeat supervision, the planning limit and the transmit backlog.
-//! `tests/tests/nopanic.rs` builds the scope and the negative control on every `cargo test`;
-//! the whole board cycle is its ignored test.
+//! History: before the board's own FDCAN accesses, this build did not link: the `fdcan` 0.2.1
+//! driver's `Mailbox::new` `unreachable!()` on hardware indices and its filter-slot
+//! conversions, and defmt-rtt's reentrancy panics, were reachable; the check then covered a
+//! scope without them, still available as `--features scoped` (`mock-can`: arbitrary frames
+//! instead of the adapter; `no-log`: without the log calls).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
 
-#[path = "../../board/src/can.rs"]
-#[cfg_attr(feature = "mock-can", allow(dead_code))]
-mod can;
-/// The board's cycle bookkeeping, compiled from its source.
-#[path = "../../board/src/cycle.rs"]
-mod cycle;
+/// The board's FDCAN1 accesses, compiled from its source.
+#[path = "../../board/src/fdcan1.rs"]
+#[allow(dead_code)] // `layout` and `silence` are start-up and fault-handler code
+mod fdcan1;
+/// The board's start-up registers and microsecond counter, compiled from its source.
+#[path = "../../board/src/hw.rs"]
+#[allow(dead_code)] // only `now_us` is on the cycle's path
+mod hw;
+/// The board's logger, compiled from its source.
+#[cfg(not(feature = "no-log"))]
+#[path = "../../board/src/logger.rs"]
+mod logger;
 #[cfg(feature = "mock-can")]
 mod mock;
+/// The board's stack high-water mark, compiled from its source.
+#[path = "../../board/src/stack.rs"]
+#[allow(dead_code)] // `repaint_below_sp` is start-up code
+mod stack;
 
 use core::hint::black_box;
 
+use board_core::{cycle, Pacer, ResetReason, Slot};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
-#[cfg(not(feature = "no-log"))]
-use defmt_rtt as _; // global logger over RTT, as on the board
 use stm32h7xx_hal::pac;
 
 use planner_core::gait::GaitError;
@@ -87,7 +82,7 @@ use planner_core::node::{Node, NodeConfig};
 
 /// The board's adapter over FDCAN1.
 #[cfg(not(feature = "mock-can"))]
-type Bus = crate::can::FdcanBus<stand_in::Fdcan1>;
+type Bus = board_core::Link<fdcan1::Fdcan1>;
 #[cfg(feature = "mock-can")]
 use crate::mock::VolatileBus as Bus;
 
@@ -97,52 +92,17 @@ const SYSCLK_HZ: u32 = 480_000_000;
 const CYCLE_HZ: u32 = 200;
 /// Control cycle \[ms\].
 const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
+/// Control cycle in ticks of the microsecond counter.
+const PERIOD_US: u32 = 1_000_000 / CYCLE_HZ;
 /// Core cycles in one control cycle.
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node (the board's).
 const QUEUE: usize = 16;
 
-/// The only `unsafe` of this crate: what stands in for the hardware set-up, and the panic
-/// handler. None of it ever runs (the image is only linked).
+/// The only `unsafe` of this crate apart from the board's files: the panic handler. It never
+/// runs (the image is only linked).
 #[allow(unsafe_code)]
 mod stand_in {
-    #[cfg(not(feature = "mock-can"))]
-    pub use fdcan1::*;
-
-    #[cfg(not(feature = "mock-can"))]
-    mod fdcan1 {
-        use core::mem::MaybeUninit;
-
-        use fdcan::{FdCan, NormalOperationMode};
-        use stm32h7xx_hal::pac;
-
-        /// FDCAN1 for the `fdcan` crate, at the addresses the HAL's `Can<FDCAN1>` gives it.
-        pub struct Fdcan1;
-
-        // SAFETY: the pointers are FDCAN1's register block and its message RAM (the HAL's
-        // values); the image is never run.
-        unsafe impl fdcan::Instance for Fdcan1 {
-            const REGISTERS: *mut fdcan::RegisterBlock = pac::FDCAN1::ptr() as *mut _;
-        }
-        // SAFETY: as above.
-        unsafe impl fdcan::message_ram::Instance for Fdcan1 {
-            const MSG_RAM: *mut fdcan::message_ram::RegisterBlock = 0x4000_ac00 as *mut _;
-        }
-
-        /// Where the configured driver is read from.
-        static CONFIGURED: MaybeUninit<FdCan<Fdcan1, NormalOperationMode>> = MaybeUninit::uninit();
-
-        /// The FDCAN driver in normal operation, as the board's set-up leaves it, but read
-        /// from memory (volatile): the only way to that mode is `into_config_mode`, whose
-        /// hardware asserts are start-up code, and the check must not depend on what the
-        /// configuration is.
-        pub fn configured_fdcan1() -> FdCan<Fdcan1, NormalOperationMode> {
-            // SAFETY: none needed: this image is never run. The volatile read only keeps the
-            // optimiser from knowing the driver's configuration.
-            unsafe { core::ptr::read_volatile(CONFIGURED.as_ptr()) }
-        }
-    }
-
     #[cfg(not(feature = "diagnose"))]
     extern "C" {
         /// Defined nowhere: referenced only if a panic is reachable, and then the link fails.
@@ -173,16 +133,12 @@ fn place_node(cfg: NodeConfig) -> Result<Option<&'static mut Node<QUEUE>>, GaitE
     Ok(cortex_m::singleton!(: Node<QUEUE> = node))
 }
 
-/// Waits for the next TIM2 update, moving CAN frames meanwhile (the board's `wait_tick` with
-/// the HAL's `Timer::wait` written out on the PAC).
-fn wait_tick(tim2: &pac::TIM2, bus: &mut Bus) {
+/// The board's `wait_slot`.
+fn wait_slot(tim2: &pac::TIM2, pacer: &mut Pacer, bus: &mut Bus) -> Slot {
     loop {
         bus.service();
-        if tim2.sr.read().uif().bit_is_set() {
-            tim2.sr.modify(|_, w| w.uif().clear_bit());
-            let _ = tim2.sr.read();
-            let _ = tim2.sr.read();
-            return;
+        if let Some(slot) = pacer.due(hw::now_us(tim2)) {
+            return slot;
         }
     }
 }
@@ -199,8 +155,10 @@ fn main() -> ! {
     let Some(dp) = pac::Peripherals::take() else {
         idle()
     };
+    // The board reads RCC_RSR and its fault mark: any value.
+    let reset = ResetReason::decode(dp.RCC.rsr.read().bits(), black_box(0));
     #[cfg(not(feature = "mock-can"))]
-    let mut bus = Bus::new(stand_in::configured_fdcan1());
+    let mut bus = Bus::new(fdcan1::Fdcan1::new());
     #[cfg(feature = "mock-can")]
     let mut bus = Bus::default();
 
@@ -210,52 +168,70 @@ fn main() -> ! {
         Ok(None) | Err(_) => idle(),
     };
 
-    let mut now_ms: u32 = 0;
+    let mut pacer = Pacer::new(
+        hw::now_us(&dp.TIM2).wrapping_add(PERIOD_US),
+        PERIOD_US,
+        CYCLE_MS,
+    );
     let mut stats = cycle::Stats::default();
-    wait_tick(&dp.TIM2, &mut bus);
     loop {
+        let slot = wait_slot(&dp.TIM2, &mut pacer, &mut bus);
+        node.set_link_health(bus.health().to_wire(reset, pacer.missed()));
+
         dp.GPIOE.bsrr.write(|w| w.bs1().set_bit()); // busy pin high
         let t0 = DWT::cycle_count();
-        let report = node.poll(now_ms, &mut bus);
+        let report = node.poll(slot.now_ms, &mut bus);
         let spent = DWT::cycle_count().wrapping_sub(t0);
         dp.GPIOE.bsrr.write(|w| w.br1().set_bit()); // busy pin low
 
-        let late = spent > PERIOD_CYCLES || dp.TIM2.sr.read().uif().bit_is_set();
+        let late = spent > PERIOD_CYCLES || pacer.behind(hw::now_us(&dp.TIM2));
         let outcome = stats.record(node, &report, spent, late);
-        #[cfg(not(feature = "no-log"))]
-        if outcome.overrun {
-            defmt::warn!(
-                "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
-                node.cycles(),
-                spent,
-                PERIOD_CYCLES,
-                stats.overruns
-            );
-        }
-        #[cfg(not(feature = "no-log"))]
-        if report.refused > 0 {
-            defmt::warn!(
-                "cycle {=u32}: {=u8} of {=u8} commands refused",
-                node.cycles(),
-                report.refused,
-                report.received
-            );
-        }
+        dp.IWDG.kr.write(|w| w.key().reset()); // the HAL's IndependentWatchdog::feed
 
         // The negative control: a panic the optimiser cannot rule out.
         #[cfg(feature = "selftest-panic")]
         {
             let table = black_box([0u8; 4]);
-            black_box(table[black_box(now_ms) as usize]);
+            black_box(table[black_box(slot.now_ms) as usize]);
         }
 
+        #[cfg(feature = "no-log")]
+        black_box((slot, outcome.overrun, stats.overruns, report.refused));
+        #[cfg(not(feature = "no-log"))]
+        {
+            if slot.skipped > 0 {
+                defmt::warn!(
+                    "{=u32} slot(s) missed before slot {=u32} ({=u32} so far)",
+                    slot.skipped,
+                    slot.index,
+                    pacer.missed()
+                );
+            }
+            if outcome.overrun {
+                defmt::warn!(
+                    "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
+                    node.cycles(),
+                    spent,
+                    PERIOD_CYCLES,
+                    stats.overruns
+                );
+            }
+            if report.refused > 0 {
+                defmt::warn!(
+                    "cycle {=u32}: {=u8} of {=u8} commands refused",
+                    node.cycles(),
+                    report.refused,
+                    report.received
+                );
+            }
+        }
         if let Some(w) = outcome.summary {
-            let c = bus.counters();
+            let h = bus.health();
             #[cfg(feature = "no-log")]
-            black_box((w.mean(), w, c.rx_overruns, stats.overruns, outcome.overrun));
+            black_box((w.mean(), w, h, stack::high_water()));
             #[cfg(not(feature = "no-log"))]
             defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32}; rx FIFO overruns {=u32}",
+                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
                 node.cycles(),
                 w.worst,
                 w.mean(),
@@ -264,11 +240,17 @@ fn main() -> ! {
                 w.refused,
                 w.sent,
                 stats.overruns,
-                c.rx_overruns
+                pacer.missed(),
+                h.tec,
+                h.rec,
+                h.state as u8,
+                h.bus_offs,
+                h.passive_episodes,
+                h.rx_lost,
+                h.replaced,
+                logger::dropped(),
+                stack::high_water()
             );
         }
-
-        wait_tick(&dp.TIM2, &mut bus);
-        now_ms = black_box(now_ms.wrapping_add(CYCLE_MS));
     }
 }

@@ -1,5 +1,5 @@
-//! `--features mock-can`: a CAN device instead of the board's FDCAN adapter (whose driver, the
-//! `fdcan` crate, has panics on values read from the hardware: see the crate docs).
+//! `--features mock-can`: a CAN device instead of the board's link adapter (the check's scope
+//! before the board had its own FDCAN accesses; kept as a narrower variant).
 //!
 //! Every frame it receives is arbitrary (`black_box`: the optimiser cannot know it), and so is
 //! whether a frame is there and whether a transmission is accepted.
@@ -7,26 +7,25 @@
 use core::convert::Infallible;
 use core::hint::black_box;
 
+use board_core::{ClassicFrame, Health};
 use embedded_can::{Frame, StandardId};
 
-use crate::can::{BusCounters, ClassicFrame};
-
-/// The board adapter's interface (`service`, `counters`, `embedded_can::nb::Can`) over
+/// The board adapter's interface (`service`, `health`, `embedded_can::nb::Can`) over
 /// arbitrary frames.
 #[derive(Default)]
 pub struct VolatileBus {
-    counters: BusCounters,
+    health: Health,
 }
 
 impl VolatileBus {
     /// Nothing to move (the board's adapter empties the hardware FIFOs here).
     pub fn service(&mut self) {
-        self.counters = black_box(self.counters);
+        self.health = black_box(self.health);
     }
 
-    /// The counters (arbitrary).
-    pub fn counters(&self) -> BusCounters {
-        self.counters
+    /// The health (arbitrary).
+    pub fn health(&self) -> Health {
+        self.health
     }
 }
 

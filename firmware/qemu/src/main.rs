@@ -78,6 +78,9 @@ const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / hw::TIMER_HZ;
 const CALIB_LOOPS: u32 = 1_000_000;
 /// A `REF` line every this many ticks.
 const REF_EVERY: u64 = 20;
+/// The board's 5 ms slot in core cycles at 480 MHz: a cycle of more instructions counts as an
+/// overrun in the board's bookkeeping.
+const BOARD_PERIOD_CYCLES: u32 = 2_400_000;
 
 impl Clock for hw::Timer0 {
     fn now(&mut self) -> u32 {
@@ -253,6 +256,10 @@ fn run_scenario(
     print_ref(out, name, 0, Kind::Standing.name(), node.gait().last());
 
     let mut runner = Runner::new(scenario);
+    // The board's bookkeeping around each poll (board-core's `cycle`), with the instructions
+    // as its cycles: overruns told to the node, a summary per 200 cycles.
+    let mut board = board_core::cycle::Stats::default();
+    let (mut summaries, mut worst_window) = (0u32, 0u32);
     while !runner.done() {
         let record = match runner.cycle(node, timer, stats, |_, _| {}) {
             Ok(r) => r,
@@ -261,6 +268,12 @@ fn run_scenario(
                 return false;
             }
         };
+        let spent = u32::try_from(instructions(record.units)).unwrap_or(u32::MAX);
+        let outcome = board.record(node, &record.report, spent, spent > BOARD_PERIOD_CYCLES);
+        if let Some(w) = outcome.summary {
+            summaries += 1;
+            worst_window = worst_window.max(w.worst);
+        }
         let reference = &record.report.reference;
         digest.add_reference(reference);
         if let Some(info) = record.replan {
@@ -309,6 +322,15 @@ fn run_scenario(
         c.tx_dropped,
         c.bus_errors,
         runner.bus().rx_overflow()
+    );
+    line!(
+        out,
+        "BOARD scenario={} summaries={} worst={} overruns={} status_overruns={}",
+        name,
+        summaries,
+        worst_window,
+        board.overruns,
+        node.counters().overruns
     );
     print_timing(out, name, stats);
     ok

@@ -9,9 +9,12 @@
 //!   codec's lowest (highest) value decode to exactly the DBC's minimum (maximum);
 //! * every value table (`VAL_`) is the codec's enumeration, code for code and name for name
 //!   (the snake case of the Rust variant): `Reason::ALL`, `ControlOp`, the command codes of
-//!   `ACK`, `NodeState`, and the phases and next sides the node publishes;
+//!   `ACK`, `NodeState`, the phases and next sides the node publishes, and `LINK`'s bus
+//!   states and reset reasons (the board firmware's `board_core::BusState` and
+//!   `board_core::ResetReason`);
 //! * every message's `GenMsgCycleTime` is the period at which a running node sends it (0 for
-//!   the commands and `ACK`, sent on events), and the bits of `STATUS`'s flags byte are the
+//!   the commands and `ACK`, sent on events; `LINK` from a node whose firmware reports its link
+//!   health every cycle, as the board does), and the bits of `STATUS`'s flags byte are the
 //!   node's.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
@@ -21,8 +24,8 @@ use can_dbc::{MessageId, NumericValue, Signal, ValueDescription, ValueType};
 use planner_core::gait::{GaitParams, Phase, Side};
 use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
-    self, ids, signed_range, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream,
-    WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
+    self, ids, signed_range, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Status,
+    Stream, WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
 };
 
 mod ranges;
@@ -91,6 +94,7 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
         ids::FOOT_RIGHT,
         ids::STATUS,
         ids::DIAG,
+        ids::LINK,
     ]
     .iter()
     .map(|&i| u32::from(i))

@@ -154,6 +154,37 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("flags_reserved", b(st.flags >> 3)),
         ],
     ));
+    let lk = LinkHealth {
+        tec: byte,
+        rec: if high { 127 } else { 0 },
+        rx_passive: high,
+        bus_state: if high { 3 } else { 0 },
+        reset: if high { 15 } else { 0 },
+        bus_offs: word,
+        passive_episodes: word,
+        missed_slots: byte,
+    };
+    // The codec sends the reserved bits as 0; the highest frame sets them (the DBC's range is
+    // the field's width).
+    let mut lf = lk.encode();
+    if high {
+        lf.data[2] |= 0xC0;
+    }
+    assert_eq!(LinkHealth::decode(&lf), Some(lk));
+    out.push((
+        lf,
+        vec![
+            ("tec", b(lk.tec)),
+            ("rec", b(lk.rec)),
+            ("rx_passive", b(u8::from(lk.rx_passive))),
+            ("bus_state", b(lk.bus_state)),
+            ("reset", b(lk.reset)),
+            ("link_reserved", if high { 3.0 } else { 0.0 }),
+            ("bus_offs", f64::from(lk.bus_offs)),
+            ("passive_episodes", f64::from(lk.passive_episodes)),
+            ("missed_slots", b(lk.missed_slots)),
+        ],
+    ));
     let dg = Diag {
         foreign: word,
         bus_errors: word,

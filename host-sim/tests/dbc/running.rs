@@ -39,7 +39,7 @@ fn every_message_has_its_cycle_time() {
     ] {
         want.insert(id, cycle);
     }
-    for id in [ids::STATUS, ids::DIAG] {
+    for id in [ids::STATUS, ids::DIAG, ids::LINK] {
         want.insert(id, 20 * cycle);
     }
     let got: BTreeMap<u16, u64> = d
@@ -98,6 +98,9 @@ pub(crate) struct Rig {
     pub(crate) seq: u8,
     /// Where the last step was appended.
     pub(crate) last_step: Option<(f64, f64)>,
+    /// The link health reported to the node before each cycle, as the board firmware does
+    /// (`None`: not reported, the node sends no `LINK`).
+    pub(crate) link: Option<LinkHealth>,
     /// Cycles in which each identifier was sent.
     pub(crate) sent: BTreeMap<u16, Vec<u32>>,
     /// Cycles in which a command was received.
@@ -116,6 +119,7 @@ impl Rig {
             cycle: 0,
             seq: 0,
             last_step: None,
+            link: None,
             sent: BTreeMap::new(),
             commanded: vec![],
             seen: BTreeMap::new(),
@@ -140,6 +144,14 @@ impl Rig {
         self.cycle += 1;
         if !self.dev.rx.is_empty() {
             self.commanded.push(self.cycle);
+        }
+        if let Some(l) = &mut self.link {
+            // A different bus state and reset reason every 100 ms: every name is heard.
+            let k = self.cycle / 20;
+            l.bus_state = (k % 4) as u8;
+            l.reset = (k % board_core::ResetReason::ALL.len() as u32) as u8;
+            l.tec = self.cycle as u8;
+            self.node.set_link_health(*l);
         }
         let rep = self.node.poll(self.now_ms, &mut self.dev);
         let mut out = vec![];
@@ -177,6 +189,16 @@ impl Rig {
                     assert_eq!(name, next_side_name(side), "cycle {}", self.cycle);
                     assert_eq!(s["next_side"] as usize, next_side_position(side));
                     note("next_side", name);
+                }
+                ids::LINK => {
+                    let l = self.link.expect("LINK from a node without a report");
+                    assert_eq!(LinkHealth::decode(&f), Some(l));
+                    assert_eq!(s["bus_state"], f64::from(l.bus_state));
+                    assert_eq!(s["reset"], f64::from(l.reset));
+                    assert_eq!(s["tec"], f64::from(l.tec));
+                    assert_eq!(s["link_reserved"], 0.0);
+                    note("bus_state", self.name(f.id, "bus_state", s["bus_state"]));
+                    note("reset", self.name(f.id, "reset", s["reset"]));
                 }
                 ids::ACK => {
                     note("command", self.name(f.id, "command", s["command"]));
@@ -257,6 +279,10 @@ impl Rig {
 #[test]
 fn a_running_node_speaks_the_dbc() {
     let mut r = Rig::new(NodeConfig::hrp2());
+    r.link = Some(LinkHealth {
+        bus_offs: 3,
+        ..LinkHealth::default()
+    });
     r.cycles(40, false);
     assert_eq!(r.step(0), "accepted"); // a right step: the left foot is next
     r.cycles(20, false);
@@ -294,6 +320,8 @@ fn a_running_node_speaks_the_dbc() {
     assert_eq!(r.seen["phase"], all(ids::COG_VEL, "phase"));
     assert_eq!(r.seen["state"], all(ids::STATUS, "state"));
     assert_eq!(r.seen["next_side"], all(ids::DIAG, "next_side"));
+    assert_eq!(r.seen["bus_state"], all(ids::LINK, "bus_state"));
+    assert_eq!(r.seen["reset"], all(ids::LINK, "reset"));
     assert!(r.seen["command"].contains("control") && r.seen["command"].contains("estop"));
     assert!(r.seen["command"].contains("append"));
 

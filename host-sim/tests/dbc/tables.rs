@@ -125,7 +125,7 @@ fn the_lists_of_variants_are_complete_and_in_order() {
 
 /// The value tables the tests below compare with the codec: a table added to the DBC without
 /// a comparison fails here.
-pub(crate) const TABLES: [(u16, &str); 7] = [
+pub(crate) const TABLES: [(u16, &str); 9] = [
     (ids::CONTROL, "op"),
     (ids::ACK, "command"),
     (ids::ACK, "reason"),
@@ -133,6 +133,8 @@ pub(crate) const TABLES: [(u16, &str); 7] = [
     (ids::COG_VEL, "phase"),
     (ids::STATUS, "state"),
     (ids::DIAG, "next_side"),
+    (ids::LINK, "bus_state"),
+    (ids::LINK, "reset"),
 ];
 
 #[test]
@@ -282,4 +284,24 @@ fn phase_and_next_side_tables_have_every_variant() {
         .map(|(i, &s)| (i as i64, next_side_name(s)))
         .collect();
     assert_eq!(table(&d, ids::DIAG, "next_side"), sides);
+}
+
+#[test]
+fn link_tables_are_the_boards_bus_states_and_reset_reasons() {
+    let d = dbc();
+    let states: BTreeMap<i64, String> = board_core::BusState::ALL
+        .iter()
+        .map(|&s| (s as i64, name_of(&s)))
+        .collect();
+    assert_eq!(states.len(), 4);
+    assert_eq!(table(&d, ids::LINK, "bus_state"), states);
+    let resets: BTreeMap<i64, String> = board_core::ResetReason::ALL
+        .iter()
+        .map(|&r| (r as i64, name_of(&r)))
+        .collect();
+    assert_eq!(resets.len(), board_core::ResetReason::ALL.len());
+    assert_eq!(table(&d, ids::LINK, "reset"), resets);
+    assert_eq!(resets[&5], "independent_watchdog");
+    // Every code fits the 4-bit field.
+    assert!(resets.keys().all(|&c| c < 16));
 }

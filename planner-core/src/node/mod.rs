@@ -89,7 +89,8 @@ use steps::{Record, Steps};
 use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side, PREVIEW};
 use crate::shaping::PreviewGains;
 use crate::wire::{
-    ids, Ack, Command, ControlOp, Diag, RawFrame, Reason, Status, Stream, WireModify, WireStep,
+    ids, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Status, Stream, WireModify,
+    WireStep,
 };
 
 /// Frames that can wait to be sent.
@@ -211,6 +212,8 @@ pub struct Node<const Q: usize> {
     last_heard: Option<u32>,
     counters: Counters,
     cycle: u32,
+    /// The firmware's CAN link health, published in `LINK` once set.
+    link: Option<LinkHealth>,
 }
 
 fn reason_of(e: GaitError) -> Reason {
@@ -273,6 +276,7 @@ impl<const Q: usize> Node<Q> {
             last_heard: None,
             counters: Counters::default(),
             cycle: 0,
+            link: None,
         })
     }
 
@@ -304,6 +308,13 @@ impl<const Q: usize> Node<Q> {
     /// Tells the node that the last cycle overran its time budget (counted and published).
     pub fn note_overrun(&mut self) {
         self.counters.overruns = self.counters.overruns.saturating_add(1);
+    }
+
+    /// The firmware's report of its CAN link (error counters, bus state, reset reason, missed
+    /// slots): from now on the node publishes it in `LINK` with every `STATUS`. Call it once
+    /// per cycle, before [`Node::poll`].
+    pub fn set_link_health(&mut self, link: LinkHealth) {
+        self.link = Some(link);
     }
 
     /// `true` if `other` is in the same state as `self`: everything but the counters (see
@@ -742,7 +753,7 @@ impl<const Q: usize> Node<Q> {
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)
         for _ in 0..self.tx.len() {
             if let Some(f) = self.tx.pop_front() {
-                if matches!(f.id, ids::ACK | ids::STATUS | ids::DIAG) {
+                if matches!(f.id, ids::ACK | ids::STATUS | ids::DIAG | ids::LINK) {
                     let _ = self.tx.push_back(f);
                 }
             }
@@ -755,6 +766,9 @@ impl<const Q: usize> Node<Q> {
             self.enqueue(s);
             let d = self.diag().encode();
             self.enqueue(d);
+            if let Some(l) = self.link {
+                self.enqueue(l.encode());
+            }
         }
         let mut sent = 0u8;
         while let Some(raw) = self.tx.pop_front() {

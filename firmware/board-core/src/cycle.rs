@@ -1,10 +1,9 @@
 //! The bookkeeping of one control cycle: overruns (counted and reported to the node, which
 //! publishes them in its status) and the statistics window summarised once per second.
 //!
-//! Shared, as source, by the board image and the link-time no-panic check
-//! (`firmware/nopanic` compiles this file with `#[path]`), so that the check links the
-//! board's own code rather than a copy. Logging stays with the callers: the check leaves it
-//! out (defmt-rtt keeps reentrancy panics, see `firmware/nopanic`).
+//! Used by the board image, the link-time no-panic check (`firmware/nopanic`) and the QEMU
+//! image, so that all three run the board's own bookkeeping; host-tested (`tests/cycle.rs`).
+//! Logging stays with the callers.
 
 use planner_core::node::{Node, PollReport};
 

@@ -1,0 +1,148 @@
+//! The classic CAN frame of the adapter, and the M_CAN message-RAM element format
+//! (RM0433 §56.4.18: 2 header words and, with 8-byte elements, 2 data words).
+
+use embedded_can::{Frame, Id, StandardId};
+
+/// A classic CAN data frame with a standard identifier (the node's whole message set).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClassicFrame {
+    id: StandardId,
+    len: u8,
+    data: [u8; 8],
+}
+
+impl ClassicFrame {
+    /// The raw 11-bit identifier.
+    pub fn raw_id(&self) -> u16 {
+        self.id.as_raw()
+    }
+
+    /// The frame as a message-RAM TX buffer element (8-byte data field): T0 = standard id in
+    /// bits 28:18 (XTD = RTR = ESI = 0), T1 = DLC in bits 19:16 (classic: FDF = BRS = 0, no
+    /// event, marker 0), then the data bytes little-endian.
+    pub fn to_element(&self) -> [u32; 4] {
+        let d = self.data;
+        [
+            u32::from(self.id.as_raw()) << 18,
+            u32::from(self.len) << 16,
+            u32::from_le_bytes([d[0], d[1], d[2], d[3]]),
+            u32::from_le_bytes([d[4], d[5], d[6], d[7]]),
+        ]
+    }
+
+    /// A message-RAM RX FIFO element as a frame; `None` for what is not a classic standard
+    /// data frame of at most 8 bytes (extended id: R0 bit 30, remote: bit 29, FD: R1 bit 21,
+    /// a DLC above 8).
+    pub fn from_element(e: &[u32; 4]) -> Option<Self> {
+        let [r0, r1, d0, d1] = *e;
+        let extended = r0 & (1 << 30) != 0;
+        let remote = r0 & (1 << 29) != 0;
+        let fd = r1 & (1 << 21) != 0;
+        let dlc = ((r1 >> 16) & 0xF) as u8;
+        if extended || remote || fd || dlc > 8 {
+            return None;
+        }
+        let id = StandardId::new(((r0 >> 18) & 0x7FF) as u16)?;
+        let [a, b, c, d] = d0.to_le_bytes();
+        let [e, f, g, h] = d1.to_le_bytes();
+        let mut data = [a, b, c, d, e, f, g, h];
+        // Bytes beyond the DLC are not the frame's.
+        for (i, byte) in data.iter_mut().enumerate() {
+            if i >= usize::from(dlc) {
+                *byte = 0;
+            }
+        }
+        Some(Self { id, len: dlc, data })
+    }
+}
+
+impl Frame for ClassicFrame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        let Id::Standard(id) = id.into() else {
+            return None;
+        };
+        if data.len() > 8 {
+            return None;
+        }
+        let mut buf = [0; 8];
+        for (b, d) in buf.iter_mut().zip(data) {
+            *b = *d;
+        }
+        Some(Self {
+            id,
+            len: data.len() as u8,
+            data: buf,
+        })
+    }
+
+    /// Remote frames are not part of the message set.
+    fn new_remote(_id: impl Into<Id>, _dlc: usize) -> Option<Self> {
+        None
+    }
+
+    fn is_extended(&self) -> bool {
+        false
+    }
+
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+
+    fn id(&self) -> Id {
+        Id::Standard(self.id)
+    }
+
+    fn dlc(&self) -> usize {
+        usize::from(self.len)
+    }
+
+    fn data(&self) -> &[u8] {
+        // `len ≤ 8` (checked by `new` and `from_element`); `get` keeps this panic-free.
+        self.data.get(..usize::from(self.len)).unwrap_or(&self.data)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(id: u16, data: &[u8]) -> ClassicFrame {
+        ClassicFrame::new(StandardId::new(id).unwrap(), data).unwrap()
+    }
+
+    #[test]
+    fn element_round_trip_keeps_id_length_and_data() {
+        for (id, data) in [(0x7FF, &[][..]), (0x100, &[1, 2, 3]), (0x010, &[9; 8])] {
+            let f = frame(id, data);
+            let e = f.to_element();
+            assert_eq!(e[0] >> 18, u32::from(id));
+            assert_eq!((e[1] >> 16) & 0xF, data.len() as u32);
+            assert_eq!(ClassicFrame::from_element(&e), Some(f));
+        }
+    }
+
+    #[test]
+    fn foreign_elements_are_refused_and_bytes_past_the_dlc_dropped() {
+        let base = frame(0x100, &[1, 2]).to_element();
+        for (word, bit) in [(0, 30), (0, 29), (1, 21)] {
+            let mut e = base;
+            e[word] |= 1 << bit;
+            assert_eq!(
+                ClassicFrame::from_element(&e),
+                None,
+                "bit {bit} of word {word}"
+            );
+        }
+        let mut e = base;
+        e[1] = (e[1] & !(0xF << 16)) | (9 << 16); // DLC 9 is an FD length
+        assert_eq!(ClassicFrame::from_element(&e), None);
+        let mut e = base;
+        e[2] = 0xFFFF_FFFF;
+        assert_eq!(
+            ClassicFrame::from_element(&e).unwrap().data(),
+            &[0xFF, 0xFF]
+        );
+        assert!(ClassicFrame::new(embedded_can::ExtendedId::ZERO, &[]).is_none());
+        assert!(ClassicFrame::new(StandardId::ZERO, &[0; 9]).is_none());
+    }
+}

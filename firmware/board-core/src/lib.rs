@@ -1,0 +1,32 @@
+//! # board-core
+//!
+//! The STM32H743 board image's logic that needs no hardware, tested on the host:
+//!
+//! * [`link`]: the CAN link adapter, `embedded_can::nb::Can` for the node over the small
+//!   [`link::Fdcan`] trait (the run-time register accesses of the FDCAN): software queues,
+//!   bus-off recovery and the error state, replacement of stale stream frames, counters;
+//! * [`frame`]: the classic frame and the message-RAM element format;
+//! * [`pace`]: the 5 ms slots from a free-running 32-bit counter, missed slots counted;
+//! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
+//! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
+//! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
+//!   statistics window summarised once per second).
+//!
+//! The board implements [`link::Fdcan`] on FDCAN1 (`firmware/board/src/fdcan1.rs`); the tests
+//! (`tests/link.rs`) on a model of the peripheral, with planner-core's node on top. The QEMU
+//! image runs [`cycle`] around its timed polls too.
+#![cfg_attr(not(test), no_std)]
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod cycle;
+pub mod frame;
+pub mod link;
+pub mod pace;
+pub mod reset;
+pub mod rtt;
+
+pub use frame::ClassicFrame;
+pub use link::{BusState, Fdcan, Health, Link, RxLost};
+pub use pace::{Pacer, Slot};
+pub use reset::ResetReason;

@@ -1,0 +1,386 @@
+//! The CAN link adapter: `embedded_can::nb::Can` for the node over a small trait of the FDCAN
+//! peripheral ([`Fdcan`]), with software queues, the error state machine (bus-off recovery,
+//! counters) and the replacement of stale frames.
+//!
+//! # Message RAM (the board's layout, see firmware/README.md)
+//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements and there are [`TX_SLOTS`] (32) dedicated TX
+//! buffers, 8-byte elements. At 1 Mbit/s a classic frame takes at least 47 bit times (~21
+//! frames per ms with 8-byte frames far fewer), so 64 elements hold ≥ 2.9 ms of a saturated bus
+//! without being read: the node's worst poll (~0.25 ms) and a whole 5 ms cycle of any
+//! realistic command burst fit, and [`Link::service`] drains the FIFO while the loop waits. No
+//! interrupt is needed for that; an overflow is still detected (`RF0L`), counted
+//! ([`Health::rx_lost`]) and reported once to the node as a receive error (its `DIAG` bus
+//! errors).
+//!
+//! # Transmission
+//! A frame goes into a free TX buffer, or waits in a software queue of [`SOFT_TX`] frames.
+//! Every identifier except [`ids::ACK`] is a stream (a newer frame supersedes the older): a
+//! frame whose identifier already waits **replaces** it: in the software queue in place; in a
+//! TX buffer by cancelling that buffer (the new frame takes another free buffer or waits; a
+//! buffer is not reused before the core has finished cancelling it, and a frame already on
+//! the wire when the cancellation comes is sent). `ACK`s, one per
+//! command, are always queued. So after a stall the bus gets the newest reference, not 25 ms of
+//! old ones.
+//!
+//! # Errors
+//! [`Link::service`] reads the protocol status and error counters each time it runs. When the
+//! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter cancels every pending
+//! TX buffer (old frames), counts the bus-off and clears `INIT`: the core then waits for 129
+//! occurrences of 11 recessive bits (~1.4 ms at 1 Mbit/s) and is error-active again. Entering
+//! error-passive counts one episode. [`Link::health`] is what the board publishes (TEC, REC,
+//! state, counters).
+
+use embedded_can::nb::Can;
+use heapless::Deque;
+use planner_core::wire::{ids, LinkHealth};
+
+use crate::frame::ClassicFrame;
+
+/// Elements of RX FIFO0 in the board's message-RAM layout.
+pub const RX_ELEMENTS: usize = 64;
+/// Dedicated TX buffers in the board's message-RAM layout (the M_CAN maximum).
+pub const TX_SLOTS: usize = 32;
+/// Frames the software receive queue holds (beyond the hardware FIFO).
+pub const SOFT_RX: usize = 32;
+/// Frames the software transmit queue holds (beyond the TX buffers).
+pub const SOFT_TX: usize = 32;
+
+/// `PSR` bits the adapter reads (RM0433 FDCAN_PSR).
+pub mod psr {
+    /// Error-passive.
+    pub const EP: u32 = 1 << 5;
+    /// Error warning (a counter ≥ 96).
+    pub const EW: u32 = 1 << 6;
+    /// Bus-off.
+    pub const BO: u32 = 1 << 7;
+}
+
+/// The few accesses to the FDCAN peripheral that the adapter needs at run time. The board
+/// implements it on FDCAN1's registers and message RAM; the host tests on a model.
+pub trait Fdcan {
+    /// Reads the oldest element of RX FIFO0 and acknowledges it (`RXF0A`); `None` if empty.
+    fn rx_pop(&mut self) -> Option<[u32; 4]>;
+    /// `true` once after a frame was lost because RX FIFO0 was full (`IR.RF0L`, cleared).
+    fn rx_take_lost(&mut self) -> bool;
+    /// Pending TX buffers (`TXBRP`: bit `i` = buffer `i` waits for or is in transmission).
+    fn tx_pending(&self) -> u32;
+    /// Writes buffer `slot` (< [`TX_SLOTS`], not pending) and requests its transmission.
+    fn tx_start(&mut self, slot: usize, element: &[u32; 4]);
+    /// Requests the cancellation of the buffers in `mask` (`TXBCR`); a buffer stays pending
+    /// until the core has cancelled it (or sent it, if it was already on the bus).
+    fn tx_cancel(&mut self, mask: u32);
+    /// The protocol status register (`PSR`).
+    fn protocol_status(&self) -> u32;
+    /// The error counter register (`ECR`: TEC 7:0, REC 14:8, RP 15).
+    fn error_counters(&self) -> u32;
+    /// `true` while the core is in its initialisation state (`CCCR.INIT`; set by the core
+    /// itself on bus-off).
+    fn in_init(&self) -> bool;
+    /// Leaves the initialisation state (clears `CCCR.INIT`): bus-off recovery begins.
+    fn leave_init(&mut self);
+}
+
+/// The state of the node on the bus (ISO 11898-1 fault confinement).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BusState {
+    /// Error-active, both counters below 96.
+    #[default]
+    Active = 0,
+    /// Error-active, a counter at 96 or above (warning).
+    Warning = 1,
+    /// Error-passive (a counter above 127).
+    Passive = 2,
+    /// Bus-off (TEC above 255): not on the bus until recovered.
+    BusOff = 3,
+}
+
+impl BusState {
+    /// Every state, in the order of its code (checked against `LINK`'s `bus_state` value
+    /// table in host-sim/can/walking.dbc).
+    pub const ALL: [BusState; 4] = [Self::Active, Self::Warning, Self::Passive, Self::BusOff];
+}
+
+/// What the board publishes about the link (counters saturating).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Health {
+    /// Transmit error counter.
+    pub tec: u8,
+    /// Receive error counter (7 bits).
+    pub rec: u8,
+    /// The receive error counter reached the error-passive level (`ECR.RP`).
+    pub rx_passive: bool,
+    /// Bus state at the last [`Link::service`].
+    pub state: BusState,
+    /// Bus-off events since start-up (each one recovered).
+    pub bus_offs: u16,
+    /// Entries into error-passive since start-up.
+    pub passive_episodes: u16,
+    /// RX FIFO0 overflows seen (frames lost while the FIFO was full).
+    pub rx_lost: u16,
+    /// Frames superseded before they were sent (software queue or cancelled TX buffer).
+    pub replaced: u16,
+    /// Received elements that were not classic standard data frames (dropped).
+    pub rx_foreign: u16,
+}
+
+impl Health {
+    /// The `LINK` frame's content: this health, the reset reason and the missed slots
+    /// (saturating at 255).
+    pub fn to_wire(&self, reset: crate::ResetReason, missed_slots: u32) -> LinkHealth {
+        LinkHealth {
+            tec: self.tec,
+            rec: self.rec,
+            rx_passive: self.rx_passive,
+            bus_state: self.state as u8,
+            reset: reset as u8,
+            bus_offs: self.bus_offs,
+            passive_episodes: self.passive_episodes,
+            missed_slots: missed_slots.min(255) as u8,
+        }
+    }
+}
+
+/// The receive error: frames were lost (RX FIFO0 overflowed) since the last report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RxLost;
+
+impl embedded_can::Error for RxLost {
+    fn kind(&self) -> embedded_can::ErrorKind {
+        embedded_can::ErrorKind::Overrun
+    }
+}
+
+/// The adapter over peripheral `P`.
+pub struct Link<P: Fdcan> {
+    hw: P,
+    rx: Deque<ClassicFrame, SOFT_RX>,
+    tx: Deque<ClassicFrame, SOFT_TX>,
+    /// Identifier in each TX buffer since it was started (meaningful while pending).
+    slot_id: [u16; TX_SLOTS],
+    /// Buffers whose cancellation the adapter requested and that are still pending.
+    cancelling: u32,
+    /// An overflow was seen and not yet reported to the receiver.
+    lost_unreported: bool,
+    health: Health,
+}
+
+/// `true` for identifiers where a newer frame supersedes a waiting one (all but `ACK`).
+pub fn supersedes(id: u16) -> bool {
+    id != ids::ACK
+}
+
+/// Buffer mask covering all TX buffers.
+const ALL_SLOTS: u32 = if TX_SLOTS >= 32 {
+    u32::MAX
+} else {
+    (1 << TX_SLOTS) - 1
+};
+
+impl<P: Fdcan> Link<P> {
+    /// The adapter over a configured peripheral in normal operation.
+    pub fn new(hw: P) -> Self {
+        Self {
+            hw,
+            rx: Deque::new(),
+            tx: Deque::new(),
+            slot_id: [0; TX_SLOTS],
+            cancelling: 0,
+            lost_unreported: false,
+            health: Health::default(),
+        }
+    }
+
+    /// The peripheral (for the tests' model, and the fault handler's silencing).
+    pub fn peripheral(&self) -> &P {
+        &self.hw
+    }
+
+    /// The peripheral, mutably.
+    pub fn peripheral_mut(&mut self) -> &mut P {
+        &mut self.hw
+    }
+
+    /// What the board publishes.
+    pub fn health(&self) -> Health {
+        self.health
+    }
+
+    /// Frames waiting in the software transmit queue.
+    pub fn tx_waiting(&self) -> usize {
+        self.tx.len()
+    }
+
+    /// Error state machine, then RX FIFO0 into the software queue and the software transmit
+    /// queue into free TX buffers. Call it often while the loop waits (cheap when idle).
+    pub fn service(&mut self) {
+        self.check_errors();
+        self.drain_rx();
+        self.pump_tx();
+    }
+
+    fn check_errors(&mut self) {
+        let psr = self.hw.protocol_status();
+        let ecr = self.hw.error_counters();
+        let h = &mut self.health;
+        h.tec = (ecr & 0xFF) as u8;
+        h.rec = ((ecr >> 8) & 0x7F) as u8;
+        h.rx_passive = ecr & (1 << 15) != 0;
+        let state = if psr & psr::BO != 0 {
+            BusState::BusOff
+        } else if psr & psr::EP != 0 {
+            BusState::Passive
+        } else if psr & psr::EW != 0 {
+            BusState::Warning
+        } else {
+            BusState::Active
+        };
+        // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
+        // bus-off that came before this adapter saw the recovery end).
+        let in_init = state == BusState::BusOff && self.hw.in_init();
+        if state == BusState::BusOff && (h.state != BusState::BusOff || in_init) {
+            h.bus_offs = h.bus_offs.saturating_add(1);
+            // What waits in the TX buffers is old by the time the bus is back.
+            let pending = self.hw.tx_pending() & ALL_SLOTS;
+            if pending != 0 {
+                self.hw.tx_cancel(pending);
+                self.cancelling |= pending;
+            }
+        }
+        if state == BusState::Passive && !matches!(h.state, BusState::Passive) {
+            h.passive_episodes = h.passive_episodes.saturating_add(1);
+        }
+        h.state = state;
+        if in_init {
+            // Recovery: the core re-joins after 129 × 11 recessive bits.
+            self.hw.leave_init();
+        }
+    }
+
+    fn drain_rx(&mut self) {
+        if self.hw.rx_take_lost() {
+            self.health.rx_lost = self.health.rx_lost.saturating_add(1);
+            self.lost_unreported = true;
+        }
+        while !self.rx.is_full() {
+            let Some(f) = self.read_hw() else {
+                break;
+            };
+            // Not full: checked by the loop condition.
+            let _ = self.rx.push_back(f);
+        }
+    }
+
+    /// The next classic frame of RX FIFO0 (others are counted and dropped).
+    fn read_hw(&mut self) -> Option<ClassicFrame> {
+        while let Some(e) = self.hw.rx_pop() {
+            match ClassicFrame::from_element(&e) {
+                Some(f) => return Some(f),
+                None => self.health.rx_foreign = self.health.rx_foreign.saturating_add(1),
+            }
+        }
+        None
+    }
+
+    /// Buffers neither pending nor being cancelled.
+    fn free_slots(&mut self) -> u32 {
+        let pending = self.hw.tx_pending() & ALL_SLOTS;
+        self.cancelling &= pending;
+        !pending & !self.cancelling & ALL_SLOTS
+    }
+
+    /// Starts `f` in a free buffer; `false` if none is free (or the bus is off).
+    fn start(&mut self, f: &ClassicFrame) -> bool {
+        if self.health.state == BusState::BusOff {
+            return false;
+        }
+        let free = self.free_slots();
+        if free == 0 {
+            return false;
+        }
+        let slot = free.trailing_zeros() as usize;
+        let Some(id) = self.slot_id.get_mut(slot) else {
+            return false;
+        };
+        *id = f.raw_id();
+        self.hw.tx_start(slot, &f.to_element());
+        true
+    }
+
+    fn pump_tx(&mut self) {
+        while let Some(f) = self.tx.front().copied() {
+            if !self.start(&f) {
+                break;
+            }
+            self.tx.pop_front();
+        }
+    }
+
+    /// Replaces a waiting frame of `f`'s identifier; `true` if `f` is taken care of.
+    fn replace(&mut self, f: &ClassicFrame) -> bool {
+        let id = f.raw_id();
+        if !supersedes(id) {
+            return false;
+        }
+        let mut queued = false;
+        if let Some(old) = self.tx.iter_mut().find(|w| w.raw_id() == id) {
+            *old = *f;
+            queued = true;
+        }
+        let pending = self.hw.tx_pending() & ALL_SLOTS & !self.cancelling;
+        let mut hit = 0u32;
+        for (slot, sid) in self.slot_id.iter().enumerate() {
+            if pending & (1 << slot) != 0 && *sid == id {
+                hit |= 1 << slot;
+            }
+        }
+        if hit != 0 {
+            self.hw.tx_cancel(hit);
+            self.cancelling |= hit;
+        }
+        if queued || hit != 0 {
+            self.health.replaced = self.health.replaced.saturating_add(1);
+        }
+        // Replaced in the queue: done; only cancelled in a buffer: still to be queued.
+        queued
+    }
+}
+
+impl<P: Fdcan> Can for Link<P> {
+    type Frame = ClassicFrame;
+    type Error = RxLost;
+
+    /// Never displaces a frame (`Ok(None)`); `WouldBlock` only when every TX buffer and the
+    /// software queue are taken.
+    fn transmit(&mut self, frame: &ClassicFrame) -> nb::Result<Option<ClassicFrame>, RxLost> {
+        if self.replace(frame) {
+            return Ok(None);
+        }
+        self.pump_tx();
+        if self.tx.is_empty() && self.start(frame) {
+            return Ok(None);
+        }
+        match self.tx.push_back(*frame) {
+            Ok(()) => Ok(None),
+            Err(_) => Err(nb::Error::WouldBlock),
+        }
+    }
+
+    /// The oldest frame (software queue, then RX FIFO0); once after an overflow, [`RxLost`].
+    fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
+        if self.hw.rx_take_lost() {
+            self.health.rx_lost = self.health.rx_lost.saturating_add(1);
+            self.lost_unreported = true;
+        }
+        if self.lost_unreported {
+            self.lost_unreported = false;
+            return Err(nb::Error::Other(RxLost));
+        }
+        if let Some(f) = self.rx.pop_front() {
+            return Ok(f);
+        }
+        match self.read_hw() {
+            Some(f) => Ok(f),
+            None => Err(nb::Error::WouldBlock),
+        }
+    }
+}

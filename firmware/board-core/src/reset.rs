@@ -1,0 +1,140 @@
+//! Why the MCU started: the reset flags of `RCC_RSR` (RM0433 §8.7.37) and the board's own
+//! mark for a reset by its fault handler.
+
+/// Reset reason, as published (4 bits in `LINK`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResetReason {
+    /// No flag the board knows (or flags not read yet).
+    Unknown = 0,
+    /// Power-on (POR/PDR).
+    PowerOn = 1,
+    /// The NRST pin (a reset button, a probe).
+    Pin = 2,
+    /// Brown-out (supply below the BOR level) without a power-on.
+    BrownOut = 3,
+    /// Software reset (`SYSRESETREQ`) not from the fault handler: e.g. a probe's reset.
+    Software = 4,
+    /// The independent watchdog (a hung loop).
+    IndependentWatchdog = 5,
+    /// The window watchdog.
+    WindowWatchdog = 6,
+    /// The fault handler (HardFault, panic) reset the MCU after silencing the CAN output.
+    Fault = 7,
+    /// The clock security system saw the HSE fail (NMI); the fault handler reset the MCU.
+    ClockFailure = 8,
+    /// A low-power reset (illegal Stop/Standby entry).
+    LowPower = 9,
+}
+
+/// `RCC_RSR` flags.
+pub mod rsr {
+    /// Low-power reset.
+    pub const LPWRRSTF: u32 = 1 << 30;
+    /// Window watchdog 1.
+    pub const WWDG1RSTF: u32 = 1 << 28;
+    /// Independent watchdog 1.
+    pub const IWDG1RSTF: u32 = 1 << 26;
+    /// Software reset (CPU1).
+    pub const SFTRSTF: u32 = 1 << 24;
+    /// Power-on / power-down reset.
+    pub const PORRSTF: u32 = 1 << 23;
+    /// NRST pin.
+    pub const PINRSTF: u32 = 1 << 22;
+    /// Brown-out reset.
+    pub const BORRSTF: u32 = 1 << 21;
+}
+
+/// What the fault handler leaves in its no-init word before a reset (`0xFA17_xxxx`: the low
+/// half says which fault).
+pub const FAULT_MARK: u32 = 0xFA17_0000;
+/// [`FAULT_MARK`] for a HardFault or a panic.
+pub const MARK_FAULT: u32 = FAULT_MARK | 1;
+/// [`FAULT_MARK`] for a clock failure (CSS NMI).
+pub const MARK_CLOCK: u32 = FAULT_MARK | 2;
+
+impl ResetReason {
+    /// Every reason, in the order of its code (the `reset` value table of `LINK` in
+    /// host-sim/can/walking.dbc is checked against it).
+    pub const ALL: [ResetReason; 10] = [
+        Self::Unknown,
+        Self::PowerOn,
+        Self::Pin,
+        Self::BrownOut,
+        Self::Software,
+        Self::IndependentWatchdog,
+        Self::WindowWatchdog,
+        Self::Fault,
+        Self::ClockFailure,
+        Self::LowPower,
+    ];
+
+    /// The reason from `RCC_RSR` and the fault handler's `mark` (the no-init word, garbage
+    /// after a power-on). The watchdogs come first (a pin reset flag accompanies every reset
+    /// on the STM32H7: the reset circuit drives NRST), then a software reset marked by the
+    /// fault handler, power-on, brown-out, software, pin.
+    pub fn decode(rsr: u32, mark: u32) -> Self {
+        use rsr::*;
+        if rsr & IWDG1RSTF != 0 {
+            Self::IndependentWatchdog
+        } else if rsr & WWDG1RSTF != 0 {
+            Self::WindowWatchdog
+        } else if rsr & LPWRRSTF != 0 {
+            Self::LowPower
+        } else if rsr & PORRSTF != 0 {
+            Self::PowerOn
+        } else if rsr & SFTRSTF != 0 && mark == MARK_FAULT {
+            Self::Fault
+        } else if rsr & SFTRSTF != 0 && mark == MARK_CLOCK {
+            Self::ClockFailure
+        } else if rsr & BORRSTF != 0 {
+            Self::BrownOut
+        } else if rsr & SFTRSTF != 0 {
+            Self::Software
+        } else if rsr & PINRSTF != 0 {
+            Self::Pin
+        } else {
+            Self::Unknown
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rsr::*;
+    use super::*;
+
+    #[test]
+    fn each_reset_is_told_apart() {
+        let cases = [
+            (PORRSTF | BORRSTF | PINRSTF, 0x1234, ResetReason::PowerOn),
+            (BORRSTF | PINRSTF, 0, ResetReason::BrownOut),
+            (PINRSTF, MARK_FAULT, ResetReason::Pin),
+            (SFTRSTF | PINRSTF, 0, ResetReason::Software),
+            (SFTRSTF | PINRSTF, MARK_FAULT, ResetReason::Fault),
+            (SFTRSTF | PINRSTF, MARK_CLOCK, ResetReason::ClockFailure),
+            (
+                IWDG1RSTF | PINRSTF,
+                MARK_FAULT,
+                ResetReason::IndependentWatchdog,
+            ),
+            (WWDG1RSTF | PINRSTF, 0, ResetReason::WindowWatchdog),
+            (LPWRRSTF | PINRSTF, 0, ResetReason::LowPower),
+            (0, 0, ResetReason::Unknown),
+        ];
+        for (rsr, mark, want) in cases {
+            assert_eq!(
+                ResetReason::decode(rsr, mark),
+                want,
+                "rsr {rsr:#x} mark {mark:#x}"
+            );
+        }
+        for (code, r) in ResetReason::ALL.iter().enumerate() {
+            assert_eq!(*r as usize, code);
+        }
+        // A power-on leaves garbage in the mark's word: never read as a fault.
+        assert_eq!(
+            ResetReason::decode(PORRSTF | SFTRSTF, MARK_FAULT),
+            ResetReason::PowerOn
+        );
+    }
+}

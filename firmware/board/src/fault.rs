@@ -1,0 +1,87 @@
+//! The safe state: what HardFault, an unexpected interrupt, a panic and the clock security
+//! system's NMI all do, and the reset reason read at start-up.
+//!
+//! [`fail_safe`]: interrupts off; FDCAN1 into its initialisation state with every pending TX
+//! buffer cancelled (the node falls silent on the bus at once: recessive, no error frames,
+//! no stale references); the fault pin (PB14 = LD3, red, on the NUCLEO-H743ZI2;
+//! configured by `main`) high; a mark in a no-init RAM word saying why; about 20 ms so that the pin
+//! is seen; then a system reset. After the reset the mark and `RCC_RSR` give the reason the
+//! node publishes (`LINK`), and the fault pin is low again (GPIO reset).
+//!
+//! The IWDG is not stopped: if the reset request itself failed, the watchdog resets the MCU.
+
+#![allow(unsafe_code)]
+
+use core::cell::UnsafeCell;
+use core::mem::MaybeUninit;
+
+use board_core::reset::{MARK_CLOCK, MARK_FAULT};
+use board_core::ResetReason;
+use cortex_m_rt::{exception, ExceptionFrame};
+use stm32h7xx_hal::pac;
+
+use crate::fdcan1;
+
+/// Core cycles the fault pin stays high before the reset (20 ms at 480 MHz; longer if the
+/// clock has fallen back to the 64 MHz HSI).
+const HOLD_CYCLES: u32 = 9_600_000;
+
+struct Mark(UnsafeCell<MaybeUninit<u32>>);
+// SAFETY: written only by `fail_safe` (interrupts off, never returns) and read/cleared once by
+// `take_reset_reason` at start-up before anything else runs.
+unsafe impl Sync for Mark {}
+
+/// Survives a system reset (DTCM keeps its contents; `.uninit` is not zeroed by the start-up
+/// code); garbage after a power-on, which `ResetReason::decode` never reads as a fault.
+#[link_section = ".uninit.FAULT_MARK"]
+static MARK: Mark = Mark(UnsafeCell::new(MaybeUninit::uninit()));
+
+/// Why the MCU started; clears the reset flags and the mark. Call it once, first thing.
+pub fn take_reset_reason(rcc: &pac::RCC) -> ResetReason {
+    let rsr = rcc.rsr.read().bits();
+    // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned in RAM; no other
+    // code runs yet.
+    let mark = unsafe { core::ptr::read_volatile(MARK.0.get() as *const u32) };
+    // SAFETY: as above.
+    unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, 0) };
+    rcc.rsr.modify(|_, w| w.rmvf().clear());
+    ResetReason::decode(rsr, mark)
+}
+
+/// Silences the CAN output, raises the fault pin, leaves `mark` and resets the MCU.
+pub fn fail_safe(mark: u32) -> ! {
+    cortex_m::interrupt::disable();
+    fdcan1::silence();
+    // SAFETY: a single write of the port's set/reset register (bit-set only: no other pin
+    // changes); GPIOB's clock is on and PB14 is a push-pull output since start-up.
+    unsafe { (*pac::GPIOB::ptr()).bsrr.write(|w| w.bs14().set_bit()) };
+    // SAFETY: see `MARK`; nothing reads it before the reset.
+    unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, mark) };
+    cortex_m::asm::delay(HOLD_CYCLES);
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+#[exception]
+unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+    fail_safe(MARK_FAULT)
+}
+
+/// An interrupt nobody enabled: treated as a fault.
+#[exception]
+unsafe fn DefaultHandler(_irqn: i16) {
+    fail_safe(MARK_FAULT)
+}
+
+/// The clock security system: the HSE failed and the hardware switched the system clock to the
+/// HSI (the PLLs, and with them the FDCAN kernel clock, stop). The node cannot keep its bit
+/// timing: safe state and reset (the next start-up waits for the HSE; if it never comes back,
+/// the IWDG resets the MCU every watchdog period and the node stays off the bus).
+#[exception]
+unsafe fn NonMaskableInt() {
+    fail_safe(MARK_CLOCK)
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    fail_safe(MARK_FAULT)
+}

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# The board image's flash and static RAM, from the build: the line firmware/README.md quotes.
+#
+#     bash firmware/size.sh           builds the board image (release) and prints the line
+#     bash firmware/size.sh --check   ... and fails if firmware/README.md does not contain it
+#                                     (tests/run-all.sh runs this, so the figures cannot go stale)
+#
+# Needs an `llvm-size` (LLVM on PATH, or rustup's llvm-tools component: `rustup component add
+# llvm-tools`) or `arm-none-eabi-size`; all print the same `-A` table.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")"
+
+size_tool() {
+    if command -v llvm-size >/dev/null 2>&1; then
+        echo llvm-size
+        return
+    fi
+    local sysroot
+    sysroot="$(rustc --print sysroot)"
+    for t in "$sysroot"/lib/rustlib/*/bin/llvm-size; do
+        if [ -x "$t" ]; then
+            echo "$t"
+            return
+        fi
+    done
+    if command -v arm-none-eabi-size >/dev/null 2>&1; then
+        echo arm-none-eabi-size
+        return
+    fi
+    echo "no llvm-size: install LLVM or run \`rustup component add llvm-tools\`" >&2
+    exit 1
+}
+
+cargo build --release -p firmware-board >&2
+elf=target/thumbv7em-none-eabihf/release/board
+table="$("$(size_tool)" -A "$elf")"
+section() {
+    awk -v s="$1" '$1 == s { print $2; found = 1 } END { if (!found) print 0 }' <<<"$table"
+}
+vt=$(section .vector_table)
+text=$(section .text)
+rodata=$(section .rodata)
+data=$(section .data)
+bss=$(section .bss)
+uninit=$(section .uninit)
+flash=$((vt + text + rodata + data))
+ram=$((data + bss + uninit))
+line="board image: flash ${flash} B (.vector_table ${vt}, .text ${text}, .rodata ${rodata}, .data ${data}); static RAM ${ram} B (.data ${data}, .bss ${bss}, .uninit ${uninit})"
+echo "$line"
+if [ "${1:-}" = "--check" ]; then
+    if ! grep -qF -- "$line" README.md; then
+        echo "firmware/README.md does not quote the board image's sizes; expected the line:" >&2
+        echo "    $line" >&2
+        exit 1
+    fi
+    echo "firmware/README.md quotes these sizes"
+fi
