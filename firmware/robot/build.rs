@@ -41,17 +41,7 @@ fn main() {
     // The preview gains, computed here once (the reader has checked that they can be), so
     // that the image copies them at start-up instead of iterating the Riccati equation.
     let gains = if robot.params.shaping {
-        let p = &robot.params;
-        let config = planner_core::shaping::PreviewConfig {
-            model: planner_core::shaping::CartTable {
-                dt: p.dt,
-                z_c: p.cog_height,
-                g: p.gravity,
-            },
-            qe: p.preview_qe,
-            r: p.preview_r,
-            ..planner_core::shaping::PreviewConfig::default()
-        };
+        let config = robot.params.preview_config();
         let mut g = Box::new(planner_core::shaping::PreviewGains::<
             f64,
             { planner_core::gait::PREVIEW },

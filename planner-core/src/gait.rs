@@ -239,6 +239,21 @@ impl<T: Real> GaitParams<T> {
         }
     }
 
+    /// The preview controller of these parameters: the cart-table model (`dt`, `z_c`, `g`)
+    /// and the weights, with the default solver settings.
+    pub fn preview_config(&self) -> PreviewConfig {
+        PreviewConfig {
+            model: CartTable {
+                dt: self.dt.f64(),
+                z_c: self.cog_height,
+                g: self.gravity,
+            },
+            qe: self.preview_qe,
+            r: self.preview_r,
+            ..PreviewConfig::default()
+        }
+    }
+
     fn seconds(&self, ticks: u32) -> T {
         T::of(ticks as f64) * self.dt
     }
@@ -835,20 +850,6 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         Self::build(params, left, right, Some(gains))
     }
 
-    /// The preview controller of `params`.
-    fn preview_config(params: &GaitParams<T>) -> PreviewConfig {
-        PreviewConfig {
-            model: CartTable {
-                dt: params.dt.f64(),
-                z_c: params.cog_height,
-                g: params.gravity,
-            },
-            qe: params.preview_qe,
-            r: params.preview_r,
-            ..PreviewConfig::default()
-        }
-    }
-
     fn build(
         params: GaitParams<T>,
         left: Footstep<T>,
@@ -901,7 +902,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         }
         params.validate()?;
         if params.shaping {
-            let config = Self::preview_config(&params);
+            let config = params.preview_config();
             match gains {
                 Some(given) if given.are_for(&config, Law::FromRest) => g.gains.copy_from(given),
                 Some(_) => return Err(GaitError::Gains(GainError::BadConfig)),

@@ -38,7 +38,7 @@ use std::boxed::Box;
 
 use crate::gait::{GaitParams, Tail, PREVIEW};
 use crate::node::{NodeConfig, Reach};
-use crate::shaping::{CartTable, Law, PreviewConfig, PreviewGains};
+use crate::shaping::{Law, PreviewGains};
 
 /// A robot, as read from its file.
 #[derive(Clone, Debug, PartialEq)]
@@ -345,12 +345,7 @@ impl Robot {
         // The preview controller's gains exist for these weights (the node computes them at
         // start-up: a file that passes here starts a node).
         if params.shaping {
-            let config = PreviewConfig {
-                model: CartTable { dt, z_c, g },
-                qe,
-                r,
-                ..PreviewConfig::default()
-            };
+            let config = params.preview_config();
             let mut gains = Box::new(PreviewGains::<f64, PREVIEW>::zeroed());
             gains.compute(&config, Law::FromRest).map_err(|e| {
                 invalid(

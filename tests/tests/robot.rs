@@ -79,17 +79,7 @@ fn the_compiled_in_gains_are_the_ones_the_node_computes() {
     let copied: Node<16> = Node::with_gains(cfg, &walk_robot::GAINS).unwrap();
     assert!(copied.same_state(&computed));
     // Every table entry, bit for bit (the build script computed them on the build machine).
-    let p = cfg.params;
-    let config = planner_core::shaping::PreviewConfig {
-        model: planner_core::shaping::CartTable {
-            dt: p.dt,
-            z_c: p.cog_height,
-            g: p.gravity,
-        },
-        qe: p.preview_qe,
-        r: p.preview_r,
-        ..Default::default()
-    };
+    let config = cfg.params.preview_config();
     let gains = planner_core::shaping::PreviewGains::<f64, { planner_core::gait::PREVIEW }>::new(
         &config,
         planner_core::shaping::Law::FromRest,
