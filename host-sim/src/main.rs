@@ -682,44 +682,6 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
     Ok(())
 }
 
-/// Largest distance between the multi-body ZMP and the support-foot centre during the single
-/// support in which the modification takes effect \[m\] (the paper's "maximum ZMP error");
-/// `None` when the model's legs cannot reach the footsteps.
-fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
-    let mb = evaluate(&Model::hrp2(), &m.trajectory, dt).ok()?;
-    let start = paper::MODIFICATION_TICK as usize;
-    let support = (m.before * 3.0, -0.1);
-    let mut worst: f64 = 0.0;
-    for (r, s) in m.trajectory.iter().zip(&mb).skip(start) {
-        if r.phase != Phase::Single(Side::Right) {
-            break;
-        }
-        worst = worst.max((s.mb_zmp_x - support.0).hypot(s.mb_zmp_y - support.1));
-    }
-    Some(worst)
-}
-
-/// A 7×7 grid over the step lengths as a Markdown table (rows: after, columns: before).
-fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> String {
-    let mut md = format!("{title}\n\n| after \\ before |");
-    for b in STEP_LENGTHS {
-        md += &format!(" {b:+.1} |");
-    }
-    md += "\n|---|";
-    for _ in STEP_LENGTHS {
-        md += "---|";
-    }
-    md += "\n";
-    for (r, after) in STEP_LENGTHS.iter().enumerate() {
-        md += &format!("| {after:+.1} |");
-        for c in 0..STEP_LENGTHS.len() {
-            md += &format!(" {} |", cell(r, c));
-        }
-        md += "\n";
-    }
-    md
-}
-
 fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
     let params = GaitParams::<f64>::hrp2();
     create_dir(out)?;
@@ -742,8 +704,10 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
             adjust[r][c] = m.adjust_s;
             lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
             lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
-            with[r][c] = modified_support_error(&m, params.dt).unwrap_or(f64::NAN);
-            without[r][c] = modified_support_error(&w, params.dt).unwrap_or(f64::NAN);
+            with[r][c] =
+                paper::modified_support_error(&Model::hrp2(), &m, params.dt).unwrap_or(f64::NAN);
+            without[r][c] =
+                paper::modified_support_error(&Model::hrp2(), &w, params.dt).unwrap_or(f64::NAN);
             let mut m = m;
             m.trajectory.clear();
             row.push(m);
@@ -771,7 +735,7 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         &out.join("tables.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    let mut md = grid_markdown(
+    let mut md = paper::grid_markdown(
         "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)",
         |r, c| format!("{:.3} / {:.3}", adjust[r][c], PAPER_ADJUST_S[r][c]),
     );
@@ -796,7 +760,7 @@ fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
         ),
     ] {
         md += "\n";
-        md += &grid_markdown(title, |r, c| {
+        md += &paper::grid_markdown(title, |r, c| {
             format!("{} / {:.1}", cell(ours[r][c]), theirs[r][c] * 100.0)
         });
     }

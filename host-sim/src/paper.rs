@@ -187,3 +187,47 @@ pub fn cells_within(grid: &[Vec<Modification>], dt: f64, cycles: f64) -> usize {
     }
     n
 }
+
+/// Largest distance between the multi-body ZMP of `model` and the support-foot centre during
+/// the single support in which the modification takes effect \[m\] (the paper's "maximum ZMP
+/// error", as `host-sim tables` and `host-sim physics-tables` report it); `None` when the
+/// model's legs cannot reach the footsteps.
+pub fn modified_support_error(
+    model: &crate::multibody::Model,
+    m: &Modification,
+    dt: f64,
+) -> Option<f64> {
+    let mb = crate::multibody::evaluate(model, &m.trajectory, dt).ok()?;
+    let start = MODIFICATION_TICK as usize;
+    let support = (m.before * 3.0, -0.1);
+    let mut worst: f64 = 0.0;
+    for (r, s) in m.trajectory.iter().zip(&mb).skip(start) {
+        if r.phase != Phase::Single(Side::Right) {
+            break;
+        }
+        worst = worst.max((s.mb_zmp_x - support.0).hypot(s.mb_zmp_y - support.1));
+    }
+    Some(worst)
+}
+
+/// A 7×7 grid over [`STEP_LENGTHS`] as a Markdown table (rows: after, columns: before), the
+/// text of cell `(row, column)` from `cell`.
+pub fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> String {
+    let mut md = format!("{title}\n\n| after \\ before |");
+    for b in STEP_LENGTHS {
+        md += &format!(" {b:+.1} |");
+    }
+    md += "\n|---|";
+    for _ in STEP_LENGTHS {
+        md += "---|";
+    }
+    md += "\n";
+    for (r, after) in STEP_LENGTHS.iter().enumerate() {
+        md += &format!("| {after:+.1} |");
+        for c in 0..STEP_LENGTHS.len() {
+            md += &format!(" {} |", cell(r, c));
+        }
+        md += "\n";
+    }
+    md
+}

@@ -17,11 +17,10 @@ use serde_json::{json, Value};
 
 use super::model::link_table;
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::multibody::evaluate;
 use crate::paper::{
     self, without_adjustment, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS,
 };
-use planner_core::gait::{GaitParams, Phase, Side};
+use planner_core::gait::GaitParams;
 
 /// The paper's remark (section IV.C): walking was difficult in dynamic simulation when the ZMP
 /// error exceeded about this \[m\].
@@ -47,22 +46,6 @@ pub struct Cell {
     pub mb_error_plain_m: Option<f64>,
     /// The same for the proposed trajectory \[m\].
     pub mb_error_proposed_m: Option<f64>,
-}
-
-/// Largest distance between the multi-body ZMP and the support-foot centre during the single
-/// support in which the modification takes effect \[m\] (as `host-sim tables` reports it).
-fn modified_support_error(m: &paper::Modification, dt: f64) -> Option<f64> {
-    let mb = evaluate(&link_table(), &m.trajectory, dt).ok()?;
-    let start = paper::MODIFICATION_TICK as usize;
-    let support = (m.before * 3.0, -0.1);
-    let mut worst: f64 = 0.0;
-    for (r, s) in m.trajectory.iter().zip(&mb).skip(start) {
-        if r.phase != Phase::Single(Side::Right) {
-            break;
-        }
-        worst = worst.max((s.mb_zmp_x - support.0).hypot(s.mb_zmp_y - support.1));
-    }
-    Some(worst)
 }
 
 /// The time window of the modified step in trajectory time \[s\]: from the re-plan at 4.0 s
@@ -103,7 +86,7 @@ pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String>
     };
     for (params, plain) in [(plain_params(), true), (proposed_params, false)] {
         let m = paper::modification(params, before, after);
-        let mb = modified_support_error(&m, dt);
+        let mb = paper::modified_support_error(&link_table(), &m, dt);
         // Out of reach kinematically: no engine run either.
         let (report, window) = match mb {
             Some(_) => {
@@ -177,28 +160,13 @@ pub fn tables_json(cells: &[Cell]) -> Value {
 
 /// A 7 × 7 Markdown grid of the cells (rows: after, columns: before); `-` where not run.
 pub fn markdown(title: &str, cells: &[Cell], f: impl Fn(&Cell) -> String) -> String {
-    let mut md = format!("{title}\n\n| after \\ before |");
-    for b in STEP_LENGTHS {
-        md += &format!(" {b:+.1} |");
-    }
-    md += "\n|---|";
-    for _ in STEP_LENGTHS {
-        md += "---|";
-    }
-    md += "\n";
-    for (r, after) in STEP_LENGTHS.iter().enumerate() {
-        md += &format!("| {after:+.1} |");
-        for c in 0..STEP_LENGTHS.len() {
-            let s = cells
-                .iter()
-                .find(|x| x.row == r && x.col == c)
-                .map(&f)
-                .unwrap_or_else(|| "-".into());
-            md += &format!(" {s} |");
-        }
-        md += "\n";
-    }
-    md
+    paper::grid_markdown(title, |r, c| {
+        cells
+            .iter()
+            .find(|x| x.row == r && x.col == c)
+            .map(&f)
+            .unwrap_or_else(|| "-".into())
+    })
 }
 
 /// One cell as text: `fell` or `ok`, the worst CoP error of the modified step and the
