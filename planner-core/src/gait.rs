@@ -649,7 +649,7 @@ impl<T: Real> Active<T> {
                 replan: None,
             },
             bounds: [PlaneBoundary::default(); 2],
-            factor: Factorized::empty(crate::window::Basis::Exponential),
+            factor: Factorized::empty(),
             plan: Plan::zeroed(Timing {
                 omega: p.omega,
                 durations: [T::ONE; M],

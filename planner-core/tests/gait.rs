@@ -458,7 +458,9 @@ fn a_reused_prediction_is_the_plan_itself() {
                 g.modify(2, Footstep::new(Side::Right, 0.32, -0.1, 0.0))
                     .unwrap();
                 if invalidate {
-                    g.modify(5, Footstep::new(Side::Left, 0.6, 0.1, 0.0))
+                    // Exactly the pushed step (0.1 × 6 is not 0.6 in binary): a modification
+                    // that changes nothing but the generation.
+                    g.modify(5, Footstep::new(Side::Left, 0.1 * 6.0, 0.1, 0.0))
                         .unwrap();
                 }
                 modified = true;

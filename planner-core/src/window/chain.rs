@@ -1,0 +1,235 @@
+//! `Z y = w` by the structure of `Z` in the exponential basis: two scalar recursions and a
+//! 2×2 system.
+//!
+//! # The elimination
+//! Write `e_i = e^{−ωD_i}` (0-based intervals `i = 0 … 6`), `P_i, Q_i` for the homogeneous pair
+//! of interval `i`, `β¹ = (β_2, β_3, β_4)` for the quartic unknowns of the first interval and
+//! `β⁷` for those of the last, and `r_0 … r_19` for the right-hand side `w` (rows as in the
+//! table of the parent module). Every COG condition is a pair of rows, position and velocity
+//! over ω; in the exponential basis their **sum and difference** separate `P` from `Q`:
+//!
+//! ```text
+//! continuity at the end of interval i (rows 4+2i, 5+2i), i = 0 … 5:
+//!     sum:   2 Q_i − 2 e_{i+1} Q_{i+1} = s_i                 s_i = r_{4+2i} + r_{5+2i}
+//!     diff:  2 e_i P_i − 2 P_{i+1}     = d_i                 d_i = r_{4+2i} − r_{5+2i}
+//! ```
+//!
+//! (`s_0, d_0` also carry the end values of `β¹`'s particular solutions, `s_5, d_5` the start
+//! values of `β⁷`'s.) So `P_{i+1} = e_i P_i − d_i/2` runs **forward** and
+//! `Q_i = e_{i+1} Q_{i+1} + s_i/2` runs **backward**, both multiplying by `e ≤ 1`: errors are
+//! damped along both recursions, which is the stable dichotomy of the pendulum's decaying and
+//! growing modes (a forward shooting of both would amplify them by `e^{ωT}`).
+//!
+//! The two ZMP rows of each quartic fix it up to one parameter: rows 0 and 1
+//! (`β_2 + β_3 + β_4 = r_0`, `2β_2 + 3β_3 + 4β_4 = r_1`) give
+//!
+//! ```text
+//! β¹ = u¹ + v t₁,   u¹ = (3r_0 − r_1, r_1 − 2r_0, 0),   v = (1, −2, 1),   t₁ = β_4¹
+//! ```
+//!
+//! and rows 18, 19 the same for `β⁷ = u⁷ + v t₇`. The initial state (rows 2, 3) gives
+//! `P_0` from its difference; the terminal state (rows 16, 17) gives `Q_6` from its sum. Every
+//! `P_i` and `Q_i` is then affine in `(t₁, t₇)`, and the two conditions left,
+//!
+//! ```text
+//! A: 2 e_0 Q_0 + S_0(β¹) = r_2 + r_3        (initial state, sum)
+//! B: 2 e_6 P_6 + D_6(β⁷) = r_16 − r_17      (terminal state, difference)
+//! ```
+//!
+//! (`S`, `D`: sum and difference of the particular solutions' position and velocity/ω) are a
+//! 2×2 system for `(t₁, t₇)`. Its matrix and the `t`-coefficients of every `P_i, Q_i` depend on
+//! the timing alone ([`Chain::factor`]: 7 exponentials, the monomial ends of intervals 1 and 7,
+//! ~120 flops); a right-hand side costs ~110 flops ([`Chain::solve`]). This is a factorisation
+//! of `Z` (block elimination in the order `β` → `P` forward, `Q` backward → Schur complement
+//! 2×2, solved with partial pivoting), so `Z` is singular exactly when that 2×2 is; it is
+//! checked against the banded LU of the dense `Z` by the tests.
+
+use super::{PlanError, Timing, LAST_BETA, M, N};
+use crate::lipm::{add_particular, particular_ends, Particular, PARTICULAR_LEN};
+use crate::real::Real;
+
+/// `v`: the direction of the free quartic parameter (`β_4`) in `(β_2, β_3, β_4)`.
+const V: [f64; 3] = [1.0, -2.0, 1.0];
+
+/// Position and velocity/ω of the particular solution of the ZMP term `s^k`, `k = 2, 3, 4`, at
+/// the start and the end of an interval: `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per `k`.
+type Ends<T> = [[T; 4]; 3];
+
+/// The timing-only part of the elimination.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Chain<T> {
+    /// `e_i = e^{−ωD_i}`.
+    e: [T; M],
+    /// Monomial ends of the first interval.
+    first: Ends<T>,
+    /// Monomial ends of the last interval.
+    last: Ends<T>,
+    /// `∂P_i/∂t₁` (`P_6` also depends on `t₇`: [`Chain::p6_t7`]).
+    p_t1: [T; M],
+    /// `∂P_6/∂t₇`.
+    p6_t7: T,
+    /// `∂Q_i/∂t₇` (`Q_0` also depends on `t₁`: [`Chain::q0_t1`]).
+    q_t7: [T; M],
+    /// `∂Q_0/∂t₁`.
+    q0_t1: T,
+    /// The 2×2 system's LU with partial pivoting: rows swapped if `swap`, `l` the multiplier,
+    /// `u = [u11, u12, u22]`.
+    swap: bool,
+    l: T,
+    u: [T; 3],
+}
+
+/// `Σ_k c_k x_k` over the three quartic unknowns, for one column of [`Ends`] combined by `f`.
+#[inline]
+fn dot3<T: Real>(ends: &Ends<T>, beta: [T; 3], f: impl Fn(&[T; 4]) -> T) -> T {
+    f(&ends[0]) * beta[0] + f(&ends[1]) * beta[1] + f(&ends[2]) * beta[2]
+}
+
+// Sums and differences of the ends (start: S, D; end: Se, De).
+#[inline]
+fn s_start<T: Real>(x: &[T; 4]) -> T {
+    x[0] + x[1]
+}
+#[inline]
+fn d_start<T: Real>(x: &[T; 4]) -> T {
+    x[0] - x[1]
+}
+#[inline]
+fn s_end<T: Real>(x: &[T; 4]) -> T {
+    x[2] + x[3]
+}
+#[inline]
+fn d_end<T: Real>(x: &[T; 4]) -> T {
+    x[2] - x[3]
+}
+
+fn monomial_ends<T: Real>(lambda: T) -> Ends<T> {
+    let mut out = [[T::ZERO; 4]; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let mut g: Particular<T> = [T::ZERO; PARTICULAR_LEN];
+        add_particular(&mut g, k + 2, T::ONE, lambda);
+        let (x0, v0, x1, v1) = particular_ends(&g, lambda);
+        *o = [x0, v0, x1, v1];
+    }
+    out
+}
+
+impl<T: Real> Chain<T> {
+    /// All zero (not factorised).
+    pub(super) const ZERO: Self = Self {
+        e: [T::ZERO; M],
+        first: [[T::ZERO; 4]; 3],
+        last: [[T::ZERO; 4]; 3],
+        p_t1: [T::ZERO; M],
+        p6_t7: T::ZERO,
+        q_t7: [T::ZERO; M],
+        q0_t1: T::ZERO,
+        swap: false,
+        l: T::ZERO,
+        u: [T::ZERO; 3],
+    };
+
+    /// The timing-only part for a valid timing; `Singular` if the 2×2 system is (numerically).
+    pub(super) fn factor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
+        let w = timing.omega;
+        let d = &timing.durations;
+        for (e, &dj) in self.e.iter_mut().zip(d.iter()) {
+            *e = (-w * dj).exp();
+        }
+        self.first = monomial_ends(w * d[0]);
+        self.last = monomial_ends(w * d[M - 1]);
+        let v = V.map(T::of);
+        let half = T::of(0.5);
+        let two = T::of(2.0);
+        let e = self.e;
+        // P forward, coefficient of t₁.
+        self.p_t1[0] = -half * dot3(&self.first, v, d_start);
+        self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(&self.first, v, d_end);
+        for i in 1..M - 1 {
+            self.p_t1[i + 1] = e[i] * self.p_t1[i];
+        }
+        self.p6_t7 = -half * dot3(&self.last, v, d_start);
+        // Q backward, coefficient of t₇.
+        self.q_t7[M - 1] = -half * dot3(&self.last, v, s_end);
+        self.q_t7[M - 2] = e[M - 1] * self.q_t7[M - 1] + half * dot3(&self.last, v, s_start);
+        for i in (0..M - 2).rev() {
+            self.q_t7[i] = e[i + 1] * self.q_t7[i + 1];
+        }
+        self.q0_t1 = -half * dot3(&self.first, v, s_end);
+        // The 2×2 system [a11 a12; a21 a22] (t₁, t₇).
+        let a11 = two * e[0] * self.q0_t1 + dot3(&self.first, v, s_start);
+        let a12 = two * e[0] * self.q_t7[0];
+        let a21 = two * e[M - 1] * self.p_t1[M - 1];
+        let a22 = two * e[M - 1] * self.p6_t7 + dot3(&self.last, v, d_end);
+        let ([b11, b12], [b21, b22], swap) = if a21.abs() > a11.abs() {
+            ([a21, a22], [a11, a12], true)
+        } else {
+            ([a11, a12], [a21, a22], false)
+        };
+        let tol = T::EPSILON * T::of(N as f64);
+        let scale1 = b11.abs().max(b21.abs());
+        if !scale1.is_finite() || b11.abs().is_nan_or_le(tol * scale1) || b11 == T::ZERO {
+            return Err(PlanError::Singular);
+        }
+        let l = b21 / b11;
+        let u22 = b22 - l * b12;
+        let scale2 = b22.abs().max((l * b12).abs());
+        if !(u22.is_finite() && scale2.is_finite()) || u22.abs().is_nan_or_le(tol * scale2) {
+            return Err(PlanError::Singular);
+        }
+        self.swap = swap;
+        self.l = l;
+        self.u = [b11, b12, u22];
+        Ok(())
+    }
+
+    /// Solves `Z y = r` (the layout of the parent module) into `y`.
+    pub(super) fn solve(&self, r: &[T; N], y: &mut [T; N]) {
+        let e = &self.e;
+        let half = T::of(0.5);
+        let two = T::of(2.0);
+        let three = T::of(3.0);
+        let u1 = [three * r[0] - r[1], r[1] - two * r[0], T::ZERO];
+        let u7 = [three * r[18] - r[19], r[19] - two * r[18], T::ZERO];
+        // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0.
+        let mut p = [T::ZERO; M];
+        let mut q = [T::ZERO; M];
+        p[0] = half * (r[2] - r[3] - dot3(&self.first, u1, d_start));
+        p[1] = e[0] * p[0] + half * (dot3(&self.first, u1, d_end) - (r[4] - r[5]));
+        for i in 1..M - 2 {
+            p[i + 1] = e[i] * p[i] - half * (r[4 + 2 * i] - r[5 + 2 * i]);
+        }
+        p[M - 1] = e[M - 2] * p[M - 2] - half * (r[14] - r[15] + dot3(&self.last, u7, d_start));
+        q[M - 1] = half * (r[16] + r[17] - dot3(&self.last, u7, s_end));
+        q[M - 2] = e[M - 1] * q[M - 1] + half * (r[14] + r[15] + dot3(&self.last, u7, s_start));
+        for i in (1..M - 2).rev() {
+            q[i] = e[i + 1] * q[i + 1] + half * (r[4 + 2 * i] + r[5 + 2 * i]);
+        }
+        q[0] = e[1] * q[1] + half * (r[4] + r[5] - dot3(&self.first, u1, s_end));
+        // The 2×2 system.
+        let ra = r[2] + r[3] - two * e[0] * q[0] - dot3(&self.first, u1, s_start);
+        let rb = r[16] - r[17] - two * e[M - 1] * p[M - 1] - dot3(&self.last, u7, d_end);
+        let (b1, b2) = if self.swap { (rb, ra) } else { (ra, rb) };
+        let [u11, u12, u22] = self.u;
+        let t7 = (b2 - self.l * b1) / u22;
+        let t1 = (b1 - u12 * t7) / u11;
+        // Back-substitution.
+        for k in 0..3 {
+            let vk = T::of(V[k]);
+            y[k] = u1[k] + vk * t1;
+            y[LAST_BETA + k] = u7[k] + vk * t7;
+        }
+        for i in 0..M {
+            let mut pi = p[i] + self.p_t1[i] * t1;
+            let mut qi = q[i] + self.q_t7[i] * t7;
+            if i == M - 1 {
+                pi += self.p6_t7 * t7;
+            }
+            if i == 0 {
+                qi += self.q0_t1 * t1;
+            }
+            y[3 + 2 * i] = pi;
+            y[4 + 2 * i] = qi;
+        }
+    }
+}
