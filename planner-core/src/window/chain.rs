@@ -145,8 +145,10 @@ impl<T: Real> Chain<T> {
         // P forward, coefficient of t₁.
         self.p_t1[0] = -half * dot3(&self.first, v, d_start);
         self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(&self.first, v, d_end);
-        for i in 1..M - 1 {
-            self.p_t1[i + 1] = e[i] * self.p_t1[i];
+        let mut acc = self.p_t1[1];
+        for (pt, &ei) in self.p_t1[2..].iter_mut().zip(&e[1..M - 1]) {
+            acc = ei * acc;
+            *pt = acc;
         }
         self.p6_t7 = -half * dot3(&self.last, v, d_start);
         // Q backward, coefficient of t₇.
