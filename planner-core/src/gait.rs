@@ -53,6 +53,8 @@
 //! [`worst_deviation`] gives their exact extrema), must stay inside the sole. Otherwise the
 //! modification is refused with [`GaitError::Infeasible`] and the queue is unchanged.
 
+use core::borrow::Borrow;
+
 use heapless::Deque;
 
 use crate::lipm::{Poly, Sample, State};
@@ -732,8 +734,12 @@ enum Mode {
 }
 
 /// The gait generator: a footstep queue of capacity `Q` and the window being executed.
+///
+/// `G` holds the preview-control gains: by value (the default, computed by [`Gait::new`]) or
+/// anything that lends them ([`Borrow`]), such as a reference to gains in flash (the firmware
+/// keeps its 28 KB of gains out of RAM this way: [`Gait::with_gains`]).
 #[derive(Clone, Debug)]
-pub struct Gait<T: Real, const Q: usize> {
+pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     params: GaitParams<T>,
     queue: Deque<Queued<T>, Q>,
     /// Where each foot stands (the swing foot: where it lifted off).
@@ -768,7 +774,7 @@ pub struct Gait<T: Real, const Q: usize> {
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
     /// Preview-control gains (shared by both planes) and the two compensators.
-    gains: PreviewGains<T, PREVIEW>,
+    gains: G,
     comp: [Compensator<T>; 2],
 }
 
@@ -834,27 +840,44 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         left: Footstep<T>,
         right: Footstep<T>,
     ) -> Result<Self, GaitError> {
-        Self::build(params, left, right, None)
+        let mut g = Self::build(params, left, right, PreviewGains::zeroed())?;
+        if params.shaping {
+            g.gains
+                .compute(&params.preview_config(), Law::FromRest)
+                .map_err(GaitError::Gains)?;
+        }
+        Ok(g)
     }
+}
 
+impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G> {
     /// [`Gait::new`] with preview gains computed beforehand (the firmware compiles them into
-    /// flash from the robot file): they are copied, not computed. `Gains(BadConfig)` unless
-    /// they are the gains [`Gait::new`] would compute for `params`
+    /// flash from the robot file) and lent by `gains` (a reference: nothing is copied).
+    /// `Gains(BadConfig)` unless they are the gains [`Gait::new`] would compute for `params`
     /// ([`PreviewGains::are_for`]); not used when `params.shaping` is off.
     pub fn with_gains(
         params: GaitParams<T>,
         left: Footstep<T>,
         right: Footstep<T>,
-        gains: &PreviewGains<T, PREVIEW>,
+        gains: G,
     ) -> Result<Self, GaitError> {
-        Self::build(params, left, right, Some(gains))
+        let g = Self::build(params, left, right, gains)?;
+        if params.shaping
+            && !g
+                .gains
+                .borrow()
+                .are_for(&params.preview_config(), Law::FromRest)
+        {
+            return Err(GaitError::Gains(GainError::BadConfig));
+        }
+        Ok(g)
     }
 
     fn build(
         params: GaitParams<T>,
         left: Footstep<T>,
         right: Footstep<T>,
-        gains: Option<&PreviewGains<T, PREVIEW>>,
+        gains: G,
     ) -> Result<Self, GaitError> {
         let mut left = left;
         let mut right = right;
@@ -893,7 +916,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
                 feet: [FootPose::default(); 2],
             },
             info: None,
-            gains: PreviewGains::zeroed(),
+            gains,
             comp: [Compensator::new(), Compensator::new()],
         };
         g.last.feet = g.ground_poses();
@@ -901,17 +924,6 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             return Err(GaitError::NonFinite);
         }
         params.validate()?;
-        if params.shaping {
-            let config = params.preview_config();
-            match gains {
-                Some(given) if given.are_for(&config, Law::FromRest) => g.gains.copy_from(given),
-                Some(_) => return Err(GaitError::Gains(GainError::BadConfig)),
-                None => g
-                    .gains
-                    .compute(&config, Law::FromRest)
-                    .map_err(GaitError::Gains)?,
-            }
-        }
         Ok(g)
     }
 
@@ -1199,13 +1211,15 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
     /// compensators, the last reference). Not compared: the caches (the spare window buffer,
     /// the eq. 18 target, the prediction of a modification's re-plan, the generation counter
     /// that keys them), which only save work, and the preview gains, which never change.
-    pub fn same_state(&self, other: &Self) -> bool {
-        let window = |g: &Self| {
-            g.cur_buf().map(|c| {
-                let w = &g.wins[c];
-                (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
-            })
-        };
+    pub fn same_state<H: Borrow<PreviewGains<T, PREVIEW>>>(&self, other: &Gait<T, Q, H>) -> bool {
+        let mine = self.cur_buf().map(|c| {
+            let w = &self.wins[c];
+            (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
+        });
+        let theirs = other.cur_buf().map(|c| {
+            let w = &other.wins[c];
+            (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
+        });
         self.params == other.params
             && self.queue.iter().eq(other.queue.iter())
             && self.feet == other.feet
@@ -1219,7 +1233,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
             && self.last == other.last
             && self.info == other.info
             && self.comp == other.comp
-            && window(self) == window(other)
+            && mine == theirs
     }
 
     /// `true` while a requested stop is being carried out (the queue is walked without
@@ -1283,7 +1297,7 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         // few millimetres, see shaping.rs).
         let (sx, sy) = if at == win.tick.wrapping_add(1) {
             let mut comp = self.comp.clone();
-            shaped_sample(win, &self.params, &self.gains, &mut comp, at)
+            shaped_sample(win, &self.params, self.gains.borrow(), &mut comp, at)
         } else {
             win.sample(&self.params, at)
         };
@@ -1658,7 +1672,13 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         let Some(c) = self.cur_buf() else {
             return (self.last.x, self.last.y);
         };
-        shaped_sample(&self.wins[c], &self.params, &self.gains, &mut self.comp, t)
+        shaped_sample(
+            &self.wins[c],
+            &self.params,
+            self.gains.borrow(),
+            &mut self.comp,
+            t,
+        )
     }
 
     /// Restarts the compensators from rest with the fluctuation of the first interval of the

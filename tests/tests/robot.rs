@@ -76,7 +76,7 @@ fn the_compiled_in_gains_are_the_ones_the_node_computes() {
     use planner_core::node::{Node, NodeConfig};
     let cfg = Robot::hrp2().node_config();
     let computed: Node<16> = Node::new(cfg).unwrap();
-    let copied: Node<16> = Node::with_gains(cfg, &walk_robot::GAINS).unwrap();
+    let copied: Node<16, &_> = Node::with_gains(cfg, &walk_robot::GAINS).unwrap();
     assert!(copied.same_state(&computed));
     // Every table entry, bit for bit (the build script computed them on the build machine).
     let config = cfg.params.preview_config();
@@ -89,8 +89,8 @@ fn the_compiled_in_gains_are_the_ones_the_node_computes() {
     // Gains made for another robot are refused.
     let mut other = NodeConfig::hrp2();
     other.params.preview_r *= 2.0;
-    assert!(Node::<16>::with_gains(other, &walk_robot::GAINS).is_err());
+    assert!(Node::<16, &_>::with_gains(other, &walk_robot::GAINS).is_err());
     other = NodeConfig::hrp2();
     other.params.cog_height = 0.8;
-    assert!(Node::<16>::with_gains(other, &walk_robot::GAINS).is_err());
+    assert!(Node::<16, &_>::with_gains(other, &walk_robot::GAINS).is_err());
 }

@@ -5,8 +5,11 @@
 //! `now_ms`, same end condition), so every reference, answer and transmitted frame can be
 //! compared with host-sim's run.
 
-use planner_core::gait::{Reference, ReplanInfo};
+use core::borrow::Borrow;
+
+use planner_core::gait::{Reference, ReplanInfo, PREVIEW};
 use planner_core::node::{Node, PollReport};
+use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
 
 use crate::bus::ScriptedBus;
@@ -148,9 +151,9 @@ impl<'s> Runner<'s> {
     /// what the node sent; `on_frame` sees every transmitted frame and, for an `ACK` that
     /// answers a command, the command's index in [`Controller::sent`]. Only `Node::poll` is
     /// timed with `clock` (recorded in `stats` by kind and as [`Kind::Cycle`]).
-    pub fn cycle<C: Clock, const Q: usize>(
+    pub fn cycle<C: Clock, const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
         &mut self,
-        node: &mut Node<Q>,
+        node: &mut Node<Q, G>,
         clock: &mut C,
         stats: &mut Stats,
         mut on_frame: impl FnMut(&RawFrame, Option<usize>),
@@ -233,6 +236,10 @@ impl<'s> Runner<'s> {
 
 /// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
 #[inline(never)]
-fn poll<const Q: usize>(node: &mut Node<Q>, now_ms: u32, bus: &mut ScriptedBus) -> PollReport {
+fn poll<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
+    node: &mut Node<Q, G>,
+    now_ms: u32,
+    bus: &mut ScriptedBus,
+) -> PollReport {
     node.poll(now_ms, bus)
 }

@@ -5,7 +5,11 @@
 //! image, so that all three run the board's own bookkeeping; host-tested (`tests/cycle.rs`).
 //! Logging stays with the callers.
 
+use core::borrow::Borrow;
+
+use planner_core::gait::PREVIEW;
 use planner_core::node::{Node, PollReport};
+use planner_core::shaping::PreviewGains;
 
 /// Cycles per summary (1 s at 5 ms).
 pub const SUMMARY_EVERY: u32 = 200;
@@ -54,9 +58,9 @@ pub struct Outcome {
 impl Stats {
     /// Records one cycle: `spent` core cycles of `poll`, `late` if the work did not fit the
     /// slot or the next slot has already begun.
-    pub fn record<const Q: usize>(
+    pub fn record<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
         &mut self,
-        node: &mut Node<Q>,
+        node: &mut Node<Q, G>,
         report: &PollReport,
         spent: u32,
         late: bool,

@@ -65,8 +65,9 @@ use stm32h7xx_hal::rcc::{rec, PllConfigStrategy};
 use stm32h7xx_hal::{pac, prelude::*};
 
 use planner_core::gait::GaitError;
-use planner_core::node::{Node, NodeConfig};
+use planner_core::node::NodeConfig;
 use planner_core::wire::ids;
+use walk_robot::Node;
 
 use crate::fdcan1::Fdcan1;
 

@@ -78,7 +78,8 @@ use cortex_m_rt::entry;
 use stm32h7xx_hal::pac;
 
 use planner_core::gait::GaitError;
-use planner_core::node::{Node, NodeConfig};
+use planner_core::node::NodeConfig;
+use walk_robot::Node;
 
 /// The board's adapter over FDCAN1.
 #[cfg(not(feature = "mock-can"))]

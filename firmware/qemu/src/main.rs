@@ -70,7 +70,8 @@ use panic_semihosting as _; // panics print over semihosting and exit with code 
 
 use gait_loop::{script, Clock, Command, Fnv, Kind, Runner, Scenario, Sent, Stats, QUEUE};
 use planner_core::gait::{Gait, GaitError, Reference, Side};
-use planner_core::node::{Node, NodeConfig};
+use planner_core::node::NodeConfig;
+use walk_robot::Node;
 
 /// Instructions per CMSDK timer tick under `-icount shift=0` (1 ns per instruction, 25 MHz).
 const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / hw::TIMER_HZ;
@@ -365,7 +366,7 @@ fn main() -> ! {
         out,
         "SIZE node={} gait={}",
         core::mem::size_of::<Node<QUEUE>>(),
-        core::mem::size_of::<Gait<f64, QUEUE>>()
+        core::mem::size_of::<Gait<f64, QUEUE, walk_robot::Gains>>()
     );
 
     // The robot file compiled in (walk-robot's build script): host-sim's default robot, whose

@@ -2,7 +2,8 @@
 //!
 //! The robot the firmware is built for: [`NODE_CONFIG`], the node's configuration, and
 //! [`GAINS`], its preview-control gains (in flash: `Node::with_gains(NODE_CONFIG, &GAINS)`
-//! copies them at start-up instead of computing them), generated
+//! lends them to the node, which neither computes nor copies them; its type is
+//! [`Node`]`<Q, `[`Gains`]`>`), generated
 //! at build time (`build.rs`) from a robot file: HRP-2's `host-sim/robots/hrp2.toml`, or the
 //! file named by the `WALK_ROBOT` environment variable
 //! (`WALK_ROBOT=/path/robot.toml cargo build --release`). The file is read by
@@ -13,3 +14,9 @@
 #![warn(missing_docs)]
 
 include!(concat!(env!("OUT_DIR"), "/robot.rs"));
+
+/// How the firmware's node holds its gains: a reference to [`GAINS`] in flash.
+pub type Gains = &'static planner_core::shaping::PreviewGains<f64, { planner_core::gait::PREVIEW }>;
+
+/// The firmware's node type, with `Q` queued steps and [`GAINS`] lent from flash.
+pub type Node<const Q: usize> = planner_core::node::Node<Q, Gains>;

@@ -79,6 +79,8 @@
 mod reach;
 mod steps;
 
+use core::borrow::Borrow;
+
 use heapless::Deque;
 
 use reach::Frame;
@@ -193,11 +195,13 @@ pub enum NodeState {
     Stopping = 4,
 }
 
-/// The node.
+/// The node. `G` holds the preview-control gains, as in [`Gait`]: by value (the default,
+/// computed by [`Node::new`]) or lent, e.g. by a reference to gains in flash
+/// ([`Node::with_gains`]).
 #[derive(Clone, Debug)]
-pub struct Node<const Q: usize> {
+pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>> {
     cfg: NodeConfig,
-    gait: Gait<f64, Q>,
+    gait: Gait<f64, Q, G>,
     tx: Deque<RawFrame, TX_BACKLOG>,
     steps: Steps<Q>,
     last_append: Option<u8>,
@@ -235,34 +239,33 @@ fn ahead(seq: u8, last: u8) -> bool {
 }
 
 impl<const Q: usize> Node<Q> {
+    /// A node standing still (computes the preview gains).
+    pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
+        let () = Self::CAPACITY_OK;
+        Ok(Self::around(
+            cfg,
+            Gait::new(cfg.params, cfg.left, cfg.right)?,
+        ))
+    }
+}
+
+impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
     /// Step ids are 8 bits: every queued step must have its own.
     const CAPACITY_OK: () = assert!(Q >= 1 && Q <= 128, "queue capacity 1 … 128");
 
-    /// A node standing still (computes the preview gains).
-    pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
-        Self::build(cfg, None)
-    }
-
-    /// [`Node::new`] with the preview gains computed beforehand ([`Gait::with_gains`]: the
-    /// firmware compiles them into flash from the robot file, and start-up copies them instead
-    /// of running the Riccati iteration).
-    pub fn with_gains(
-        cfg: NodeConfig,
-        gains: &PreviewGains<f64, PREVIEW>,
-    ) -> Result<Self, GaitError> {
-        Self::build(cfg, Some(gains))
-    }
-
-    fn build(
-        cfg: NodeConfig,
-        gains: Option<&PreviewGains<f64, PREVIEW>>,
-    ) -> Result<Self, GaitError> {
+    /// [`Node::new`] with the preview gains computed beforehand and lent by `gains`
+    /// ([`Gait::with_gains`]: the firmware compiles them into flash from the robot file and
+    /// passes a reference, so they are neither computed nor copied at start-up).
+    pub fn with_gains(cfg: NodeConfig, gains: G) -> Result<Self, GaitError> {
         let () = Self::CAPACITY_OK;
-        let gait = match gains {
-            Some(g) => Gait::with_gains(cfg.params, cfg.left, cfg.right, g)?,
-            None => Gait::new(cfg.params, cfg.left, cfg.right)?,
-        };
-        Ok(Self {
+        Ok(Self::around(
+            cfg,
+            Gait::with_gains(cfg.params, cfg.left, cfg.right, gains)?,
+        ))
+    }
+
+    fn around(cfg: NodeConfig, gait: Gait<f64, Q, G>) -> Self {
+        Self {
             gait,
             cfg,
             tx: Deque::new(),
@@ -277,11 +280,11 @@ impl<const Q: usize> Node<Q> {
             counters: Counters::default(),
             cycle: 0,
             link: None,
-        })
+        }
     }
 
     /// The gait.
-    pub fn gait(&self) -> &Gait<f64, Q> {
+    pub fn gait(&self) -> &Gait<f64, Q, G> {
         &self.gait
     }
 
@@ -319,7 +322,7 @@ impl<const Q: usize> Node<Q> {
 
     /// `true` if `other` is in the same state as `self`: everything but the counters (see
     /// [`Gait::same_state`] for what the gait compares). A refused command keeps it.
-    pub fn same_state(&self, other: &Self) -> bool {
+    pub fn same_state<H: Borrow<PreviewGains<f64, PREVIEW>>>(&self, other: &Node<Q, H>) -> bool {
         self.gait.same_state(&other.gait)
             && self.cfg == other.cfg
             && self.tx.iter().eq(other.tx.iter())

@@ -6,6 +6,10 @@
 //! Records follow the gait's queue: appended in order, moved to `swing` when the gait lifts the
 //! step off, to `done` (the last [`HISTORY`] steps walked or dropped) after that.
 
+use core::borrow::Borrow;
+
+use crate::gait::PREVIEW;
+use crate::shaping::PreviewGains;
 use heapless::Deque;
 
 use crate::gait::Gait;
@@ -90,7 +94,10 @@ impl<const Q: usize> Steps<Q> {
 
     /// Follows the gait after it changed: queued steps it no longer has were lifted off (the
     /// one it swings) or dropped; a swing it no longer has has landed.
-    pub fn sync<const GQ: usize>(&mut self, gait: &Gait<f64, GQ>) {
+    pub fn sync<const GQ: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
+        &mut self,
+        gait: &Gait<f64, GQ, G>,
+    ) {
         if let Some(s) = self.swing {
             if gait.swinging() != Some(s.id()) {
                 self.swing = None;
