@@ -30,11 +30,11 @@
 //! * logging (defmt over [`logger`], never blocking) happens after the timed part of the
 //!   cycle: warnings on overruns, missed slots and refusals, and a summary once a second.
 //!
-//! The node (`Node<16>`, ~47 KB: the gait's two plan windows and preview gains) is built once
-//! in a function of its own and moved into a `static` in .bss (DTCM) by
-//! `cortex_m::singleton!`: no `static mut` in this crate, no allocator. The stack is the
-//! 512 KiB AXI SRAM (board/stack.x), painted at reset; its high-water mark is logged
-//! ([`stack`]).
+//! The node (`walk_robot::Node<16>`, ~14 KB: the gait's two plan windows; the preview gains
+//! stay in flash, borrowed) is built once in a function of its own and moved into a `static`
+//! in .bss (DTCM) by `cortex_m::singleton!`: no `static mut` in this crate, no allocator. The
+//! stack is the lower 64 KiB of the DTCM, below .data and .bss (board/stack.x), painted at
+//! reset; its high-water mark is logged ([`stack`]).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]

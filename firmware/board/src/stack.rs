@@ -1,9 +1,9 @@
 //! The stack's high-water mark. cortex-m-rt's `paint-stack` fills the stack region
-//! (`_stack_end` … `_stack_start`, the 512 KiB of AXI SRAM: board/stack.x) with
+//! (`_stack_end` … `_stack_start`, the lower 64 KiB of the DTCM: board/stack.x) with
 //! `STACK_PAINT_VALUE` at reset; [`high_water`] finds the lowest word that has lost it, and
 //! [`repaint_below_sp`] paints the free part again, so that what follows is measured alone
 //! (the board does it once the node is built: the summary then reports the control loop's own
-//! high-water mark, not the ~109 KB frame of `Node::new`).
+//! high-water mark, not the frames that build the node).
 
 #![allow(unsafe_code)]
 
@@ -16,13 +16,13 @@ extern "C" {
 }
 
 /// Bytes of the stack used so far at most (from its top down to the lowest scrubbed word).
-/// Reads the whole unused part (up to 512 KiB): call it outside the timed part, rarely.
+/// Reads the whole unused part (up to 64 KiB): call it outside the timed part, rarely.
 pub fn high_water() -> u32 {
     let top = addr_of!(_stack_start) as usize;
     let bottom = addr_of!(_stack_end) as usize;
     let mut p = bottom;
     while p < top {
-        // SAFETY: [bottom, top) is the stack region of the linker script (AXI SRAM, mapped and
+        // SAFETY: [bottom, top) is the stack region of the linker script (DTCM, mapped and
         // clocked from reset), 4-byte aligned (link.x asserts it); a read has no side effect.
         let word = unsafe { read_volatile(p as *const u32) };
         if word != cortex_m_rt::STACK_PAINT_VALUE {
