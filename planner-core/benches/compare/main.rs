@@ -16,8 +16,9 @@
 //! ready-made (the same vectors, recovered once as `Z·y` from planner-core's plan) and write
 //! the bare solution vectors, so the ratios favour LAPACK. A fourth row, planner-core's linear
 //! algebra alone (refactor and two [`Factorized::solve_vector`]), is the like-for-like one.
-//! jrl-walkgen also copies and transposes `Z` and allocates its workspace at every solve; here
-//! the workspace is kept (the copy of `A` into `AF` before `dgetrf` is kept: `dgesvx` needs both).
+//! jrl-walkgen also transposes a copy of `Z` and allocates its workspace at every solve; here
+//! the workspace is allocated once, and only the copy of `A` into `AF` before `dgetrf` remains
+//! (`dgesvx` needs both).
 //!
 //! Before timing, [`check`] solves the same `Z` and right-hand sides three ways for several
 //! timings (single support 0.6–1.0 s, double support 0.1–0.2 s, a re-plan in the middle of a
