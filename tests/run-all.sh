@@ -7,7 +7,8 @@
 #    clippy, rustfmt) if it is missing, QEMU (qemu-system-arm, apt-get), and the CAN tools the
 #    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), the Python
 #    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip), and the
-#    physics engine (MuJoCo 3.2.7, pip);
+#    physics engine (MuJoCo 3.2.7, pip), and LAPACK for the comparison bench (liblapack-dev,
+#    apt-get);
 # 2. the host workspace: unit, integration and bench targets, then the doctests (this includes
 #    firmware/board-core, the board's CAN adapter, pacer and reset reason on a mock FDCAN);
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
@@ -81,6 +82,18 @@ if [ -z "${HOST_SIM_FONT:-}" ] && [ ! -f /usr/share/fonts/truetype/dejavu/DejaVu
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q fonts-dejavu-core
 fi
 # --- end host-sim plots ------------------------------------------------------------------
+
+# --- LAPACK for the comparison bench (planner-core/benches/compare: issue 12) ---------------
+# Debian's reference LAPACK with its link-time library (liblapack-dev): the bench links
+# -llapack, and step 2 builds and runs it in test mode.
+if ! dpkg-query -W -f='${Status}' liblapack-dev 2>/dev/null | grep -q "ok installed"; then
+    echo "installing liblapack-dev"
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q liblapack-dev
+fi
+# --- end LAPACK -----------------------------------------------------------------------------
 
 # --- the real CAN tools that read host-sim's can.log (host-sim/tests/canlog.rs) -----------
 # Debian's can-utils (log2asc, asc2log), python-can and cantools (for the python3 on PATH;
