@@ -354,13 +354,13 @@ fn methods() -> Vec<Box<dyn Method>> {
     vec![
         Box::new(Planner {
             cases,
-            factor: Factorized::empty(Basis::Exponential),
+            factor: Factorized::empty(),
             plan: Plan::zeroed(cases[0].timing),
         }),
         Box::new(PlannerLinalg {
             cases,
             rhs,
-            factor: Factorized::empty(Basis::Exponential),
+            factor: Factorized::empty(),
             out: [[0.0; N]; 2],
         }),
         Box::new(Lapack {
