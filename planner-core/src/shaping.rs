@@ -298,6 +298,14 @@ impl<const NL: usize> PreviewGains<f64, NL> {
     }
 }
 
+/// A tick count as `f64`: exact, by the hardware's 32-bit conversion (an `i64` would take a
+/// software routine on the Cortex-M). Counts here are within a window (well inside ±2³¹);
+/// beyond that they saturate.
+#[inline]
+fn tick_f64(x: i64) -> f64 {
+    f64::from(x.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+}
+
 /// Which preview-control law the gains implement (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -700,7 +708,7 @@ impl<T: Real> Piece<T> {
         if rel < 0 || rel >= i64::from(self.ticks) {
             return T::ZERO;
         }
-        let s = T::of(rel as f64) * inv_ticks;
+        let s = T::of(tick_f64(rel)) * inv_ticks;
         self.coeffs
             .iter()
             .rev()
@@ -843,11 +851,11 @@ impl<T: Real, const P: usize> Compensator<T, P> {
             if lo > hi {
                 continue;
             }
-            let a = T::of((k - k0) as f64) * inv_n;
+            let a = T::of(tick_f64(k - k0)) * inv_n;
             if hi - lo < DIRECT_MAX as i64 {
                 // Short overlap: the direct sum (the moment form would extrapolate the piece
                 // far outside its ticks).
-                let mut s = a + T::of(lo as f64) * inv_n;
+                let mut s = a + T::of(tick_f64(lo)) * inv_n;
                 let mut acc = T::ZERO;
                 for f in gains
                     .preview
@@ -860,7 +868,7 @@ impl<T: Real, const P: usize> Compensator<T, P> {
                 sum += acc;
                 continue;
             }
-            let b = T::of(nl as f64) * inv_n;
+            let b = T::of(tick_f64(nl)) * inv_n;
             // Taylor shift: e(t) = c(a + t).
             let mut e = p.coeffs;
             for i in 0..MOMENTS - 1 {

@@ -971,21 +971,28 @@ impl LinkHealth {
     }
 }
 
+/// `libm::round(x)` (halves away from zero) as an `i32`, saturated at the `i32` range, `NaN`
+/// to 0: one hardware conversion (`vcvt`, truncating) and an exact correction, instead of
+/// libm's bit manipulation. `x − trunc(x)` is exact for every `f64` whose truncation fits an
+/// `i32`; beyond the range the truncation saturates and the correction saturates too.
+fn round_to_i32(x: f64) -> i32 {
+    let t = x as i32;
+    let frac = x - f64::from(t);
+    if frac >= 0.5 {
+        t.saturating_add(1)
+    } else if frac <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
 /// Saturating conversion to a fixed-point integer of `unit`.
 fn fixed(v: f64, unit: f64, min: i32, max: i32) -> i32 {
     if !v.is_finite() {
         return 0;
     }
-    let r = libm::round(v / unit);
-    if r < f64::from(min) {
-        min
-    } else if r > f64::from(max) {
-        max
-    } else {
-        // In range, so exact: one hardware conversion on the Cortex-M (a 64-bit integer
-        // would take a software routine).
-        r as i32
-    }
+    round_to_i32(v / unit).clamp(min, max)
 }
 
 /// The 5 ms reference stream (what the node publishes every control cycle).
@@ -1083,6 +1090,53 @@ impl Stream {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn round_to_i32_is_libm_round_saturated() {
+        let mut cases = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            1e-300,
+            -1e-300,
+            2147483646.5,
+            2147483647.4,
+            2147483647.5,
+            -2147483648.4,
+            -2147483648.5,
+            -2147483649.0,
+            1e12,
+            -1e12,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            4503599627370495.5,
+            -4503599627370495.5,
+        ];
+        let mut x = 0x1234_5678_9abc_def0_u64;
+        for _ in 0..100_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+            // Spread over ±2^33, with many exact halves.
+            cases.push((u - 0.5) * 2f64.powi(34));
+            cases.push(((x % 20_001) as f64 - 10_000.0) * 0.5);
+        }
+        for &c in &cases {
+            let want = libm::round(c).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+            assert_eq!(round_to_i32(c), want, "{c:e}");
+        }
+        assert_eq!(round_to_i32(f64::NAN), 0);
+    }
 
     #[test]
     fn steps_round_trip_at_wire_precision() {

@@ -98,17 +98,22 @@ impl<const Q: usize> Steps<Q> {
         &mut self,
         gait: &Gait<f64, GQ, G>,
     ) {
-        if let Some(s) = self.swing {
-            if gait.swinging() != Some(s.id()) {
-                self.swing = None;
-                self.retire(s);
+        // Ids are compared in place; a record is copied only when it moves (no 40-byte copies
+        // on the steady cycle, where nothing changes).
+        if let Some(id) = self.swing.as_ref().map(Record::id) {
+            if gait.swinging() != Some(id) {
+                if let Some(s) = self.swing.take() {
+                    self.retire(s);
+                }
             }
         }
-        while let Some(r) = self.queued.front().copied() {
-            if gait.is_queued(r.id()) {
+        while let Some(id) = self.queued.front().map(Record::id) {
+            if gait.is_queued(id) {
                 break;
             }
-            self.queued.pop_front();
+            let Some(r) = self.queued.pop_front() else {
+                break;
+            };
             if gait.swinging() == Some(r.id()) {
                 if let Some(s) = self.swing.take() {
                     self.retire(s);
