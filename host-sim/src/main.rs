@@ -6,9 +6,9 @@
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
-//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
-//! host-sim physics-tables [--out DIR] [--cells all|r,c;...]   Tables I/II in MuJoCo
-//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N]   fault sweep in MuJoCo
+//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop] [--robot FILE]   MuJoCo run
+//! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [--robot FILE]   Tables I/II in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [--robot FILE]   faults in MuJoCo
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -106,6 +106,9 @@ enum Cmd {
         /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
         #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
         push: Option<String>,
+        /// The robot file (its link table and soles) [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// The paper's Tables I and II in MuJoCo: each modification cell with the plain re-plan
     /// and with the proposed method; writes DIR/physics_tables.json and .md.
@@ -119,6 +122,9 @@ enum Cmd {
         /// Play the patterns open loop (the stabilizer off).
         #[arg(long)]
         open_loop: bool,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
     /// DIR/physics_faults.json and .md.
@@ -132,6 +138,9 @@ enum Cmd {
         /// The seed of every row.
         #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
@@ -201,14 +210,32 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             out,
             open_loop,
             push,
-        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop, push.as_deref()),
+            robot,
+        }) => host_sim::physics::output::cli(
+            &scenario,
+            out.as_deref(),
+            &load_robot(robot.as_deref())?,
+            open_loop,
+            push.as_deref(),
+        ),
         Some(Cmd::PhysicsTables {
             out,
             cells,
             open_loop,
-        }) => host_sim::physics::output::tables_cli(&out, &cells, open_loop),
-        Some(Cmd::PhysicsFaults { out, rows, seed }) => {
-            host_sim::physics::output::faults_cli(&out, &rows, seed)
+            robot,
+        }) => host_sim::physics::output::tables_cli(
+            &out,
+            &cells,
+            &load_robot(robot.as_deref())?,
+            open_loop,
+        ),
+        Some(Cmd::PhysicsFaults {
+            out,
+            rows,
+            seed,
+            robot,
+        }) => {
+            host_sim::physics::output::faults_cli(&out, &rows, seed, &load_robot(robot.as_deref())?)
         }
         Some(Cmd::Node {
             interface,
@@ -406,15 +433,8 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         scenario: s,
         entries,
     } = load_scenario(name)?;
-    let hrp2_width = host_sim::robot::Robot::hrp2().planner.params.step_width;
-    if !name.ends_with(".toml") && robot.planner.params.step_width != hrp2_width {
-        return Err(format!(
-            "{name}: the built-in scenarios are HRP-2's footsteps (feet {hrp2_width} m apart), \
-             and {} stands {} m apart: write a scenario file for it",
-            robot.name(),
-            robot.planner.params.step_width
-        )
-        .into());
+    if !name.ends_with(".toml") {
+        robot.check_hrp2_footsteps(name)?;
     }
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);

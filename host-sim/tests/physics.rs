@@ -15,6 +15,7 @@ use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSIO
 use host_sim::physics::metrics::FallCause;
 use host_sim::physics::output::scenario_trajectory;
 use host_sim::physics::{run, PhysicsConfig, PhysicsReport, Push};
+use host_sim::robot::Robot;
 use host_sim::scenario::BUILT_IN;
 
 const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
@@ -47,7 +48,7 @@ fn engine_here(test: &str) -> bool {
 }
 
 fn report(scenario: &str, cfg: &PhysicsConfig) -> PhysicsReport {
-    let (_, trajectory, dt) = scenario_trajectory(scenario).expect("scenario");
+    let (_, trajectory, dt) = scenario_trajectory(scenario, &Robot::hrp2()).expect("scenario");
     run(&trajectory, dt, cfg).expect("engine run").report
 }
 
@@ -280,4 +281,57 @@ fn physics_faults_heavy_row() {
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics small-walk.toml --robot small.toml`: the second robot (17.4 kg, soles
+/// 0.16 × 0.09 m) walks through in the engine, on its own soles; a built-in (HRP-2) scenario
+/// is refused for it.
+#[test]
+fn a_second_robot_walks_on_its_own_soles() {
+    if !engine_here("a_second_robot_walks_on_its_own_soles") {
+        return;
+    }
+    let robots = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    let dir = temp_dir("small");
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("physics")
+        .arg(robots.join("small-walk.toml"))
+        .arg("--robot")
+        .arg(robots.join("small.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("physics.json")).expect("physics.json");
+    let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(j["robot"], "small biped", "{text}");
+    assert_eq!(
+        j["sole_half_m"],
+        serde_json::json!([0.08, 0.045, 0.03]),
+        "{text}"
+    );
+    assert_eq!(j["fell"], false, "{text}");
+    let num = |k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k} in {text}"));
+    // Four 8 cm steps and the closing step: 5.9 s.
+    assert!(num("simulated_s") > 5.5, "{text}");
+    assert!(num("max_tilt_deg") < TILT_BOUND_DEG, "{text}");
+    assert!(num("cop_err_mean_m") < COP_MEAN_BOUND_M, "{text}");
+    assert!(num("cop_err_max_m") < COP_MAX_BOUND_M, "{text}");
+    assert!(num("foot_drift_max_m") < 0.02, "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["physics", "straight", "--robot"])
+        .arg(robots.join("small.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("0.13 m apart"), "{err}");
 }

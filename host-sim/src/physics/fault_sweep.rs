@@ -12,7 +12,8 @@
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::faults::{run_case, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::faults::{run_case_with, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::robot::Robot;
 use crate::scenario;
 
 /// Every row of the sweep in its order: the [`SWEEP`] rates, then the [`HEAVY`] mixes.
@@ -46,18 +47,21 @@ pub struct FaultRun {
     pub report: PhysicsReport,
 }
 
-/// Runs row `(kind, rate)` of the sweep on `scenario` with `seed`, then in the engine.
+/// Runs row `(kind, rate)` of the sweep on `scenario` with `seed` through `robot`'s node,
+/// then in the engine (`cfg.robot` should be [`super::model::Robot::of`] it).
 pub fn fault_run(
     scenario_name: &str,
     kind: FaultKind,
     rate: f64,
     seed: u64,
+    robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<FaultRun, String> {
     let s =
         scenario::built_in(scenario_name).ok_or_else(|| format!("no scenario {scenario_name}"))?;
-    let case = run_case(&s, kind, rate, seed)?;
-    let dt = planner_core::gait::GaitParams::<f64>::hrp2().dt;
+    let node = robot.node_config();
+    let dt = node.params.dt;
+    let case = run_case_with(&s, kind, rate, seed, node, &robot.model)?;
     let report = run(&case.trajectory, dt, cfg)?.report;
     Ok(FaultRun {
         kind,
@@ -72,7 +76,12 @@ pub fn fault_run(
 }
 
 /// Runs the rows with the given indices (into [`rows`]) on every sweep scenario.
-pub fn sweep(indices: &[usize], seed: u64, cfg: &PhysicsConfig) -> Result<Vec<FaultRun>, String> {
+pub fn sweep(
+    indices: &[usize],
+    seed: u64,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<Vec<FaultRun>, String> {
     let all = rows();
     let mut out = Vec::new();
     for &i in indices {
@@ -81,7 +90,7 @@ pub fn sweep(indices: &[usize], seed: u64, cfg: &PhysicsConfig) -> Result<Vec<Fa
             .ok_or_else(|| format!("row {i}: the sweep has rows 0..{}", all.len()))?;
         for s in SCENARIOS {
             out.push(
-                fault_run(s, kind, rate, seed, cfg).map_err(|e| {
+                fault_run(s, kind, rate, seed, robot, cfg).map_err(|e| {
                     format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate))
                 })?,
             );

@@ -65,6 +65,8 @@ pub struct PhysicsConfig {
     pub push: Option<Push>,
     /// LIPM height z_c \[m\].
     pub z_c: f64,
+    /// The robot (its MJCF, kinematics and soles).
+    pub robot: Robot,
 }
 
 impl Default for PhysicsConfig {
@@ -75,6 +77,19 @@ impl Default for PhysicsConfig {
             tail_s: 1.0,
             push: None,
             z_c: planner_core::HRP2_COG_HEIGHT,
+            robot: Robot::default(),
+        }
+    }
+}
+
+impl PhysicsConfig {
+    /// The default run of a robot file's robot: its link table and soles ([`Robot::of`]) and
+    /// its pendulum height.
+    pub fn for_robot(robot: &crate::robot::Robot) -> Self {
+        Self {
+            z_c: robot.planner.params.cog_height,
+            robot: Robot::of(robot),
+            ..Self::default()
         }
     }
 }
@@ -217,7 +232,7 @@ pub fn run(
     if trajectory.is_empty() {
         return Err("empty trajectory".into());
     }
-    let robot = Robot::default();
+    let robot = cfg.robot;
     let mut engine = Engine::start(&robot.mjcf())?;
     let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
     // Initial pose: the first reference through the waist search and the IK.

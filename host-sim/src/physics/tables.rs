@@ -15,7 +15,6 @@
 
 use serde_json::{json, Value};
 
-use super::model::link_table;
 use super::{run, PhysicsConfig, PhysicsReport};
 use crate::paper::{
     self, without_adjustment, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS,
@@ -62,17 +61,24 @@ fn window_error(samples: &[super::PhysicsSample]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The plain re-plan's parameters: no adjustment, no shaping (Table I).
-pub fn plain_params() -> GaitParams<f64> {
-    let mut p = without_adjustment(GaitParams::<f64>::hrp2());
+/// The plain re-plan's parameters of the gait `params`: no adjustment, no shaping (Table I).
+pub fn plain_params(params: GaitParams<f64>) -> GaitParams<f64> {
+    let mut p = without_adjustment(params);
     p.shaping = false;
     p
 }
 
-/// Runs one cell both ways. Errors: the engine failed (an unreachable footstep is `None`).
-pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String> {
+/// Runs one cell both ways with the gait `params` (the proposed method; the plain re-plan is
+/// [`plain_params`] of it) and the robot of `cfg` (its link table for the kinematic error).
+/// Errors: the engine failed (an unreachable footstep is `None`).
+pub fn cell(
+    row: usize,
+    col: usize,
+    params: &GaitParams<f64>,
+    cfg: &PhysicsConfig,
+) -> Result<Cell, String> {
     let (after, before) = (STEP_LENGTHS[row], STEP_LENGTHS[col]);
-    let proposed_params = GaitParams::<f64>::hrp2();
+    let proposed_params = *params;
     let dt = proposed_params.dt;
     let mut out = Cell {
         row,
@@ -84,9 +90,12 @@ pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String>
         mb_error_plain_m: None,
         mb_error_proposed_m: None,
     };
-    for (params, plain) in [(plain_params(), true), (proposed_params, false)] {
+    for (params, plain) in [
+        (plain_params(proposed_params), true),
+        (proposed_params, false),
+    ] {
         let m = paper::modification(params, before, after);
-        let mb = paper::modified_support_error(&link_table(), &m, dt);
+        let mb = paper::modified_support_error(cfg.robot.link_table(), &m, dt);
         // Out of reach kinematically: no engine run either.
         let (report, window) = match mb {
             Some(_) => {
