@@ -25,17 +25,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::multibody::{evaluate, max_zmp_error, MbSample, Model};
-use host_sim::paper::{
-    self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
-    PAPER_ERROR_WITH_M, STEP_LENGTHS,
-};
+use host_sim::multibody::{evaluate, max_zmp_error, MbSample};
+use host_sim::paper;
 use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, replay, toml_scenario};
-use planner_core::gait::{GaitParams, Phase, Side};
+use planner_core::gait::{Phase, Side};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -204,7 +201,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         Some(Cmd::Replay { log, out, robot }) => {
             replay_log(&log, &out, &load_robot(robot.as_deref())?)
         }
-        Some(Cmd::Tables { out }) => tables(&out),
+        Some(Cmd::Tables { out }) => Ok(paper::tables_command(&out)?),
         Some(Cmd::Physics {
             scenario,
             out,
@@ -699,98 +696,5 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         ))
         .into());
     }
-    Ok(())
-}
-
-fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
-    let params = GaitParams::<f64>::hrp2();
-    create_dir(out)?;
-    let n = STEP_LENGTHS.len();
-    let mut adjust = vec![vec![0.0; n]; n];
-    let mut with = vec![vec![0.0; n]; n];
-    let mut without = vec![vec![0.0; n]; n];
-    let mut lipm_with = vec![vec![0.0; n]; n];
-    let mut lipm_without = vec![vec![0.0; n]; n];
-    let mut grid = Vec::new();
-    // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
-    let mut bare = without_adjustment(params);
-    bare.shaping = false;
-    for (r, &after) in STEP_LENGTHS.iter().enumerate() {
-        let mut row = Vec::new();
-        for (c, &before) in STEP_LENGTHS.iter().enumerate() {
-            eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
-            let m = paper::modification(params, before, after);
-            let w = paper::modification(bare, before, after);
-            adjust[r][c] = m.adjust_s;
-            lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
-            lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
-            with[r][c] =
-                paper::modified_support_error(&Model::hrp2(), &m, params.dt).unwrap_or(f64::NAN);
-            without[r][c] =
-                paper::modified_support_error(&Model::hrp2(), &w, params.dt).unwrap_or(f64::NAN);
-            let mut m = m;
-            m.trajectory.clear();
-            row.push(m);
-        }
-        grid.push(row);
-    }
-    eprintln!();
-    let within = cells_within(&grid, params.dt, 1.0);
-    let json = json!({
-        "step_lengths_m": STEP_LENGTHS,
-        "rows": "length after the modification",
-        "columns": "length before the modification",
-        "adjust_s": adjust,
-        "paper_adjust_s": PAPER_ADJUST_S,
-        "cells_within_one_cycle": within,
-        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
-        "max_zmp_error_without_m": without,
-        "max_zmp_error_with_m": with,
-        "lipm_zmp_fluctuation_without_m": lipm_without,
-        "lipm_zmp_fluctuation_with_m": lipm_with,
-        "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
-        "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
-    });
-    write_file(
-        &out.join("tables.json"),
-        serde_json::to_string_pretty(&json)?,
-    )?;
-    let mut md = paper::grid_markdown(
-        "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)",
-        |r, c| format!("{:.3} / {:.3}", adjust[r][c], PAPER_ADJUST_S[r][c]),
-    );
-    md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
-    let cell = |v: f64| {
-        if v.is_finite() {
-            format!("{:.1}", v * 100.0)
-        } else {
-            "n/a".to_string()
-        }
-    };
-    for (title, ours, theirs) in [
-        (
-            "Table I: maximum ZMP error without any adjustment [cm], ours (multi-body) / paper",
-            &without,
-            &PAPER_ERROR_WITHOUT_M,
-        ),
-        (
-            "Table II: maximum ZMP error with the proposed method [cm], ours (multi-body) / paper",
-            &with,
-            &PAPER_ERROR_WITH_M,
-        ),
-    ] {
-        md += "\n";
-        md += &paper::grid_markdown(title, |r, c| {
-            format!("{} / {:.1}", cell(ours[r][c]), theirs[r][c] * 100.0)
-        });
-    }
-    md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
-    write_file(&out.join("tables.md"), &md)?;
-    println!("{md}");
-    println!(
-        "results: {} and {}",
-        out.join("tables.json").display(),
-        out.join("tables.md").display()
-    );
     Ok(())
 }
