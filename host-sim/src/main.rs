@@ -103,6 +103,12 @@ enum Cmd {
         /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
         #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
         push: Option<String>,
+        /// Every feedback gain of the stabilizer times S (1: as stated, 0: none acts).
+        #[arg(long, value_name = "S", default_value_t = 1.0)]
+        stabilizer: f64,
+        /// The joint damping of every servo [N m s/rad] [default: the robot's].
+        #[arg(long, value_name = "KD")]
+        servo_damping: Option<f64>,
         /// The robot file (its link table and soles) [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
@@ -122,6 +128,13 @@ enum Cmd {
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
+        /// The stabilizer: `full`, `off` (no feedback acts), a scale of every feedback gain,
+        /// or `weakest` (the smallest scale with which every built-in scenario walks).
+        #[arg(long, value_name = "full|off|weakest|S", default_value = "full")]
+        stabilizer: String,
+        /// The joint damping of every servo [N m s/rad] [default: the robot's].
+        #[arg(long, value_name = "KD")]
+        servo_damping: Option<f64>,
     },
     /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
     /// DIR/physics_faults.json and .md.
@@ -208,23 +221,31 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             open_loop,
             push,
             robot,
+            stabilizer,
+            servo_damping,
         }) => host_sim::physics::output::cli(
             &scenario,
             out.as_deref(),
             &load_robot(robot.as_deref())?,
             open_loop,
             push.as_deref(),
+            stabilizer,
+            servo_damping,
         ),
         Some(Cmd::PhysicsTables {
             out,
             cells,
             open_loop,
             robot,
+            stabilizer,
+            servo_damping,
         }) => host_sim::physics::output::tables_cli(
             &out,
             &cells,
             &load_robot(robot.as_deref())?,
             open_loop,
+            &stabilizer,
+            servo_damping,
         ),
         Some(Cmd::PhysicsFaults {
             out,

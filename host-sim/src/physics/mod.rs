@@ -9,7 +9,9 @@
 //! * [`metrics`]: the definitions of a fall and of the CoP tracking;
 //! * [`output`]: the `physics` command and its files (`physics.json` …);
 //! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
-//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`).
+//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`);
+//! * [`probe`]: the grid with a weakened stabilizer and softer servos (`physics-tables
+//!   --stabilizer`, `--servo-damping`).
 //!
 //! # A run
 //!
@@ -27,6 +29,7 @@ pub mod fault_sweep;
 pub mod metrics;
 pub mod model;
 pub mod output;
+pub mod probe;
 pub mod stabilizer;
 pub mod tables;
 

@@ -185,6 +185,12 @@ impl Robot {
         }
     }
 
+    /// The same robot with the joint damping `kd` \[N m s/rad\] (the stiffness unchanged).
+    pub fn with_servo_damping(mut self, kd: f64) -> Self {
+        self.servo[1] = kd;
+        self
+    }
+
     /// Servo stiffness \[N m/rad\] and joint damping \[N m s/rad\].
     pub fn servo(&self) -> [f64; 2] {
         self.servo

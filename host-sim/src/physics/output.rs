@@ -69,6 +69,8 @@ pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun)
         "foot_drift_max_m": p.foot_drift_max_m,
         "simulated_s": p.simulated_s,
         "stabilizer": cfg.gains.enabled,
+        "stabilizer_gains": format!("{:?}", cfg.gains),
+        "servo_kp_kd": cfg.robot.servo(),
         "engine": format!("MuJoCo {}", p.engine),
         "physics_dt_s": super::PHYSICS_DT,
         "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
@@ -121,6 +123,19 @@ fn smoothed(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     out
 }
 
+/// How the run was controlled, for the captions: `open loop`, `stabilized`, or `stabilizer
+/// × s` for weakened gains ([`super::probe`]).
+fn mode(cfg: &PhysicsConfig) -> String {
+    let full = super::stabilizer::Gains::default();
+    if !cfg.gains.enabled {
+        "open loop".into()
+    } else if cfg.gains == full {
+        "stabilized".into()
+    } else {
+        format!("stabilizer × {}", cfg.gains.k_cog / full.k_cog)
+    }
+}
+
 /// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name).
 pub fn write_outputs(
     out: &Path,
@@ -136,11 +151,7 @@ pub fn write_outputs(
     let path = out.join("physics.json");
     fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     write_csv(&out.join("physics.csv"), r)?;
-    let mode = if cfg.gains.enabled {
-        "stabilized"
-    } else {
-        "open loop"
-    };
+    let mode = mode(cfg);
     let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
     let limit: Vec<(f64, f64)> = r
         .samples
@@ -223,15 +234,18 @@ pub fn parse_push(s: &str) -> Result<Push, String> {
     }
 }
 
-/// The command line's `physics` subcommand: runs `robot`, writes, prints the figures.
+/// The command line's `physics` subcommand: runs `robot`, writes, prints the figures; the
+/// stabilizer's feedback scaled by `scale` and the servo damping `kd` (see [`super::probe`]).
 pub fn cli(
     name: &str,
     out: Option<&Path>,
     robot: &Robot,
     open_loop: bool,
     push: Option<&str>,
+    scale: f64,
+    kd: Option<f64>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let mut cfg = PhysicsConfig::for_robot(robot);
+    let mut cfg = super::probe::weakened(robot, scale, kd);
     cfg.gains.enabled = !open_loop;
     cfg.push = push.map(parse_push).transpose()?;
     let default_out;
@@ -261,7 +275,7 @@ pub fn cli(
         } else {
             "walked through, no fall".to_string()
         },
-        if open_loop { "open loop" } else { "stabilized" },
+        mode(&cfg),
         num("simulated_s")
     );
     println!(
@@ -278,19 +292,42 @@ pub fn cli(
 
 /// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
 /// `DIR/physics_tables.json` and `DIR/physics_tables.md`, with `robot` (its gait parameters,
-/// link table and soles; it must stand as HRP-2, the grid being HRP-2's footsteps).
+/// link table and soles; it must stand as HRP-2, the grid being HRP-2's footsteps), the
+/// stabilizer `setting` (`full`, `off`, `weakest` or a scale) and the servo damping `kd`
+/// (see [`super::probe`]).
 pub fn tables_cli(
     out: &Path,
     cells: &str,
     robot: &Robot,
     open_loop: bool,
+    setting: &str,
+    kd: Option<f64>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use super::tables::{cell, cell_text, markdown, parse_cells, tables_json};
+    use super::probe::{parse_setting, weakened, weakest, Setting};
+    use super::tables::{cell, cell_text, markdown, parse_cells, side_by_side_text, tables_json};
     let list = parse_cells(cells)?;
     robot.check_hrp2_footsteps("physics-tables")?;
-    let mut cfg = PhysicsConfig::for_robot(robot);
+    let (scale, ladder) = match parse_setting(setting)? {
+        Setting::Scale(s) => (s, None),
+        Setting::Weakest => match weakest(robot, kd)? {
+            (Some(s), rungs) => (s, Some(rungs)),
+            (None, _) => {
+                return Err(
+                    "--stabilizer weakest: not even the full stabilizer walks every \
+                            built-in scenario with this servo damping"
+                        .into(),
+                )
+            }
+        },
+    };
+    let mut cfg = weakened(robot, scale, kd);
     cfg.gains.enabled = !open_loop;
-    let mode = if open_loop { "open loop" } else { "stabilized" };
+    let [_, servo_kd] = cfg.robot.servo();
+    let mode = if open_loop {
+        format!("open loop, servo damping {servo_kd} N m s/rad")
+    } else {
+        format!("stabilizer × {scale}, servo damping {servo_kd} N m s/rad")
+    };
     let mut done = Vec::new();
     for (i, &(r, c)) in list.iter().enumerate() {
         eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
@@ -304,7 +341,25 @@ pub fn tables_cli(
     let path = out.join("physics_tables.json");
     let mut json = tables_json(&done);
     json["stabilizer"] = serde_json::Value::Bool(!open_loop);
+    json["stabilizer_scale"] = scale.into();
+    json["servo_damping"] = servo_kd.into();
     json["robot"] = robot.name().into();
+    if let Some(rungs) = &ladder {
+        json["weakest_ladder"] = rungs
+            .iter()
+            .map(|r| {
+                json!({
+                    "scale": r.scale,
+                    "walked": r.walked(),
+                    "runs": r.runs.iter().map(|(n, p)| json!({
+                        "scenario": n, "fell": p.fell, "fall_time_s": p.fall_time_s,
+                        "max_tilt_deg": p.max_tilt_deg, "cop_err_max_m": p.cop_err_max_m,
+                    })).collect::<Vec<_>>(),
+                })
+            })
+            .collect::<Vec<_>>()
+            .into();
+    }
     fs::write(&path, serde_json::to_string_pretty(&json)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let mut md = markdown(
@@ -331,6 +386,31 @@ pub fn tables_cli(
         },
     );
     let count = |f: &dyn Fn(&super::tables::Cell) -> bool| done.iter().filter(|c| f(c)).count();
+    md += "\n";
+    md += &markdown(
+        &format!(
+            "Side by side, {mode}: plain re-plan / proposed method fell or ok, their kinematic \
+             multi-body ZMP errors [cm] (* above the paper's 0.07 m)"
+        ),
+        &done,
+        side_by_side_text,
+    );
+    if let Some(rungs) = &ladder {
+        md += "\nThe weakest stabilizer: scales tried on the built-in scenarios (up to the first fall):";
+        for r in rungs {
+            md += &format!(
+                " × {}: {};",
+                r.scale,
+                if r.walked() {
+                    "all walk".to_string()
+                } else {
+                    let (n, p) = &r.runs[r.runs.len() - 1];
+                    format!("{n} fell at {:.2} s", p.fall_time_s.unwrap_or(f64::NAN))
+                }
+            );
+        }
+        md += "\n";
+    }
     md += &format!(
         "\n{} cells simulated; falls: plain {}, proposed {}.\n",
         done.len(),

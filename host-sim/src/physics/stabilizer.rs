@@ -100,6 +100,23 @@ impl Default for Gains {
     }
 }
 
+impl Gains {
+    /// The gains with every feedback scaled by `s` ≥ 0: the DCM gain `k_ξ`, the COG
+    /// modification `K_c` and the force difference `K_f` times `s`, the foot damping `D`
+    /// divided by it (its compliance `1 / D` times `s`); the filters, return times and limits
+    /// unchanged. `s` = 1 is the stabilizer as stated, `s` = 0 leaves no feedback acting (the
+    /// pattern through the same IK: the open-loop playback).
+    pub fn scaled(self, s: f64) -> Self {
+        Self {
+            k_dcm: self.k_dcm * s,
+            damping: self.damping / s,
+            k_force: self.k_force * s,
+            k_cog: self.k_cog * s,
+            ..self
+        }
+    }
+}
+
 /// What the stabilizer computed at a tick (for the logs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Internals {

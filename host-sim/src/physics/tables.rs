@@ -192,6 +192,29 @@ pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>
     }
 }
 
+/// One cell side by side: the verdicts of the plain re-plan and of the proposed method, then
+/// their kinematic multi-body errors in cm, the plain one marked `*` above the paper's 0.07 m:
+/// `ok / ok, 9.3* / 5.0`.
+pub fn side_by_side_text(c: &Cell) -> String {
+    let verdict = |r: &Option<PhysicsReport>| match r {
+        Some(r) if r.fell => "**fell**",
+        Some(_) => "ok",
+        None => "n/a",
+    };
+    let cm = |e: Option<f64>| e.map_or("n/a".to_string(), |e| format!("{:.1}", e * 100.0));
+    let mark = match c.mb_error_plain_m {
+        Some(e) if e > PAPER_DIFFICULT_ERROR_M => "*",
+        _ => "",
+    };
+    format!(
+        "{} / {}, {}{mark} / {}",
+        verdict(&c.plain),
+        verdict(&c.proposed),
+        cm(c.mb_error_plain_m),
+        cm(c.mb_error_proposed_m)
+    )
+}
+
 /// Parses `--cells`: `r,c;r,c;...` (indices 0..7), or `all`.
 pub fn parse_cells(s: &str) -> Result<Vec<(usize, usize)>, String> {
     let n = STEP_LENGTHS.len();
@@ -238,10 +261,17 @@ mod tests {
             mb_error_plain_m: Some(0.05),
             mb_error_proposed_m: None,
         };
-        let j = tables_json(&[c]);
+        let j = tables_json(std::slice::from_ref(&c));
         assert_eq!(j["fell_plain"].as_array().unwrap().len(), 7);
         assert!(j["fell_plain"][1][2].is_null());
         assert_eq!(j["mb_zmp_error_plain_m"][1][2], json!(0.05));
         assert!(j["mb_zmp_error_plain_m"][0][0].is_null());
+        assert_eq!(side_by_side_text(&c), "n/a / n/a, 5.0 / n/a");
+        let big = Cell {
+            mb_error_plain_m: Some(0.093),
+            mb_error_proposed_m: Some(0.05),
+            ..c
+        };
+        assert_eq!(side_by_side_text(&big), "n/a / n/a, 9.3* / 5.0");
     }
 }
