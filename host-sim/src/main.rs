@@ -143,7 +143,7 @@ enum Cmd {
         #[arg(long, value_name = "DIR", default_value = "out/physics_faults")]
         out: PathBuf,
         /// The rows: `all` or comma-separated indices (0 = no fault).
-        #[arg(long, value_name = "ROWS", default_value = "all")]
+        #[arg(long, value_name = "ROWS", default_value = host_sim::physics::fault_sweep::DEFAULT_ROWS)]
         rows: String,
         /// The seed of every row.
         #[arg(long, value_name = "N", default_value_t = 1)]

@@ -474,3 +474,43 @@ fn physics_tables_full_grid_long() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `host-sim physics-faults` with its defaults simulates every row of the sweep (seed 1) on
+/// both sweep scenarios in the engine (44 runs), and the engine's verdict agrees with the
+/// kinematic one on every run.
+#[test]
+fn physics_faults_every_row_long() {
+    use host_sim::physics::fault_sweep::rows;
+    if !long_runs("physics_faults_every_row_long") {
+        return;
+    }
+    let dir = temp_dir("faults-all");
+    let j = host_sim_json(&["physics-faults"], &dir, "physics_faults.json");
+    let runs = j.as_array().expect("array");
+    let scenarios = host_sim::faults::SCENARIOS;
+    assert_eq!(runs.len(), rows().len() * scenarios.len());
+    for (kind, rate) in rows() {
+        for s in scenarios {
+            let hits: Vec<_> = runs
+                .iter()
+                .filter(|r| {
+                    r["fault"] == kind.name()
+                        && r["rate"] == kind.rate_label(rate)
+                        && r["scenario"] == s
+                })
+                .collect();
+            assert_eq!(
+                hits.len(),
+                1,
+                "{} {} on {s}",
+                kind.name(),
+                kind.rate_label(rate)
+            );
+            let r = hits[0];
+            assert_eq!(r["seed"], 1);
+            assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
+            assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
