@@ -11,7 +11,10 @@
 //! `DIR/physics_tables.json`: `fell_plain` and `fell_proposed` (7 × 7, rows "after", columns
 //! "before", in the order of `tables.json`; `null` for a cell not simulated or whose footsteps
 //! the legs cannot reach) and the per-cell figures; `--cells r,c;r,c` restricts the run to
-//! some cells (the test runs a reduced grid).
+//! some cells (the test runs a reduced grid). `--stabilizer full|off|weakest|S` and
+//! `--servo-damping KD` weaken the stabilizer and the servos ([`super::probe`]; the JSON then
+//! has `stabilizer_scale`, `servo_damping` and, for `weakest`, `weakest_ladder`), `--robot
+//! FILE` takes another robot file standing as HRP-2 (the grid is HRP-2's footsteps).
 
 use serde_json::{json, Value};
 
