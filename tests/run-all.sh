@@ -21,7 +21,9 @@
 #
 # WALK_LONG=1 makes the long runs for a release: the fault sweep with 10 seeds per row and 40
 # per heavier mixed row, 2,048 random programs of the protocol property test (each can also be
-# set alone: WALK_FAULT_SEEDS, WALK_FAULT_HEAVY_SEEDS, WALK_PROTOCOL_CASES).
+# set alone: WALK_FAULT_SEEDS, WALK_FAULT_HEAVY_SEEDS, WALK_PROTOCOL_CASES), and the MuJoCo
+# runs of host-sim/tests/physics.rs that take minutes: the full Tables I/II grid (with the full
+# and with the weakest stabilizer) and every fault-sweep row in the engine.
 set -euo pipefail
 
 if [ "${WALK_LONG:-0}" = 1 ]; then

@@ -457,7 +457,19 @@ pub fn landings(traj: &[Reference<f64>]) -> Vec<(Side, FootPose<f64>)> {
 
 /// Plays `scenario` with one fault kind at one rate and one seed, and evaluates the outcome.
 pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<CaseResult, String> {
-    let cfg = NodeConfig::hrp2();
+    run_case_with(s, kind, rate, seed, NodeConfig::hrp2(), &Model::hrp2())
+}
+
+/// [`run_case`] with another robot: its node `cfg` and its link table `model` (for the
+/// kinematic verdict).
+pub fn run_case_with(
+    s: &Scenario,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    cfg: NodeConfig,
+    model: &Model,
+) -> Result<CaseResult, String> {
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up: {e:?}"))?;
     let mut rng = Rng::new(seed ^ 0xFA17);
     let ms = 1_000_000u64;
@@ -850,15 +862,14 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
     let dt = cfg.params.dt;
     // If the model cannot follow from tick `e` on (a leg out of reach), the ZMP is evaluated
     // on the ticks up to 50 ms before it.
-    let model = Model::hrp2();
     let mut model_error = None;
-    let mut evaluated = evaluate(&model, &trajectory, dt);
+    let mut evaluated = evaluate(model, &trajectory, dt);
     if let Err(MbError::OutOfReach(e, _) | MbError::NoConvergence(e, _) | MbError::NonFinite(e)) =
         evaluated
     {
         model_error = Some(format!("{:?}", evaluated.as_ref().err()));
         // Up to 50 ms before it: at the stretched knee itself the waist search is singular.
-        evaluated = evaluate(&model, &trajectory[..e.saturating_sub(10)], dt);
+        evaluated = evaluate(model, &trajectory[..e.saturating_sub(10)], dt);
     }
     let (fell, max_outside, max_err) = match evaluated {
         Ok(mb) => {

@@ -6,9 +6,9 @@
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
-//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop]   MuJoCo run (physics.json)
-//! host-sim physics-tables [--out DIR] [--cells all|r,c;...]   Tables I/II in MuJoCo
-//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N]   fault sweep in MuJoCo
+//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop] [--robot FILE]   MuJoCo run
+//! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [--robot FILE]   Tables I/II in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [--robot FILE]   faults in MuJoCo
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //! ```
 //!
@@ -25,17 +25,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::multibody::{evaluate, max_zmp_error, MbSample, Model};
-use host_sim::paper::{
-    self, cells_within, without_adjustment, PAPER_ADJUST_S, PAPER_ERROR_WITHOUT_M,
-    PAPER_ERROR_WITH_M, STEP_LENGTHS,
-};
+use host_sim::multibody::{evaluate, max_zmp_error, MbSample};
+use host_sim::paper;
 use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, replay, toml_scenario};
-use planner_core::gait::{GaitParams, Phase, Side};
+use planner_core::gait::{Phase, Side};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -106,6 +103,15 @@ enum Cmd {
         /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
         #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
         push: Option<String>,
+        /// Every feedback gain of the stabilizer times S (1: as stated, 0: none acts).
+        #[arg(long, value_name = "S", default_value_t = 1.0)]
+        stabilizer: f64,
+        /// The joint damping of every servo [N m s/rad] [default: the robot's].
+        #[arg(long, value_name = "KD")]
+        servo_damping: Option<f64>,
+        /// The robot file (its link table and soles) [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// The paper's Tables I and II in MuJoCo: each modification cell with the plain re-plan
     /// and with the proposed method; writes DIR/physics_tables.json and .md.
@@ -119,6 +125,16 @@ enum Cmd {
         /// Play the patterns open loop (the stabilizer off).
         #[arg(long)]
         open_loop: bool,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+        /// The stabilizer: `full`, `off` (no feedback acts), a scale of every feedback gain,
+        /// or `weakest` (the smallest scale with which every built-in scenario walks).
+        #[arg(long, value_name = "full|off|weakest|S", default_value = "full")]
+        stabilizer: String,
+        /// The joint damping of every servo [N m s/rad] [default: the robot's].
+        #[arg(long, value_name = "KD")]
+        servo_damping: Option<f64>,
     },
     /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
     /// DIR/physics_faults.json and .md.
@@ -127,11 +143,14 @@ enum Cmd {
         #[arg(long, value_name = "DIR", default_value = "out/physics_faults")]
         out: PathBuf,
         /// The rows: `all` or comma-separated indices (0 = no fault).
-        #[arg(long, value_name = "ROWS", default_value = "all")]
+        #[arg(long, value_name = "ROWS", default_value = host_sim::physics::fault_sweep::DEFAULT_ROWS)]
         rows: String,
         /// The seed of every row.
         #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
     },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
@@ -195,20 +214,46 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         Some(Cmd::Replay { log, out, robot }) => {
             replay_log(&log, &out, &load_robot(robot.as_deref())?)
         }
-        Some(Cmd::Tables { out }) => tables(&out),
+        Some(Cmd::Tables { out }) => Ok(paper::tables_command(&out)?),
         Some(Cmd::Physics {
             scenario,
             out,
             open_loop,
             push,
-        }) => host_sim::physics::output::cli(&scenario, out.as_deref(), open_loop, push.as_deref()),
+            robot,
+            stabilizer,
+            servo_damping,
+        }) => host_sim::physics::output::cli(
+            &scenario,
+            out.as_deref(),
+            &load_robot(robot.as_deref())?,
+            open_loop,
+            push.as_deref(),
+            stabilizer,
+            servo_damping,
+        ),
         Some(Cmd::PhysicsTables {
             out,
             cells,
             open_loop,
-        }) => host_sim::physics::output::tables_cli(&out, &cells, open_loop),
-        Some(Cmd::PhysicsFaults { out, rows, seed }) => {
-            host_sim::physics::output::faults_cli(&out, &rows, seed)
+            robot,
+            stabilizer,
+            servo_damping,
+        }) => host_sim::physics::output::tables_cli(
+            &out,
+            &cells,
+            &load_robot(robot.as_deref())?,
+            open_loop,
+            &stabilizer,
+            servo_damping,
+        ),
+        Some(Cmd::PhysicsFaults {
+            out,
+            rows,
+            seed,
+            robot,
+        }) => {
+            host_sim::physics::output::faults_cli(&out, &rows, seed, &load_robot(robot.as_deref())?)
         }
         Some(Cmd::Node {
             interface,
@@ -406,15 +451,8 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         scenario: s,
         entries,
     } = load_scenario(name)?;
-    let hrp2_width = host_sim::robot::Robot::hrp2().planner.params.step_width;
-    if !name.ends_with(".toml") && robot.planner.params.step_width != hrp2_width {
-        return Err(format!(
-            "{name}: the built-in scenarios are HRP-2's footsteps (feet {hrp2_width} m apart), \
-             and {} stands {} m apart: write a scenario file for it",
-            robot.name(),
-            robot.planner.params.step_width
-        )
-        .into());
+    if !name.ends_with(".toml") {
+        robot.check_hrp2_footsteps(name)?;
     }
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);
@@ -679,98 +717,5 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         ))
         .into());
     }
-    Ok(())
-}
-
-fn tables(out: &Path) -> Result<(), Box<dyn Error>> {
-    let params = GaitParams::<f64>::hrp2();
-    create_dir(out)?;
-    let n = STEP_LENGTHS.len();
-    let mut adjust = vec![vec![0.0; n]; n];
-    let mut with = vec![vec![0.0; n]; n];
-    let mut without = vec![vec![0.0; n]; n];
-    let mut lipm_with = vec![vec![0.0; n]; n];
-    let mut lipm_without = vec![vec![0.0; n]; n];
-    let mut grid = Vec::new();
-    // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
-    let mut bare = without_adjustment(params);
-    bare.shaping = false;
-    for (r, &after) in STEP_LENGTHS.iter().enumerate() {
-        let mut row = Vec::new();
-        for (c, &before) in STEP_LENGTHS.iter().enumerate() {
-            eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
-            let m = paper::modification(params, before, after);
-            let w = paper::modification(bare, before, after);
-            adjust[r][c] = m.adjust_s;
-            lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
-            lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
-            with[r][c] =
-                paper::modified_support_error(&Model::hrp2(), &m, params.dt).unwrap_or(f64::NAN);
-            without[r][c] =
-                paper::modified_support_error(&Model::hrp2(), &w, params.dt).unwrap_or(f64::NAN);
-            let mut m = m;
-            m.trajectory.clear();
-            row.push(m);
-        }
-        grid.push(row);
-    }
-    eprintln!();
-    let within = cells_within(&grid, params.dt, 1.0);
-    let json = json!({
-        "step_lengths_m": STEP_LENGTHS,
-        "rows": "length after the modification",
-        "columns": "length before the modification",
-        "adjust_s": adjust,
-        "paper_adjust_s": PAPER_ADJUST_S,
-        "cells_within_one_cycle": within,
-        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
-        "max_zmp_error_without_m": without,
-        "max_zmp_error_with_m": with,
-        "lipm_zmp_fluctuation_without_m": lipm_without,
-        "lipm_zmp_fluctuation_with_m": lipm_with,
-        "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
-        "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
-    });
-    write_file(
-        &out.join("tables.json"),
-        serde_json::to_string_pretty(&json)?,
-    )?;
-    let mut md = paper::grid_markdown(
-        "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)",
-        |r, c| format!("{:.3} / {:.3}", adjust[r][c], PAPER_ADJUST_S[r][c]),
-    );
-    md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
-    let cell = |v: f64| {
-        if v.is_finite() {
-            format!("{:.1}", v * 100.0)
-        } else {
-            "n/a".to_string()
-        }
-    };
-    for (title, ours, theirs) in [
-        (
-            "Table I: maximum ZMP error without any adjustment [cm], ours (multi-body) / paper",
-            &without,
-            &PAPER_ERROR_WITHOUT_M,
-        ),
-        (
-            "Table II: maximum ZMP error with the proposed method [cm], ours (multi-body) / paper",
-            &with,
-            &PAPER_ERROR_WITH_M,
-        ),
-    ] {
-        md += "\n";
-        md += &paper::grid_markdown(title, |r, c| {
-            format!("{} / {:.1}", cell(ours[r][c]), theirs[r][c] * 100.0)
-        });
-    }
-    md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
-    write_file(&out.join("tables.md"), &md)?;
-    println!("{md}");
-    println!(
-        "results: {} and {}",
-        out.join("tables.json").display(),
-        out.join("tables.md").display()
-    );
     Ok(())
 }

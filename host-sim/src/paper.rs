@@ -9,6 +9,10 @@
 //! that the design notes point out). The re-plan at 4.0 s applies eq. 18.
 
 use planner_core::gait::{Footstep, Gait, GaitParams, Phase, Reference, Side};
+use std::fs;
+use std::path::Path;
+
+use serde_json::json;
 
 /// The step lengths of Tables I and II \[m\].
 pub const STEP_LENGTHS: [f64; 7] = [-0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3];
@@ -230,4 +234,105 @@ pub fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> Stri
         md += "\n";
     }
     md
+}
+
+/// The `host-sim tables` command: the paper's Tables I and II and the Fig. 4 adjustment
+/// recomputed with the multi-body HRP-2 model; writes `out/tables.json` and `out/tables.md`.
+pub fn tables_command(out: &Path) -> Result<(), String> {
+    let params = GaitParams::<f64>::hrp2();
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let n = STEP_LENGTHS.len();
+    let mut adjust = vec![vec![0.0; n]; n];
+    let mut with = vec![vec![0.0; n]; n];
+    let mut without = vec![vec![0.0; n]; n];
+    let mut lipm_with = vec![vec![0.0; n]; n];
+    let mut lipm_without = vec![vec![0.0; n]; n];
+    let mut grid = Vec::new();
+    // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
+    let mut bare = without_adjustment(params);
+    bare.shaping = false;
+    for (r, &after) in STEP_LENGTHS.iter().enumerate() {
+        let mut row = Vec::new();
+        for (c, &before) in STEP_LENGTHS.iter().enumerate() {
+            eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
+            let m = modification(params, before, after);
+            let w = modification(bare, before, after);
+            adjust[r][c] = m.adjust_s;
+            lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
+            lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
+            with[r][c] = modified_support_error(&crate::multibody::Model::hrp2(), &m, params.dt)
+                .unwrap_or(f64::NAN);
+            without[r][c] = modified_support_error(&crate::multibody::Model::hrp2(), &w, params.dt)
+                .unwrap_or(f64::NAN);
+            let mut m = m;
+            m.trajectory.clear();
+            row.push(m);
+        }
+        grid.push(row);
+    }
+    eprintln!();
+    let within = cells_within(&grid, params.dt, 1.0);
+    let json = json!({
+        "step_lengths_m": STEP_LENGTHS,
+        "rows": "length after the modification",
+        "columns": "length before the modification",
+        "adjust_s": adjust,
+        "paper_adjust_s": PAPER_ADJUST_S,
+        "cells_within_one_cycle": within,
+        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
+        "max_zmp_error_without_m": without,
+        "max_zmp_error_with_m": with,
+        "lipm_zmp_fluctuation_without_m": lipm_without,
+        "lipm_zmp_fluctuation_with_m": lipm_with,
+        "paper_max_zmp_error_without_m": PAPER_ERROR_WITHOUT_M,
+        "paper_max_zmp_error_with_m": PAPER_ERROR_WITH_M,
+    });
+    write_file(
+        &out.join("tables.json"),
+        serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?,
+    )?;
+    let mut md = grid_markdown(
+        "Adjustment time [s], ours / paper's Table II (rows: after, columns: before)",
+        |r, c| format!("{:.3} / {:.3}", adjust[r][c], PAPER_ADJUST_S[r][c]),
+    );
+    md += &format!("\n{within}/49 cells within one control cycle (5 ms) of the paper.\n");
+    let cell = |v: f64| {
+        if v.is_finite() {
+            format!("{:.1}", v * 100.0)
+        } else {
+            "n/a".to_string()
+        }
+    };
+    for (title, ours, theirs) in [
+        (
+            "Table I: maximum ZMP error without any adjustment [cm], ours (multi-body) / paper",
+            &without,
+            &PAPER_ERROR_WITHOUT_M,
+        ),
+        (
+            "Table II: maximum ZMP error with the proposed method [cm], ours (multi-body) / paper",
+            &with,
+            &PAPER_ERROR_WITH_M,
+        ),
+    ] {
+        md += "\n";
+        md += &grid_markdown(title, |r, c| {
+            format!("{} / {:.1}", cell(ours[r][c]), theirs[r][c] * 100.0)
+        });
+    }
+    md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
+    write_file(&out.join("tables.md"), &md)?;
+    println!("{md}");
+    println!(
+        "results: {} and {}",
+        out.join("tables.json").display(),
+        out.join("tables.md").display()
+    );
+    Ok(())
+}
+
+/// Writes `contents` to `path`; the error names it.
+fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), String> {
+    fs::write(path, contents).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }

@@ -270,4 +270,21 @@ impl Robot {
     pub fn node_config(&self) -> NodeConfig {
         self.planner.node_config()
     }
+
+    /// Whether this robot can walk HRP-2's footsteps (the built-in scenarios, the fault
+    /// sweep's and the paper's grid are written for feet `step_width` = 0.2 m apart): an error
+    /// naming `what` and the robot's width if its feet stand otherwise.
+    pub fn check_hrp2_footsteps(&self, what: &str) -> Result<(), String> {
+        let hrp2_width = Self::hrp2().planner.params.step_width;
+        let width = self.planner.params.step_width;
+        if width == hrp2_width {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what}: the built-in scenarios are HRP-2's footsteps (feet {hrp2_width} m \
+                 apart), and {} stands {width} m apart: write a scenario file for it",
+                self.name()
+            ))
+        }
+    }
 }

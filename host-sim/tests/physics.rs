@@ -15,6 +15,7 @@ use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSIO
 use host_sim::physics::metrics::FallCause;
 use host_sim::physics::output::scenario_trajectory;
 use host_sim::physics::{run, PhysicsConfig, PhysicsReport, Push};
+use host_sim::robot::Robot;
 use host_sim::scenario::BUILT_IN;
 
 const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
@@ -47,7 +48,7 @@ fn engine_here(test: &str) -> bool {
 }
 
 fn report(scenario: &str, cfg: &PhysicsConfig) -> PhysicsReport {
-    let (_, trajectory, dt) = scenario_trajectory(scenario).expect("scenario");
+    let (_, trajectory, dt) = scenario_trajectory(scenario, &Robot::hrp2()).expect("scenario");
     run(&trajectory, dt, cfg).expect("engine run").report
 }
 
@@ -197,19 +198,83 @@ fn a_rejected_model_is_an_error() {
     assert!(e.starts_with("MuJoCo: MJCF rejected"), "{e}");
 }
 
-/// `host-sim physics-tables --cells 5,1` (the reduced grid of CI: 0.2 m backward steps, the
-/// step in flight changed to 0.2 m forward; the plain re-plan's kinematic error is above the
-/// paper's 0.07 m there, the proposed method's below):
-/// `physics_tables.json` has 7 × 7 `fell_plain` / `fell_proposed` with this cell filled in,
-/// the others null; under the stabilizer neither falls.
+/// The reduced grid of CI, run once for the tests that read it: `host-sim physics-tables
+/// --cells '5,1;1,5'` (0.2 m backward steps, the step in flight changed to 0.2 m forward, and
+/// the mirror cell; the plain re-plan's kinematic error is above the paper's 0.07 m in both,
+/// the proposed method's below). `None` without the engine.
+fn reduced_grid() -> Option<&'static serde_json::Value> {
+    static GRID: std::sync::OnceLock<Option<serde_json::Value>> = std::sync::OnceLock::new();
+    GRID.get_or_init(|| {
+        if !engine_here("the reduced physics-tables grid") {
+            return None;
+        }
+        let dir = temp_dir("tables");
+        let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(["physics-tables", "--cells", "5,1;1,5", "--out"])
+            .arg(&dir)
+            .output()
+            .expect("host-sim runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = std::fs::read_to_string(dir.join("physics_tables.json")).expect("json");
+        let _ = std::fs::remove_dir_all(&dir);
+        Some(serde_json::from_str(&text).expect("JSON"))
+    })
+    .as_ref()
+}
+
+const REDUCED: [(usize, usize); 2] = [(5, 1), (1, 5)];
+
+/// `physics_tables.json` of the reduced grid: 7 × 7 `fell_plain` / `fell_proposed` with these
+/// cells filled in, the others null; under the stabilizer neither falls.
 #[test]
 fn physics_tables_reduced_grid() {
-    if !engine_here("physics_tables_reduced_grid") {
-        return;
+    let Some(j) = reduced_grid() else { return };
+    let text = j.to_string();
+    for key in ["fell_plain", "fell_proposed"] {
+        let g = j[key].as_array().expect(key);
+        assert_eq!(g.len(), 7);
+        for (r, row) in g.iter().enumerate() {
+            let row = row.as_array().expect("row");
+            assert_eq!(row.len(), 7);
+            for (c, v) in row.iter().enumerate() {
+                if REDUCED.contains(&(r, c)) {
+                    assert_eq!(v, &serde_json::Value::Bool(false), "{key}: {text}");
+                } else {
+                    assert!(v.is_null(), "{key}[{r}][{c}] = {v}");
+                }
+            }
+        }
     }
-    let dir = temp_dir("tables");
+    for (r, c) in REDUCED {
+        let mb_plain = j["mb_zmp_error_plain_m"][r][c].as_f64().expect("mb plain");
+        let mb_prop = j["mb_zmp_error_proposed_m"][r][c]
+            .as_f64()
+            .expect("mb proposed");
+        assert!(mb_plain > 0.07 && mb_prop < 0.07, "({r}, {c}): {text}");
+        for key in ["cop_err_modified_plain_m", "cop_err_modified_proposed_m"] {
+            let e = j[key][r][c].as_f64().expect(key);
+            assert!(e > 0.0 && e < 0.2, "{key}: {text}");
+        }
+    }
+    assert_eq!(j["stabilizer_scale"], 1.0);
+    assert_eq!(j["servo_damping"], 600.0);
+}
+
+/// `physics_tables.json` is in the order of `tables.json` (`host-sim tables`): the same step
+/// lengths, rows "after" and columns "before", and each simulated cell's kinematic multi-body
+/// error is `tables.json`'s for that cell (plain re-plan: Table I's `max_zmp_error_without_m`,
+/// proposed: Table II's `max_zmp_error_with_m`). The reduced grid's two cells are each
+/// other's mirror with different errors, so a transposed grid fails.
+#[test]
+fn physics_tables_follow_tables_json() {
+    let Some(p) = reduced_grid() else { return };
+    let dir = temp_dir("kinematic-tables");
     let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(["physics-tables", "--cells", "5,1", "--out"])
+        .args(["tables", "--out"])
         .arg(&dir)
         .output()
         .expect("host-sim runs");
@@ -218,33 +283,25 @@ fn physics_tables_reduced_grid() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = std::fs::read_to_string(dir.join("physics_tables.json")).expect("json");
-    let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
-    for key in ["fell_plain", "fell_proposed"] {
-        let g = j[key].as_array().expect(key);
-        assert_eq!(g.len(), 7);
-        for (r, row) in g.iter().enumerate() {
-            let row = row.as_array().expect("row");
-            assert_eq!(row.len(), 7);
-            for (c, v) in row.iter().enumerate() {
-                if (r, c) == (5, 1) {
-                    assert_eq!(v, &serde_json::Value::Bool(false), "{key}: {text}");
-                } else {
-                    assert!(v.is_null(), "{key}[{r}][{c}] = {v}");
-                }
-            }
+    let text = std::fs::read_to_string(dir.join("tables.json")).expect("tables.json");
+    let t: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let _ = std::fs::remove_dir_all(&dir);
+    for key in ["step_lengths_m", "rows", "columns"] {
+        assert_eq!(p[key], t[key], "{key}");
+    }
+    for (physics, kinematic) in [
+        ("mb_zmp_error_plain_m", "max_zmp_error_without_m"),
+        ("mb_zmp_error_proposed_m", "max_zmp_error_with_m"),
+    ] {
+        for (r, c) in REDUCED {
+            let a = p[physics][r][c].as_f64().expect(physics);
+            let b = t[kinematic][r][c].as_f64().expect(kinematic);
+            assert_eq!(a, b, "{physics} vs {kinematic} at ({r}, {c})");
+            // The mirror cell differs: the comparison would catch a transposition.
+            let m = t[kinematic][c][r].as_f64().expect(kinematic);
+            assert!((a - m).abs() > 1e-4, "({r}, {c}) and its mirror: {a} {m}");
         }
     }
-    let mb_plain = j["mb_zmp_error_plain_m"][5][1].as_f64().expect("mb plain");
-    let mb_prop = j["mb_zmp_error_proposed_m"][5][1]
-        .as_f64()
-        .expect("mb proposed");
-    assert!(mb_plain > 0.07 && mb_prop < 0.07, "{text}");
-    for key in ["cop_err_modified_plain_m", "cop_err_modified_proposed_m"] {
-        let e = j[key][5][1].as_f64().expect(key);
-        assert!(e > 0.0 && e < 0.2, "{key}: {text}");
-    }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `host-sim physics-faults --rows 19` (the first heavy mixed row: 30 % each of 600 ms delays,
@@ -278,6 +335,182 @@ fn physics_faults_heavy_row() {
         assert!(r["fall_time_s"].is_null());
         let e = r["cop_err_max_m"].as_f64().expect("cop error");
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics small-walk.toml --robot small.toml`: the second robot (17.4 kg, soles
+/// 0.16 × 0.09 m) walks through in the engine, on its own soles; a built-in (HRP-2) scenario
+/// is refused for it.
+#[test]
+fn a_second_robot_walks_on_its_own_soles() {
+    if !engine_here("a_second_robot_walks_on_its_own_soles") {
+        return;
+    }
+    let robots = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    let dir = temp_dir("small");
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("physics")
+        .arg(robots.join("small-walk.toml"))
+        .arg("--robot")
+        .arg(robots.join("small.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("physics.json")).expect("physics.json");
+    let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(j["robot"], "small biped", "{text}");
+    assert_eq!(
+        j["sole_half_m"],
+        serde_json::json!([0.08, 0.045, 0.03]),
+        "{text}"
+    );
+    assert_eq!(j["fell"], false, "{text}");
+    let num = |k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k} in {text}"));
+    // Four 8 cm steps and the closing step: 5.9 s.
+    assert!(num("simulated_s") > 5.5, "{text}");
+    assert!(num("max_tilt_deg") < TILT_BOUND_DEG, "{text}");
+    assert!(num("cop_err_mean_m") < COP_MEAN_BOUND_M, "{text}");
+    assert!(num("cop_err_max_m") < COP_MAX_BOUND_M, "{text}");
+    assert!(num("foot_drift_max_m") < 0.02, "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["physics", "straight", "--robot"])
+        .arg(robots.join("small.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("0.13 m apart"), "{err}");
+}
+
+/// `WALK_LONG=1` (tests/run-all.sh's release runs) turns on the full-grid and full-sweep
+/// engine runs (minutes each); otherwise they skip and say so.
+fn long_runs(test: &str) -> bool {
+    let long = std::env::var("WALK_LONG").is_ok_and(|v| v == "1");
+    if !long {
+        eprintln!("physics: SKIPPED {test} (WALK_LONG=1 runs it)");
+    }
+    long && engine_here(test)
+}
+
+fn host_sim_json(args: &[&str], dir: &std::path::Path, file: &str) -> serde_json::Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join(file)).expect(file);
+    serde_json::from_str(&text).expect("JSON")
+}
+
+/// The full grid (98 engine runs) with the full stabilizer and the harder probe (the weakest
+/// stabilizer that walks the built-in scenarios, with servo damping 150 N m s/rad; see
+/// `host_sim::physics::probe`), against `tables.json`: every cell the legs reach in
+/// `tables.json` is simulated, with `tables.json`'s kinematic error, and no cell falls in
+/// either (the README's result).
+#[test]
+fn physics_tables_full_grid_long() {
+    if !long_runs("physics_tables_full_grid_long") {
+        return;
+    }
+    let dir = temp_dir("full-grid");
+    let t = host_sim_json(&["tables"], &dir, "tables.json");
+    for (args, scale) in [
+        (&["physics-tables"][..], 1.0),
+        (
+            &[
+                "physics-tables",
+                "--stabilizer",
+                "weakest",
+                "--servo-damping",
+                "150",
+            ][..],
+            0.05,
+        ),
+    ] {
+        let p = host_sim_json(args, &dir, "physics_tables.json");
+        assert_eq!(p["stabilizer_scale"], scale, "{args:?}");
+        for (physics, kinematic, fell) in [
+            (
+                "mb_zmp_error_plain_m",
+                "max_zmp_error_without_m",
+                "fell_plain",
+            ),
+            (
+                "mb_zmp_error_proposed_m",
+                "max_zmp_error_with_m",
+                "fell_proposed",
+            ),
+        ] {
+            for r in 0..7 {
+                for c in 0..7 {
+                    assert_eq!(p[physics][r][c], t[kinematic][r][c], "{physics} ({r}, {c})");
+                    let reached = t[kinematic][r][c].is_f64();
+                    let v = &p[fell][r][c];
+                    assert_eq!(v.is_boolean(), reached, "{args:?} {fell} ({r}, {c}): {v}");
+                    assert_ne!(
+                        v,
+                        &serde_json::Value::Bool(true),
+                        "{args:?} {fell} ({r}, {c})"
+                    );
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics-faults` with its defaults simulates every row of the sweep (seed 1) on
+/// both sweep scenarios in the engine (44 runs), and the engine's verdict agrees with the
+/// kinematic one on every run.
+#[test]
+fn physics_faults_every_row_long() {
+    use host_sim::physics::fault_sweep::rows;
+    if !long_runs("physics_faults_every_row_long") {
+        return;
+    }
+    let dir = temp_dir("faults-all");
+    let j = host_sim_json(&["physics-faults"], &dir, "physics_faults.json");
+    let runs = j.as_array().expect("array");
+    let scenarios = host_sim::faults::SCENARIOS;
+    assert_eq!(runs.len(), rows().len() * scenarios.len());
+    for (kind, rate) in rows() {
+        for s in scenarios {
+            let hits: Vec<_> = runs
+                .iter()
+                .filter(|r| {
+                    r["fault"] == kind.name()
+                        && r["rate"] == kind.rate_label(rate)
+                        && r["scenario"] == s
+                })
+                .collect();
+            assert_eq!(
+                hits.len(),
+                1,
+                "{} {} on {s}",
+                kind.name(),
+                kind.rate_label(rate)
+            );
+            let r = hits[0];
+            assert_eq!(r["seed"], 1);
+            assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
+            assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -12,7 +12,8 @@
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::faults::{run_case, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::faults::{run_case_with, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::robot::Robot;
 use crate::scenario;
 
 /// Every row of the sweep in its order: the [`SWEEP`] rates, then the [`HEAVY`] mixes.
@@ -46,18 +47,21 @@ pub struct FaultRun {
     pub report: PhysicsReport,
 }
 
-/// Runs row `(kind, rate)` of the sweep on `scenario` with `seed`, then in the engine.
+/// Runs row `(kind, rate)` of the sweep on `scenario` with `seed` through `robot`'s node,
+/// then in the engine (`cfg.robot` should be [`super::model::Robot::of`] it).
 pub fn fault_run(
     scenario_name: &str,
     kind: FaultKind,
     rate: f64,
     seed: u64,
+    robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<FaultRun, String> {
     let s =
         scenario::built_in(scenario_name).ok_or_else(|| format!("no scenario {scenario_name}"))?;
-    let case = run_case(&s, kind, rate, seed)?;
-    let dt = planner_core::gait::GaitParams::<f64>::hrp2().dt;
+    let node = robot.node_config();
+    let dt = node.params.dt;
+    let case = run_case_with(&s, kind, rate, seed, node, &robot.model)?;
     let report = run(&case.trajectory, dt, cfg)?.report;
     Ok(FaultRun {
         kind,
@@ -71,23 +75,38 @@ pub fn fault_run(
     })
 }
 
-/// Runs the rows with the given indices (into [`rows`]) on every sweep scenario.
-pub fn sweep(indices: &[usize], seed: u64, cfg: &PhysicsConfig) -> Result<Vec<FaultRun>, String> {
+/// The rows `physics-faults` runs by default: `all`, so that every row of the sweep is
+/// simulated in the engine with (at least) one seed.
+pub const DEFAULT_ROWS: &str = "all";
+
+/// What [`sweep`] runs for the rows with the given indices (into [`rows`]): each row on every
+/// sweep scenario ([`SCENARIOS`]), in that order. Errors: an index out of range.
+pub fn plan(indices: &[usize]) -> Result<Vec<(FaultKind, f64, &'static str)>, String> {
     let all = rows();
     let mut out = Vec::new();
     for &i in indices {
         let (kind, rate) = *all
             .get(i)
             .ok_or_else(|| format!("row {i}: the sweep has rows 0..{}", all.len()))?;
-        for s in SCENARIOS {
-            out.push(
-                fault_run(s, kind, rate, seed, cfg).map_err(|e| {
-                    format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate))
-                })?,
-            );
-        }
+        out.extend(SCENARIOS.iter().map(|s| (kind, rate, *s)));
     }
     Ok(out)
+}
+
+/// Runs the rows with the given indices (into [`rows`]) on every sweep scenario ([`plan`]).
+pub fn sweep(
+    indices: &[usize],
+    seed: u64,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<Vec<FaultRun>, String> {
+    plan(indices)?
+        .into_iter()
+        .map(|(kind, rate, s)| {
+            fault_run(s, kind, rate, seed, robot, cfg)
+                .map_err(|e| format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate)))
+        })
+        .collect()
 }
 
 /// The JSON of the runs.
@@ -166,5 +185,30 @@ mod tests {
         assert_eq!(parse_rows("all").unwrap().len(), r.len());
         assert_eq!(parse_rows("0, 3").unwrap(), vec![0, 3]);
         assert!(parse_rows("99").is_err());
+    }
+
+    /// The default run simulates every row of the sweep (each fault kind at each of its
+    /// rates, and every heavy mix) on every sweep scenario, once.
+    #[test]
+    fn the_default_run_simulates_every_row() {
+        let p = plan(&parse_rows(DEFAULT_ROWS).unwrap()).unwrap();
+        assert_eq!(p.len(), rows().len() * SCENARIOS.len());
+        for (kind, rates) in SWEEP {
+            for &rate in rates {
+                for s in SCENARIOS {
+                    let n = p.iter().filter(|x| **x == (kind, rate, s)).count();
+                    assert_eq!(n, 1, "{} {} on {s}", kind.name(), kind.rate_label(rate));
+                }
+            }
+        }
+        for i in 0..HEAVY.len() {
+            for s in SCENARIOS {
+                assert!(
+                    p.contains(&(FaultKind::Mixed(i), 0.0, s)),
+                    "heavy row {i} on {s}"
+                );
+            }
+        }
+        assert!(plan(&[rows().len()]).is_err());
     }
 }

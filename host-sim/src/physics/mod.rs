@@ -9,7 +9,9 @@
 //! * [`metrics`]: the definitions of a fall and of the CoP tracking;
 //! * [`output`]: the `physics` command and its files (`physics.json` …);
 //! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
-//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`).
+//! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`);
+//! * [`probe`]: the grid with a weakened stabilizer and softer servos (`physics-tables
+//!   --stabilizer`, `--servo-damping`).
 //!
 //! # A run
 //!
@@ -27,6 +29,7 @@ pub mod fault_sweep;
 pub mod metrics;
 pub mod model;
 pub mod output;
+pub mod probe;
 pub mod stabilizer;
 pub mod tables;
 
@@ -65,6 +68,8 @@ pub struct PhysicsConfig {
     pub push: Option<Push>,
     /// LIPM height z_c \[m\].
     pub z_c: f64,
+    /// The robot (its MJCF, kinematics and soles).
+    pub robot: Robot,
 }
 
 impl Default for PhysicsConfig {
@@ -75,6 +80,19 @@ impl Default for PhysicsConfig {
             tail_s: 1.0,
             push: None,
             z_c: planner_core::HRP2_COG_HEIGHT,
+            robot: Robot::default(),
+        }
+    }
+}
+
+impl PhysicsConfig {
+    /// The default run of a robot file's robot: its link table and soles ([`Robot::of`]) and
+    /// its pendulum height.
+    pub fn for_robot(robot: &crate::robot::Robot) -> Self {
+        Self {
+            z_c: robot.planner.params.cog_height,
+            robot: Robot::of(robot),
+            ..Self::default()
         }
     }
 }
@@ -217,7 +235,7 @@ pub fn run(
     if trajectory.is_empty() {
         return Err("empty trajectory".into());
     }
-    let robot = Robot::default();
+    let robot = cfg.robot;
     let mut engine = Engine::start(&robot.mjcf())?;
     let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
     // Initial pose: the first reference through the waist search and the IK.

@@ -15,8 +15,10 @@
 //! joints of a body in the order written, so the frames are those of
 //! [`crate::multibody`]: `R_w R_z(q1) R_x(q2) R_y(q3) R_y(q4) R_y(q5) R_x(q6)`.
 //!
-//! Collision shapes: the **soles** are boxes 0.24 × 0.14 × 0.08 m (the foot box of the link
-//! table, its bottom face `ankle_height` below the ankle, the sole centre straight below it);
+//! Collision shapes: the **soles** are boxes of the robot file's `[feet]` `sole_length` ×
+//! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or `ankle_height`
+//! if that is less (their bottom face `ankle_height` below the ankle, the sole centre straight
+//! below it);
 //! every other body has the box of equal inertia (`a² = 6 (I_y + I_z − I_x) / m`, and so on),
 //! so that a fall can touch the floor with a knee, a hip or the trunk. Robot geoms collide
 //! with the floor only (`contype 2, conaffinity 1` against the floor's `1, 2`): no self
@@ -33,6 +35,10 @@
 //! and a reflected rotor inertia (`armature`) of [`ARMATURE`] kg m² (stated assumptions of an
 //! HRP-2-class harmonic-drive joint; no torque limit). With `kd` = 150 the ankle mode of the
 //! standing robot (about 4 Hz) is barely damped and the open-loop playback rocks; 600 damps it.
+//! For another robot ([`Robot::of`]) `kp` and `kd` scale with its total mass against HRP-2's
+//! (the gravity torques its joints hold scale with it), the armature stays: with HRP-2's
+//! servos the 17.4 kg test robot (`host-sim/tests/robots/small.toml`) walked but rocked on its
+//! sole edges (CoP error mean 25.6 mm), scaled (× 0.30) 5.7 mm.
 //!
 //! Sensors (what the real robot measures, nothing else reaches the controller): a trunk IMU
 //! (site `imu` at the waist origin: `framequat` as the attitude estimate, `gyro`,
@@ -52,8 +58,11 @@ pub const SERVO_KD: f64 = 600.0;
 pub const ARMATURE: f64 = 0.3;
 /// Largest hip–ankle distance the IK is asked for, as a fraction of `thigh + shank`.
 pub const REACH_FRACTION: f64 = 0.9995;
-/// Half-extents of the sole box \[m\]: 0.24 × 0.14 × 0.08.
+/// Half-extents of HRP-2's sole box \[m\]: 0.24 × 0.14 × 0.08 (the robot of
+/// [`Robot::new`]; [`Robot::of`] takes the robot file's).
 pub const SOLE_HALF: Vec3 = [0.12, 0.07, 0.04];
+/// Height of the sole box \[m\], at most the ankle height.
+pub const SOLE_BOX_HEIGHT: f64 = 0.08;
 
 /// Joint names in actuator (and qpos) order: left leg then right leg, each hip yaw, hip roll,
 /// hip pitch, knee, ankle pitch, ankle roll.
@@ -85,9 +94,12 @@ pub mod sensor {
 }
 
 /// The robot as the physics module sees it: the link table and what follows from it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Robot {
     hrp2: Model,
+    sole_half: Vec3,
+    /// Servo stiffness and joint damping.
+    servo: [f64; 2],
 }
 
 impl Default for Robot {
@@ -147,9 +159,51 @@ fn collision_box(name: &str, b: &Body) -> String {
 }
 
 impl Robot {
-    /// The robot of a link table.
+    /// The robot of a link table, with HRP-2's soles ([`SOLE_HALF`]).
     pub fn new(hrp2: Model) -> Self {
-        Self { hrp2 }
+        Self {
+            hrp2,
+            sole_half: SOLE_HALF,
+            servo: [SERVO_KP, SERVO_KD],
+        }
+    }
+
+    /// The robot of a robot file: its `[multibody]` link table, its `[feet]` soles
+    /// (`sole_length` × `sole_width`, [`SOLE_BOX_HEIGHT`] high or `ankle_height` if less) and
+    /// servos scaled by its mass (see the module docs).
+    pub fn of(robot: &crate::robot::Robot) -> Self {
+        let p = &robot.planner.params;
+        let scale = robot.model.total_mass() / link_table().total_mass();
+        Self {
+            servo: [SERVO_KP * scale, SERVO_KD * scale],
+            hrp2: robot.model,
+            sole_half: [
+                p.sole_half_length,
+                p.sole_half_width,
+                0.5 * SOLE_BOX_HEIGHT.min(robot.model.ankle_height),
+            ],
+        }
+    }
+
+    /// The same robot with the joint damping `kd` \[N m s/rad\] (the stiffness unchanged).
+    pub fn with_servo_damping(mut self, kd: f64) -> Self {
+        self.servo[1] = kd;
+        self
+    }
+
+    /// Servo stiffness \[N m/rad\] and joint damping \[N m s/rad\].
+    pub fn servo(&self) -> [f64; 2] {
+        self.servo
+    }
+
+    /// Half-extents of the sole box (length, width, height) \[m\].
+    pub fn sole_half(&self) -> Vec3 {
+        self.sole_half
+    }
+
+    /// The link table.
+    pub fn link_table(&self) -> &Model {
+        &self.hrp2
     }
 
     /// Gravity \[m/s²\].
@@ -193,9 +247,9 @@ impl Robot {
              <default class=\"robot\"><geom contype=\"2\" conaffinity=\"1\" condim=\"3\" \
              friction=\"1 0.005 0.0001\" solref=\"0.004 1\" solimp=\"0.95 0.99 0.001\"/></default>\
              </default>",
-            f(SERVO_KD),
+            f(self.servo[1]),
             f(ARMATURE),
-            f(SERVO_KP)
+            f(self.servo[0])
         );
         let _ = writeln!(x, "  <worldbody>");
         let _ = writeln!(
@@ -262,8 +316,8 @@ impl Robot {
                 j(4, "0 1 0"),
                 j(5, "1 0 0"),
                 inertial(&mirrored(&h.foot, side)),
-                f(-h.ankle_height + SOLE_HALF[2]),
-                v3(SOLE_HALF)
+                f(-h.ankle_height + self.sole_half[2]),
+                v3(self.sole_half)
             );
             let _ = writeln!(x, "          </body></body></body>");
         }
@@ -463,5 +517,29 @@ mod tests {
         assert_eq!(x.matches("type=\"hinge\"").count(), 12);
         assert!(x.contains("size=\"0.120000 0.070000 0.040000\""));
         assert!(x.contains("timestep=\"0.001\""));
+    }
+
+    #[test]
+    fn the_robot_files_soles_make_the_sole_boxes() {
+        let small = crate::robot::Robot::from_toml(include_str!("../../tests/robots/small.toml"))
+            .expect("small.toml");
+        let r = Robot::of(&small);
+        // [feet] 0.16 × 0.09; ankle_height 0.06 < 0.08: the box is 0.06 high.
+        assert_eq!(r.sole_half(), [0.08, 0.045, 0.03]);
+        let x = r.mjcf();
+        assert_eq!(x.matches("size=\"0.080000 0.045000 0.030000\"").count(), 2);
+        assert!(!x.contains("0.120000 0.070000"));
+        // The bottom face 0.06 below the ankle: the box centre 0.03 below it.
+        assert!(x.contains("pos=\"0 0 -0.030000\" size=\"0.080000"));
+        // Servos scaled by the mass, 17.4 kg against HRP-2's.
+        let scale = small.model.total_mass() / link_table().total_mass();
+        assert!((small.model.total_mass() - 17.4).abs() < 1e-9);
+        assert!(scale > 0.25 && scale < 0.4, "{scale}");
+        assert_eq!(r.servo(), [SERVO_KP * scale, SERVO_KD * scale]);
+        assert!(x.contains(&format!("kp=\"{:.6}\"", SERVO_KP * scale)));
+        // HRP-2's file gives the default robot's soles.
+        let h = Robot::of(&crate::robot::Robot::hrp2());
+        assert_eq!(h.sole_half(), SOLE_HALF);
+        assert_eq!(h.mjcf(), Robot::default().mjcf());
     }
 }

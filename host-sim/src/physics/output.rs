@@ -5,7 +5,8 @@
 //! * `DIR/physics.json`: `fell` (bool), `fall_time_s` (trajectory time, null if none),
 //!   `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
 //!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
-//!   `simulated_s`, `stabilizer`, `engine` (the MuJoCo version), `scenario`;
+//!   `simulated_s`, `stabilizer`, `stabilizer_gains`, `servo_kp_kd`, `engine` (the MuJoCo
+//!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents);
 //! * `DIR/physics.csv`: the log every 5 ms (time, tilt, CoP, reference and desired ZMP, the
 //!   50 ms tracking error, true and reference COG, waist height);
 //! * `DIR/physics_tilt.png`, `DIR/physics_cop_x.png`, `DIR/physics_cop_y.png`: the tilt, and
@@ -19,18 +20,22 @@ use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsRun, Push};
 use crate::plot::{write_time_plot, Curve};
+use crate::robot::Robot;
 use crate::scenario::{self, BUILT_IN};
 use crate::sim::{simulate, SimConfig};
 use crate::toml_scenario;
 
 /// The planner's trajectory for a scenario (built-in name or `.toml` file) through the virtual
-/// CAN bus and the node, and its tick \[s\].
+/// CAN bus and `robot`'s node, and its tick \[s\]. A built-in scenario needs a robot that
+/// stands as HRP-2 ([`Robot::check_hrp2_footsteps`]).
 pub fn scenario_trajectory(
     name: &str,
+    robot: &Robot,
 ) -> Result<(String, Vec<planner_core::gait::Reference<f64>>, f64), String> {
     let s = if name.ends_with(".toml") {
         toml_scenario::load_file(Path::new(name))?.scenario
     } else {
+        robot.check_hrp2_footsteps(name)?;
         scenario::built_in(name).ok_or_else(|| {
             format!(
                 "unknown scenario {name:?}; built-in: {} (or a .toml file)",
@@ -38,17 +43,22 @@ pub fn scenario_trajectory(
             )
         })?
     };
-    let cfg = SimConfig::default();
+    let cfg = SimConfig {
+        node: robot.node_config(),
+        ..SimConfig::default()
+    };
     let dt = cfg.node.params.dt;
     let sim = simulate(&s, &cfg).map_err(|e| format!("{}: {e}", s.name))?;
     Ok((s.name.clone(), sim.run.trajectory, dt))
 }
 
-/// The JSON of a run.
-pub fn report_json(name: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
+/// The JSON of a run of `robot` (its name).
+pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
     let p = &r.report;
     json!({
         "scenario": name,
+        "robot": robot,
+        "sole_half_m": cfg.robot.sole_half(),
         "fell": p.fell,
         "fall_time_s": p.fall_time_s,
         "fall_cause": p.fall_cause.map(|c| c.name()),
@@ -60,6 +70,8 @@ pub fn report_json(name: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
         "foot_drift_max_m": p.foot_drift_max_m,
         "simulated_s": p.simulated_s,
         "stabilizer": cfg.gains.enabled,
+        "stabilizer_gains": format!("{:?}", cfg.gains),
+        "servo_kp_kd": cfg.robot.servo(),
         "engine": format!("MuJoCo {}", p.engine),
         "physics_dt_s": super::PHYSICS_DT,
         "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
@@ -112,25 +124,35 @@ fn smoothed(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     out
 }
 
-/// Writes `physics.json`, `physics.csv` and the plots into `out`.
+/// How the run was controlled, for the captions: `open loop`, `stabilized`, or `stabilizer
+/// × s` for weakened gains ([`super::probe`]).
+fn mode(cfg: &PhysicsConfig) -> String {
+    let full = super::stabilizer::Gains::default();
+    if !cfg.gains.enabled {
+        "open loop".into()
+    } else if cfg.gains == full {
+        "stabilized".into()
+    } else {
+        format!("stabilizer × {}", cfg.gains.k_cog / full.k_cog)
+    }
+}
+
+/// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name).
 pub fn write_outputs(
     out: &Path,
     name: &str,
+    robot: &str,
     cfg: &PhysicsConfig,
     r: &PhysicsRun,
 ) -> Result<(), String> {
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
-    let json =
-        serde_json::to_string_pretty(&report_json(name, cfg, r)).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(&report_json(name, robot, cfg, r))
+        .map_err(|e| e.to_string())?;
     let path = out.join("physics.json");
     fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     write_csv(&out.join("physics.csv"), r)?;
-    let mode = if cfg.gains.enabled {
-        "stabilized"
-    } else {
-        "open loop"
-    };
+    let mode = mode(cfg);
     let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
     let limit: Vec<(f64, f64)> = r
         .samples
@@ -179,12 +201,18 @@ pub fn write_outputs(
     Ok(())
 }
 
-/// The `physics` command: runs the scenario, writes the files, returns the JSON.
-pub fn physics_command(name: &str, out: &Path, cfg: &PhysicsConfig) -> Result<Value, String> {
-    let (sname, trajectory, dt) = scenario_trajectory(name)?;
+/// The `physics` command: runs the scenario with `robot` (`cfg.robot` should be
+/// [`super::model::Robot::of`] it), writes the files, returns the JSON.
+pub fn physics_command(
+    name: &str,
+    out: &Path,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<Value, String> {
+    let (sname, trajectory, dt) = scenario_trajectory(name, robot)?;
     let r = run(&trajectory, dt, cfg).map_err(|e| format!("{sname} in MuJoCo: {e}"))?;
-    write_outputs(out, &sname, cfg, &r)?;
-    Ok(report_json(&sname, cfg, &r))
+    write_outputs(out, &sname, robot.name(), cfg, &r)?;
+    Ok(report_json(&sname, robot.name(), cfg, &r))
 }
 
 /// Parses `--push T,FX,FY`: a push of 0.1 s starting at `T` (trajectory time) \[s\] with the
@@ -207,14 +235,18 @@ pub fn parse_push(s: &str) -> Result<Push, String> {
     }
 }
 
-/// The command line's `physics` subcommand: runs, writes, prints the figures.
+/// The command line's `physics` subcommand: runs `robot`, writes, prints the figures; the
+/// stabilizer's feedback scaled by `scale` and the servo damping `kd` (see [`super::probe`]).
 pub fn cli(
     name: &str,
     out: Option<&Path>,
+    robot: &Robot,
     open_loop: bool,
     push: Option<&str>,
+    scale: f64,
+    kd: Option<f64>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let mut cfg = PhysicsConfig::default();
+    let mut cfg = super::probe::weakened(robot, scale, kd);
     cfg.gains.enabled = !open_loop;
     cfg.push = push.map(parse_push).transpose()?;
     let default_out;
@@ -229,11 +261,12 @@ pub fn cli(
             &default_out
         }
     };
-    let j = physics_command(name, out, &cfg)?;
+    let j = physics_command(name, out, robot, &cfg)?;
     let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
     println!(
-        "{}: {} in MuJoCo ({}), {:.2} s simulated",
+        "{} ({}): {} in MuJoCo ({}), {:.2} s simulated",
         j["scenario"].as_str().unwrap_or(name),
+        robot.name(),
         if j["fell"].as_bool() == Some(true) {
             format!(
                 "FELL at {:.3} s ({})",
@@ -243,7 +276,7 @@ pub fn cli(
         } else {
             "walked through, no fall".to_string()
         },
-        if open_loop { "open loop" } else { "stabilized" },
+        mode(&cfg),
         num("simulated_s")
     );
     println!(
@@ -259,21 +292,49 @@ pub fn cli(
 }
 
 /// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
-/// `DIR/physics_tables.json` and `DIR/physics_tables.md`.
+/// `DIR/physics_tables.json` and `DIR/physics_tables.md`, with `robot` (its gait parameters,
+/// link table and soles; it must stand as HRP-2, the grid being HRP-2's footsteps), the
+/// stabilizer `setting` (`full`, `off`, `weakest` or a scale) and the servo damping `kd`
+/// (see [`super::probe`]).
 pub fn tables_cli(
     out: &Path,
     cells: &str,
+    robot: &Robot,
     open_loop: bool,
+    setting: &str,
+    kd: Option<f64>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use super::tables::{cell, cell_text, markdown, parse_cells, tables_json};
+    use super::probe::{parse_setting, weakened, weakest, Setting};
+    use super::tables::{cell, cell_text, markdown, parse_cells, side_by_side_text, tables_json};
     let list = parse_cells(cells)?;
-    let mut cfg = PhysicsConfig::default();
+    robot.check_hrp2_footsteps("physics-tables")?;
+    let (scale, ladder) = match parse_setting(setting)? {
+        Setting::Scale(s) => (s, None),
+        Setting::Weakest => match weakest(robot, kd)? {
+            (Some(s), rungs) => (s, Some(rungs)),
+            (None, _) => {
+                return Err(
+                    "--stabilizer weakest: not even the full stabilizer walks every \
+                            built-in scenario with this servo damping"
+                        .into(),
+                )
+            }
+        },
+    };
+    let mut cfg = weakened(robot, scale, kd);
     cfg.gains.enabled = !open_loop;
-    let mode = if open_loop { "open loop" } else { "stabilized" };
+    let [_, servo_kd] = cfg.robot.servo();
+    let mode = if open_loop {
+        format!("open loop, servo damping {servo_kd} N m s/rad")
+    } else {
+        format!("stabilizer × {scale}, servo damping {servo_kd} N m s/rad")
+    };
     let mut done = Vec::new();
     for (i, &(r, c)) in list.iter().enumerate() {
         eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
-        done.push(cell(r, c, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?);
+        done.push(
+            cell(r, c, &robot.planner.params, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?,
+        );
     }
     eprintln!();
     fs::create_dir_all(out)
@@ -281,6 +342,25 @@ pub fn tables_cli(
     let path = out.join("physics_tables.json");
     let mut json = tables_json(&done);
     json["stabilizer"] = serde_json::Value::Bool(!open_loop);
+    json["stabilizer_scale"] = scale.into();
+    json["servo_damping"] = servo_kd.into();
+    json["robot"] = robot.name().into();
+    if let Some(rungs) = &ladder {
+        json["weakest_ladder"] = rungs
+            .iter()
+            .map(|r| {
+                json!({
+                    "scale": r.scale,
+                    "walked": r.walked(),
+                    "runs": r.runs.iter().map(|(n, p)| json!({
+                        "scenario": n, "fell": p.fell, "fall_time_s": p.fall_time_s,
+                        "max_tilt_deg": p.max_tilt_deg, "cop_err_max_m": p.cop_err_max_m,
+                    })).collect::<Vec<_>>(),
+                })
+            })
+            .collect::<Vec<_>>()
+            .into();
+    }
     fs::write(&path, serde_json::to_string_pretty(&json)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let mut md = markdown(
@@ -307,6 +387,31 @@ pub fn tables_cli(
         },
     );
     let count = |f: &dyn Fn(&super::tables::Cell) -> bool| done.iter().filter(|c| f(c)).count();
+    md += "\n";
+    md += &markdown(
+        &format!(
+            "Side by side, {mode}: plain re-plan / proposed method fell or ok, their kinematic \
+             multi-body ZMP errors [cm] (* above the paper's 0.07 m)"
+        ),
+        &done,
+        side_by_side_text,
+    );
+    if let Some(rungs) = &ladder {
+        md += "\nThe weakest stabilizer: scales tried on the built-in scenarios (up to the first fall):";
+        for r in rungs {
+            md += &format!(
+                " × {}: {};",
+                r.scale,
+                if r.walked() {
+                    "all walk".to_string()
+                } else {
+                    let (n, p) = &r.runs[r.runs.len() - 1];
+                    format!("{n} fell at {:.2} s", p.fall_time_s.unwrap_or(f64::NAN))
+                }
+            );
+        }
+        md += "\n";
+    }
     md += &format!(
         "\n{} cells simulated; falls: plain {}, proposed {}.\n",
         done.len(),
@@ -321,11 +426,17 @@ pub fn tables_cli(
 }
 
 /// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) with
-/// `seed` through the node and the engine; `DIR/physics_faults.json` and `.md`.
-pub fn faults_cli(out: &Path, rows: &str, seed: u64) -> Result<(), Box<dyn std::error::Error>> {
+/// `seed` through `robot`'s node and the engine; `DIR/physics_faults.json` and `.md`.
+pub fn faults_cli(
+    out: &Path,
+    rows: &str,
+    seed: u64,
+    robot: &Robot,
+) -> Result<(), Box<dyn std::error::Error>> {
     use super::fault_sweep::{json, markdown, parse_rows, sweep};
     let idx = parse_rows(rows)?;
-    let runs = sweep(&idx, seed, &PhysicsConfig::default())?;
+    robot.check_hrp2_footsteps("physics-faults")?;
+    let runs = sweep(&idx, seed, robot, &PhysicsConfig::for_robot(robot))?;
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_faults.json");

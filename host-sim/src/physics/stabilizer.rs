@@ -32,7 +32,8 @@
 //!    `r_z = −ankle_height`.
 //! 4. **ZMP distribution** (Kajita 2010): `p_d` is projected onto the segment between the two
 //!    sole centres: the ratio `α` gives the desired vertical forces `α M g`, `(1 − α) M g`;
-//!    what is left over is each foot's desired local CoP `r_d` (clamped into the sole).
+//!    what is left over is each foot's desired local CoP `r_d` (clamped into the sole, 1 cm
+//!    inside its edges).
 //! 5. **Foot damping control**: each loaded ankle yields to the torque error,
 //!    `Δθ̇_pitch = −F_z (r_x,m − r_x,d) / D − Δθ_pitch / T`,
 //!    `Δθ̇_roll = F_z (r_y,m − r_y,d) / D − Δθ_roll / T`, added to the ankle joint targets.
@@ -99,6 +100,23 @@ impl Default for Gains {
     }
 }
 
+impl Gains {
+    /// The gains with every feedback scaled by `s` ≥ 0: the DCM gain `k_ξ`, the COG
+    /// modification `K_c` and the force difference `K_f` times `s`, the foot damping `D`
+    /// divided by it (its compliance `1 / D` times `s`); the filters, return times and limits
+    /// unchanged. `s` = 1 is the stabilizer as stated, `s` = 0 leaves no feedback acting (the
+    /// pattern through the same IK: the open-loop playback).
+    pub fn scaled(self, s: f64) -> Self {
+        Self {
+            k_dcm: self.k_dcm * s,
+            damping: self.damping / s,
+            k_force: self.k_force * s,
+            k_cog: self.k_cog * s,
+            ..self
+        }
+    }
+}
+
 /// What the stabilizer computed at a tick (for the logs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Internals {
@@ -155,8 +173,8 @@ fn quat_to_mat(q: &[f64]) -> Mat3 {
 /// Return time constant of the ankle corrections of the swing foot \[s\]: level before landing.
 const SWING_RETURN_S: f64 = 0.05;
 
-/// The sole rectangle's half sizes used for clamping (a 1 cm margin inside 0.24 × 0.14).
-const SOLE_CLAMP: [f64; 2] = [0.11, 0.06];
+/// Margin inside the sole rectangle of the desired local CoPs \[m\].
+const SOLE_CLAMP_MARGIN_M: f64 = 0.01;
 
 /// The ground's vertical force on a flat foot \[N\] and its centre of pressure in the foot
 /// frame (x, y from below the ankle) \[m\], from the ankle sensor `ft` (force then torque).
@@ -289,13 +307,18 @@ impl Stabilizer {
                 )
             }
         };
+        let half = self.robot.sole_half();
+        let clamp = [
+            (half[0] - SOLE_CLAMP_MARGIN_M).max(0.0),
+            (half[1] - SOLE_CLAMP_MARGIN_M).max(0.0),
+        ];
         let mut r_d = [[0.0; 2]; 2];
         let mut clamped_pd = [0.0; 2];
         for k in 0..2 {
             let yaw = r.feet[k].yaw;
             let (s, c) = yaw.sin_cos();
-            let lx = (c * rest[0] + s * rest[1]).clamp(-SOLE_CLAMP[0], SOLE_CLAMP[0]);
-            let ly = (-s * rest[0] + c * rest[1]).clamp(-SOLE_CLAMP[1], SOLE_CLAMP[1]);
+            let lx = (c * rest[0] + s * rest[1]).clamp(-clamp[0], clamp[0]);
+            let ly = (-s * rest[0] + c * rest[1]).clamp(-clamp[1], clamp[1]);
             r_d[k] = [lx, ly];
             let share = if k == 0 { alpha } else { 1.0 - alpha };
             clamped_pd[0] += share * (soles_ref[k].p[0] + c * lx - s * ly);

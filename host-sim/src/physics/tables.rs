@@ -11,11 +11,13 @@
 //! `DIR/physics_tables.json`: `fell_plain` and `fell_proposed` (7 × 7, rows "after", columns
 //! "before", in the order of `tables.json`; `null` for a cell not simulated or whose footsteps
 //! the legs cannot reach) and the per-cell figures; `--cells r,c;r,c` restricts the run to
-//! some cells (the test runs a reduced grid).
+//! some cells (the test runs a reduced grid). `--stabilizer full|off|weakest|S` and
+//! `--servo-damping KD` weaken the stabilizer and the servos ([`super::probe`]; the JSON then
+//! has `stabilizer_scale`, `servo_damping` and, for `weakest`, `weakest_ladder`), `--robot
+//! FILE` takes another robot file standing as HRP-2 (the grid is HRP-2's footsteps).
 
 use serde_json::{json, Value};
 
-use super::model::link_table;
 use super::{run, PhysicsConfig, PhysicsReport};
 use crate::paper::{
     self, without_adjustment, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS,
@@ -62,17 +64,24 @@ fn window_error(samples: &[super::PhysicsSample]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The plain re-plan's parameters: no adjustment, no shaping (Table I).
-pub fn plain_params() -> GaitParams<f64> {
-    let mut p = without_adjustment(GaitParams::<f64>::hrp2());
+/// The plain re-plan's parameters of the gait `params`: no adjustment, no shaping (Table I).
+pub fn plain_params(params: GaitParams<f64>) -> GaitParams<f64> {
+    let mut p = without_adjustment(params);
     p.shaping = false;
     p
 }
 
-/// Runs one cell both ways. Errors: the engine failed (an unreachable footstep is `None`).
-pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String> {
+/// Runs one cell both ways with the gait `params` (the proposed method; the plain re-plan is
+/// [`plain_params`] of it) and the robot of `cfg` (its link table for the kinematic error).
+/// Errors: the engine failed (an unreachable footstep is `None`).
+pub fn cell(
+    row: usize,
+    col: usize,
+    params: &GaitParams<f64>,
+    cfg: &PhysicsConfig,
+) -> Result<Cell, String> {
     let (after, before) = (STEP_LENGTHS[row], STEP_LENGTHS[col]);
-    let proposed_params = GaitParams::<f64>::hrp2();
+    let proposed_params = *params;
     let dt = proposed_params.dt;
     let mut out = Cell {
         row,
@@ -84,9 +93,12 @@ pub fn cell(row: usize, col: usize, cfg: &PhysicsConfig) -> Result<Cell, String>
         mb_error_plain_m: None,
         mb_error_proposed_m: None,
     };
-    for (params, plain) in [(plain_params(), true), (proposed_params, false)] {
+    for (params, plain) in [
+        (plain_params(proposed_params), true),
+        (proposed_params, false),
+    ] {
         let m = paper::modification(params, before, after);
-        let mb = paper::modified_support_error(&link_table(), &m, dt);
+        let mb = paper::modified_support_error(cfg.robot.link_table(), &m, dt);
         // Out of reach kinematically: no engine run either.
         let (report, window) = match mb {
             Some(_) => {
@@ -183,6 +195,29 @@ pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>
     }
 }
 
+/// One cell side by side: the verdicts of the plain re-plan and of the proposed method, then
+/// their kinematic multi-body errors in cm, the plain one marked `*` above the paper's 0.07 m:
+/// `ok / ok, 9.3* / 5.0`.
+pub fn side_by_side_text(c: &Cell) -> String {
+    let verdict = |r: &Option<PhysicsReport>| match r {
+        Some(r) if r.fell => "**fell**",
+        Some(_) => "ok",
+        None => "n/a",
+    };
+    let cm = |e: Option<f64>| e.map_or("n/a".to_string(), |e| format!("{:.1}", e * 100.0));
+    let mark = match c.mb_error_plain_m {
+        Some(e) if e > PAPER_DIFFICULT_ERROR_M => "*",
+        _ => "",
+    };
+    format!(
+        "{} / {}, {}{mark} / {}",
+        verdict(&c.plain),
+        verdict(&c.proposed),
+        cm(c.mb_error_plain_m),
+        cm(c.mb_error_proposed_m)
+    )
+}
+
 /// Parses `--cells`: `r,c;r,c;...` (indices 0..7), or `all`.
 pub fn parse_cells(s: &str) -> Result<Vec<(usize, usize)>, String> {
     let n = STEP_LENGTHS.len();
@@ -229,10 +264,17 @@ mod tests {
             mb_error_plain_m: Some(0.05),
             mb_error_proposed_m: None,
         };
-        let j = tables_json(&[c]);
+        let j = tables_json(std::slice::from_ref(&c));
         assert_eq!(j["fell_plain"].as_array().unwrap().len(), 7);
         assert!(j["fell_plain"][1][2].is_null());
         assert_eq!(j["mb_zmp_error_plain_m"][1][2], json!(0.05));
         assert!(j["mb_zmp_error_plain_m"][0][0].is_null());
+        assert_eq!(side_by_side_text(&c), "n/a / n/a, 5.0 / n/a");
+        let big = Cell {
+            mb_error_plain_m: Some(0.093),
+            mb_error_proposed_m: Some(0.05),
+            ..c
+        };
+        assert_eq!(side_by_side_text(&big), "n/a / n/a, 9.3* / 5.0");
     }
 }
