@@ -72,6 +72,13 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
         }
     };
     consider(duration);
+    // A bound of |p| on [0, D] for the stopping test below (|Σ a_i τ^i| ≤ Σ |a_i| D^i).
+    let mut scale = T::ZERO;
+    let mut dpow = T::ONE;
+    for &c in zmp.iter() {
+        scale += c.abs() * dpow;
+        dpow *= duration;
+    }
     // Split [0, D] at the roots of p'' = 2a2 + 6a3 τ + 12a4 τ².
     let mut cuts = [T::ZERO, duration, duration, duration];
     let mut n = 1;
@@ -130,7 +137,9 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
         let mut x = T::of(0.5) * (lo + hi);
         for _ in 0..MAX_STEPS {
             let (_, v, a) = eval(x);
-            if v == T::ZERO {
+            // Done once the value at the root is reached to rounding: near a simple root the
+            // extremum lies ≈ v²/(2|p''|) from p(x) (the root's own error is ~|v/p''|, harmless).
+            if v == T::ZERO || v * v <= T::EPSILON * a.abs() * scale {
                 break;
             }
             if (v < T::ZERO) == lo_negative {
@@ -139,7 +148,9 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
                 hi = x;
             }
             let newton = x - v / a;
-            let next = if newton > lo && newton < hi {
+            // The bracket's ends are allowed: a root within an ulp of one (a zero end
+            // velocity, rounded) is reached in one step instead of ~50 bisections.
+            let next = if newton >= lo && newton <= hi {
                 newton
             } else {
                 T::of(0.5) * (lo + hi)
