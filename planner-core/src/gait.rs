@@ -81,7 +81,7 @@ impl Side {
             Side::Right => Side::Left,
         }
     }
-    fn index(self) -> usize {
+    pub(crate) fn index(self) -> usize {
         match self {
             Side::Left => 0,
             Side::Right => 1,
@@ -946,23 +946,28 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// taken: the last such step queued before the step `before` (or before the end of the
     /// queue), else the one being swung, else where that foot stands. Used to check reach.
     pub fn previous_other(&self, side: Side, before: Option<u16>) -> Footstep<T> {
-        let other = side.other();
-        let end = before
-            .and_then(|id| self.queue.iter().position(|q| q.id == id))
-            .unwrap_or(self.queue.len());
-        if let Some(q) = self
-            .queue
-            .iter()
-            .take(end)
-            .filter(|q| q.step.side == other)
-            .last()
-        {
-            return q.step;
+        self.previous_feet(before)[side.other().index()]
+    }
+
+    /// Where each foot will stand just before the queued step `before` is taken (or after the
+    /// whole queue, for `None`), indexed by side (`[left, right]`): the last queued step of that
+    /// side before it, else the swing target of that side, else where the foot stands. One
+    /// pass over the queue for both feet ([`previous_other`](Self::previous_other) is one of
+    /// them).
+    pub fn previous_feet(&self, before: Option<u16>) -> [Footstep<T>; 2] {
+        let mut last: [Option<&Footstep<T>>; 2] = [None, None];
+        for q in self.queue.iter() {
+            if before == Some(q.id) {
+                break;
+            }
+            last[q.step.side.index()] = Some(&q.step);
         }
-        match self.swing {
-            Some(s) if s.step.side == other => s.step,
-            _ => self.feet[other.index()],
-        }
+        let resolve = |side: Side| match (last[side.index()], self.swing) {
+            (Some(step), _) => *step,
+            (None, Some(s)) if s.step.side == side => s.step,
+            (None, _) => self.feet[side.index()],
+        };
+        [resolve(Side::Left), resolve(Side::Right)]
     }
 
     /// `true` if the step `id` is queued (not yet swung).

@@ -405,8 +405,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
     /// queued step `before`, with its two successors then checked against it.
     fn check_reach(&self, step: &Footstep<f64>, before: Option<u16>) -> Result<(), Reason> {
         let r = &self.cfg.reach;
-        let other = Frame::of(&self.gait.previous_other(step.side, before));
-        let same = Frame::of(&self.gait.previous_other(step.side.other(), before));
+        let feet = self.gait.previous_feet(before);
+        let other = Frame::of(&feet[step.side.other().index()]);
+        let same = Frame::of(&feet[step.side.index()]);
         let f = Frame::of(step);
         // The first swing of a walk from standing: its growth counts from a step of 0.
         let position = match before {
