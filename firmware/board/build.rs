@@ -1,7 +1,7 @@
 //! Puts the top-level `memory.x` (STM32H743 layout) where cortex-m-rt's `link.x` can `INCLUDE`
 //! it (a copy in OUT_DIR, and OUT_DIR on this package's linker search path), and links with
-//! cortex-m-rt's and defmt's linker scripts and with `stack.x` (this package's: the stack at
-//! the top of the AXI SRAM, see that file).
+//! cortex-m-rt's and defmt's linker scripts and with `stack.x` (this package's: the stack in
+//! the lower 64 KiB of the DTCM, below .data and .bss, see that file).
 
 use std::env;
 use std::fs;

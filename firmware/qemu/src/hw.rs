@@ -62,9 +62,9 @@ impl Timer0 {
 }
 
 extern "C" {
-    // cortex-m-rt's linker script: the stack grows down from `_stack_start` (end of RAM) to
-    // `_stack_end` (end of .bss); with the `paint-stack` feature the reset handler fills that
-    // range with STACK_PAINT_VALUE before `main`.
+    // The stack region (qemu/memory.x sets both: the `STACK` region below `RAM`): the stack
+    // grows down from `_stack_start` to `_stack_end`; with the `paint-stack` feature the reset
+    // handler fills that range with STACK_PAINT_VALUE before `main`.
     static _stack_start: u32;
     static _stack_end: u32;
 }

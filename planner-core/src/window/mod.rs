@@ -516,7 +516,8 @@ mod tests {
         assert!(residual(&z, &yc, &b) < 1e-12);
     }
 
-    /// Durations from 5 ms to 3 s in every interval (a deterministic pseudo-random sweep): the
+    /// Every mix of 5 ms and 10 s intervals, and durations from 5 ms to 3 s in every interval (a
+    /// deterministic pseudo-random sweep): the
     /// structured elimination agrees with the banded LU relative to the size of the solution,
     /// and its residual in the dense system is at rounding level (rows are in metres).
     #[test]
@@ -529,12 +530,23 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let mut worst = 0.0_f64;
-        for _ in 0..2000 {
+        for case in 0..2128 {
             let mut t = timing();
-            for d in t.durations.iter_mut() {
-                // Log-uniform in [0.005, 3] s, rounded to whole 5 ms ticks.
-                let v = 0.005 * libm::exp(next() * libm::log(600.0));
-                *d = (libm::round(v / 0.005)).max(1.0) * 0.005;
+            if case < 128 {
+                // Every mix of the extremes: 5 ms and 10 s (MAX_DURATION) intervals.
+                for (j, d) in t.durations.iter_mut().enumerate() {
+                    *d = if case >> j & 1 == 1 {
+                        MAX_DURATION
+                    } else {
+                        MIN_DURATION
+                    };
+                }
+            } else {
+                for d in t.durations.iter_mut() {
+                    // Log-uniform in [0.005, 3] s, rounded to whole 5 ms ticks.
+                    let v = 0.005 * libm::exp(next() * libm::log(600.0));
+                    *d = (libm::round(v / 0.005)).max(1.0) * 0.005;
+                }
             }
             let mut z = SMatrix::<f64, N, N>::from_element(0.0);
             build_z(&t, Basis::Exponential, &mut z);
