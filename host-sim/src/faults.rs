@@ -457,6 +457,27 @@ pub fn landings(traj: &[Reference<f64>]) -> Vec<(Side, FootPose<f64>)> {
 
 /// Plays `scenario` with one fault kind at one rate and one seed, and evaluates the outcome.
 pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<CaseResult, String> {
+    play(s, kind, rate, seed, false).map(|(r, _)| r)
+}
+
+/// [`run_case`], and the candump log of every frame the bus delivered (the controller's, the
+/// node's, a flood's), for `host-sim replay` or the QEMU image's player.
+pub fn run_case_logged(
+    s: &Scenario,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+) -> Result<(CaseResult, Vec<String>), String> {
+    play(s, kind, rate, seed, true)
+}
+
+fn play(
+    s: &Scenario,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    record: bool,
+) -> Result<(CaseResult, Vec<String>), String> {
     let cfg = NodeConfig::hrp2();
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up: {e:?}"))?;
     let mut rng = Rng::new(seed ^ 0xFA17);
@@ -485,6 +506,9 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         FaultKind::None | FaultKind::Flood | FaultKind::Burst => {}
     }
     let bus = Bus::new(1_000_000, 4, faults, seed.wrapping_mul(2).wrapping_add(1));
+    if record {
+        bus.record();
+    }
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let mut flood = Flood {
         on: kind == FaultKind::Flood,
@@ -876,7 +900,7 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
             (false, f64::NAN, f64::NAN)
         }
     };
-    Ok(CaseResult {
+    let result = CaseResult {
         ticks: trajectory.len(),
         fell,
         model_error,
@@ -893,7 +917,8 @@ pub fn run_case(s: &Scenario, kind: FaultKind, rate: f64, seed: u64) -> Result<C
         landings: walked.len(),
         bus_load: bus.load(),
         trajectory,
-    })
+    };
+    Ok((result, bus.log()))
 }
 
 /// One row of the table: one fault kind at one rate over scenarios and seeds.
