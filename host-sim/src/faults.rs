@@ -470,6 +470,29 @@ pub fn run_case_with(
     cfg: NodeConfig,
     model: &Model,
 ) -> Result<CaseResult, String> {
+    play(s, kind, rate, seed, cfg, model, false).map(|(r, _)| r)
+}
+
+/// [`run_case`], and the candump log of every frame the bus delivered (the controller's, the
+/// node's, a flood's), for `host-sim replay` or the QEMU image's player.
+pub fn run_case_logged(
+    s: &Scenario,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+) -> Result<(CaseResult, Vec<String>), String> {
+    play(s, kind, rate, seed, NodeConfig::hrp2(), &Model::hrp2(), true)
+}
+
+fn play(
+    s: &Scenario,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    cfg: NodeConfig,
+    model: &Model,
+    record: bool,
+) -> Result<(CaseResult, Vec<String>), String> {
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up: {e:?}"))?;
     let mut rng = Rng::new(seed ^ 0xFA17);
     let ms = 1_000_000u64;
@@ -497,6 +520,9 @@ pub fn run_case_with(
         FaultKind::None | FaultKind::Flood | FaultKind::Burst => {}
     }
     let bus = Bus::new(1_000_000, 4, faults, seed.wrapping_mul(2).wrapping_add(1));
+    if record {
+        bus.record();
+    }
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let mut flood = Flood {
         on: kind == FaultKind::Flood,
@@ -887,7 +913,7 @@ pub fn run_case_with(
             (false, f64::NAN, f64::NAN)
         }
     };
-    Ok(CaseResult {
+    let result = CaseResult {
         ticks: trajectory.len(),
         fell,
         model_error,
@@ -904,7 +930,8 @@ pub fn run_case_with(
         landings: walked.len(),
         bus_load: bus.load(),
         trajectory,
-    })
+    };
+    Ok((result, bus.log()))
 }
 
 /// One row of the table: one fault kind at one rate over scenarios and seeds.

@@ -7,7 +7,8 @@
 //! (cycles of `dt`, the robot's control period, on the grid of Unix time, which host-sim's
 //! epoch 2026-01-01T00:00:00Z is on), as canplayer plays a log from its first frame.
 //!
-//! **When a frame is played.** The log records a frame when it was delivered; the node polls
+//! **When a frame is played** (the rule is `planner_core::playback`'s, which the QEMU image's
+//! player uses too). The log records a frame when it was delivered; the node polls
 //! in the middle of each cycle (`k·dt + dt/2`, as in `host_sim::sim`). A frame logged at `t`
 //! is for the first poll at or after `t`, cycle `k = ⌈(t − dt/2) / dt⌉`: it is sent from the
 //! start of that cycle, in log order, one at a time (the next goes into the mailbox when the
@@ -29,13 +30,14 @@
 
 use planner_core::gait::Reference;
 use planner_core::node::{Node, NodeConfig};
+use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::bus::{parse_log_line, Bus, Faults, LOG_IFACE};
+use crate::bus::{parse_log_line, Bus, BusError, Faults, Port, VFrame, LOG_IFACE};
 use embedded_can::nb::Can;
 
-/// Longest replay after the log's last frame \[s\].
-pub const MAX_AFTER_S: f64 = 60.0;
+/// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).
+pub const MAX_AFTER_S: f64 = playback::MAX_AFTER_US as f64 * 1e-6;
 
 /// A frame to replay and the control cycle it is sent in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,6 +57,8 @@ pub struct Replayed {
     pub can_log: Vec<String>,
     /// The node's answers, with the cycle they arrived in.
     pub acks: Vec<(u64, Ack)>,
+    /// Every frame the node handed to its port, with the cycle whose poll sent it.
+    pub node_frames: Vec<(u64, RawFrame)>,
     /// Frames replayed (put on the bus).
     pub replayed: usize,
     /// Frames lost because a receive FIFO was full (the node's, or the player's own).
@@ -85,7 +89,6 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
     if period_us < 2 {
         return Err(format!("control period {dt} s is below 2 µs"));
     }
-    let half = period_us / 2;
     let mut out = Vec::new();
     let mut base = None;
     let mut last_us = 0;
@@ -112,16 +115,13 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
         }
         last_us = us;
         // The start of the first frame's cycle, on the grid of Unix time.
-        let base = *base.get_or_insert(us - us % period_us);
+        let clock = *base.get_or_insert_with(|| LogClock::new(us, period_us));
+        let Some(clock) = clock else {
+            return Err(format!("control period {dt} s is below 2 µs"));
+        };
         if !node_sends(entry.frame.id) {
-            let x = us - base;
-            let tick = if x <= half {
-                0
-            } else {
-                (x - half).div_ceil(period_us)
-            };
             out.push(Timed {
-                tick,
+                tick: clock.cycle(us),
                 frame: entry.frame,
             });
         }
@@ -129,18 +129,51 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
     Ok(out)
 }
 
-/// Plays `frames` into a node configured by `cfg` over the virtual bus at `bitrate` (see the
-/// module docs).
+/// The node's port, recording what the node hands to it (with the cycle).
+struct Tap<'a> {
+    port: &'a mut Port,
+    cycle: u64,
+    sent: Vec<(u64, RawFrame)>,
+}
+
+impl Can for Tap<'_> {
+    type Frame = VFrame;
+    type Error = BusError;
+    fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
+        let r = self.port.transmit(frame);
+        if r.is_ok() {
+            self.sent.push((self.cycle, *frame));
+        }
+        r
+    }
+    fn receive(&mut self) -> nb::Result<VFrame, BusError> {
+        self.port.receive()
+    }
+}
+
+/// Plays `frames` into a node (`Node<64>`) configured by `cfg` over the virtual bus at
+/// `bitrate` (see the module docs).
 pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replayed, String> {
-    let mut node: Node<64> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    replay_into::<64>(frames, cfg, bitrate)
+}
+
+/// [`replay`] into a node with a queue of `Q` steps (the firmware's is `Node<16>`).
+pub fn replay_into<const Q: usize>(
+    frames: &[Timed],
+    cfg: &NodeConfig,
+    bitrate: u32,
+) -> Result<Replayed, String> {
+    let mut node: Node<Q> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
     let bus = Bus::new(bitrate, 2, Faults::default(), 1);
     bus.record();
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
-    let period_ns = (cfg.params.dt * 1e9).round() as u64;
+    let period_us = (cfg.params.dt * 1e6).round() as u64;
+    let period_ns = period_us * 1000;
     let last = frames.last().map_or(0, |f| f.tick);
-    let max_ticks = last + (MAX_AFTER_S / cfg.params.dt).ceil() as u64;
+    let max_ticks = playback::max_cycles(last, period_us);
     let mut trajectory = vec![*node.gait().last()];
     let mut acks = Vec::new();
+    let mut node_frames = Vec::new();
     let mut next = 0;
     let mut cut = true;
     for k in 0..max_ticks {
@@ -163,8 +196,14 @@ pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replay
             bus.advance(bus.free_at().max(t0) + 1);
         }
         bus.advance(poll);
-        let now_ms = (poll / 1_000_000) as u32;
-        trajectory.push(node.poll(now_ms, &mut nport).reference);
+        let now_ms = playback::poll_ms(k, period_us);
+        let mut tap = Tap {
+            port: &mut nport,
+            cycle: k,
+            sent: Vec::new(),
+        };
+        trajectory.push(node.poll(now_ms, &mut tap).reference);
+        node_frames.append(&mut tap.sent);
         bus.advance(t0 + period_ns);
         while let Ok(f) = ctl.receive() {
             if let Some(a) = Ack::decode(&f) {
@@ -172,7 +211,7 @@ pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replay
             }
         }
         let idle = next >= frames.len() && ctl.pending() == 0 && nport.received() == 0;
-        if k >= last && idle && node.gait().is_standing() {
+        if playback::finished(k, last, idle, node.gait().is_standing()) {
             cut = false;
             break;
         }
@@ -181,6 +220,7 @@ pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replay
         trajectory,
         can_log: bus.log(),
         acks,
+        node_frames,
         replayed: next,
         lost: bus.stats().rx_overflow,
         cut,

@@ -25,6 +25,7 @@ extern crate std;
 pub mod gait;
 pub mod lipm;
 pub mod node;
+pub mod playback;
 pub mod real;
 #[cfg(feature = "robot")]
 pub mod robot;

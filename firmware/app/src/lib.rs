@@ -11,7 +11,9 @@
 //! * [`cycle`]: one 5 ms control cycle: the controller's frames, one
 //!   [`Node::poll`](planner_core::node::Node::poll) timed by a [`cycle::Clock`] that the image
 //!   provides and classified by [`Kind`], the node's answers;
-//! * [`stats`]: count, maximum and sum per kind.
+//! * [`stats`]: count, maximum and sum per kind;
+//! * [`player`]: the player of a recorded CAN log by `planner_core::playback`'s rule (not yet
+//!   used by the image).
 //!
 //! The board image runs the same `Node::poll` over FDCAN1 instead of the in-memory device.
 #![no_std]
@@ -21,6 +23,7 @@
 pub mod bus;
 pub mod controller;
 pub mod cycle;
+pub mod player;
 pub mod script;
 pub mod stats;
 

@@ -1,0 +1,140 @@
+//! The target's player of a recorded CAN log (issue 12's record and replay; not yet used by
+//! the QEMU image, which still runs [`crate::Runner`]).
+//!
+//! [`Player`] feeds logged frames into the node through the in-memory [`ScriptedBus`] by the
+//! rule of `planner_core::playback`, the one `host-sim replay` uses: a frame is for cycle
+//! [`LogClock::cycle`] of its time; before the poll of cycle `k` every frame for a cycle
+//! `≤ k` is delivered, in log order (the in-memory device has no bus time: a log denser than
+//! the bus carries before a poll is not replayed as host-sim's bus would); the node polls at
+//! [`playback::poll_ms`]; the replay ends by [`playback::finished`] or after
+//! [`playback::max_cycles`].
+
+use planner_core::node::{Node, PollReport};
+use planner_core::playback::{self, LogClock};
+use planner_core::wire::RawFrame;
+
+use crate::bus::ScriptedBus;
+use crate::cycle::Fnv;
+
+/// A logged frame: its time \[µs, in the log's time\] and the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LogFrame {
+    /// When the log recorded it.
+    pub us: u64,
+    /// The frame.
+    pub frame: RawFrame,
+}
+
+/// Where the player reads the log's frames from, in log order.
+pub trait Source {
+    /// The next frame, `None` if there is none (any more).
+    fn next_frame(&mut self) -> Option<LogFrame>;
+}
+
+/// The log ended before the number of frames its header announced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Truncated;
+
+/// Plays one log into a node, one control cycle per [`Player::cycle`].
+#[derive(Clone, Debug)]
+pub struct Player {
+    clock: LogClock,
+    remaining: u32,
+    ahead: Option<(u64, RawFrame)>,
+    last: u64,
+    max: u64,
+    bus: ScriptedBus,
+    k: u64,
+    finished: bool,
+    fed: u32,
+    tx_frames: u32,
+    tx_digest: Fnv,
+}
+
+impl Player {
+    /// A log of `count` frames to replay, the last one at `last_us`, on the grid `clock`.
+    pub fn new(clock: LogClock, count: u32, last_us: u64) -> Self {
+        let last = if count == 0 { 0 } else { clock.cycle(last_us) };
+        Self {
+            clock,
+            remaining: count,
+            ahead: None,
+            last,
+            max: playback::max_cycles(last, clock.period_us()),
+            bus: ScriptedBus::new(),
+            k: 0,
+            finished: false,
+            fed: 0,
+            tx_frames: 0,
+            tx_digest: Fnv::default(),
+        }
+    }
+
+    /// `true` once the replay has ended (standing and idle, or at its longest).
+    pub fn done(&self) -> bool {
+        self.finished || self.k >= self.max
+    }
+
+    /// Whether it ended at its longest rather than standing and idle.
+    pub fn cut(&self) -> bool {
+        !self.finished
+    }
+
+    /// Frames fed to the node so far.
+    pub fn fed(&self) -> u32 {
+        self.fed
+    }
+
+    /// The device (frame counters).
+    pub fn bus(&self) -> &ScriptedBus {
+        &self.bus
+    }
+
+    /// Frames the node transmitted, and their digest ([`Fnv::add_frame`]).
+    pub fn transmitted(&self) -> (u32, u64) {
+        (self.tx_frames, self.tx_digest.0)
+    }
+
+    /// One control cycle: the frames due, one `poll` (through `poll`, which the image times),
+    /// then `on_frame(cycle, frame)` for every frame the node sent.
+    pub fn cycle<S: Source, const Q: usize>(
+        &mut self,
+        node: &mut Node<Q>,
+        source: &mut S,
+        poll: impl FnOnce(&mut Node<Q>, u32, &mut ScriptedBus) -> PollReport,
+        mut on_frame: impl FnMut(u64, &RawFrame),
+    ) -> Result<PollReport, Truncated> {
+        let k = self.k;
+        loop {
+            if self.ahead.is_none() && self.remaining > 0 {
+                let f = source.next_frame().ok_or(Truncated)?;
+                self.remaining -= 1;
+                self.ahead = Some((self.clock.cycle(f.us), f.frame));
+            }
+            match self.ahead {
+                Some((tick, frame)) if tick <= k => {
+                    self.bus.deliver(frame);
+                    self.fed = self.fed.saturating_add(1);
+                    self.ahead = None;
+                }
+                _ => break,
+            }
+        }
+        let report = poll(
+            node,
+            playback::poll_ms(k, self.clock.period_us()),
+            &mut self.bus,
+        );
+        while let Some(f) = self.bus.take_sent() {
+            self.tx_frames = self.tx_frames.saturating_add(1);
+            self.tx_digest.add_frame(&f);
+            on_frame(k, &f);
+        }
+        let idle = self.remaining == 0 && self.ahead.is_none() && self.bus.pending_len() == 0;
+        if playback::finished(k, self.last, idle, node.gait().is_standing()) {
+            self.finished = true;
+        }
+        self.k += 1;
+        Ok(report)
+    }
+}
