@@ -25,13 +25,12 @@
 //! DWT.
 //!
 //! # Memory (as on the board)
-//! The node (`Node<16>`, ~47 KB) is a `static` in .bss, placed once by `cortex_m::singleton!`
-//! (and built again in place of the first one for the second scenario). Building it takes
-//! ~160 KB of stack once (`Node::new`'s own frame is ~109 KB: it builds the gait and the node
-//! by value; the 47 KB `Result` it returns comes on top), which does not fit the 128 KiB RAM
-//! next to the node: `memory.x` puts the stack into a region of its own (`STACK`, 512 KiB, the
-//! board's AXI SRAM), as `board/stack.x` does on the board. The control loop itself needs
-//! ~15 KB of stack (`STACK ... control=`).
+//! The node (`walk_robot::Node<16>`, ~14 KB: it borrows its preview gains from flash) is a
+//! `static` in .bss, placed once by `cortex_m::singleton!` (and built again in place of the
+//! first one for the second scenario). Building it takes ~25 KB of stack once (the gait and the
+//! node are built by value), the control loop ~20 KB (`STACK ... control=`); `memory.x` puts
+//! the stack into a 64 KiB region of its own below the 64 KiB RAM, as `board/stack.x` does on
+//! the board (the lower half of its DTCM).
 //!
 //! # Output (one record per line, `key=value` fields)
 //! * `CALIB loop_instructions=… timer_ticks=… instructions_per_tick=…`
@@ -223,7 +222,7 @@ fn print_command(out: &mut Console, scenario: &str, c: &Sent) {
 type Slot = Result<Node<QUEUE>, GaitError>;
 
 /// Builds the node into its `static` (in .bss) with `cortex_m::singleton!`, as the board's
-/// `place_node` does, but keeps the `Result` (moving the node out of it would copy its 47 KB
+/// `place_node` does, but keeps the `Result` (moving the node out of it would copy its 14 KB
 /// through this frame once more). Not inlined: the temporaries of `Node::new` (the gait, the
 /// preview-gain computation, the node returned by value) live in this frame only while it runs.
 #[inline(never)]
