@@ -481,7 +481,15 @@ pub fn run_case_logged(
     rate: f64,
     seed: u64,
 ) -> Result<(CaseResult, Vec<String>), String> {
-    play(s, kind, rate, seed, NodeConfig::hrp2(), &Model::hrp2(), true)
+    play(
+        s,
+        kind,
+        rate,
+        seed,
+        NodeConfig::hrp2(),
+        &Model::hrp2(),
+        true,
+    )
 }
 
 fn play(
