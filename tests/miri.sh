@@ -132,6 +132,11 @@ SKIP=(
     timing::tests::eq17_matches_brute_force_for_zero_end_velocities
     timing::tests::general_quartics_match_brute_force
     wire::tests::every_one_two_and_three_bit_error_is_caught
+    # added with issue 12's solver and encoding (thousands of cases each; not measured under
+    # Miri, > 60 s by their host times): run by `cargo test`
+    timing::tests::random_quartics_match_brute_force
+    window::tests::structured_elimination_agrees_with_banded_lu_over_many_timings
+    wire::tests::round_to_i32_is_libm_round_saturated
     # --test oracle
     planner_matches_the_general_44_unknown_formulation
     rk4_integration_matches_the_closed_form_cog
