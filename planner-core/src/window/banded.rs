@@ -14,7 +14,7 @@ use super::{
     hcol, solve_both, solve_plane_new, Basis, Plan, PlanError, PlaneBoundary, PlanePlan, Solver,
     Timing, LAST_BETA, M, N,
 };
-use crate::lipm::{add_particular, particular_ends, Particular, PARTICULAR_LEN};
+use crate::lipm::monomial_ends;
 use crate::real::Real;
 
 /// Lower and upper bandwidth of `Z` in the ordering of the parent module (checked by a test
@@ -48,14 +48,6 @@ fn basis_block<T: Real>(basis: Basis, e: T, at_end: bool) -> [[T; 2]; 2] {
             [[c, s], [s, c]]
         }
     }
-}
-
-/// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP term `s^k`.
-#[inline]
-fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
-    let mut g: Particular<T> = [T::ZERO; PARTICULAR_LEN];
-    add_particular(&mut g, k, T::ONE, lambda);
-    particular_ends(&g, lambda)
 }
 
 /// Builds `Z` for a timing into `z` (no allocation; `z` is overwritten).

@@ -53,9 +53,7 @@ mod chain;
 pub use banded::{bandwidths, build_z, Banded, BANDWIDTH};
 use chain::Chain;
 
-use crate::lipm::{
-    add_particular, hermite, particular_ends, Poly, Sample, Segment, State, PARTICULAR_LEN,
-};
+use crate::lipm::{hermite, particular_ends, particular_into, Poly, Sample, Segment, State};
 use crate::real::Real;
 
 /// Number of intervals in a window.
@@ -255,10 +253,7 @@ fn build_rhs<T: Real>(
     for j in 0..M {
         let lambda = w * d[j];
         let g = &mut segs[j].particular;
-        *g = [T::ZERO; PARTICULAR_LEN];
-        for (k, &ck) in polys[j].iter().enumerate() {
-            add_particular(g, k, ck, lambda);
-        }
+        particular_into(g, &polys[j], lambda);
         let (x0, v0, x1, v1) = particular_ends(g, lambda);
         starts[j] = State::new(x0, v0);
         ends[j] = State::new(x1, v1);
@@ -369,13 +364,12 @@ fn solve_plane_into<T: Real, S: Solver<T>>(
         seg.q = q;
         seg.zmp = polys[j];
     }
-    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4; their particular
-    // solutions are added to the known ones (linearity).
+    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4 of the first and the
+    // last interval: their particular solutions are those of the whole polynomials.
     for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
-        for k in 0..3 {
-            out[j].zmp[k + 2] = y[col + k];
-            add_particular(&mut out[j].particular, k + 2, y[col + k], w * d[j]);
-        }
+        let seg = &mut out[j];
+        seg.zmp[2..].copy_from_slice(&y[col..col + 3]);
+        particular_into(&mut seg.particular, &seg.zmp, w * d[j]);
     }
     for seg in out.iter_mut() {
         seg.zmp[0] += origin;

@@ -133,18 +133,31 @@ impl Symbols {
         let mut function = None;
         let mut line = String::from("?");
         if let Ok(mut frames) = self.loader.find_frames(u64::from(addr)) {
-            if let Ok(Some(frame)) = frames.next() {
-                function = frame
-                    .function
-                    .as_ref()
-                    .and_then(|f| f.demangle().ok())
-                    .map(|f| clean(&f));
+            // Innermost first: the function is the innermost frame's; the line is that of the
+            // innermost frame in the project's own code (not the standard library's or a
+            // dependency's), which says where an inlined `+` or `Option::map` was written.
+            let mut first = true;
+            while let Ok(Some(frame)) = frames.next() {
+                if first {
+                    function = frame
+                        .function
+                        .as_ref()
+                        .and_then(|f| f.demangle().ok())
+                        .map(|f| clean(&f));
+                }
                 if let Some(l) = frame.location {
                     let file = l.file.unwrap_or("?");
-                    let short = file.rsplit('/').take(2).collect::<Vec<_>>();
-                    let short = short.into_iter().rev().collect::<Vec<_>>().join("/");
-                    line = format!("{short}:{}", l.line.unwrap_or(0));
+                    let foreign = file.starts_with("/rustc/") || file.contains("/.cargo/registry/");
+                    if first || !foreign {
+                        let short = file.rsplit('/').take(2).collect::<Vec<_>>();
+                        let short = short.into_iter().rev().collect::<Vec<_>>().join("/");
+                        line = format!("{short}:{}", l.line.unwrap_or(0));
+                    }
+                    if !foreign {
+                        break;
+                    }
                 }
+                first = false;
             }
         }
         let function = function.unwrap_or_else(|| self.symbol(addr));
@@ -346,24 +359,37 @@ fn main() {
     let mut inclusive: HashMap<String, u64> = HashMap::new();
     let mut own: HashMap<String, u64> = HashMap::new();
     let mut per_line: HashMap<String, u64> = HashMap::new();
-    let mut stack: Vec<(u32, String)> = Vec::new(); // (return address, callee symbol)
+    // Inclusive per call site (callee, and the source line of the branch-and-link).
+    let mut per_site: HashMap<String, u64> = HashMap::new();
+    // (return address, callee symbol, `callee ← file:line` of the call)
+    let mut stack: Vec<(u32, String, String)> = Vec::new();
     let mut root = None;
-    let mut pending_return: Option<u32> = None;
+    let mut pending_return: Option<(u32, u32)> = None;
     for host in &call.blocks {
         let block = &blocks[host];
         let pc = block.addrs[0];
-        if let Some(k) = stack.iter().rposition(|(ret, _)| *ret == pc) {
+        if let Some(k) = stack.iter().rposition(|(ret, _, _)| *ret == pc) {
             stack.truncate(k);
         }
-        if let Some(ret) = pending_return.take() {
-            stack.push((ret, syms.symbol(pc)));
+        if let Some((ret, site)) = pending_return.take() {
+            let callee = syms.symbol(pc);
+            let (_, line) = syms.inner(site);
+            let key = format!("{callee} <- {line}");
+            stack.push((ret, callee, key));
         }
         let here = root.get_or_insert_with(|| syms.symbol(pc)).clone();
         let mut on_stack: Vec<&str> = vec![here.as_str()];
-        for (_, s) in &stack {
+        let mut sites: Vec<&str> = Vec::new();
+        for (_, s, site) in &stack {
             if !on_stack.contains(&s.as_str()) {
                 on_stack.push(s);
             }
+            if !sites.contains(&site.as_str()) {
+                sites.push(site);
+            }
+        }
+        for s in sites {
+            *per_site.entry(s.to_string()).or_default() += block.addrs.len() as u64;
         }
         for s in on_stack {
             *inclusive.entry(s.to_string()).or_default() += block.addrs.len() as u64;
@@ -376,7 +402,7 @@ fn main() {
             }
         }
         if block.calls {
-            pending_return = Some(block.end);
+            pending_return = block.addrs.last().map(|last| (block.end, *last));
         }
     }
     let mut table = |title: &str, map: HashMap<String, u64>| {
@@ -392,8 +418,17 @@ fn main() {
         }
     };
     table("INCLUSIVE (call stack)", inclusive);
+    if o.lines {
+        table(
+            "INCLUSIVE (call site: callee <- file:line of the call)",
+            per_site,
+        );
+    }
     table("SELF (source function, inlined included)", own);
     if o.lines {
-        table("SELF (source line)", per_line);
+        table(
+            "SELF (source line: the innermost one in the project)",
+            per_line,
+        );
     }
 }
