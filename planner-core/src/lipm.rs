@@ -168,120 +168,57 @@ const INV_PAIR: [f64; PARTICULAR_LEN] = {
     t
 };
 
-/// The coefficients `g_0, g_1, …` of the particular solution for the normalised ZMP polynomial
-/// `c` over an interval with `λ = ωD`, in order; [`particular_len`] of them (the rest are zero):
+/// Writes the particular solution `G(s) = Σ g_i s^i` for the normalised ZMP polynomial `c`
+/// over an interval with `λ = ωD` into `g`, every coefficient (the unused tail is zeroed):
 ///
 /// * `λ < 1`, at rest at `s = 0`: `g_0 = g_1 = 0` and `g_i = λ²/(i(i−1)) (g_{i−2} − c_{i−2})`
 ///   upwards (`c_i = 0` beyond the quartic), which sums `−Σ_{n≥1} λ^{2n} k!/(k+2n)! c_k` over
 ///   the terms with `k + 2n = i`, up to degree [`PARTICULAR_LEN`]` − 1`;
 /// * `λ ≥ 1`, the paper's polynomial: `g_4 = c_4`, `g_3 = c_3` and
 ///   `g_i = c_i + (i+1)(i+2) g_{i+2} / λ²` downwards.
-#[derive(Clone, Copy, Debug)]
-struct Coefficients<T> {
-    c: Poly<T>,
-    /// `λ²` (`λ < 1`).
-    l2: T,
-    /// The next index.
-    i: usize,
-    /// `particular_len(λ)`.
-    len: usize,
-    /// `(g_{i−2}, g_{i−1})` by parity of the index (`λ < 1`).
-    back: [T; 2],
-    /// The whole polynomial (`λ ≥ 1`).
-    head: Poly<T>,
-}
-
-impl<T: Real> Coefficients<T> {
-    #[inline]
-    fn new(c: &Poly<T>, lambda: T) -> Self {
-        let short = lambda < T::of(SHORT_LAMBDA);
-        let mut head = [T::ZERO; N_COEFFS];
-        if !short {
-            let inv2 = T::ONE / (lambda * lambda);
-            head[4] = c[4];
-            head[3] = c[3];
-            head[2] = c[2] + T::of(12.0) * inv2 * head[4];
-            head[1] = c[1] + T::of(6.0) * inv2 * head[3];
-            head[0] = c[0] + T::of(2.0) * inv2 * head[2];
-        }
-        Self {
-            c: *c,
-            l2: lambda * lambda,
-            i: 0,
-            len: if short { PARTICULAR_LEN } else { N_COEFFS },
-            back: [T::ZERO; 2],
-            head,
-        }
-    }
-}
-
-impl<T: Real> Iterator for Coefficients<T> {
-    type Item = T;
-    #[inline]
-    fn next(&mut self) -> Option<T> {
-        let i = self.i;
-        if i >= self.len {
-            return None;
-        }
-        self.i += 1;
-        if self.len == N_COEFFS {
-            return self.head.get(i).copied();
-        }
-        if i < 2 {
-            return Some(T::ZERO);
-        }
-        let ci = self.c.get(i - 2).copied().unwrap_or(T::ZERO);
-        let inv = INV_PAIR.get(i).copied().unwrap_or(0.0);
-        let g = self.l2 * T::of(inv) * (self.back[i % 2] - ci);
-        self.back[i % 2] = g;
-        Some(g)
-    }
-}
-
-/// Writes the particular solution for the normalised ZMP polynomial `c` over an interval with
-/// `λ = ωD` into `g`, every coefficient (see [`particular`]; the unused tail is zeroed).
 #[inline]
 pub fn particular_into<T: Real>(g: &mut Particular<T>, c: &Poly<T>, lambda: T) {
-    let mut it = Coefficients::new(c, lambda);
-    for gi in g.iter_mut() {
-        *gi = it.next().unwrap_or(T::ZERO);
+    if lambda < T::of(SHORT_LAMBDA) {
+        let l2 = lambda * lambda;
+        g[0] = T::ZERO;
+        g[1] = T::ZERO;
+        for i in 2..PARTICULAR_LEN {
+            let ci = if i - 2 < N_COEFFS { c[i - 2] } else { T::ZERO };
+            g[i] = l2 * T::of(INV_PAIR[i]) * (g[i - 2] - ci);
+        }
+    } else {
+        let inv2 = T::ONE / (lambda * lambda);
+        g[4] = c[4];
+        g[3] = c[3];
+        g[2] = c[2] + T::of(12.0) * inv2 * g[4];
+        g[1] = c[1] + T::of(6.0) * inv2 * g[3];
+        g[0] = c[0] + T::of(2.0) * inv2 * g[2];
+        for gi in g.iter_mut().skip(N_COEFFS) {
+            *gi = T::ZERO;
+        }
     }
 }
 
-/// The particular solution `G(s) = Σ g_i s^i` for the normalised ZMP polynomial `c` over an
-/// interval with `λ = ωD`:
-///
-/// * `λ < 1`, at rest at `s = 0`: `g_0 = g_1 = 0` and `g_i = λ²/(i(i−1)) (g_{i−2} − c_{i−2})`
-///   upwards (`c_i = 0` beyond the quartic), which sums `−Σ_{n≥1} λ^{2n} k!/(k+2n)! c_k` over
-///   the terms with `k + 2n = i`, up to degree [`PARTICULAR_LEN`]` − 1`;
-/// * `λ ≥ 1`, the paper's polynomial: `g_4 = c_4`, `g_3 = c_3` and
-///   `g_i = c_i + (i+1)(i+2) g_{i+2} / λ²` downwards.
+/// The particular solution for the normalised ZMP polynomial `c` over an interval with `λ = ωD`
+/// (see [`particular_into`]).
 #[inline]
 pub fn particular<T: Real>(c: &Poly<T>, lambda: T) -> Particular<T> {
-    let mut it = Coefficients::new(c, lambda);
-    core::array::from_fn(|_| it.next().unwrap_or(T::ZERO))
+    let mut g = [T::ZERO; PARTICULAR_LEN];
+    particular_into(&mut g, c, lambda);
+    g
 }
 
 /// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP monomial `s^k`
-/// (`k ≤ MAX_ORDER`; a larger `k` is the zero polynomial), summed as its coefficients come.
+/// (`k ≤ MAX_ORDER`; a larger `k` is the zero polynomial), computed in `scratch` (whatever it
+/// holds: every coefficient is written), so that a caller with many monomials zeroes no buffer.
 #[inline]
-pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
+pub fn monomial_ends<T: Real>(scratch: &mut Particular<T>, k: usize, lambda: T) -> (T, T, T, T) {
     let mut c = [T::ZERO; N_COEFFS];
     if let Some(ck) = c.get_mut(k) {
         *ck = T::ONE;
     }
-    let (mut g0, mut g1, mut x1, mut v1, mut i) = (T::ZERO, T::ZERO, T::ZERO, T::ZERO, T::ZERO);
-    for (n, gi) in Coefficients::new(&c, lambda).enumerate() {
-        match n {
-            0 => g0 = gi,
-            1 => g1 = gi,
-            _ => {}
-        }
-        x1 += gi;
-        v1 += i * gi;
-        i += T::ONE;
-    }
-    (g0, g1 / lambda, x1, v1 / lambda)
+    particular_into(scratch, &c, lambda);
+    particular_ends(scratch, lambda)
 }
 
 /// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.

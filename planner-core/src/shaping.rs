@@ -906,6 +906,7 @@ impl<T: Real, const P: usize> Compensator<T, P> {
     }
 
     /// What [`step`](Self::step) would return now, without advancing.
+    #[inline(always)]
     pub fn peek<const NL: usize>(&self, gains: &PreviewGains<T, NL>) -> Compensation<T> {
         let k = self.tick;
         let [x, v, acc] = self.state;
