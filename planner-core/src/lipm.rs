@@ -178,6 +178,19 @@ const INV_PAIR: [f64; PARTICULAR_LEN] = {
 ///   `g_i = c_i + (i+1)(i+2) g_{i+2} / λ²` downwards.
 #[inline]
 pub fn particular_into<T: Real>(g: &mut Particular<T>, c: &Poly<T>, lambda: T) {
+    particular_over(g, c, lambda, T::ZERO);
+}
+
+/// [`particular_into`] over a particular solution `g` computed before for `λ = old_lambda`:
+/// its tail is zero already if `old_lambda ≥ 1` (see [`particular_len`]), and then is not
+/// written again.
+#[inline]
+pub(crate) fn particular_over<T: Real>(
+    g: &mut Particular<T>,
+    c: &Poly<T>,
+    lambda: T,
+    old_lambda: T,
+) {
     if lambda < T::of(SHORT_LAMBDA) {
         let l2 = lambda * lambda;
         g[0] = T::ZERO;
@@ -193,8 +206,12 @@ pub fn particular_into<T: Real>(g: &mut Particular<T>, c: &Poly<T>, lambda: T) {
         g[2] = c[2] + T::of(12.0) * inv2 * g[4];
         g[1] = c[1] + T::of(6.0) * inv2 * g[3];
         g[0] = c[0] + T::of(2.0) * inv2 * g[2];
-        for gi in g.iter_mut().skip(N_COEFFS) {
-            *gi = T::ZERO;
+        // A NaN `old_lambda` zeroes too.
+        let tail_zero = old_lambda >= T::of(SHORT_LAMBDA);
+        if !tail_zero {
+            for gi in g.iter_mut().skip(N_COEFFS) {
+                *gi = T::ZERO;
+            }
         }
     }
 }
