@@ -8,7 +8,7 @@
 //! of [`super::probe`]: `--stabilizer`, `--servo-damping`, `--open-loop`) writes
 //! `DIR/physics_faults.json`: an object with the settings (`robot`, `seed`, `stabilizer`,
 //! `stabilizer_scale`, `servo_damping`, for `weakest` also `weakest_ladder`) and `runs`, one
-//! object per row and scenario ([`json`]: `fault`, `rate`, `scenario`, `seed`,
+//! object per row and scenario ([`json()`]: `fault`, `rate`, `scenario`, `seed`,
 //! `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`, `cop_err_mean_m`,
 //! `cop_err_max_m`, `safety_stop`, `lost`); and `DIR/physics_faults.md`.
 
