@@ -99,6 +99,10 @@ fn straight_walks_through_the_command_line_contract() {
     assert!(num("cop_err_mean_m") > 0.0 && num("cop_err_max_m") >= num("cop_err_mean_m"));
     // The whole walk was simulated (10 steps of 0.8 s and the stop).
     assert!(num("simulated_s") > 9.0, "{text}");
+    // The probe settings (the defaults: the robot as stated).
+    assert_eq!(j["stabilizer"], true, "{text}");
+    assert_eq!(num("stabilizer_scale"), 1.0, "{text}");
+    assert_eq!(num("servo_damping"), 600.0, "{text}");
     for f in [
         "physics.csv",
         "physics_tilt.png",

@@ -6,7 +6,9 @@
 //!   `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
 //!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
 //!   `simulated_s`, `stabilizer`, `stabilizer_gains`, `servo_kp_kd`, `engine` (the MuJoCo
-//!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents);
+//!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents),
+//!   and the probe settings ([`super::probe::Probe::record`]: `stabilizer_scale`,
+//!   `servo_damping`, for `weakest` `weakest_ladder`);
 //! * `DIR/physics.csv`: the log every 5 ms (time, tilt, CoP, reference and desired ZMP, the
 //!   50 ms tracking error, true and reference COG, waist height);
 //! * `DIR/physics_tilt.png`, `DIR/physics_cop_x.png`, `DIR/physics_cop_y.png`: the tilt, and
