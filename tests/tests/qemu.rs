@@ -12,11 +12,15 @@
 //! The runs: every built-in scenario (`host_sim::scenario::BUILT_IN`) and every TOML scenario
 //! of `host-sim/scenarios/` through `sim::simulate`, and one fault-sweep run
 //! (`faults::run_case_logged`, fig4, seed 1) per fault kind that the in-memory device can
-//! replay as host-sim's bus does: none, drop, duplicate, corrupt, delay, silence, burst and the
-//! heavier mixed rows. **Not the flood rows**: a flood puts more frames on the bus than it
-//! carries in the 2.5 ms before a poll; host-sim's replay (`replay::replay_into`) sends them as
-//! the bus's transmission time allows, the in-memory device has no transmission time and
-//! delivers every due frame before the poll, so the node's frames cannot match.
+//! replay as host-sim's bus does: none, drop, duplicate, corrupt, delay, silence, flood at
+//! 20 % load, burst and the heavier mixed rows. **Not the flood at 100 % load**: it puts more
+//! frames on the bus than it carries in the 2.5 ms before a poll; host-sim's replay
+//! (`replay::replay_into`) sends them as the bus's transmission time allows, the in-memory
+//! device has no transmission time and delivers every due frame before the poll, so the node's
+//! frames cannot match (they differ from the 84th on). At 20 % load the due frames fit.
+//!
+//! A third QEMU run on a file whose second log is cut short checks that the image refuses it
+//! (an `ERROR` line, exit code 1) after replaying the first.
 //!
 //! Checked, against the host (the same log, the same `Node<16>`):
 //! * for every log, the target's node sent the frames that `replay::replay_into::<16>` (host-sim's
@@ -152,6 +156,7 @@ fn fault_runs() -> Vec<(String, FaultKind, f64)> {
         (FaultKind::Corrupt, 0.05),
         (FaultKind::Delay, 0.05),
         (FaultKind::Silence, 0.0),
+        (FaultKind::Flood, 0.2),
         (FaultKind::Burst, 20.0),
     ]
     .into_iter()
@@ -351,9 +356,9 @@ fn build_image() -> PathBuf {
     elf
 }
 
-/// Runs the image in `dir` (which holds its `replay.wlog`).
-fn run_qemu(elf: &Path, dir: &Path) -> QemuRun {
-    let out = Process::new("timeout")
+/// Runs the image in `dir` (which holds its `replay.wlog`): its exit code and output.
+fn qemu(elf: &Path, dir: &Path) -> std::process::Output {
+    Process::new("timeout")
         .arg("300")
         .args(["qemu-system-arm", "-M", "mps2-an500", "-nographic"])
         .args(["-semihosting-config", "enable=on,target=native"])
@@ -362,7 +367,12 @@ fn run_qemu(elf: &Path, dir: &Path) -> QemuRun {
         .arg(elf)
         .current_dir(dir)
         .output()
-        .expect("cannot run timeout/qemu-system-arm");
+        .expect("cannot run timeout/qemu-system-arm")
+}
+
+/// Runs the image in `dir` (which holds its `replay.wlog`); it must succeed.
+fn run_qemu(elf: &Path, dir: &Path) -> QemuRun {
+    let out = qemu(elf, dir);
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
@@ -388,6 +398,8 @@ struct Runs {
     cases: Vec<(Case, Expected)>,
     first: QemuRun,
     second: QemuRun,
+    /// The run on a file whose second log is cut short: exit code, output.
+    broken: (Option<i32>, String),
 }
 
 fn runs() -> Option<&'static Runs> {
@@ -411,6 +423,17 @@ fn runs() -> Option<&'static Runs> {
         std::fs::write(dir.join("replay.wlog"), &file).unwrap();
         let first = run_qemu(&elf, &dir);
         let second = run_qemu(&elf, &dir);
+        // The smallest log, whole, then the same cut in the middle of its frames.
+        let (stop, _) = cases.iter().find(|(c, _)| c.name == "stop").unwrap();
+        let whole = replay::binary_log(&stop.name, &stop.log, &stop.cfg).unwrap();
+        let mut broken = whole.clone();
+        broken.extend_from_slice(&whole[..whole.len() * 2 / 3]);
+        std::fs::write(dir.join("replay.wlog"), &broken).unwrap();
+        let out = qemu(&elf, &dir);
+        let broken = (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        );
         let _ = std::fs::remove_dir_all(&dir);
         // WALK_QEMU_KEEP=DIR keeps the file and the first run's report (e.g. to run the image
         // under a QEMU trace on the same logs).
@@ -429,6 +452,7 @@ fn runs() -> Option<&'static Runs> {
             cases,
             first,
             second,
+            broken,
         })
     })
     .as_ref()
@@ -676,4 +700,32 @@ fn worst_cycle_within_budget() {
         "worst control cycle: {worst} instructions at tick {} (budget {BUDGET}); over the budget: {over:?}",
         cycle.get("max_tick")
     );
+}
+
+/// The image refuses a log cut short (the decoder's `Truncated`) after replaying the whole log
+/// before it, and fails the run.
+#[test]
+fn a_log_cut_short_fails_the_run() {
+    let Some(runs) = runs() else {
+        return;
+    };
+    let (code, stdout) = &runs.broken;
+    assert_eq!(
+        *code,
+        Some(1),
+        "exit code on a broken file:\n{}",
+        tail(stdout, 10)
+    );
+    let records: Vec<Record> = stdout.lines().filter_map(Record::parse).collect();
+    let ends = records.iter().filter(|r| r.kind == "END").count();
+    let errors: Vec<&Record> = records.iter().filter(|r| r.kind == "ERROR").collect();
+    assert_eq!(ends, 1, "the whole log is replayed:\n{}", tail(stdout, 10));
+    assert_eq!(errors.len(), 1, "{}", tail(stdout, 10));
+    assert_eq!(
+        errors[0].get("log"),
+        "Some(Truncated)",
+        "{}",
+        tail(stdout, 10)
+    );
+    assert!(stdout.contains("RUNS count=1"), "{}", tail(stdout, 10));
 }

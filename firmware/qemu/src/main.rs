@@ -430,7 +430,12 @@ fn main() -> ! {
         let mut stats = Stats::new();
         stats.record(Kind::New, new_units, 0);
         let mut frames = Frames::new(&header, &mut file);
-        ok &= replay(&mut out, &mut timer, &header, &mut frames, node, &mut stats);
+        if !replay(&mut out, &mut timer, &header, &mut frames, node, &mut stats) {
+            // The log was refused (its ERROR line says why): where the next one would begin
+            // is unknown.
+            ok = false;
+            break;
+        }
         // A replay cut at its longest leaves frames unread: skip to the next header.
         if let Err(e) = frames.skip_rest() {
             line!(out, "ERROR scenario={} log={:?}", name, e);
