@@ -4,8 +4,9 @@
 #   bash firmware/qemu/attribute.sh [qemu-attribute options]
 #
 # Builds the QEMU image (release, as tests/tests/qemu.rs runs it) and the `qemu-attribute`
-# tool (tests/src/bin/qemu-attribute.rs), runs the image under QEMU's instruction trace and
-# prints, for the `Node::poll` that ran the most instructions (or `--call N`, 0-based; poll N
+# tool (tests/src/bin/qemu-attribute.rs), records host-sim's run of a scenario as the image's
+# replay log (`--scenario NAME|FILE.toml`, fig4 by default), runs the image on it under QEMU's
+# instruction trace and prints, for the `Node::poll` that ran the most instructions (or `--call N`, 0-based; poll N
 # is the cycle of tick N+1), its instructions per function: inclusive on the call stack and
 # self per source function (inlined included; `--lines` adds source lines). Other options:
 # `--stop-after N` (calls), `--top K`, `--function SUBSTR`, `--counts FILE` (every poll's count),

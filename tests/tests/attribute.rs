@@ -1,6 +1,7 @@
 //! `qemu-attribute` (tests/src/bin, run by `firmware/qemu/attribute.sh`) on the QEMU image: a
-//! smoke test of the per-function attribution, cheap enough for CI (the first 330 polls only,
-//! which include fig4's first re-plan at the start of single support).
+//! smoke test of the per-function attribution, cheap enough for CI (the image replays the log of
+//! host-sim's fig4 run that the tool records; the first 330 polls only, which include fig4's
+//! first re-plan at the start of single support).
 //!
 //! The tool cuts QEMU's instruction trace into polls by the call and return of the image's
 //! poll function. Checked: every poll the image itself timed and printed (its `REPLAN` lines,

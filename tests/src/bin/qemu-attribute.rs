@@ -20,7 +20,11 @@
 //! Usage: `qemu-attribute [--machine M] [--function SUBSTR] [--call N] [--stop-after N]
 //! [--top K] [--lines] [--counts FILE] [--stdout FILE] ELF` (see `firmware/qemu/attribute.sh`).
 //! `--counts FILE` writes every call's instruction count, one per line, in call order;
-//! `--stdout FILE` keeps what the image printed over semihosting. `--stop-after N` kills QEMU
+//! `--stdout FILE` keeps what the image printed over semihosting.
+//!
+//! The image replays recorded CAN logs (`replay.wlog` in its working directory, see
+//! `gait_loop::binlog`): the tool records one, host-sim's run of `--scenario` (a built-in
+//! scenario or a TOML file; `fig4` by default), in a directory of its own and runs QEMU there. `--stop-after N` kills QEMU
 //! after N calls (for a quick look at the first cycles, and for the smoke test in
 //! `tests/tests/qemu.rs`).
 
@@ -51,13 +55,14 @@ struct Options {
     lines: bool,
     counts: Option<PathBuf>,
     stdout: Option<PathBuf>,
+    scenario: String,
     elf: PathBuf,
 }
 
 fn usage() -> ! {
     eprintln!(
         "usage: qemu-attribute [--machine M] [--function SUBSTR] [--call N] [--stop-after N] \
-         [--top K] [--lines] [--counts FILE] [--stdout FILE] ELF"
+         [--top K] [--lines] [--counts FILE] [--stdout FILE] [--scenario NAME|FILE.toml] ELF"
     );
     std::process::exit(2)
 }
@@ -72,6 +77,7 @@ fn parse_options() -> Options {
         lines: false,
         counts: None,
         stdout: None,
+        scenario: "fig4".into(),
         elf: PathBuf::new(),
     };
     let mut args = std::env::args().skip(1);
@@ -87,11 +93,14 @@ fn parse_options() -> Options {
             "--lines" => o.lines = true,
             "--counts" => o.counts = Some(PathBuf::from(value())),
             "--stdout" => o.stdout = Some(PathBuf::from(value())),
+            "--scenario" => o.scenario = value(),
             s if s.starts_with("--") => usage(),
             _ => elf = Some(PathBuf::from(a)),
         }
     }
-    o.elf = elf.unwrap_or_else(|| usage());
+    // Absolute: QEMU runs in the log's directory.
+    let elf = elf.unwrap_or_else(|| usage());
+    o.elf = std::fs::canonicalize(&elf).unwrap_or(elf);
     o
 }
 
@@ -214,6 +223,37 @@ struct Call {
     instructions: u64,
 }
 
+/// Records host-sim's run of `scenario` as the image's `replay.wlog`, in a new temporary
+/// directory (returned).
+fn write_log(scenario: &str) -> PathBuf {
+    let fail = |e: String| -> ! {
+        eprintln!("qemu-attribute: scenario {scenario}: {e}");
+        std::process::exit(1)
+    };
+    let s = if scenario.ends_with(".toml") {
+        host_sim::toml_scenario::load(std::path::Path::new(scenario))
+            .unwrap_or_else(|e| fail(e.to_string()))
+    } else {
+        host_sim::scenario::built_in(scenario).unwrap_or_else(|| fail("not built in".into()))
+    };
+    let sim = host_sim::sim::SimConfig::default();
+    let run = host_sim::sim::simulate(&s, &sim).unwrap_or_else(|e| fail(e));
+    let cfg = host_sim::sim::start_config(&s, &sim.node);
+    let name: String = scenario
+        .rsplit('/')
+        .next()
+        .unwrap_or(scenario)
+        .trim_end_matches(".toml")
+        .chars()
+        .take(32)
+        .collect();
+    let bytes = host_sim::replay::binary_log(&name, &run.can_log, &cfg).unwrap_or_else(|e| fail(e));
+    let dir = std::env::temp_dir().join(format!("qemu-attribute-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| fail(e.to_string()));
+    std::fs::write(dir.join("replay.wlog"), bytes).unwrap_or_else(|e| fail(e.to_string()));
+    dir
+}
+
 fn main() {
     let o = parse_options();
     let loader = addr2line::Loader::new(&o.elf).unwrap_or_else(|e| {
@@ -226,7 +266,9 @@ fn main() {
         inner: HashMap::new(),
     };
 
+    let dir = write_log(&o.scenario);
     let mut qemu = Command::new("qemu-system-arm")
+        .current_dir(&dir)
         .args(["-M", &o.machine, "-nographic", "-icount", "shift=0"])
         .args(["-semihosting-config", "enable=on,target=native"])
         .args(["-d", "in_asm,exec,nochain", "-kernel"])
@@ -330,6 +372,7 @@ fn main() {
     }
     let _ = qemu.kill();
     let _ = qemu.wait();
+    let _ = std::fs::remove_dir_all(&dir);
 
     if let Some(path) = &o.counts {
         let text: String = counts.iter().map(|c| format!("{c}\n")).collect();
