@@ -494,8 +494,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
             Ok(()) => self.last_heard = Some(now_ms),
             Err(reason) => self.refuse(reason),
         }
-        // Steps the command dropped (emergency stop, stop now) leave the step records.
-        self.steps.sync(&self.gait);
+        // Steps the command dropped (emergency stop, stop now) leave the step records. A
+        // footstep command drops none (an append adds its record with its step, a modification
+        // changes a queued step in place, or nothing if refused).
+        if !matches!(decoded, Ok(Command::Append(_) | Command::Modify(_))) {
+            self.steps.sync(&self.gait);
+        }
         let version = match decoded {
             Ok(Command::Append(_) | Command::Modify(_)) => self.steps.version(seq),
             _ => None,
