@@ -226,16 +226,55 @@ pub fn particular<T: Real>(c: &Poly<T>, lambda: T) -> Particular<T> {
 }
 
 /// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP monomial `s^k`
-/// (`k ≤ MAX_ORDER`; a larger `k` is the zero polynomial), computed in `scratch` (whatever it
-/// holds: every coefficient is written), so that a caller with many monomials zeroes no buffer.
+/// (`k ≤ MAX_ORDER`; a larger `k` is the zero polynomial): [`particular_ends`] of
+/// [`particular`], summed as the recurrences of [`particular_into`] produce the coefficients
+/// (the same operations in the same order: bit for bit the same), without a buffer.
 #[inline]
-pub fn monomial_ends<T: Real>(scratch: &mut Particular<T>, k: usize, lambda: T) -> (T, T, T, T) {
-    let mut c = [T::ZERO; N_COEFFS];
-    if let Some(ck) = c.get_mut(k) {
-        *ck = T::ONE;
+pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
+    if k > MAX_ORDER {
+        return (T::ZERO, T::ZERO, T::ZERO, T::ZERO);
     }
-    particular_into(scratch, &c, lambda);
-    particular_ends(scratch, lambda)
+    let (mut x1, mut v1) = (T::ZERO, T::ZERO);
+    let (g0, g1);
+    if lambda < T::of(SHORT_LAMBDA) {
+        // g_i = λ²/(i(i−1)) (g_{i−2} − c_{i−2}), c = e_k: zero below k + 2, then one chain.
+        let l2 = lambda * lambda;
+        (g0, g1) = (T::ZERO, T::ZERO);
+        let mut prev = T::ZERO; // g_{i−2} on the chain i ≡ k (mod 2)
+        let mut i = T::ZERO;
+        for (n, &inv) in INV_PAIR.iter().enumerate() {
+            let g = if n >= k + 2 && (n - k) % 2 == 0 {
+                let c = if n - 2 == k { T::ONE } else { T::ZERO };
+                let v = l2 * T::of(inv) * (prev - c);
+                prev = v;
+                v
+            } else {
+                T::ZERO
+            };
+            x1 += g;
+            v1 += i * g;
+            i += T::ONE;
+        }
+    } else {
+        // g_k = 1, g_{k−2} = k(k−1)/λ², …: the paper's m_k, as `particular_into` computes it.
+        let mut c = [T::ZERO; N_COEFFS];
+        c[k] = T::ONE;
+        let inv2 = T::ONE / (lambda * lambda);
+        let mut g = [T::ZERO; N_COEFFS];
+        g[4] = c[4];
+        g[3] = c[3];
+        g[2] = c[2] + T::of(12.0) * inv2 * g[4];
+        g[1] = c[1] + T::of(6.0) * inv2 * g[3];
+        g[0] = c[0] + T::of(2.0) * inv2 * g[2];
+        (g0, g1) = (g[0], g[1]);
+        let mut i = T::ZERO;
+        for &gi in &g {
+            x1 += gi;
+            v1 += i * gi;
+            i += T::ONE;
+        }
+    }
+    (g0, g1 / lambda, x1, v1 / lambda)
 }
 
 /// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.
@@ -488,6 +527,25 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn monomial_ends_are_those_of_the_whole_particular() {
+        for k in 0..=MAX_ORDER {
+            let mut c = [0.0; N_COEFFS];
+            c[k] = 1.0;
+            for &lambda in &[0.005, 0.02, 0.35, 0.99, 1.0, 2.4, 3.6, 40.0] {
+                let want = particular_ends(&particular(&c, lambda), lambda);
+                let got = monomial_ends(k, lambda);
+                // Bit for bit (the same operations on the same values).
+                assert_eq!(
+                    [got.0, got.1, got.2, got.3].map(f64::to_bits),
+                    [want.0, want.1, want.2, want.3].map(f64::to_bits),
+                    "k={k} λ={lambda}"
+                );
+            }
+        }
+        assert_eq!(monomial_ends(MAX_ORDER + 1, 0.5), (0.0, 0.0, 0.0, 0.0));
     }
 
     #[test]

@@ -619,7 +619,7 @@ fn non_finite_boundaries_are_rejected_and_leave_the_plan_untouched() {
         ("cog_end.pos", |b, v| b.cog_end.pos = v),
     ];
     for (name, poke) in pokes {
-        for bad in [f64::NAN, f64::INFINITY] {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
             for k in 0..2 {
                 let (mut x, mut y) = (win.x, win.y);
                 poke(if k == 0 { &mut x } else { &mut y }, bad);

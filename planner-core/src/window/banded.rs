@@ -14,7 +14,7 @@ use super::{
     hcol, solve_both, solve_plane_new, Basis, Plan, PlanError, PlaneBoundary, PlanePlan, Solver,
     Timing, LAST_BETA, M, N,
 };
-use crate::lipm::{monomial_ends, PARTICULAR_LEN};
+use crate::lipm::monomial_ends;
 use crate::real::Real;
 
 /// Lower and upper bandwidth of `Z` in the ordering of the parent module (checked by a test
@@ -77,15 +77,14 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         z[(2 + r, hcol(0))] = b[r][0];
         z[(2 + r, hcol(0) + 1)] = b[r][1];
     }
-    let mut scratch = [T::ZERO; PARTICULAR_LEN];
     for k in 0..3 {
-        let (x0, v0, x1, v1) = monomial_ends(&mut scratch, k + 2, l_first);
+        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_first);
         z[(2, k)] = x0;
         z[(3, k)] = v0;
         // Continuity at the end of interval 1 (rows 4, 5).
         z[(4, k)] = x1;
         z[(5, k)] = v1;
-        let (x0, v0, x1, v1) = monomial_ends(&mut scratch, k + 2, l_last);
+        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_last);
         // Continuity at the start of interval 7 (rows 14, 15) and terminal state (16, 17).
         z[(14, LAST_BETA + k)] = -x0;
         z[(15, LAST_BETA + k)] = -v0;

@@ -45,7 +45,7 @@
 //! checked against the banded LU of the dense `Z` by the tests.
 
 use super::{PlanError, Timing, LAST_BETA, M, N};
-use crate::lipm::{monomial_ends as ends_of, PARTICULAR_LEN};
+use crate::lipm::monomial_ends as ends_of;
 use crate::real::Real;
 
 /// `v`: the direction of the free quartic parameter (`β_4`) in `(β_2, β_3, β_4)`.
@@ -105,9 +105,8 @@ fn d_end<T: Real>(x: &[T; 4]) -> T {
 
 fn monomial_ends<T: Real>(lambda: T) -> Ends<T> {
     let mut out = [[T::ZERO; 4]; 3];
-    let mut scratch = [T::ZERO; PARTICULAR_LEN];
     for (k, o) in out.iter_mut().enumerate() {
-        let (x0, v0, x1, v1) = ends_of(&mut scratch, k + 2, lambda);
+        let (x0, v0, x1, v1) = ends_of(k + 2, lambda);
         *o = [x0, v0, x1, v1];
     }
     out
@@ -132,8 +131,15 @@ impl<T: Real> Chain<T> {
     pub(super) fn factor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
         let w = timing.omega;
         let d = &timing.durations;
-        for (e, &dj) in self.e.iter_mut().zip(d.iter()) {
-            *e = (-w * dj).exp();
+        // A window has few distinct durations (single and double supports alternate): each
+        // exponential is computed once, bit for bit the same value.
+        for j in 0..M {
+            let dj = d[j];
+            let seen = (0..j).find(|&i| d[i] == dj);
+            self.e[j] = match seen {
+                Some(i) => self.e[i],
+                None => (-w * dj).exp(),
+            };
         }
         self.first = monomial_ends(w * d[0]);
         self.last = monomial_ends(w * d[M - 1]);

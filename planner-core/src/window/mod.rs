@@ -149,17 +149,16 @@ pub struct PlaneBoundary<T> {
 }
 
 impl<T: Real> PlaneBoundary<T> {
+    /// Every value finite: `v · 0` is `0` for a finite `v` and NaN for an infinite or NaN
+    /// one, so the sum of those products is `0` exactly when all are finite (no branch per
+    /// value, and no overflow whatever the magnitudes).
     fn all_finite(&self) -> bool {
-        let mut ok = self.cog_start.pos.is_finite()
-            && self.cog_start.vel.is_finite()
-            && self.zmp_start.pos.is_finite()
-            && self.zmp_start.vel.is_finite()
-            && self.cog_end.pos.is_finite()
-            && self.cog_end.vel.is_finite();
+        let z = |s: &State<T>| s.pos * T::ZERO + s.vel * T::ZERO;
+        let mut sum = z(&self.cog_start) + z(&self.zmp_start) + z(&self.cog_end);
         for v in &self.via {
-            ok &= v.pos.is_finite() && v.vel.is_finite();
+            sum += z(v);
         }
-        ok
+        sum == T::ZERO
     }
 }
 
