@@ -57,7 +57,7 @@ use core::borrow::Borrow;
 
 use heapless::Deque;
 
-use crate::lipm::{Poly, Sample, State};
+use crate::lipm::{Poly, Sample, Segment, State};
 use crate::real::Real;
 use crate::shaping::{
     CartTable, Compensation, Compensator, GainError, Law, Piece, PreviewConfig, PreviewGains,
@@ -694,7 +694,7 @@ impl<T: Real> Active<T> {
     fn sample(&self, p: &GaitParams<T>, tick: u32) -> (Sample<T>, Sample<T>) {
         let j = self.interval(tick);
         let tau = p.seconds(tick - self.starts[j]);
-        (self.plan.x[j].sample(tau), self.plan.y[j].sample(tau))
+        Segment::sample_pair(&self.plan.x[j], &self.plan.y[j], tau)
     }
 
     /// Worst ZMP excursion of interval 0 in the frame of its support foot (or of the via point
@@ -1457,7 +1457,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 cur.factor.solve(&bounds[0], &bounds[1], &mut spare.plan)?;
                 let j = cur.interval(at);
                 let tau = self.params.seconds(at - cur.starts[j]);
-                let f = [spare.plan.x[j].sample(tau), spare.plan.y[j].sample(tau)];
+                let (fx, fy) = Segment::sample_pair(&spare.plan.x[j], &spare.plan.y[j], tau);
+                let f = [fx, fy];
                 self.target = Some((self.gen, self.serial, at, f));
                 f
             }

@@ -302,6 +302,19 @@ pub fn particular_ends<T: Real>(g: &Particular<T>, lambda: T) -> (T, T, T, T) {
     (g[0], g[1] / lambda, x1, v1 / lambda)
 }
 
+/// The part of a sample that depends on `ω`, `D` and `τ` only ([`Segment::sample_pair`]).
+#[derive(Clone, Copy, Debug)]
+struct At<T> {
+    /// `τ / D`.
+    s: T,
+    /// `1 / D`.
+    inv_d: T,
+    /// `e^{−ωτ}`.
+    ep: T,
+    /// `e^{−ω(D−τ)}`.
+    eq: T,
+}
+
 /// One interval of the plan in one plane: the ZMP polynomial and the closed-form COG.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment<T> {
@@ -411,12 +424,41 @@ impl<T: Real> Segment<T> {
 
     /// COG and ZMP at local time `tau` (clamped to `[0, D]`).
     pub fn sample(&self, tau: T) -> Sample<T> {
+        self.sample_at(&self.at(tau))
+    }
+
+    /// Both planes of a window at local time `tau`: `(x.sample(tau), y.sample(tau))`, bit for
+    /// bit, with the exponentials computed once when the two segments have the same `ω` and
+    /// `D` (as the two planes of a window always do).
+    pub fn sample_pair(x: &Self, y: &Self, tau: T) -> (Sample<T>, Sample<T>) {
+        let a = x.at(tau);
+        if x.omega == y.omega && x.duration == y.duration {
+            (x.sample_at(&a), y.sample_at(&a))
+        } else {
+            (x.sample_at(&a), y.sample(tau))
+        }
+    }
+
+    /// What a sample at `tau` needs of `ω`, `D` and `τ` only.
+    #[inline]
+    fn at(&self, tau: T) -> At<T> {
         let tau = tau.max(T::ZERO).min(self.duration);
         let w = self.omega;
         let inv_d = T::ONE / self.duration;
-        let s = tau * inv_d;
-        let hp = self.p * (-w * tau).exp();
-        let hq = self.q * (-w * (self.duration - tau)).exp();
+        At {
+            s: tau * inv_d,
+            inv_d,
+            ep: (-w * tau).exp(),
+            eq: (-w * (self.duration - tau)).exp(),
+        }
+    }
+
+    #[inline]
+    fn sample_at(&self, a: &At<T>) -> Sample<T> {
+        let w = self.omega;
+        let (s, inv_d) = (a.s, a.inv_d);
+        let hp = self.p * a.ep;
+        let hq = self.q * a.eq;
         let len = particular_len(w * self.duration);
         let (xp, vp, ap) = poly_eval_slice(&self.particular[..len], s);
         let (z, zv, _) = poly_eval(&self.zmp, s);

@@ -207,7 +207,7 @@ impl<T: Real> Plan<T> {
     /// Both planes at window time `t` (seconds since the window start, clamped to the window).
     pub fn sample(&self, t: T) -> (Sample<T>, Sample<T>) {
         let (j, tau) = self.locate(t);
-        (self.x[j].sample(tau), self.y[j].sample(tau))
+        Segment::sample_pair(&self.x[j], &self.y[j], tau)
     }
 }
 
