@@ -668,11 +668,11 @@ impl<T: Real> Active<T> {
     fn plan_into(
         &mut self,
         p: &GaitParams<T>,
-        inputs: Inputs<T>,
+        inputs: &Inputs<T>,
         cog: [State<T>; 2],
         zmp: [State<T>; 2],
     ) -> Result<(), PlanError> {
-        self.spec = build_spec(p, &inputs);
+        self.spec = build_spec(p, inputs);
         let (timing, bounds) = boundaries(p, &self.spec, cog, zmp);
         self.bounds = bounds;
         self.factor.refactor(&timing)?;
@@ -682,7 +682,7 @@ impl<T: Real> Active<T> {
         for j in 0..M {
             self.starts[j + 1] = self.starts[j] + self.spec.ticks[j];
         }
-        self.inputs = inputs;
+        self.inputs = *inputs;
         self.tick = 0;
         Ok(())
     }
@@ -1154,7 +1154,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             first_ticks: self.params.start_ticks,
         };
         let (cog, zmp) = self.state();
-        self.wins[0].plan_into(&self.params, inputs, cog, zmp)?;
+        self.wins[0].plan_into(&self.params, &inputs, cog, zmp)?;
         self.cur = Some(0);
         self.serial = self.serial.wrapping_add(1);
         self.start_shaping();
@@ -1339,7 +1339,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         // Planned in the spare buffer, which is free between re-plans.
         let spare = 1 - c;
         self.predicted = None;
-        self.wins[spare].plan_into(&self.params, inputs, cog, zmp)?;
+        self.wins[spare].plan_into(&self.params, &inputs, cog, zmp)?;
         self.predicted = Some(self.prediction(at, inputs, cog, zmp));
         self.predicted_worst = self.wins[spare].worst_first();
         Ok(Some(self.predicted_worst))
@@ -1602,7 +1602,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         let planned = self.predicted.take() == Some(this);
         if !planned
             && self.wins[spare]
-                .plan_into(&self.params, inputs, cog, zmp)
+                .plan_into(&self.params, &inputs, cog, zmp)
                 .is_err()
         {
             // The walking window cannot be planned (a validated configuration never gets
@@ -1660,7 +1660,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             first_ticks: self.params.settle_ticks,
         };
         if self.wins[spare]
-            .plan_into(&self.params, inputs, cog, zmp)
+            .plan_into(&self.params, &inputs, cog, zmp)
             .is_err()
         {
             self.failed = true;
