@@ -2,56 +2,62 @@
 //! saturating fixed-point encoding.
 
 use super::{ids, RawFrame, FOOT_UNIT};
+use crate::real::Real;
 
 /// Largest magnitude of a 20-bit field.
 const I20_MAX: i32 = (1 << 19) - 1;
 
-/// `libm::round(x)` (halves away from zero) as an `i32`, saturated at the `i32` range, `NaN`
-/// to 0: one hardware conversion (`vcvt`, truncating) and an exact correction, instead of
-/// libm's bit manipulation. `x − trunc(x)` is exact for every `f64` whose truncation fits an
-/// `i32`; beyond the range the truncation saturates and the correction saturates too.
-pub(super) fn round_to_i32(x: f64) -> i32 {
-    let t = x as i32;
-    let frac = x - f64::from(t);
-    if frac >= 0.5 {
+/// `libm::round(x)` (halves away from zero; `libm::roundf` for `f32`) as an `i32`, saturated
+/// at the `i32` range, `NaN` to 0: one hardware conversion (`vcvt`, truncating) and an exact
+/// correction, instead of libm's bit manipulation. `x − trunc(x)` is exact for every `x` whose
+/// truncation fits an `i32` (below 2⁵² for `f64`, 2²³ for `f32`, it keeps the fraction's bits;
+/// above, `x` is an integer and the difference is 0); beyond the range the truncation
+/// saturates and the correction saturates too.
+pub(super) fn round_to_i32<T: Real>(x: T) -> i32 {
+    let t = x.trunc_i32();
+    let frac = x - T::of_i32(t);
+    let half = T::of(0.5);
+    if frac >= half {
         t.saturating_add(1)
-    } else if frac <= -0.5 {
+    } else if frac <= -half {
         t.saturating_sub(1)
     } else {
         t
     }
 }
 
-/// Saturating conversion to a fixed-point integer of `unit`.
-fn fixed(v: f64, unit: f64, min: i32, max: i32) -> i32 {
+/// Saturating conversion to a fixed-point integer of `unit` (`v / unit` in `T`).
+fn fixed<T: Real>(v: T, unit: f64, min: i32, max: i32) -> i32 {
     if !v.is_finite() {
         return 0;
     }
-    round_to_i32(v / unit).clamp(min, max)
+    round_to_i32(v / T::of(unit)).clamp(min, max)
 }
 
-/// The 5 ms reference stream (what the node publishes every control cycle).
+/// The 5 ms reference stream (what the node publishes every control cycle), in the node's
+/// scalar `T`; the frames are the same fixed-point integers for both scalars (each value
+/// divided by its unit and rounded in `T`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Stream {
+pub struct Stream<T = f64> {
     /// COG x, y \[m\].
-    pub cog: [f64; 2],
+    pub cog: [T; 2],
     /// COG velocity \[m/s\].
-    pub cog_vel: [f64; 2],
+    pub cog_vel: [T; 2],
     /// ZMP x, y \[m\].
-    pub zmp: [f64; 2],
+    pub zmp: [T; 2],
     /// Phase: 0 standing, 1 double support, 2 single support on the left foot, 3 on the right.
     pub phase: u8,
     /// Low byte of the tick counter.
     pub tick: u8,
     /// Left and right foot: x, y, z \[m\], yaw \[rad\].
-    pub feet: [[f64; 4]; 2],
+    pub feet: [[T; 4]; 2],
 }
 
-impl Stream {
+impl<T: Real> Stream<T> {
     /// The five frames of one cycle, in identifier order.
     pub fn encode(&self) -> [RawFrame; 5] {
-        let um = |v: f64| fixed(v, 1e-6, i32::MIN, i32::MAX);
-        let pos = |id: u16, p: [f64; 2]| {
+        let um = |v: T| fixed(v, 1e-6, i32::MIN, i32::MAX);
+        let pos = |id: u16, p: [T; 2]| {
             let (a, b) = (um(p[0]).to_le_bytes(), um(p[1]).to_le_bytes());
             RawFrame {
                 id,
@@ -59,12 +65,12 @@ impl Stream {
                 data: [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]],
             }
         };
-        let vel = |v: f64| fixed(v, 1e-4, i16::MIN.into(), i16::MAX.into()) as i16;
+        let vel = |v: T| fixed(v, 1e-4, i16::MIN.into(), i16::MAX.into()) as i16;
         let (vx, vy) = (
             vel(self.cog_vel[0]).to_le_bytes(),
             vel(self.cog_vel[1]).to_le_bytes(),
         );
-        let foot = |id: u16, f: [f64; 4]| {
+        let foot = |id: u16, f: [T; 4]| {
             let x = fixed(f[0], FOOT_UNIT, -I20_MAX, I20_MAX) as u64;
             let y = fixed(f[1], FOOT_UNIT, -I20_MAX, I20_MAX) as u64;
             let z = fixed(f[2], 5e-4, 0, 255) as u64;
@@ -89,7 +95,9 @@ impl Stream {
             foot(ids::FOOT_RIGHT, self.feet[1]),
         ]
     }
+}
 
+impl Stream<f64> {
     /// Updates the fields carried by one stream frame; `false` if it is not a stream frame.
     pub fn decode_into(&mut self, f: &RawFrame) -> bool {
         let d = &f.data;

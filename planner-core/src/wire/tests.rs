@@ -50,6 +50,57 @@ fn round_to_i32_is_libm_round_saturated() {
     assert_eq!(round_to_i32(f64::NAN), 0);
 }
 
+/// The `f32` path (the Cortex-M4F node's encoding) against `libm::roundf`, saturated, on the
+/// same kinds of values: halves, the ends of the `i32` range, huge values, and every `f32`
+/// bit pattern of a spread sample (NaNs included).
+#[test]
+fn round_to_i32_of_f32_is_libm_roundf_saturated() {
+    let mut cases = vec![
+        0.0_f32,
+        -0.0,
+        0.5,
+        -0.5,
+        1.5,
+        -1.5,
+        2.5,
+        -2.5,
+        0.499_999_97,
+        -0.499_999_97,
+        1e-40,
+        -1e-40,
+        2_147_483_500.0,
+        2_147_483_648.0,
+        -2_147_483_648.0,
+        -2_147_483_904.0,
+        8_388_607.5,
+        -8_388_607.5,
+        16_777_215.0,
+        1e12,
+        -1e12,
+        f32::MAX,
+        f32::MIN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    let mut x = 0x9abc_def0_u32;
+    for _ in 0..200_000 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        cases.push(f32::from_bits(x));
+        cases.push(((x % 20_001) as f32 - 10_000.0) * 0.5);
+    }
+    for &c in &cases {
+        let want = if c.is_nan() {
+            0
+        } else {
+            // Through f64: exact for every f32, and f64's clamp to the i32 range is exact.
+            f64::from(libm::roundf(c)).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+        };
+        assert_eq!(round_to_i32(c), want, "{c:e}");
+    }
+}
+
 #[test]
 fn steps_round_trip_at_wire_precision() {
     for &(x, y, yaw) in &[
