@@ -21,3 +21,50 @@ pub fn firmware_cargo(dir: &std::path::Path) -> Command {
     }
     cmd
 }
+
+/// The QEMU images' report lines (`KIND key=value …`), as the QEMU tests read them.
+pub mod report {
+    use std::collections::BTreeMap;
+
+    /// One output line: its keyword and `key=value` fields.
+    #[derive(Debug, Clone)]
+    pub struct Record {
+        /// The first word.
+        pub kind: String,
+        /// The `key=value` words.
+        pub fields: BTreeMap<String, String>,
+    }
+
+    impl Record {
+        /// The line's record; `None` for an empty line.
+        pub fn parse(line: &str) -> Option<Record> {
+            let mut words = line.split_whitespace();
+            let kind = words.next()?.to_string();
+            let fields = words
+                .filter_map(|w| w.split_once('='))
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect();
+            Some(Record { kind, fields })
+        }
+
+        /// Field `key` (panics if missing: the image's report is malformed).
+        pub fn get(&self, key: &str) -> &str {
+            self.fields
+                .get(key)
+                .unwrap_or_else(|| panic!("{} line without `{key}`: {:?}", self.kind, self.fields))
+        }
+
+        /// Field `key` as a number (panics if it is not one).
+        pub fn num<T: std::str::FromStr>(&self, key: &str) -> T {
+            let v = self.get(key);
+            v.parse()
+                .unwrap_or_else(|_| panic!("{} line: `{key}={v}` is not a number", self.kind))
+        }
+    }
+
+    /// The last `n` lines of `s`.
+    pub fn tail(s: &str, n: usize) -> String {
+        let lines: Vec<&str> = s.lines().collect();
+        lines[lines.len().saturating_sub(n)..].join("\n")
+    }
+}

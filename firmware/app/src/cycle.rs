@@ -11,6 +11,7 @@ use planner_core::gait::{Reference, ReplanInfo, PREVIEW};
 use planner_core::node::{Node, PollReport};
 use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
+use planner_core::Real;
 
 use crate::bus::ScriptedBus;
 use crate::controller::{Controller, Unrepresentable};
@@ -24,9 +25,9 @@ pub trait Clock {
     fn now(&mut self) -> u32;
 }
 
-/// What one control cycle did.
+/// What one control cycle did (`T`: the node's scalar).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CycleRecord {
+pub struct CycleRecord<T = f64> {
     /// The gait's tick count after the cycle (the index of `reference` in host-sim's
     /// trajectory); the cycle ran at tick `tick - 1`.
     pub tick: u64,
@@ -35,9 +36,9 @@ pub struct CycleRecord {
     /// Clock units spent in `Node::poll`.
     pub units: u32,
     /// The node's report (its reference, frames received, refused and sent).
-    pub report: PollReport,
+    pub report: PollReport<T>,
     /// The re-plan done by this cycle's tick, if any.
-    pub replan: Option<ReplanInfo<f64>>,
+    pub replan: Option<ReplanInfo<T>>,
 }
 
 /// FNV-1a 64.
@@ -59,11 +60,12 @@ impl Fnv {
         }
     }
 
-    /// Adds the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x, then of y.
-    pub fn add_reference(&mut self, r: &Reference<f64>) {
+    /// Adds the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x, then of y (as `f64`:
+    /// an `f32` reference widened, exactly).
+    pub fn add_reference<T: Real>(&mut self, r: &Reference<T>) {
         for s in [&r.x, &r.y] {
             for v in [s.cog, s.cog_vel, s.cog_acc, s.zmp, s.zmp_vel] {
-                self.add(&v.to_bits().to_le_bytes());
+                self.add(&v.f64().to_bits().to_le_bytes());
             }
         }
     }
@@ -151,13 +153,13 @@ impl<'s> Runner<'s> {
     /// what the node sent; `on_frame` sees every transmitted frame and, for an `ACK` that
     /// answers a command, the command's index in [`Controller::sent`]. Only `Node::poll` is
     /// timed with `clock` (recorded in `stats` by kind and as [`Kind::Cycle`]).
-    pub fn cycle<C: Clock, const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
+    pub fn cycle<C: Clock, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
         &mut self,
-        node: &mut Node<Q, G>,
+        node: &mut Node<Q, G, T>,
         clock: &mut C,
         stats: &mut Stats,
         mut on_frame: impl FnMut(&RawFrame, Option<usize>),
-    ) -> Result<CycleRecord, Unrepresentable> {
+    ) -> Result<CycleRecord<T>, Unrepresentable> {
         let k = self.k;
         self.controller.send_due(k, &mut self.bus)?;
         // What the node may take in this cycle, by class: `seen[i]` covers the first i + 1
@@ -236,10 +238,10 @@ impl<'s> Runner<'s> {
 
 /// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
 #[inline(never)]
-fn poll<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
-    node: &mut Node<Q, G>,
+fn poll<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+    node: &mut Node<Q, G, T>,
     now_ms: u32,
     bus: &mut ScriptedBus,
-) -> PollReport {
+) -> PollReport<T> {
     node.poll(now_ms, bus)
 }

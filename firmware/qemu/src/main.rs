@@ -60,6 +60,7 @@
 #![deny(unsafe_code)]
 
 mod hw;
+mod machine;
 
 use core::fmt::{self, Write};
 
@@ -68,9 +69,9 @@ use cortex_m_semihosting::{debug, hio};
 use panic_semihosting as _; // panics print over semihosting and exit with code 1
 
 use gait_loop::{script, Clock, Command, Fnv, Kind, Runner, Scenario, Sent, Stats, QUEUE};
+use machine::{Node, Scalar};
 use planner_core::gait::{Gait, GaitError, Reference, Side};
 use planner_core::node::NodeConfig;
-use walk_robot::Node;
 
 /// Instructions per CMSDK timer tick under `-icount shift=0` (1 ns per instruction, 25 MHz).
 const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / hw::TIMER_HZ;
@@ -142,7 +143,7 @@ fn instructions(timer_ticks: u32) -> u64 {
     u64::from(timer_ticks) * u64::from(INSTRUCTIONS_PER_TICK)
 }
 
-fn print_ref(out: &mut Console, scenario: &str, tick: u64, kind: &str, r: &Reference<f64>) {
+fn print_ref(out: &mut Console, scenario: &str, tick: u64, kind: &str, r: &Reference<Scalar>) {
     line!(
         out,
         "REF scenario={} tick={} kind={} cog_x={:e} cog_y={:e} zmp_x={:e} zmp_y={:e} cogv_x={:e} cogv_y={:e}",
@@ -226,8 +227,8 @@ type Slot = Result<Node<QUEUE>, GaitError>;
 /// through this frame once more). Not inlined: the temporaries of `Node::new` (the gait, the
 /// preview-gain computation, the node returned by value) live in this frame only while it runs.
 #[inline(never)]
-fn place_node(cfg: NodeConfig) -> &'static mut Slot {
-    match cortex_m::singleton!(: Slot = Node::with_gains(cfg, &walk_robot::GAINS)) {
+fn place_node(cfg: NodeConfig<Scalar>) -> &'static mut Slot {
+    match cortex_m::singleton!(: Slot = Node::with_gains(cfg, machine::GAINS)) {
         Some(slot) => slot,
         None => panic!("place_node called twice"),
     }
@@ -236,8 +237,8 @@ fn place_node(cfg: NodeConfig) -> &'static mut Slot {
 /// A fresh node in place of the old one (the next scenario starts from start-up), in a frame
 /// of its own like [`place_node`].
 #[inline(never)]
-fn renew_node(slot: &mut Slot, cfg: NodeConfig) {
-    *slot = Node::with_gains(cfg, &walk_robot::GAINS);
+fn renew_node(slot: &mut Slot, cfg: NodeConfig<Scalar>) {
+    *slot = Node::with_gains(cfg, machine::GAINS);
 }
 
 /// Plays one scenario against `node` (just created); returns `false` if a command was refused
@@ -365,12 +366,18 @@ fn main() -> ! {
         out,
         "SIZE node={} gait={}",
         core::mem::size_of::<Node<QUEUE>>(),
-        core::mem::size_of::<Gait<f64, QUEUE, walk_robot::Gains>>()
+        core::mem::size_of::<Gait<Scalar, QUEUE, machine::Gains>>()
+    );
+    line!(
+        out,
+        "MACHINE name={} scalar={}",
+        machine::NAME,
+        core::any::type_name::<Scalar>()
     );
 
     // The robot file compiled in (walk-robot's build script): host-sim's default robot, whose
     // stance both scenarios start from.
-    let cfg = walk_robot::NODE_CONFIG;
+    let cfg = machine::NODE_CONFIG;
     let mut all = Stats::new();
     let mut ok = true;
     let mut placed: Option<&'static mut Slot> = None;
@@ -380,7 +387,7 @@ fn main() -> ! {
             ok = false;
             continue;
         };
-        ok &= scenario.feet == [cfg.left, cfg.right];
+        ok &= machine::starts_at(&scenario.feet, &cfg);
         let t0 = timer.now();
         let slot = match placed.take() {
             None => place_node(cfg),

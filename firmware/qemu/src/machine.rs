@@ -1,0 +1,73 @@
+//! What differs between the two QEMU images, chosen by the `m4f` feature: the node's scalar,
+//! its configuration and gains (both from walk-robot, generated from the same robot file),
+//! and the machine's name. The memory layout is chosen by `build.rs` (`memory.x` or
+//! `memory-m4f.x`), the CPU by the build's `target-cpu` (see `Cargo.toml`).
+//!
+//! | feature | QEMU machine | CPU | FPU | scalar |
+//! |---|---|---|---|---|
+//! | (default) | `mps2-an500` | Cortex-M7 | double precision (FPv5-D16) | `f64` |
+//! | `m4f` | `mps2-an386` | Cortex-M4F | single precision (FPv4-SP-D16) | `f32` |
+//!
+//! Both machines map their code RAM at 0, data RAM at 0x2000_0000 and the CMSDK APB timer 0
+//! at 0x4000_0000, clocked at 25 MHz (QEMU 7.2 `hw/arm/mps2.c` treats AN385, AN386 and AN500
+//! alike there), so `hw.rs` and the 40 instructions per timer tick hold for both.
+
+/// The node's scalar.
+#[cfg(not(feature = "m4f"))]
+pub type Scalar = f64;
+/// The node's scalar.
+#[cfg(feature = "m4f")]
+pub type Scalar = f32;
+
+/// How the node holds its gains (a reference to the gains in flash).
+#[cfg(not(feature = "m4f"))]
+pub type Gains = walk_robot::Gains;
+/// How the node holds its gains (a reference to the gains in flash).
+#[cfg(feature = "m4f")]
+pub type Gains = walk_robot::GainsF32;
+
+/// The image's node type, with `Q` queued steps.
+#[cfg(not(feature = "m4f"))]
+pub type Node<const Q: usize> = walk_robot::Node<Q>;
+/// The image's node type, with `Q` queued steps.
+#[cfg(feature = "m4f")]
+pub type Node<const Q: usize> = walk_robot::NodeF32<Q>;
+
+/// The node's configuration (the robot file compiled in).
+#[cfg(not(feature = "m4f"))]
+pub const NODE_CONFIG: planner_core::node::NodeConfig<Scalar> = walk_robot::NODE_CONFIG;
+/// The node's configuration (the robot file compiled in, rounded to `f32`).
+#[cfg(feature = "m4f")]
+pub const NODE_CONFIG: planner_core::node::NodeConfig<Scalar> = walk_robot::NODE_CONFIG_F32;
+
+/// The node's preview gains in flash.
+#[cfg(not(feature = "m4f"))]
+pub static GAINS: &planner_core::shaping::PreviewGains<Scalar, { planner_core::gait::PREVIEW }> =
+    &walk_robot::GAINS;
+/// The node's preview gains in flash.
+#[cfg(feature = "m4f")]
+pub static GAINS: &planner_core::shaping::PreviewGains<Scalar, { planner_core::gait::PREVIEW }> =
+    &walk_robot::GAINS_F32;
+
+/// The QEMU machine the image is built for.
+#[cfg(not(feature = "m4f"))]
+pub const NAME: &str = "mps2-an500";
+/// The QEMU machine the image is built for.
+#[cfg(feature = "m4f")]
+pub const NAME: &str = "mps2-an386";
+
+/// Whether the node of `cfg` stands where a scenario's feet start (given in `f64`; each
+/// rounded to the node's scalar).
+pub fn starts_at(
+    feet: &[planner_core::gait::Footstep<f64>; 2],
+    cfg: &planner_core::node::NodeConfig<Scalar>,
+) -> bool {
+    use planner_core::Real;
+    let same = |f: &planner_core::gait::Footstep<f64>, c: &planner_core::gait::Footstep<Scalar>| {
+        f.side == c.side
+            && Scalar::of(f.x) == c.x
+            && Scalar::of(f.y) == c.y
+            && Scalar::of(f.yaw) == c.yaw
+    };
+    same(&feet[0], &cfg.left) && same(&feet[1], &cfg.right)
+}
