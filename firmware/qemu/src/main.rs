@@ -228,7 +228,7 @@ type Slot = Result<Node<QUEUE>, GaitError>;
 /// preview-gain computation, the node returned by value) live in this frame only while it runs.
 #[inline(never)]
 fn place_node(cfg: NodeConfig<Scalar>) -> &'static mut Slot {
-    match cortex_m::singleton!(: Slot = Node::with_gains(cfg, machine::GAINS)) {
+    match cortex_m::singleton!(: Slot = Node::with_gains(cfg, machine::gains())) {
         Some(slot) => slot,
         None => panic!("place_node called twice"),
     }
@@ -238,7 +238,7 @@ fn place_node(cfg: NodeConfig<Scalar>) -> &'static mut Slot {
 /// of its own like [`place_node`].
 #[inline(never)]
 fn renew_node(slot: &mut Slot, cfg: NodeConfig<Scalar>) {
-    *slot = Node::with_gains(cfg, machine::GAINS);
+    *slot = Node::with_gains(cfg, machine::gains());
 }
 
 /// Plays one scenario against `node` (just created); returns `false` if a command was refused
@@ -387,7 +387,7 @@ fn main() -> ! {
             ok = false;
             continue;
         };
-        ok &= machine::starts_at(&scenario.feet, &cfg);
+        ok &= machine::starts_at(&scenario.feet);
         let t0 = timer.now();
         let slot = match placed.take() {
             None => place_node(cfg),
