@@ -18,8 +18,14 @@
 //!   scalars round to the same tick unless the optimum falls within ≈ 1e-6 s of a half-tick
 //!   boundary. If one ever does, the assertion names the scenario and tick;
 //! * both walks have the same length (the same tick at which the node stands again).
+//!
+//! Of the built-in scenarios only `stop` has refusals (5); so that more refusals are compared,
+//! [`faulty_runs_refuse_alike`] does the same on logs of host-sim's fault sweep (fig4 and
+//! lateral with frames lost, repeated, corrupted, delayed, and bursts of modifications: the
+//! nodes refuse gaps, repeats, bad CRCs, stale versions and infeasible modifications).
 
 use gait_loop::ScriptedBus;
+use host_sim::faults::{run_case_logged, FaultKind};
 use host_sim::replay;
 use host_sim::scenario::{built_in, BUILT_IN};
 use host_sim::sim::{references, simulate, start_config, SimConfig};
@@ -102,55 +108,87 @@ fn walk<T: Real>(frames: &[replay::Timed], cfg: NodeConfig<T>, period_us: u64) -
     w
 }
 
+/// Both nodes replayed on one candump log: the worst COG difference \[m\] and the number of
+/// refusals, after asserting the same answers, re-plans and walk length.
+fn compare(name: &str, log: &[String], cfg: NodeConfig, period_us: u64) -> (f64, usize, Walk) {
+    let frames =
+        replay::parse(&(log.join("\n") + "\n"), cfg.params.dt).expect("host-sim's log parses");
+    let wide = walk::<f64>(&frames, cfg, period_us);
+    let narrow = walk::<f32>(&frames, cfg.cast::<f32>(), period_us);
+    assert!(wide.acks.len() > 5, "{name}: {} answers", wide.acks.len());
+    assert_eq!(narrow.acks, wide.acks, "{name}: answers (ACK frames)");
+    assert_eq!(
+        narrow.replans, wide.replans,
+        "{name}: re-plans and adjustments"
+    );
+    assert_eq!(
+        narrow.trajectory.len(),
+        wide.trajectory.len(),
+        "{name}: walk length"
+    );
+    let (mut worst, mut at) = (0.0_f64, 0);
+    for (k, (a, b)) in narrow.trajectory.iter().zip(&wide.trajectory).enumerate() {
+        let d = (a.x.cog - b.x.cog).abs().max((a.y.cog - b.y.cog).abs());
+        if d > worst {
+            (worst, at) = (d, k);
+        }
+    }
+    let refused = wide.acks.iter().filter(|(_, a)| a.reason.is_some()).count();
+    println!(
+        "F32 run={name} ticks={} acks={} refused={refused} replans={} worst_cog_diff_m={worst:.3e} at_tick={at}",
+        wide.trajectory.len() - 1,
+        wide.acks.len(),
+        wide.replans.len()
+    );
+    assert!(
+        worst <= COG_TOLERANCE,
+        "{name}: COG of the f32 node {worst:e} m from the f64 node's at tick {at}"
+    );
+    (worst, refused, wide)
+}
+
+#[test]
+fn faulty_runs_refuse_alike() {
+    let sim_cfg = SimConfig::default();
+    let period_us = (sim_cfg.node.params.dt * 1e6).round() as u64;
+    let mut refused = 0;
+    for name in ["fig4", "lateral"] {
+        let s = built_in(name).expect("built-in scenario");
+        for (kind, rate) in [
+            (FaultKind::Drop, 0.05),
+            (FaultKind::Duplicate, 0.1),
+            (FaultKind::Corrupt, 0.05),
+            (FaultKind::Delay, 0.1),
+            (FaultKind::Burst, 1.0),
+        ] {
+            for seed in 1..=2 {
+                let (_, log) = run_case_logged(&s, kind, rate, seed).expect("fault run");
+                let label = format!("{name}/{kind:?}/{rate}/seed{seed}");
+                let cfg = start_config(&s, &sim_cfg.node);
+                refused += compare(&label, &log, cfg, period_us).1;
+            }
+        }
+    }
+    assert!(
+        refused > 0,
+        "no refusal in the fault runs: nothing compared"
+    );
+}
+
 #[test]
 fn the_f32_node_walks_as_the_f64_node() {
     let sim_cfg = SimConfig::default();
     let period_us = (sim_cfg.node.params.dt * 1e6).round() as u64;
-    let mut report = Vec::new();
     for name in BUILT_IN {
         let s = built_in(name).expect("built-in scenario");
         let sim = simulate(&s, &sim_cfg).expect("simulate");
-        let frames = replay::parse(&(sim.can_log.join("\n") + "\n"), sim_cfg.node.params.dt)
-            .expect("host-sim's log parses");
         let cfg = start_config(&s, &sim_cfg.node);
-        let wide = walk::<f64>(&frames, cfg, period_us);
-        let narrow = walk::<f32>(&frames, cfg.cast::<f32>(), period_us);
-
+        let (_, _, wide) = compare(name, &sim.can_log, cfg, period_us);
         // The f64 replay is host-sim's own walk (a check of this driver).
         assert_eq!(
             wide.trajectory.len(),
             references(&sim).len(),
             "{name}: f64 replay length against host-sim's run"
         );
-        assert!(wide.acks.len() > 5, "{name}: {} answers", wide.acks.len());
-        assert_eq!(narrow.acks, wide.acks, "{name}: answers (ACK frames)");
-        assert_eq!(
-            narrow.replans, wide.replans,
-            "{name}: re-plans and adjustments"
-        );
-        assert_eq!(
-            narrow.trajectory.len(),
-            wide.trajectory.len(),
-            "{name}: walk length"
-        );
-        let (mut worst, mut at) = (0.0_f64, 0);
-        for (k, (a, b)) in narrow.trajectory.iter().zip(&wide.trajectory).enumerate() {
-            let d = (a.x.cog - b.x.cog).abs().max((a.y.cog - b.y.cog).abs());
-            if d > worst {
-                (worst, at) = (d, k);
-            }
-        }
-        println!(
-            "F32 scenario={name} ticks={} acks={} replans={} worst_cog_diff_m={worst:.3e} at_tick={at}",
-            wide.trajectory.len() - 1,
-            wide.acks.len(),
-            wide.replans.len()
-        );
-        report.push((name, worst));
-        assert!(
-            worst <= COG_TOLERANCE,
-            "{name}: COG of the f32 node {worst:e} m from the f64 node's at tick {at}"
-        );
     }
-    assert_eq!(report.len(), BUILT_IN.len());
 }
