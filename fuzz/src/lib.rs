@@ -12,6 +12,10 @@
 //!   one of the node's identifiers received is answered with one `ACK` and every other frame
 //!   with none (counted as foreign), and a refused frame changes nothing
 //!   ([`Node::same_state`] against a clone taken before it).
+//! * [`wlog_one`]: the bytes as a file of binary CAN logs for the QEMU image
+//!   (`gait_loop::binlog`): the decoder never panics, and every header and frame it gives
+//!   satisfies the format's rules (name, period, feet; identifiers, lengths, times from
+//!   `first_us` to `last_us` in order, no more frames than announced, the last at `last_us`).
 
 use std::collections::VecDeque;
 use std::sync::OnceLock;
@@ -433,6 +437,36 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         "seed-status".into(),
         frame(planner_core::wire::Status::default().encode()),
     ));
+    // `wlog`: a log of a heartbeat, a start and a stop; two logs in one file; an empty log.
+    let heartbeat = frame(
+        Command::Control {
+            seq: 1,
+            op: ControlOp::Heartbeat,
+        }
+        .encode(),
+    );
+    let start = frame(
+        Command::Control {
+            seq: 2,
+            op: ControlOp::Start,
+        }
+        .encode(),
+    );
+    let (hb_id, hb) = (
+        u16::from_le_bytes([heartbeat[0], heartbeat[1]]),
+        &heartbeat[2..],
+    );
+    let (st_id, st) = (u16::from_le_bytes([start[0], start[1]]), &start[2..]);
+    let one = wlog_seed(
+        "walk",
+        3,
+        &[(120, hb_id, hb), (100_000, st_id, st), (300, 0x123, &[])],
+    );
+    out.push(("wlog", "seed-one".into(), one.clone()));
+    let mut two = one.clone();
+    two.extend(wlog_seed("second", 1, &[(9_000_000_000, hb_id, hb)]));
+    out.push(("wlog", "seed-two".into(), two));
+    out.push(("wlog", "seed-empty".into(), wlog_seed("empty", 0, &[])));
     // `node`: a walk of four steps, a modification, a stop; an emergency stop and reset; a
     // silent controller; raw frames of every command identifier.
     let walk = vec![
@@ -512,4 +546,79 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     raw.extend_from_slice(&[op::HANDLE, 0x10, 0x00, 1, 5, op::HANDLE, 0x23, 0x01, 0]);
     out.push(("node", "seed-raw".into(), raw));
     out
+}
+
+/// `wlog` target: see the module docs.
+pub fn wlog_one(data: &[u8]) {
+    use gait_loop::binlog::{Frames, Header, SliceBytes, NAME_MAX};
+    use gait_loop::player::Source;
+
+    let mut src = SliceBytes::new(data);
+    // Every log of the file, until the end or the first refusal.
+    while let Ok(Some(h)) = Header::read(&mut src) {
+        assert!(h.name().len() <= NAME_MAX && h.name().bytes().all(|b| b.is_ascii_graphic()));
+        assert!(h.period_us >= 2 && h.last_us >= h.first_us);
+        assert!(h.count > 0 || h.last_us == h.first_us);
+        for f in h.feet {
+            assert!(f.x.is_finite() && f.y.is_finite() && f.yaw.is_finite());
+        }
+        let before = src.remaining();
+        let mut frames = Frames::new(&h, &mut src);
+        let (mut n, mut t) = (0u32, h.first_us);
+        while let Some(f) = frames.next_frame() {
+            n += 1;
+            assert!(n <= h.count, "more frames than announced");
+            assert!(f.us >= t && f.us <= h.last_us, "time {} after {t}", f.us);
+            assert!(f.frame.id <= 0x7FF && f.frame.len <= 8);
+            t = f.us;
+        }
+        assert_eq!(frames.remaining(), h.count - n);
+        match frames.error() {
+            None => {
+                assert_eq!(n, h.count);
+                assert!(n == 0 || t == h.last_us, "the last frame not at last_us");
+            }
+            Some(_) => {
+                assert!(n < h.count);
+                // A refused log stays refused and gives nothing more.
+                assert!(frames.next_frame().is_none());
+                assert!(matches!(frames.skip_rest(), Err(e) if Some(e) == frames.error()));
+                break;
+            }
+        }
+        // Each frame takes at least 4 bytes.
+        assert!(before - src.remaining() >= 4 * n as usize);
+    }
+}
+
+/// A binary log for the `wlog` seeds: `frames` as (time increment, identifier, data).
+fn wlog_seed(name: &str, count: u32, frames: &[(u64, u16, &[u8])]) -> Vec<u8> {
+    let mut v = b"WLOG".to_vec();
+    v.push(1);
+    v.push(name.len() as u8);
+    v.extend_from_slice(name.as_bytes());
+    v.extend_from_slice(&5000u32.to_le_bytes());
+    let first = 1_767_225_600_000_000u64;
+    let last = first + frames.iter().map(|f| f.0).sum::<u64>();
+    v.extend_from_slice(&first.to_le_bytes());
+    v.extend_from_slice(&last.to_le_bytes());
+    v.extend_from_slice(&count.to_le_bytes());
+    for x in [0.0f64, 0.1, 0.0, 0.0, -0.1, 0.0] {
+        v.extend_from_slice(&x.to_le_bytes());
+    }
+    for &(mut dt, id, data) in frames {
+        loop {
+            let low = (dt & 0x7F) as u8;
+            dt >>= 7;
+            if dt == 0 {
+                v.push(low);
+                break;
+            }
+            v.push(low | 0x80);
+        }
+        v.extend_from_slice(&id.to_le_bytes());
+        v.push(data.len() as u8);
+        v.extend_from_slice(data);
+    }
+    v
 }

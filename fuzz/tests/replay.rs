@@ -118,3 +118,15 @@ fn node_over_corpus_and_random_programs() {
         walk_fuzz::node_run(&input);
     }
 }
+
+#[test]
+fn wlog_over_corpus_and_random_files() {
+    let seeds = corpus("wlog");
+    assert!(seeds.len() >= 3);
+    for input in &seeds {
+        walk_fuzz::wlog_one(input);
+    }
+    for input in random_inputs(&seeds, cases(20_000), 300, 0x5EED_1067) {
+        walk_fuzz::wlog_one(&input);
+    }
+}

@@ -6,10 +6,15 @@
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
 //! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
-//! host-sim physics <scenario|file.toml> [--out DIR] [--open-loop] [--robot FILE]   MuJoCo run
-//! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [--robot FILE]   Tables I/II in MuJoCo
-//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [--robot FILE]   faults in MuJoCo
+//! host-sim physics <scenario|file.toml> [--out DIR] [--push T,FX,FY] [PROBE] [--robot FILE]   MuJoCo run
+//! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [PROBE] [--robot FILE]   Tables I/II in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [PROBE] [--robot FILE]   faults in MuJoCo
+//! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
+//!                                  consecutive modified steps in MuJoCo, plain and proposed
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
+//!
+//! PROBE (the same for the four engine commands): [--open-loop] [--stabilizer full|off|weakest|S]
+//!       [--servo-damping KD]
 //! ```
 //!
 //! `run` prints every command that failed (refused by the node, never answered, or accepted
@@ -27,6 +32,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use host_sim::multibody::{evaluate, max_zmp_error, MbSample};
 use host_sim::paper;
+use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
 use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
@@ -97,18 +103,11 @@ enum Cmd {
         /// The output directory [default: out/physics/<scenario>].
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
-        /// Play the pattern open loop (the stabilizer off).
-        #[arg(long)]
-        open_loop: bool,
         /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
         #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
         push: Option<String>,
-        /// Every feedback gain of the stabilizer times S (1: as stated, 0: none acts).
-        #[arg(long, value_name = "S", default_value_t = 1.0)]
-        stabilizer: f64,
-        /// The joint damping of every servo [N m s/rad] [default: the robot's].
-        #[arg(long, value_name = "KD")]
-        servo_damping: Option<f64>,
+        #[command(flatten)]
+        probe: ProbeArgs,
         /// The robot file (its link table and soles) [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
@@ -122,19 +121,11 @@ enum Cmd {
         /// The cells to run: `all` (98 engine runs) or `row,col;row,col` (indices 0..7).
         #[arg(long, value_name = "CELLS", default_value = "all")]
         cells: String,
-        /// Play the patterns open loop (the stabilizer off).
-        #[arg(long)]
-        open_loop: bool,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
-        /// The stabilizer: `full`, `off` (no feedback acts), a scale of every feedback gain,
-        /// or `weakest` (the smallest scale with which every built-in scenario walks).
-        #[arg(long, value_name = "full|off|weakest|S", default_value = "full")]
-        stabilizer: String,
-        /// The joint damping of every servo [N m s/rad] [default: the robot's].
-        #[arg(long, value_name = "KD")]
-        servo_damping: Option<f64>,
+        #[command(flatten)]
+        probe: ProbeArgs,
     },
     /// The fault sweep's rows (one seed) through the node and then MuJoCo; writes
     /// DIR/physics_faults.json and .md.
@@ -151,6 +142,27 @@ enum Cmd {
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
+        #[command(flatten)]
+        probe: ProbeArgs,
+    },
+    /// Several consecutive steps modified, each one control cycle before its lift-off, in
+    /// MuJoCo with the plain re-plan and with the proposed method; writes
+    /// DIR/physics_sequence.json and .md.
+    PhysicsSequence {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/physics_sequence")]
+        out: PathBuf,
+        /// The planned step length [m].
+        #[arg(long, value_name = "M", default_value_t = host_sim::paper::SEQUENCE_BEFORE_M, allow_negative_numbers = true)]
+        before: f64,
+        /// The new lengths of the consecutive modified steps (from step 3), comma-separated [m].
+        #[arg(long, value_name = "M,M,...", default_value = host_sim::physics::sequence::DEFAULT_AFTERS, allow_hyphen_values = true)]
+        afters: String,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+        #[command(flatten)]
+        probe: ProbeArgs,
     },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
@@ -218,43 +230,53 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         Some(Cmd::Physics {
             scenario,
             out,
-            open_loop,
             push,
             robot,
-            stabilizer,
-            servo_damping,
+            probe,
         }) => host_sim::physics::output::cli(
             &scenario,
             out.as_deref(),
             &load_robot(robot.as_deref())?,
-            open_loop,
             push.as_deref(),
-            stabilizer,
-            servo_damping,
+            &probe,
         ),
         Some(Cmd::PhysicsTables {
             out,
             cells,
-            open_loop,
             robot,
-            stabilizer,
-            servo_damping,
+            probe,
         }) => host_sim::physics::output::tables_cli(
             &out,
             &cells,
             &load_robot(robot.as_deref())?,
-            open_loop,
-            &stabilizer,
-            servo_damping,
+            &probe,
         ),
         Some(Cmd::PhysicsFaults {
             out,
             rows,
             seed,
             robot,
-        }) => {
-            host_sim::physics::output::faults_cli(&out, &rows, seed, &load_robot(robot.as_deref())?)
-        }
+            probe,
+        }) => host_sim::physics::output::faults_cli(
+            &out,
+            &rows,
+            seed,
+            &load_robot(robot.as_deref())?,
+            &probe,
+        ),
+        Some(Cmd::PhysicsSequence {
+            out,
+            before,
+            afters,
+            robot,
+            probe,
+        }) => host_sim::physics::sequence::cli(
+            &out,
+            before,
+            &afters,
+            &load_robot(robot.as_deref())?,
+            &probe,
+        ),
         Some(Cmd::Node {
             interface,
             seconds,

@@ -155,11 +155,199 @@ pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modific
     }
 }
 
+/// The first step the consecutive modifications of [`consecutive`] change: step 3 (left foot),
+/// lifting off at 4.0 s as in the grid.
+pub const SEQUENCE_FIRST_STEP: u16 = 3;
+
+/// The default consecutive modifications (`host-sim physics-sequence`): a walk planned with
+/// 0.1 m steps whose steps 3 to 7 are changed, each one control cycle before its lift-off, to
+/// +0.3, −0.1, +0.12, +0.3 and −0.1 m: five modifications in a row, four of them by 0.2 m,
+/// each inside the node's reach limits (`Reach::default()`) given the steps before it (a step
+/// may grow by 0.22 m at most over the one before, so after −0.1 m the next is at most
+/// +0.12 m), the later steps keeping 0.1 m.
+pub const SEQUENCE_BEFORE_M: f64 = 0.1;
+
+/// The lengths of the modified steps of the default sequence \[m\] (see [`SEQUENCE_BEFORE_M`]).
+pub const SEQUENCE_AFTERS_M: [f64; 5] = [0.3, -0.1, 0.12, 0.3, -0.1];
+
+/// One modification of a [`Sequence`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SequenceStep {
+    /// The step modified.
+    pub id: u16,
+    /// Its new length \[m\].
+    pub after: f64,
+    /// The gait accepted the modification (eq. 17); if not, the step kept its length.
+    pub accepted: bool,
+    /// Tick of its lift-off (the re-plan that applied it).
+    pub liftoff_tick: u64,
+    /// Tick of its landing (the first tick of the double support after its swing).
+    pub landing_tick: u64,
+    /// Single-support adjustment of that re-plan \[s\].
+    pub adjust_s: f64,
+    /// `r` of eq. 18.
+    pub ratio: f64,
+}
+
+/// A walk with several consecutive steps modified ([`consecutive`]).
+#[derive(Clone, Debug)]
+pub struct Sequence {
+    /// The planned step length \[m\].
+    pub before: f64,
+    /// The modifications, in order.
+    pub steps: Vec<SequenceStep>,
+    /// Every reference of the run, one per tick, to standing at the end.
+    pub trajectory: Vec<Reference<f64>>,
+    /// The footsteps as planned after each modification (the first: before any), for the
+    /// reach check.
+    pub plans: Vec<Vec<Footstep<f64>>>,
+}
+
+impl Sequence {
+    /// The footsteps as walked.
+    pub fn walked(&self) -> &[Footstep<f64>] {
+        self.plans.last().map_or(&[], |p| p.as_slice())
+    }
+
+    /// The time window of the modified steps \[s\]: from the first modified lift-off to the end
+    /// of the double support after the last modified landing.
+    pub fn window_s(&self, params: &GaitParams<f64>) -> (f64, f64) {
+        let dt = params.dt;
+        match (self.steps.first(), self.steps.last()) {
+            (Some(a), Some(b)) => (
+                a.liftoff_tick as f64 * dt,
+                (b.landing_tick + u64::from(params.double_ticks)) as f64 * dt,
+            ),
+            _ => (0.0, 0.0),
+        }
+    }
+}
+
+/// The scenario of [`modification`] with several consecutive steps modified: steps of length
+/// `before`; one control cycle before the lift-off of step [`SEQUENCE_FIRST_STEP`] `+ k` (the
+/// moment found by ticking a copy of the gait ahead), that step is moved to length `afters[k]`
+/// from the step before it, the later steps with it (so they keep the length `before`). After
+/// the last modified re-plan the walk is stopped; the trajectory runs until standing. Errors:
+/// the gait failed to plan, or did not stand within 30 s.
+pub fn consecutive(
+    params: GaitParams<f64>,
+    before: f64,
+    afters: &[f64],
+) -> Result<Sequence, String> {
+    let first = SEQUENCE_FIRST_STEP;
+    let n = first + afters.len() as u16 + 3;
+    let mut g: Gait<f64, 16> = Gait::new(
+        params,
+        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+    )
+    .map_err(|e| format!("gait parameters: {e:?}"))?;
+    let mut plan = footsteps(before, 0.0, n);
+    for (i, s) in plan.iter().enumerate() {
+        g.push(i as u16, *s)
+            .map_err(|e| format!("step {i}: {e:?}"))?;
+    }
+    let mut trajectory = vec![*g.last()];
+    for _ in 0..160 {
+        trajectory.push(g.tick());
+    }
+    g.start().map_err(|e| format!("start: {e:?}"))?;
+    let mut plans = vec![plan.clone()];
+    let mut steps: Vec<SequenceStep> = Vec::new();
+    let limit = 6000; // 30 s
+                      // One tick, noting the landing of the last modified step (the first double support after
+                      // its lift-off).
+    let advance = |g: &mut Gait<f64, 16>,
+                   trajectory: &mut Vec<Reference<f64>>,
+                   steps: &mut Vec<SequenceStep>| {
+        let r = g.tick();
+        if let Some(s) = steps.last_mut() {
+            if s.landing_tick == 0 && r.phase == Phase::Double {
+                s.landing_tick = g.ticks();
+            }
+        }
+        trajectory.push(r);
+    };
+    for (k, &after) in afters.iter().enumerate() {
+        let id = first + k as u16;
+        // Up to one control cycle before the lift-off of `id`.
+        loop {
+            let mut ahead = g.clone();
+            ahead.tick();
+            if ahead.swinging() == Some(id) {
+                break;
+            }
+            if g.ticks() > limit {
+                return Err(format!("step {id} never lifted off"));
+            }
+            advance(&mut g, &mut trajectory, &mut steps);
+        }
+        let i = usize::from(id);
+        let delta = plan[i - 1].x + after - plan[i].x;
+        let mut moved = plan.clone();
+        for s in moved.iter_mut().skip(i) {
+            s.x += delta;
+        }
+        // The later steps first, then the swing target (the one checked by eq. 17); if that
+        // is refused, the later steps go back.
+        for j in (i + 1..usize::from(n)).rev() {
+            g.modify(j as u16, moved[j])
+                .map_err(|e| format!("step {j}: {e:?}"))?;
+        }
+        let accepted = g.modify(id, moved[i]).is_ok();
+        if accepted {
+            plan = moved;
+        } else {
+            for j in (i + 1..usize::from(n)).rev() {
+                g.modify(j as u16, plan[j])
+                    .map_err(|e| format!("step {j}: {e:?}"))?;
+            }
+        }
+        plans.push(plan.clone());
+        advance(&mut g, &mut trajectory, &mut steps);
+        let info = *g.last_replan().ok_or("no re-plan at the lift-off")?;
+        if g.swinging() != Some(id) || info.tick != g.ticks() {
+            return Err(format!("step {id}: the re-plan was not at its lift-off"));
+        }
+        steps.push(SequenceStep {
+            id,
+            after,
+            accepted,
+            liftoff_tick: info.tick,
+            landing_tick: 0,
+            adjust_s: f64::from(info.adjust_ticks) * params.dt,
+            ratio: info.ratio,
+        });
+    }
+    g.stop();
+    while !g.is_standing() {
+        if g.ticks() > limit {
+            return Err("the walk did not stop within 30 s".into());
+        }
+        advance(&mut g, &mut trajectory, &mut steps);
+    }
+    Ok(Sequence {
+        before,
+        steps,
+        trajectory,
+        plans,
+    })
+}
+
 /// Parameters with the single-support adjustment switched off.
 pub fn without_adjustment(mut params: GaitParams<f64>) -> GaitParams<f64> {
     params.adjust_min_ticks = 0;
     params.adjust_max_ticks = 0;
     params
+}
+
+/// The plain re-plan of Table I: the gait `params` with no single-support adjustment (eq. 18)
+/// and no shaping (what `host-sim tables`, `physics-tables` and `physics-sequence` call
+/// "plain").
+pub fn plain_params(params: GaitParams<f64>) -> GaitParams<f64> {
+    let mut p = without_adjustment(params);
+    p.shaping = false;
+    p
 }
 
 /// The 7×7 grid of Table II (rows: after, columns: before).
@@ -214,6 +402,50 @@ pub fn modified_support_error(
     Some(worst)
 }
 
+/// Checks footsteps walked from the scenario's stance (feet at (0, ±0.1) m) against the leg
+/// reach limits `reach` as the node does (the first step from rest). Errors: the first step
+/// refused, and why.
+pub fn check_reach(
+    reach: &planner_core::node::Reach,
+    steps: &[Footstep<f64>],
+) -> Result<(), String> {
+    let mut feet = [
+        Footstep::new(Side::Left, 0.0, 0.1, 0.0),
+        Footstep::new(Side::Right, 0.0, -0.1, 0.0),
+    ];
+    let index = |s: Side| if s == Side::Left { 0 } else { 1 };
+    for (i, step) in steps.iter().enumerate() {
+        let (same, other) = (feet[index(step.side)], feet[index(step.side.other())]);
+        reach
+            .check_with(&other, &same, step, i == 0)
+            .map_err(|e| format!("step {i} at x = {:.3} m: {e:?}", step.x))?;
+        feet[index(step.side)] = *step;
+    }
+    Ok(())
+}
+
+/// [`modified_support_error`] over the single supports of the modified steps of a
+/// [`Sequence`]: the largest distance between the multi-body ZMP of `model` and the centre of
+/// the support foot (the step before the one swinging) \[m\]; `None` when the legs cannot
+/// reach the footsteps.
+pub fn sequence_support_error(
+    model: &crate::multibody::Model,
+    seq: &Sequence,
+    dt: f64,
+) -> Option<f64> {
+    let mb = crate::multibody::evaluate(model, &seq.trajectory, dt).ok()?;
+    let walked = seq.walked();
+    let mut worst: f64 = 0.0;
+    for s in &seq.steps {
+        let support = walked.get(usize::from(s.id).checked_sub(1)?)?;
+        let (a, b) = (s.liftoff_tick as usize, s.landing_tick as usize);
+        for m in mb.get(a..b.min(mb.len()))? {
+            worst = worst.max((m.mb_zmp_x - support.x).hypot(m.mb_zmp_y - support.y));
+        }
+    }
+    Some(worst)
+}
+
 /// A 7×7 grid over [`STEP_LENGTHS`] as a Markdown table (rows: after, columns: before), the
 /// text of cell `(row, column)` from `cell`.
 pub fn grid_markdown(title: &str, cell: impl Fn(usize, usize) -> String) -> String {
@@ -250,8 +482,7 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
     let mut lipm_without = vec![vec![0.0; n]; n];
     let mut grid = Vec::new();
     // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
-    let mut bare = without_adjustment(params);
-    bare.shaping = false;
+    let bare = plain_params(params);
     for (r, &after) in STEP_LENGTHS.iter().enumerate() {
         let mut row = Vec::new();
         for (c, &before) in STEP_LENGTHS.iter().enumerate() {

@@ -27,13 +27,16 @@
 //! The replay runs until every frame has been sent and read by the node and the node stands
 //! still, or for at most [`MAX_AFTER_S`] after the log's last frame. Frames the node's
 //! receive FIFO had no room for are counted ([`Replayed::lost`]).
+//!
+//! [`binary_log`] writes a log in the compact binary form that the QEMU image reads over
+//! semihosting (`tests/tests/qemu.rs` replays host runs on the emulated target with it).
 
 use planner_core::gait::Reference;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::bus::{parse_log_line, Bus, BusError, Faults, Port, VFrame, LOG_IFACE};
+use crate::bus::{parse_log_line, Bus, BusError, Faults, LogEntry, Port, VFrame, LOG_IFACE};
 use embedded_can::nb::Can;
 
 /// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).
@@ -98,17 +101,9 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
         if line.is_empty() {
             continue;
         }
-        // `(time) IFACE ID#DATA` → the strict form of host-sim's own log.
-        let bad =
-            || format!("line {n}: not a candump -l line with a standard identifier: {line:?}");
-        let mut parts = line.split_whitespace();
-        let (Some(time), Some(_iface), Some(frame), None) =
-            (parts.next(), parts.next(), parts.next(), parts.next())
-        else {
-            return Err(bad());
-        };
-        let strict = format!("{time} {LOG_IFACE} {}", frame.to_ascii_uppercase());
-        let entry = parse_log_line(&strict).ok_or_else(bad)?;
+        let entry = candump_line(line).ok_or_else(|| {
+            format!("line {n}: not a candump -l line with a standard identifier: {line:?}")
+        })?;
         let us = entry.unix_us;
         if us < last_us {
             return Err(format!("line {n}: time goes backwards"));
@@ -125,6 +120,95 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
                 frame: entry.frame,
             });
         }
+    }
+    Ok(out)
+}
+
+/// One candump `-l` line, `(time) IFACE ID#DATA` with any interface name and hexadecimal of
+/// either case, through the strict form of host-sim's own log (`parse_log_line`).
+fn candump_line(line: &str) -> Option<LogEntry> {
+    let mut parts = line.split_whitespace();
+    let (Some(time), Some(_iface), Some(frame), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return None;
+    };
+    parse_log_line(&format!(
+        "{time} {LOG_IFACE} {}",
+        frame.to_ascii_uppercase()
+    ))
+}
+
+/// The compact binary log the QEMU image replays (the format is `gait_loop::binlog`'s, in
+/// `firmware/app/src/binlog.rs`): the candump log `log` (see the module docs: blank lines
+/// skipped, times not going backwards) as one log named `name` (at most 32 ASCII graphic
+/// bytes), for a node configured by `cfg` (its control period and start feet). The frames are
+/// the ones [`parse`] replays (not the node's own), with their times; the cycle grid starts at
+/// the log's first line, as in [`parse`].
+pub fn binary_log(name: &str, log: &[String], cfg: &NodeConfig) -> Result<Vec<u8>, String> {
+    if name.is_empty() || name.len() > 32 || !name.bytes().all(|b| b.is_ascii_graphic()) {
+        return Err(format!(
+            "log name {name:?}: not 1 to 32 ASCII graphic bytes"
+        ));
+    }
+    let period_us = (cfg.params.dt * 1e6).round() as u64;
+    let period_us = u32::try_from(period_us)
+        .ok()
+        .filter(|&p| p >= 2)
+        .ok_or_else(|| format!("control period {} s", cfg.params.dt))?;
+    let mut first_us = None;
+    let mut frames: Vec<(u64, RawFrame)> = Vec::new();
+    let mut last_us = 0;
+    for (i, line) in log.iter().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let entry = candump_line(line)
+            .ok_or_else(|| format!("line {}: not a candump -l line: {line:?}", i + 1))?;
+        if entry.unix_us < last_us {
+            return Err(format!("line {}: time goes backwards", i + 1));
+        }
+        last_us = entry.unix_us;
+        first_us.get_or_insert(entry.unix_us);
+        if !node_sends(entry.frame.id) {
+            frames.push((entry.unix_us, entry.frame));
+        }
+    }
+    let first_us = first_us.unwrap_or(0);
+    let count = u32::try_from(frames.len()).map_err(|_| "more than 2^32 frames".to_string())?;
+    let mut out = Vec::with_capacity(96 + 8 * frames.len());
+    out.extend_from_slice(b"WLOG");
+    out.push(1);
+    out.push(name.len() as u8);
+    out.extend_from_slice(name.as_bytes());
+    out.extend_from_slice(&period_us.to_le_bytes());
+    out.extend_from_slice(&first_us.to_le_bytes());
+    let last = frames.last().map_or(first_us, |&(us, _)| us);
+    out.extend_from_slice(&last.to_le_bytes());
+    out.extend_from_slice(&count.to_le_bytes());
+    for f in [cfg.left, cfg.right] {
+        for v in [f.x, f.y, f.yaw] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    let mut t = first_us;
+    for (us, frame) in frames {
+        // ULEB128 of the time since the frame before (the first: since the log's start).
+        let mut dt = us - t;
+        t = us;
+        loop {
+            let low = (dt & 0x7F) as u8;
+            dt >>= 7;
+            if dt == 0 {
+                out.push(low);
+                break;
+            }
+            out.push(low | 0x80);
+        }
+        out.extend_from_slice(&frame.id.to_le_bytes());
+        out.push(frame.len);
+        out.extend_from_slice(frame.bytes());
     }
     Ok(out)
 }

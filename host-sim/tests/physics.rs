@@ -99,6 +99,10 @@ fn straight_walks_through_the_command_line_contract() {
     assert!(num("cop_err_mean_m") > 0.0 && num("cop_err_max_m") >= num("cop_err_mean_m"));
     // The whole walk was simulated (10 steps of 0.8 s and the stop).
     assert!(num("simulated_s") > 9.0, "{text}");
+    // The probe settings (the defaults: the robot as stated).
+    assert_eq!(j["stabilizer"], true, "{text}");
+    assert_eq!(num("stabilizer_scale"), 1.0, "{text}");
+    assert_eq!(num("servo_damping"), 600.0, "{text}");
     for f in [
         "physics.csv",
         "physics_tilt.png",
@@ -325,8 +329,13 @@ fn physics_faults_heavy_row() {
     );
     let text = std::fs::read_to_string(dir.join("physics_faults.json")).expect("json");
     let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
-    let runs = j.as_array().expect("array");
+    let runs = j["runs"].as_array().expect("runs");
     assert_eq!(runs.len(), 2, "{text}");
+    // The probe settings of the default run.
+    assert_eq!(j["stabilizer"], true, "{text}");
+    assert_eq!(j["stabilizer_scale"], 1.0, "{text}");
+    assert_eq!(j["servo_damping"], 600.0, "{text}");
+    assert_eq!(j["seed"], 1, "{text}");
     for (r, scenario) in runs.iter().zip(["straight", "fig4"]) {
         assert_eq!(r["scenario"], scenario);
         assert_eq!(r["fault"], "mixed");
@@ -336,6 +345,120 @@ fn physics_faults_heavy_row() {
         let e = r["cop_err_max_m"].as_f64().expect("cop error");
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics-faults` takes the probe options of `physics-tables` (one definition):
+/// `--rows 0` (no fault, both sweep scenarios: two engine runs) with the stabilizer × 0.5 and
+/// the servo damping 300 N m s/rad records them in `physics_faults.json` and in the
+/// Markdown's title; a bad setting is a usage error before any engine run.
+#[test]
+fn physics_faults_takes_the_probe_options() {
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["physics-faults", "--rows", "0", "--stabilizer", "weak"])
+        .output()
+        .expect("host-sim runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("full, off, weakest or a scale"), "{err}");
+    if !engine_here("physics_faults_takes_the_probe_options") {
+        return;
+    }
+    let dir = temp_dir("faults-probe");
+    let j = host_sim_json(
+        &[
+            "physics-faults",
+            "--rows",
+            "0",
+            "--stabilizer",
+            "0.5",
+            "--servo-damping",
+            "300",
+        ],
+        &dir,
+        "physics_faults.json",
+    );
+    let text = j.to_string();
+    assert_eq!(j["stabilizer"], true, "{text}");
+    assert_eq!(j["stabilizer_scale"], 0.5, "{text}");
+    assert_eq!(j["servo_damping"], 300.0, "{text}");
+    assert!(j.get("weakest_ladder").is_none(), "{text}");
+    let runs = j["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 2, "{text}");
+    for (r, scenario) in runs.iter().zip(["straight", "fig4"]) {
+        assert_eq!(r["scenario"], scenario);
+        assert_eq!(r["fault"], "none");
+        assert!(r["fell"].is_boolean(), "{text}");
+        assert!(
+            r["cop_err_max_m"].as_f64().is_some_and(|e| e > 0.0),
+            "{text}"
+        );
+    }
+    let md = std::fs::read_to_string(dir.join("physics_faults.md")).expect("md");
+    assert!(
+        md.contains("stabilizer × 0.5, servo damping 300 N m s/rad"),
+        "{md}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics-sequence` (its default: 0.1 m steps, steps 3–7 changed to +0.3, −0.1,
+/// +0.12, +0.3, −0.1 m, each one control cycle before its lift-off; two engine runs): every
+/// modification is accepted by both patterns, the plain re-plan adjusts no single support
+/// and the proposed method does, the proposed method walks it with no fall, and its
+/// kinematic multi-body error over the modified single supports is below the plain re-plan's.
+#[test]
+fn consecutive_modifications_in_the_engine() {
+    if !engine_here("consecutive_modifications_in_the_engine") {
+        return;
+    }
+    let dir = temp_dir("sequence");
+    let j = host_sim_json(&["physics-sequence"], &dir, "physics_sequence.json");
+    let text = j.to_string();
+    let afters = &host_sim::paper::SEQUENCE_AFTERS_M;
+    assert_eq!(j["afters_m"], serde_json::json!(afters), "{text}");
+    assert_eq!(j["stabilizer_scale"], 1.0, "{text}");
+    for key in ["plain", "proposed"] {
+        let r = &j[key];
+        let mods = r["modifications"].as_array().expect("modifications");
+        assert_eq!(mods.len(), afters.len(), "{text}");
+        for (k, m) in mods.iter().enumerate() {
+            assert_eq!(m["accepted"], true, "{key} {k}: {text}");
+            assert_eq!(m["step"], 3 + k, "{text}");
+        }
+        let adjusted = mods
+            .iter()
+            .filter(|m| m["adjust_s"].as_f64() != Some(0.0))
+            .count();
+        if key == "plain" {
+            assert_eq!(adjusted, 0, "{text}");
+        } else {
+            assert!(adjusted > 0, "{text}");
+        }
+        assert!(r["fell"].is_boolean(), "{text}");
+        let e = r["cop_err_modified_m"].as_f64().expect("cop error");
+        assert!(
+            e > 0.0 && e <= r["cop_err_max_m"].as_f64().unwrap(),
+            "{text}"
+        );
+        let w = r["modified_window_s"].as_array().expect("window");
+        assert!((w[0].as_f64().unwrap() - 4.0).abs() < 1e-9, "{text}");
+        assert!(
+            w[1].as_f64().unwrap() > 4.0 + 0.8 * (afters.len() - 1) as f64,
+            "{text}"
+        );
+    }
+    let p = &j["proposed"];
+    assert_eq!(p["fell"], false, "{text}");
+    assert!(p["fall_time_s"].is_null(), "{text}");
+    assert!(
+        p["cop_err_max_m"].as_f64().unwrap() < COP_MAX_BOUND_M,
+        "{text}"
+    );
+    let mb = |k: &str| j[k]["mb_zmp_error_m"].as_f64().expect("mb error");
+    assert!(mb("proposed") < mb("plain"), "{text}");
+    let md = std::fs::read_to_string(dir.join("physics_sequence.md")).expect("md");
+    assert!(md.contains("| plain re-plan |") && md.contains("| proposed method |"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -486,7 +609,7 @@ fn physics_faults_every_row_long() {
     }
     let dir = temp_dir("faults-all");
     let j = host_sim_json(&["physics-faults"], &dir, "physics_faults.json");
-    let runs = j.as_array().expect("array");
+    let runs = j["runs"].as_array().expect("runs");
     let scenarios = host_sim::faults::SCENARIOS;
     assert_eq!(runs.len(), rows().len() * scenarios.len());
     for (kind, rate) in rows() {

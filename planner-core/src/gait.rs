@@ -59,7 +59,9 @@ use heapless::Deque;
 
 use crate::lipm::{Poly, Sample, State};
 use crate::real::Real;
-use crate::shaping::{CartTable, Compensator, GainError, Law, Piece, PreviewConfig, PreviewGains};
+use crate::shaping::{
+    CartTable, Compensation, Compensator, GainError, Law, Piece, PreviewConfig, PreviewGains,
+};
 use crate::timing::worst_deviation;
 use crate::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M};
 
@@ -801,14 +803,36 @@ fn shaped_sample<T: Real>(
     comp: &mut [Compensator<T>; 2],
     t: u32,
 ) -> (Sample<T>, Sample<T>) {
+    shaped_by(win, params, gains, t, |k| comp[k & 1].step(gains))
+}
+
+/// What [`shaped_sample`] returns, without advancing the compensators.
+fn shaped_peek<T: Real>(
+    win: &Active<T>,
+    params: &GaitParams<T>,
+    gains: &PreviewGains<T, PREVIEW>,
+    comp: &[Compensator<T>; 2],
+    t: u32,
+) -> (Sample<T>, Sample<T>) {
+    shaped_by(win, params, gains, t, |k| comp[k & 1].peek(gains))
+}
+
+/// The window's sample at `t` minus the compensation of plane `k` that `compensation(k)`
+/// gives (x first), if shaping is on.
+fn shaped_by<T: Real>(
+    win: &Active<T>,
+    params: &GaitParams<T>,
+    gains: &PreviewGains<T, PREVIEW>,
+    t: u32,
+    mut compensation: impl FnMut(usize) -> Compensation<T>,
+) -> (Sample<T>, Sample<T>) {
     let (sx, sy) = win.sample(params, t);
     if !params.shaping {
         return (sx, sy);
     }
     let zf = gains.zmp_factor();
-    let [c0, c1] = comp;
-    let cx = c0.step(gains).sample(zf);
-    let cy = c1.step(gains).sample(zf);
+    let cx = compensation(0).sample(zf);
+    let cy = compensation(1).sample(zf);
     (minus(sx, cx), minus(sy, cy))
 }
 
@@ -1303,8 +1327,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         // next step, on a copy); further ahead the compensation is left out (it is small: a
         // few millimetres, see shaping.rs).
         let (sx, sy) = if at == win.tick.wrapping_add(1) {
-            let mut comp = self.comp.clone();
-            shaped_sample(win, &self.params, self.gains.borrow(), &mut comp, at)
+            shaped_peek(win, &self.params, self.gains.borrow(), &self.comp, at)
         } else {
             win.sample(&self.params, at)
         };

@@ -168,50 +168,74 @@ const INV_PAIR: [f64; PARTICULAR_LEN] = {
     t
 };
 
-/// Adds `c ×` (the particular solution for the ZMP term `s^k`) to `g`, for `λ = ωD`.
+/// Writes the particular solution `G(s) = Σ g_i s^i` for the normalised ZMP polynomial `c`
+/// over an interval with `λ = ωD` into `g`, every coefficient (the unused tail is zeroed):
+///
+/// * `λ < 1`, at rest at `s = 0`: `g_0 = g_1 = 0` and `g_i = λ²/(i(i−1)) (g_{i−2} − c_{i−2})`
+///   upwards (`c_i = 0` beyond the quartic), which sums `−Σ_{n≥1} λ^{2n} k!/(k+2n)! c_k` over
+///   the terms with `k + 2n = i`, up to degree [`PARTICULAR_LEN`]` − 1`;
+/// * `λ ≥ 1`, the paper's polynomial: `g_4 = c_4`, `g_3 = c_3` and
+///   `g_i = c_i + (i+1)(i+2) g_{i+2} / λ²` downwards.
 #[inline]
-pub fn add_particular<T: Real>(g: &mut Particular<T>, k: usize, c: T, lambda: T) {
-    if c == T::ZERO {
-        return;
-    }
+pub fn particular_into<T: Real>(g: &mut Particular<T>, c: &Poly<T>, lambda: T) {
+    particular_over(g, c, lambda, T::ZERO);
+}
+
+/// [`particular_into`] over a particular solution `g` computed before for `λ = old_lambda`:
+/// its tail is zero already if `old_lambda ≥ 1` (see [`particular_len`]), and then is not
+/// written again.
+#[inline]
+pub(crate) fn particular_over<T: Real>(
+    g: &mut Particular<T>,
+    c: &Poly<T>,
+    lambda: T,
+    old_lambda: T,
+) {
     if lambda < T::of(SHORT_LAMBDA) {
-        // At rest at s = 0: g_k = −Σ_{n≥1} λ^{2n} k!/(k+2n)! s^{k+2n}.
         let l2 = lambda * lambda;
-        let mut term = c;
-        for n in 1..=SERIES_TERMS {
-            // In range for every `k ≤ MAX_ORDER`; `get` keeps an out-of-range `k` panic-free.
-            let i = k + 2 * n;
-            let (Some(gi), Some(&inv)) = (g.get_mut(i), INV_PAIR.get(i)) else {
-                break;
-            };
-            term = term * l2 * T::of(inv);
-            *gi -= term;
+        g[0] = T::ZERO;
+        g[1] = T::ZERO;
+        for i in 2..PARTICULAR_LEN {
+            let ci = if i - 2 < N_COEFFS { c[i - 2] } else { T::ZERO };
+            g[i] = l2 * T::of(INV_PAIR[i]) * (g[i - 2] - ci);
         }
     } else {
-        // The polynomial m_k = Σ_l k!/(k−2l)! λ^{−2l} s^{k−2l}.
         let inv2 = T::ONE / (lambda * lambda);
-        let mut term = T::ONE;
-        let mut j = k;
-        // `get_mut` fails only for k > MAX_ORDER + 2·SERIES_TERMS (never): no panic path.
-        while let Some(gj) = g.get_mut(j) {
-            *gj += c * term;
-            if j < 2 {
-                break;
+        g[4] = c[4];
+        g[3] = c[3];
+        g[2] = c[2] + T::of(12.0) * inv2 * g[4];
+        g[1] = c[1] + T::of(6.0) * inv2 * g[3];
+        g[0] = c[0] + T::of(2.0) * inv2 * g[2];
+        // A NaN `old_lambda` zeroes too.
+        let tail_zero = old_lambda >= T::of(SHORT_LAMBDA);
+        if !tail_zero {
+            for gi in g.iter_mut().skip(N_COEFFS) {
+                *gi = T::ZERO;
             }
-            term = term * T::of((j * (j - 1)) as f64) * inv2;
-            j -= 2;
         }
     }
 }
 
-/// The particular solution for the normalised ZMP polynomial `c` over an interval with `λ = ωD`.
+/// The particular solution for the normalised ZMP polynomial `c` over an interval with `λ = ωD`
+/// (see [`particular_into`]).
 #[inline]
 pub fn particular<T: Real>(c: &Poly<T>, lambda: T) -> Particular<T> {
     let mut g = [T::ZERO; PARTICULAR_LEN];
-    for (k, &ck) in c.iter().enumerate() {
-        add_particular(&mut g, k, ck, lambda);
-    }
+    particular_into(&mut g, c, lambda);
     g
+}
+
+/// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP monomial `s^k`
+/// (`k ≤ MAX_ORDER`; a larger `k` is the zero polynomial), computed in `scratch` (whatever it
+/// holds: every coefficient is written), so that a caller with many monomials zeroes no buffer.
+#[inline]
+pub fn monomial_ends<T: Real>(scratch: &mut Particular<T>, k: usize, lambda: T) -> (T, T, T, T) {
+    let mut c = [T::ZERO; N_COEFFS];
+    if let Some(ck) = c.get_mut(k) {
+        *ck = T::ONE;
+    }
+    particular_into(scratch, &c, lambda);
+    particular_ends(scratch, lambda)
 }
 
 /// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.
@@ -435,6 +459,33 @@ mod tests {
                 let (p, _, _) = poly_eval(&c, s);
                 let r = a / (lambda * lambda) - x + p;
                 assert!(r.abs() < 1e-12, "λ={lambda} s={s}: residual {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn particular_recurrences_equal_the_sums_they_stand_for() {
+        // λ < 1: g_i = −Σ λ^{2n} k!/(k+2n)! c_k over k + 2n = i, n ≥ 1; λ ≥ 1: g_i =
+        // Σ_k k!/i! λ^{i−k} c_k over k − i even, k ≥ i. Written out term by term here.
+        let fact = |n: usize| (1..=n).map(|v| v as f64).product::<f64>();
+        let c = [0.05, 0.1, -0.3, 0.2, 0.1];
+        for &lambda in &[0.02, 0.35, 0.99, 1.0, 2.4, 3.6] {
+            // Into a buffer full of garbage: every coefficient is written.
+            let mut g = [7.0; PARTICULAR_LEN];
+            particular_into(&mut g, &c, lambda);
+            for (i, &gi) in g.iter().enumerate() {
+                let mut want = 0.0;
+                for (k, &ck) in c.iter().enumerate() {
+                    if lambda < SHORT_LAMBDA && i > k && (i - k) % 2 == 0 {
+                        want -= libm::pow(lambda, (i - k) as f64) * fact(k) / fact(i) * ck;
+                    } else if lambda >= SHORT_LAMBDA && k >= i && (k - i) % 2 == 0 {
+                        want += fact(k) / fact(i) / libm::pow(lambda, (k - i) as f64) * ck;
+                    }
+                }
+                assert!(
+                    (gi - want).abs() <= 1e-15 * (1.0 + want.abs()),
+                    "λ={lambda} g_{i}: {gi} vs {want}"
+                );
             }
         }
     }

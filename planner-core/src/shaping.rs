@@ -899,23 +899,32 @@ impl<T: Real, const P: usize> Compensator<T, P> {
     /// `u(k) = −G_i Σ_{i≤k} e(i) − K X(k) + Σ_{j=1}^{NL} f_j r(k+j) + f_∞ r(k+NL)`.
     /// `gains` must be the same on every call between resets (it is not stored).
     pub fn step<const NL: usize>(&mut self, gains: &PreviewGains<T, NL>) -> Compensation<T> {
-        let k = self.tick;
-        let [x, v, acc] = self.state;
-        let r = self.reference(k);
-        let zmp = x - gains.zg * acc;
-        self.error_sum += zmp - r;
-        let ks = &gains.k_state;
-        let u = self.preview_sum(gains, k)
-            + gains.tail * self.reference(k.saturating_add(u32::try_from(NL).unwrap_or(u32::MAX)))
-            - gains.k_int * self.error_sum
-            - (ks[0] * x + ks[1] * v + ks[2] * acc);
+        let c = self.peek(gains);
         let [dt, dt2, dt3] = gains.dt;
+        let (x, v, acc, u) = (c.cog, c.cog_vel, c.cog_acc, c.jerk);
+        self.error_sum += c.zmp - c.reference;
         self.state = [
             x + dt * v + dt2 * acc + dt3 * u,
             v + dt * acc + dt2 * u,
             acc + dt * u,
         ];
         self.tick = self.tick.saturating_add(1);
+        c
+    }
+
+    /// What [`step`](Self::step) would return now, without advancing.
+    #[inline(always)]
+    pub fn peek<const NL: usize>(&self, gains: &PreviewGains<T, NL>) -> Compensation<T> {
+        let k = self.tick;
+        let [x, v, acc] = self.state;
+        let r = self.reference(k);
+        let zmp = x - gains.zg * acc;
+        let error_sum = self.error_sum + (zmp - r);
+        let ks = &gains.k_state;
+        let u = self.preview_sum(gains, k)
+            + gains.tail * self.reference(k.saturating_add(u32::try_from(NL).unwrap_or(u32::MAX)))
+            - gains.k_int * error_sum
+            - (ks[0] * x + ks[1] * v + ks[2] * acc);
         Compensation {
             tick: k,
             cog: x,

@@ -16,7 +16,8 @@
 //! critical point in `[0, D]` by bracketing: the roots of `p''` split the interval into pieces on
 //! which `ṗ` is monotone, so each piece holds at most one root of `ṗ`, found by Newton's method
 //! safeguarded by the bracket (a step that would leave it bisects; at most 56 steps, typically
-//! 4–6). The value at the extremum is insensitive to the root's error to first order.
+//! 4–6, started at the chord between the bracket's ends). The value at the extremum is
+//! insensitive to the root's error to first order.
 
 use crate::lipm::{poly_eval, Poly, Segment};
 use crate::real::Real;
@@ -134,7 +135,14 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
         // would leave it bisects instead. ṗ is monotone on the piece, so the root is unique
         // and Newton converges quadratically once close (typically 4–6 steps); the count is
         // bounded by `MAX_STEPS` whatever the polynomial.
-        let mut x = T::of(0.5) * (lo + hi);
+        // Started where the chord between the bracket's ends crosses zero (ṗ is monotone
+        // there, so that is inside; the midpoint if rounding says otherwise).
+        let chord = lo - vlo * (hi - lo) / (vhi - vlo);
+        let mut x = if chord > lo && chord < hi {
+            chord
+        } else {
+            T::of(0.5) * (lo + hi)
+        };
         for _ in 0..MAX_STEPS {
             let (_, v, a) = eval(x);
             // Done once the value at the root is reached to rounding: near a simple root the

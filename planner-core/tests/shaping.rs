@@ -406,6 +406,23 @@ fn b_closed_form_preview_sum_matches_the_direct_sum() {
     }
 }
 
+/// `peek` is `step` without the advance: over 400 ticks of the test pieces, `peek` returns
+/// exactly what the following `step` returns, and leaves the compensator as it was.
+#[test]
+fn b_peek_is_the_next_step_without_advancing() {
+    let g = gains(Law::Integral);
+    let mut comp: Compensator<f64, 4> = Compensator::new();
+    comp.set_pieces(&test_pieces()).expect("pieces");
+    for k in 0..400 {
+        let before = comp.clone();
+        let peeked = comp.peek(&g);
+        assert_eq!(comp, before, "tick {k}: peek changed the compensator");
+        let stepped = comp.step(&g);
+        assert_eq!(peeked, stepped, "tick {k}");
+        assert_ne!(comp, before, "tick {k}: step did not advance");
+    }
+}
+
 #[test]
 fn b_short_and_far_pieces_keep_their_precision() {
     // One piece of n ticks at every distance from 1 to 330 ticks ahead, f64 and f32, against

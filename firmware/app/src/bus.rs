@@ -1,10 +1,10 @@
 //! An in-memory CAN device: the node's side of the bus inside the image.
 //!
 //! [`ScriptedBus`] implements `embedded_can::nb::Can` with planner-core's own frame type
-//! ([`RawFrame`], standard identifiers, data frames). The [`Controller`](crate::Controller)
-//! puts the frames it sends into the receive FIFO before a cycle; the node takes them from
-//! there in `Node::poll`, and what the node transmits is kept in the transmit FIFO until the
-//! controller drains it after the cycle. Both FIFOs hold [`FIFO`] frames, like a port of
+//! ([`RawFrame`], standard identifiers, data frames). The [`Player`](crate::Player) puts the
+//! logged frames due into the receive FIFO before a cycle; the node takes them from there in
+//! `Node::poll`, and what the node transmits is kept in the transmit FIFO until the player
+//! drains it after the cycle. Both FIFOs hold [`FIFO`] frames, like a port of
 //! host-sim's virtual bus (`host_sim::bus::MAILBOX`, `RX_FIFO`): a full receive FIFO loses the
 //! newest frame (counted), a full transmit FIFO answers `WouldBlock`.
 //!
@@ -41,7 +41,7 @@ impl ScriptedBus {
         Self::default()
     }
 
-    /// A frame from the controller arrives (lost and counted if the receive FIFO is full).
+    /// A frame from the log arrives (lost and counted if the receive FIFO is full).
     pub fn deliver(&mut self, f: RawFrame) {
         if self.rx.push_back(f).is_err() {
             self.rx_overflow = self.rx_overflow.saturating_add(1);
@@ -58,7 +58,7 @@ impl ScriptedBus {
         self.rx.len()
     }
 
-    /// The oldest frame the node transmitted and the controller has not read yet.
+    /// The oldest frame the node transmitted and the player has not read yet.
     pub fn take_sent(&mut self) -> Option<RawFrame> {
         self.tx.pop_front()
     }

@@ -1,9 +1,5 @@
-//! One control cycle: the controller's frames, one timed `Node::poll`, the node's answers.
-//!
-//! [`Runner`] plays a [`Scenario`] against planner-core's [`Node`] exactly as
-//! `host_sim::sim::simulate` does with a fault-free bus (same frames at the same ticks, same
-//! `now_ms`, same end condition), so every reference, answer and transmitted frame can be
-//! compared with host-sim's run.
+//! One timed control cycle: one `Node::poll` over the in-memory device, timed by a [`Clock`]
+//! and classified by [`Kind`] from the frames it took and what its tick did.
 
 use core::borrow::Borrow;
 
@@ -13,10 +9,8 @@ use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
 use planner_core::Real;
 
-use crate::bus::ScriptedBus;
-use crate::controller::{Controller, Unrepresentable};
-use crate::script::Scenario;
-use crate::stats::{Kind, Stats};
+use crate::bus::{ScriptedBus, FIFO};
+use crate::stats::Kind;
 
 /// A free-running up-counter provided by the image (wrapping `u32`; only differences are
 /// used).
@@ -28,7 +22,7 @@ pub trait Clock {
 /// What one control cycle did (`T`: the node's scalar).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CycleRecord<T = f64> {
-    /// The gait's tick count after the cycle (the index of `reference` in host-sim's
+    /// The gait's tick count after the cycle (the index of `report.reference` in the run's
     /// trajectory); the cycle ran at tick `tick - 1`.
     pub tick: u64,
     /// The kind of the cycle.
@@ -75,6 +69,13 @@ impl Fnv {
         self.add(&f.id.to_le_bytes());
         self.add(f.bytes());
     }
+
+    /// Adds a frame the node sent with the cycle that sent it: the cycle (8 bytes, little
+    /// endian), then [`Fnv::add_frame`].
+    pub fn add_sent(&mut self, cycle: u64, f: &RawFrame) {
+        self.add(&cycle.to_le_bytes());
+        self.add_frame(f);
+    }
 }
 
 /// Classes of received frames, for [`Kind`].
@@ -96,149 +97,76 @@ fn class(f: &RawFrame) -> u8 {
             ..
         })
         | Ok(Command::EmergencyStop { .. }) => RX_STOP,
-        _ => 0, // heartbeat, reset, invalid
+        _ => 0, // heartbeat, reset, invalid, foreign
     }
 }
 
-/// Frames the node takes per cycle at most (`NodeConfig::max_rx` of `NodeConfig::hrp2`).
-const MAX_RX: usize = 16;
-
-/// Plays a scenario, one control cycle per call of [`Runner::cycle`].
-#[derive(Clone, Debug)]
-pub struct Runner<'s> {
-    controller: Controller<'s>,
-    bus: ScriptedBus,
-    k: u64,
-    finished: bool,
-    tx_frames: u32,
-    tx_digest: Fnv,
-}
-
-impl<'s> Runner<'s> {
-    /// Plays `scenario` against a node that was just created (standing, nothing queued).
-    pub fn new(scenario: &'s Scenario) -> Self {
-        Self {
-            controller: Controller::new(scenario),
-            bus: ScriptedBus::new(),
-            k: 0,
-            finished: false,
-            tx_frames: 0,
-            tx_digest: Fnv::default(),
-        }
+/// One control cycle: `Node::poll(now_ms, bus)`, and only it, timed with `clock`
+/// (through [`poll`], a frame of its own), then classified (see [`Kind`]): by the classes of
+/// the frames the node took from the device's receive FIFO (a prefix of it), by whether its
+/// tick re-planned, and by whether the node stood before and after.
+pub fn timed_poll<C: Clock, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+    node: &mut Node<Q, G, T>,
+    now_ms: u32,
+    bus: &mut ScriptedBus,
+    clock: &mut C,
+) -> CycleRecord<T> {
+    // What the node may take, by class: `seen[i]` covers the first i + 1 waiting frames.
+    let mut seen = [0u8; FIFO];
+    let mut acc = 0;
+    for (s, f) in seen.iter_mut().zip(bus.pending()) {
+        acc |= class(f);
+        *s = acc;
     }
+    let waiting = bus.pending_len();
+    let was_standing = node.gait().is_standing();
 
-    /// The controller (commands sent, answers).
-    pub fn controller(&self) -> &Controller<'s> {
-        &self.controller
-    }
+    let t0 = clock.now();
+    let report = poll(node, now_ms, bus);
+    let units = clock.now().wrapping_sub(t0);
 
-    /// The device (frame counters).
-    pub fn bus(&self) -> &ScriptedBus {
-        &self.bus
-    }
-
-    /// Frames the node transmitted, and their digest ([`Fnv::add_frame`], in sending order).
-    pub fn transmitted(&self) -> (u32, u64) {
-        (self.tx_frames, self.tx_digest.0)
-    }
-
-    /// `true` once the scenario has ended: standing after its last command (as
-    /// `host_sim::sim::simulate` decides), or `max_ticks` cycles run.
-    pub fn done(&self) -> bool {
-        self.finished || self.k >= self.controller.scenario().max_ticks
-    }
-
-    /// One control cycle at tick `k`: the controller sends what is due, the node polls once
-    /// at `now_ms = 5k + 2` (host-sim polls 2.5 ms into the tick), then the controller reads
-    /// what the node sent; `on_frame` sees every transmitted frame and, for an `ACK` that
-    /// answers a command, the command's index in [`Controller::sent`]. Only `Node::poll` is
-    /// timed with `clock` (recorded in `stats` by kind and as [`Kind::Cycle`]).
-    pub fn cycle<C: Clock, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
-        &mut self,
-        node: &mut Node<Q, G, T>,
-        clock: &mut C,
-        stats: &mut Stats,
-        mut on_frame: impl FnMut(&RawFrame, Option<usize>),
-    ) -> Result<CycleRecord<T>, Unrepresentable> {
-        let k = self.k;
-        self.controller.send_due(k, &mut self.bus)?;
-        // What the node may take in this cycle, by class: `seen[i]` covers the first i + 1
-        // waiting frames (it takes a prefix of the FIFO).
-        let mut seen = [0u8; MAX_RX];
-        let mut acc = 0;
-        for (s, f) in seen.iter_mut().zip(self.bus.pending()) {
-            acc |= class(f);
-            *s = acc;
-        }
-        let waiting = self.bus.pending_len();
-        let was_standing = node.gait().is_standing();
-        let now_ms = (k * 5 + 2) as u32;
-
-        let t0 = clock.now();
-        let report = poll(node, now_ms, &mut self.bus);
-        let units = clock.now().wrapping_sub(t0);
-
-        let taken = waiting - self.bus.pending_len();
-        let rx = if taken == 0 {
-            0
+    let taken = waiting.saturating_sub(bus.pending_len());
+    let rx = match taken.checked_sub(1) {
+        None => 0,
+        Some(i) => seen.get(i).copied().unwrap_or(acc),
+    };
+    let tick = node.gait().ticks();
+    let replan = node
+        .gait()
+        .last_replan()
+        .filter(|i| i.tick == tick)
+        .copied();
+    let kind = if rx & RX_MODIFY != 0 {
+        Kind::Modify
+    } else if rx & RX_START != 0 {
+        Kind::Start
+    } else if let Some(info) = replan {
+        if info.adjust_ticks != 0 {
+            Kind::Adjust
         } else {
-            seen[taken.min(MAX_RX) - 1]
-        };
-        let tick = node.gait().ticks();
-        let replan = node
-            .gait()
-            .last_replan()
-            .filter(|i| i.tick == tick)
-            .copied();
-        let kind = if rx & RX_MODIFY != 0 {
-            Kind::Modify
-        } else if rx & RX_START != 0 {
-            Kind::Start
-        } else if let Some(info) = replan {
-            if info.adjust_ticks != 0 {
-                Kind::Adjust
-            } else {
-                Kind::Replan
-            }
-        } else if rx & RX_STOP != 0 {
-            Kind::StopCommand
-        } else if rx & RX_PUSH != 0 {
-            Kind::Push
-        } else if was_standing && node.gait().is_standing() {
-            Kind::Standing
-        } else {
-            Kind::Steady
-        };
-        stats.record(kind, units, tick);
-        stats.record(Kind::Cycle, units, tick);
-
-        while let Some(f) = self.bus.take_sent() {
-            self.tx_frames = self.tx_frames.saturating_add(1);
-            self.tx_digest.add_frame(&f);
-            let answered = self.controller.read(k, &f);
-            on_frame(&f, answered);
+            Kind::Replan
         }
-
-        if node.gait().is_standing()
-            && k > self.controller.last_command()
-            && self.controller.all_sent()
-        {
-            self.finished = true;
-        }
-        self.k += 1;
-        Ok(CycleRecord {
-            tick,
-            kind,
-            units,
-            report,
-            replan,
-        })
+    } else if rx & RX_STOP != 0 {
+        Kind::StopCommand
+    } else if rx & RX_PUSH != 0 {
+        Kind::Push
+    } else if was_standing && node.gait().is_standing() {
+        Kind::Standing
+    } else {
+        Kind::Steady
+    };
+    CycleRecord {
+        tick,
+        kind,
+        units,
+        report,
+        replan,
     }
 }
 
 /// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
 #[inline(never)]
-fn poll<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+pub fn poll<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
     node: &mut Node<Q, G, T>,
     now_ms: u32,
     bus: &mut ScriptedBus,

@@ -1,5 +1,5 @@
-//! The target's player of a recorded CAN log (issue 12's record and replay; not yet used by
-//! the QEMU image, which still runs [`crate::Runner`]).
+//! The target's player of a recorded CAN log (issue 12's record and replay): the QEMU image
+//! replays host-sim's logs with it ([`crate::binlog`] reads them).
 //!
 //! [`Player`] feeds logged frames into the node through the in-memory [`ScriptedBus`] by the
 //! rule of `planner_core::playback`, the one `host-sim replay` uses: a frame is for cycle
@@ -9,9 +9,14 @@
 //! [`playback::poll_ms`]; the replay ends by [`playback::finished`] or after
 //! [`playback::max_cycles`].
 
-use planner_core::node::{Node, PollReport};
+use core::borrow::Borrow;
+
+use planner_core::gait::PREVIEW;
+use planner_core::node::Node;
 use planner_core::playback::{self, LogClock};
+use planner_core::shaping::PreviewGains;
 use planner_core::wire::RawFrame;
+use planner_core::Real;
 
 use crate::bus::ScriptedBus;
 use crate::cycle::Fnv;
@@ -90,20 +95,32 @@ impl Player {
         &self.bus
     }
 
-    /// Frames the node transmitted, and their digest ([`Fnv::add_frame`]).
+    /// Frames the node transmitted, and their digest ([`Fnv::add_sent`]: each with the cycle
+    /// that sent it).
     pub fn transmitted(&self) -> (u32, u64) {
         (self.tx_frames, self.tx_digest.0)
     }
 
-    /// One control cycle: the frames due, one `poll` (through `poll`, which the image times),
-    /// then `on_frame(cycle, frame)` for every frame the node sent.
-    pub fn cycle<S: Source, const Q: usize>(
+    /// The control cycle that [`Player::cycle`] runs next.
+    pub fn next_cycle(&self) -> u64 {
+        self.k
+    }
+
+    /// One control cycle: the frames due, one `poll(node, now_ms, device)` (which the image
+    /// times; its result is returned), then `on_frame(cycle, frame)` for every frame the
+    /// node sent. `Err(Truncated)` if `source` ended before the frames announced.
+    pub fn cycle<S, const Q: usize, G, T, R>(
         &mut self,
-        node: &mut Node<Q>,
+        node: &mut Node<Q, G, T>,
         source: &mut S,
-        poll: impl FnOnce(&mut Node<Q>, u32, &mut ScriptedBus) -> PollReport,
+        poll: impl FnOnce(&mut Node<Q, G, T>, u32, &mut ScriptedBus) -> R,
         mut on_frame: impl FnMut(u64, &RawFrame),
-    ) -> Result<PollReport, Truncated> {
+    ) -> Result<R, Truncated>
+    where
+        S: Source,
+        G: Borrow<PreviewGains<T, PREVIEW>>,
+        T: Real,
+    {
         let k = self.k;
         loop {
             if self.ahead.is_none() && self.remaining > 0 {
@@ -127,7 +144,7 @@ impl Player {
         );
         while let Some(f) = self.bus.take_sent() {
             self.tx_frames = self.tx_frames.saturating_add(1);
-            self.tx_digest.add_frame(&f);
+            self.tx_digest.add_sent(k, &f);
             on_frame(k, &f);
         }
         let idle = self.remaining == 0 && self.ahead.is_none() && self.bus.pending_len() == 0;

@@ -60,7 +60,7 @@ pub const NAME: &str = "mps2-an500";
 #[cfg(feature = "m4f")]
 pub const NAME: &str = "mps2-an386";
 
-/// Whether the node of [`NODE_CONFIG`] stands where a scenario's feet start (given in `f64`;
+/// Whether the node of [`NODE_CONFIG`] stands where a log's feet start (given in `f64`;
 /// each rounded to the node's scalar). (It reads the constant rather than borrowing `main`'s
 /// copy: with a borrow, the M7 image built its node through one more copy, 45,080
 /// instructions and 49.5 KB of stack instead of 24,320 and 25 KB.)

@@ -4,10 +4,13 @@
 //! verdict ([`super::metrics`]) each row keeps the sweep's kinematic one (the multi-body ZMP
 //! more than 20 mm outside the support polygon).
 //!
-//! `host-sim physics-faults --out DIR [--rows all|i,j,...] [--seed N]` writes
-//! `DIR/physics_faults.json` (one object per row and scenario: `fault`, `rate`, `scenario`,
-//! `seed`, `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`, `cop_err_mean_m`,
-//! `cop_err_max_m`, `safety_stop`, `lost`) and `DIR/physics_faults.md`.
+//! `host-sim physics-faults --out DIR [--rows all|i,j,...] [--seed N]` (and the probe options
+//! of [`super::probe`]: `--stabilizer`, `--servo-damping`, `--open-loop`) writes
+//! `DIR/physics_faults.json`: an object with the settings (`robot`, `seed`, `stabilizer`,
+//! `stabilizer_scale`, `servo_damping`, for `weakest` also `weakest_ladder`) and `runs`, one
+//! object per row and scenario ([`json()`]: `fault`, `rate`, `scenario`, `seed`,
+//! `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`, `cop_err_mean_m`,
+//! `cop_err_max_m`, `safety_stop`, `lost`); and `DIR/physics_faults.md`.
 
 use serde_json::{json, Value};
 
@@ -109,7 +112,7 @@ pub fn sweep(
         .collect()
 }
 
-/// The JSON of the runs.
+/// The JSON of the runs (`physics_faults.json`'s `runs`).
 pub fn json(runs: &[FaultRun]) -> Value {
     Value::Array(
         runs.iter()

@@ -10,8 +10,10 @@
 //! * [`output`]: the `physics` command and its files (`physics.json` …);
 //! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
 //! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`);
-//! * [`probe`]: the grid with a weakened stabilizer and softer servos (`physics-tables
-//!   --stabilizer`, `--servo-damping`).
+//! * [`probe`]: the grid with a weakened stabilizer and softer servos (`--stabilizer`,
+//!   `--servo-damping`, `--open-loop`: the options of every engine command);
+//! * [`sequence`]: several consecutive steps modified, plain re-plan and proposed method
+//!   (`physics-sequence`).
 //!
 //! # A run
 //!
@@ -30,6 +32,7 @@ pub mod metrics;
 pub mod model;
 pub mod output;
 pub mod probe;
+pub mod sequence;
 pub mod stabilizer;
 pub mod tables;
 

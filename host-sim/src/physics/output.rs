@@ -6,7 +6,9 @@
 //!   `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
 //!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
 //!   `simulated_s`, `stabilizer`, `stabilizer_gains`, `servo_kp_kd`, `engine` (the MuJoCo
-//!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents);
+//!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents),
+//!   and the probe settings ([`super::probe::Probe::record`]: `stabilizer_scale`,
+//!   `servo_damping`, for `weakest` `weakest_ladder`);
 //! * `DIR/physics.csv`: the log every 5 ms (time, tilt, CoP, reference and desired ZMP, the
 //!   50 ms tracking error, true and reference COG, waist height);
 //! * `DIR/physics_tilt.png`, `DIR/physics_cop_x.png`, `DIR/physics_cop_y.png`: the tilt, and
@@ -236,18 +238,17 @@ pub fn parse_push(s: &str) -> Result<Push, String> {
 }
 
 /// The command line's `physics` subcommand: runs `robot`, writes, prints the figures; the
-/// stabilizer's feedback scaled by `scale` and the servo damping `kd` (see [`super::probe`]).
+/// stabilizer and the servos as the probe options say (see [`super::probe`]; recorded in
+/// `physics.json`).
 pub fn cli(
     name: &str,
     out: Option<&Path>,
     robot: &Robot,
-    open_loop: bool,
     push: Option<&str>,
-    scale: f64,
-    kd: Option<f64>,
+    probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let mut cfg = super::probe::weakened(robot, scale, kd);
-    cfg.gains.enabled = !open_loop;
+    let probe = probe.resolve(robot)?;
+    let mut cfg = probe.cfg;
     cfg.push = push.map(parse_push).transpose()?;
     let default_out;
     let out = match out {
@@ -261,7 +262,11 @@ pub fn cli(
             &default_out
         }
     };
-    let j = physics_command(name, out, robot, &cfg)?;
+    let mut j = physics_command(name, out, robot, &cfg)?;
+    probe.record(&mut j);
+    let path = out.join("physics.json");
+    fs::write(&path, serde_json::to_string_pretty(&j)?)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
     println!(
         "{} ({}): {} in MuJoCo ({}), {:.2} s simulated",
@@ -293,42 +298,20 @@ pub fn cli(
 
 /// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,
 /// `DIR/physics_tables.json` and `DIR/physics_tables.md`, with `robot` (its gait parameters,
-/// link table and soles; it must stand as HRP-2, the grid being HRP-2's footsteps), the
-/// stabilizer `setting` (`full`, `off`, `weakest` or a scale) and the servo damping `kd`
-/// (see [`super::probe`]).
+/// link table and soles; it must stand as HRP-2, the grid being HRP-2's footsteps) and the
+/// probe options (see [`super::probe`]; recorded in the JSON).
 pub fn tables_cli(
     out: &Path,
     cells: &str,
     robot: &Robot,
-    open_loop: bool,
-    setting: &str,
-    kd: Option<f64>,
+    probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use super::probe::{parse_setting, weakened, weakest, Setting};
     use super::tables::{cell, cell_text, markdown, parse_cells, side_by_side_text, tables_json};
     let list = parse_cells(cells)?;
     robot.check_hrp2_footsteps("physics-tables")?;
-    let (scale, ladder) = match parse_setting(setting)? {
-        Setting::Scale(s) => (s, None),
-        Setting::Weakest => match weakest(robot, kd)? {
-            (Some(s), rungs) => (s, Some(rungs)),
-            (None, _) => {
-                return Err(
-                    "--stabilizer weakest: not even the full stabilizer walks every \
-                            built-in scenario with this servo damping"
-                        .into(),
-                )
-            }
-        },
-    };
-    let mut cfg = weakened(robot, scale, kd);
-    cfg.gains.enabled = !open_loop;
-    let [_, servo_kd] = cfg.robot.servo();
-    let mode = if open_loop {
-        format!("open loop, servo damping {servo_kd} N m s/rad")
-    } else {
-        format!("stabilizer × {scale}, servo damping {servo_kd} N m s/rad")
-    };
+    let probe = probe.resolve(robot)?;
+    let cfg = probe.cfg;
+    let mode = probe.mode();
     let mut done = Vec::new();
     for (i, &(r, c)) in list.iter().enumerate() {
         eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
@@ -341,26 +324,8 @@ pub fn tables_cli(
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_tables.json");
     let mut json = tables_json(&done);
-    json["stabilizer"] = serde_json::Value::Bool(!open_loop);
-    json["stabilizer_scale"] = scale.into();
-    json["servo_damping"] = servo_kd.into();
+    probe.record(&mut json);
     json["robot"] = robot.name().into();
-    if let Some(rungs) = &ladder {
-        json["weakest_ladder"] = rungs
-            .iter()
-            .map(|r| {
-                json!({
-                    "scale": r.scale,
-                    "walked": r.walked(),
-                    "runs": r.runs.iter().map(|(n, p)| json!({
-                        "scenario": n, "fell": p.fell, "fall_time_s": p.fall_time_s,
-                        "max_tilt_deg": p.max_tilt_deg, "cop_err_max_m": p.cop_err_max_m,
-                    })).collect::<Vec<_>>(),
-                })
-            })
-            .collect::<Vec<_>>()
-            .into();
-    }
     fs::write(&path, serde_json::to_string_pretty(&json)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let mut md = markdown(
@@ -396,22 +361,7 @@ pub fn tables_cli(
         &done,
         side_by_side_text,
     );
-    if let Some(rungs) = &ladder {
-        md += "\nThe weakest stabilizer: scales tried on the built-in scenarios (up to the first fall):";
-        for r in rungs {
-            md += &format!(
-                " × {}: {};",
-                r.scale,
-                if r.walked() {
-                    "all walk".to_string()
-                } else {
-                    let (n, p) = &r.runs[r.runs.len() - 1];
-                    format!("{n} fell at {:.2} s", p.fall_time_s.unwrap_or(f64::NAN))
-                }
-            );
-        }
-        md += "\n";
-    }
+    md += &probe.ladder_markdown();
     md += &format!(
         "\n{} cells simulated; falls: plain {}, proposed {}.\n",
         done.len(),
@@ -426,23 +376,34 @@ pub fn tables_cli(
 }
 
 /// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) with
-/// `seed` through `robot`'s node and the engine; `DIR/physics_faults.json` and `.md`.
+/// `seed` through `robot`'s node and the engine, with the probe options (see
+/// [`super::probe`]); `DIR/physics_faults.json` (the settings and the runs, see
+/// [`super::fault_sweep`]) and `.md`.
 pub fn faults_cli(
     out: &Path,
     rows: &str,
     seed: u64,
     robot: &Robot,
+    probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
     use super::fault_sweep::{json, markdown, parse_rows, sweep};
     let idx = parse_rows(rows)?;
     robot.check_hrp2_footsteps("physics-faults")?;
-    let runs = sweep(&idx, seed, robot, &PhysicsConfig::for_robot(robot))?;
+    let probe = probe.resolve(robot)?;
+    let runs = sweep(&idx, seed, robot, &probe.cfg)?;
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_faults.json");
-    fs::write(&path, serde_json::to_string_pretty(&json(&runs))?)
+    let mut j = serde_json::json!({ "robot": robot.name(), "seed": seed, "runs": json(&runs) });
+    probe.record(&mut j);
+    fs::write(&path, serde_json::to_string_pretty(&j)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let md = markdown(&runs);
+    let md = format!(
+        "Probe: {}.\n\n{}{}",
+        probe.mode(),
+        markdown(&runs),
+        probe.ladder_markdown()
+    );
     let mdpath = out.join("physics_faults.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
     println!("{md}");

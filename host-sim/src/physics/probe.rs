@@ -20,9 +20,17 @@
 //!   scale that walks every scenario; the scenarios are tried in [`BUILT_IN`] order and a scale
 //!   is abandoned at its first fall.
 //!
+//! The options are one definition, [`ProbeArgs`], flattened into every engine subcommand
+//! (`physics`, `physics-tables`, `physics-faults`, `physics-sequence`); [`ProbeArgs::resolve`]
+//! turns them into the configuration to run, and [`Probe::record`] writes the settings into
+//! the command's JSON (`stabilizer`, `stabilizer_scale`, `servo_damping` and, for `weakest`,
+//! `weakest_ladder`).
+//!
 //! What it models, and what not: a robot whose balance depends more on the pattern, the more
 //! the feedback is weakened. It does not model HRP-2's stabilizer, its servo electronics or
 //! its flexible ankle bushings; a fall or its absence here is a statement about this model.
+
+use serde_json::{json, Value};
 
 use super::stabilizer::Gains;
 use super::{run, PhysicsConfig, PhysicsReport};
@@ -54,6 +62,139 @@ pub fn parse_setting(s: &str) -> Result<Setting, String> {
                 "--stabilizer {s:?}: expected full, off, weakest or a scale ≥ 0"
             )),
         },
+    }
+}
+
+/// The probe options of the engine subcommands (one definition, flattened into each).
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+pub struct ProbeArgs {
+    /// Play the patterns open loop (the stabilizer off).
+    #[arg(long)]
+    pub open_loop: bool,
+    /// The stabilizer: `full`, `off` (no feedback acts), a scale S ≥ 0 of every feedback gain,
+    /// or `weakest` (the smallest scale with which every built-in scenario walks).
+    #[arg(long, value_name = "full|off|weakest|S", default_value = "full", value_parser = parse_setting)]
+    pub stabilizer: Setting,
+    /// The joint damping of every servo [N m s/rad] [default: the robot's].
+    #[arg(long, value_name = "KD")]
+    pub servo_damping: Option<f64>,
+}
+
+impl Default for ProbeArgs {
+    /// The robot as stated: the full stabilizer, the robot's servos.
+    fn default() -> Self {
+        Self {
+            open_loop: false,
+            stabilizer: Setting::Scale(1.0),
+            servo_damping: None,
+        }
+    }
+}
+
+/// The probe settings resolved for a robot: the configuration to run and what to record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Probe {
+    /// The engine configuration (gains scaled, servos damped, open loop or not).
+    pub cfg: PhysicsConfig,
+    /// The stabilizer scale.
+    pub scale: f64,
+    /// The stabilizer off altogether (`--open-loop`).
+    pub open_loop: bool,
+    /// For `weakest`: the rungs tried.
+    pub ladder: Option<Vec<Rung>>,
+}
+
+impl ProbeArgs {
+    /// The configuration of `robot` with these options; `weakest` runs the ladder
+    /// ([`weakest`]). Errors: the engine failed, or no scale walks every built-in scenario.
+    pub fn resolve(&self, robot: &Robot) -> Result<Probe, String> {
+        let (scale, ladder) = match self.stabilizer {
+            Setting::Scale(s) => (s, None),
+            Setting::Weakest => match weakest(robot, self.servo_damping)? {
+                (Some(s), rungs) => (s, Some(rungs)),
+                (None, _) => {
+                    return Err(
+                        "--stabilizer weakest: not even the full stabilizer walks every \
+                                built-in scenario with this servo damping"
+                            .into(),
+                    )
+                }
+            },
+        };
+        let mut cfg = weakened(robot, scale, self.servo_damping);
+        cfg.gains.enabled = !self.open_loop;
+        Ok(Probe {
+            cfg,
+            scale,
+            open_loop: self.open_loop,
+            ladder,
+        })
+    }
+}
+
+impl Probe {
+    /// The servo damping run \[N m s/rad\].
+    pub fn servo_damping(&self) -> f64 {
+        self.cfg.robot.servo()[1]
+    }
+
+    /// The settings in words, for the tables' titles: `stabilizer × 1, servo damping 600 N m
+    /// s/rad` or `open loop, servo damping 600 N m s/rad`.
+    pub fn mode(&self) -> String {
+        let kd = self.servo_damping();
+        if self.open_loop {
+            format!("open loop, servo damping {kd} N m s/rad")
+        } else {
+            format!("stabilizer × {}, servo damping {kd} N m s/rad", self.scale)
+        }
+    }
+
+    /// Writes the settings into the JSON object `json`: `stabilizer` (false when open loop),
+    /// `stabilizer_scale`, `servo_damping` and, for `weakest`, `weakest_ladder` (each rung's
+    /// scale, whether it walked, and its runs).
+    pub fn record(&self, json: &mut Value) {
+        json["stabilizer"] = Value::Bool(!self.open_loop);
+        json["stabilizer_scale"] = self.scale.into();
+        json["servo_damping"] = self.servo_damping().into();
+        if let Some(rungs) = &self.ladder {
+            json["weakest_ladder"] = rungs
+                .iter()
+                .map(|r| {
+                    json!({
+                        "scale": r.scale,
+                        "walked": r.walked(),
+                        "runs": r.runs.iter().map(|(n, p)| json!({
+                            "scenario": n, "fell": p.fell, "fall_time_s": p.fall_time_s,
+                            "max_tilt_deg": p.max_tilt_deg, "cop_err_max_m": p.cop_err_max_m,
+                        })).collect::<Vec<_>>(),
+                    })
+                })
+                .collect::<Vec<_>>()
+                .into();
+        }
+    }
+
+    /// The ladder in words (Markdown), for `weakest`; empty otherwise.
+    pub fn ladder_markdown(&self) -> String {
+        let Some(rungs) = &self.ladder else {
+            return String::new();
+        };
+        let mut md = String::from(
+            "\nThe weakest stabilizer: scales tried on the built-in scenarios (up to the first fall):",
+        );
+        for r in rungs {
+            md += &format!(
+                " × {}: {};",
+                r.scale,
+                if r.walked() {
+                    "all walk".to_string()
+                } else {
+                    let (n, p) = &r.runs[r.runs.len() - 1];
+                    format!("{n} fell at {:.2} s", p.fall_time_s.unwrap_or(f64::NAN))
+                }
+            );
+        }
+        md + "\n"
     }
 }
 
@@ -135,6 +276,36 @@ mod tests {
         assert!(parse_setting("-1").is_err());
         assert!(parse_setting("weak").is_err());
         assert!(parse_setting("inf").is_err());
+    }
+
+    #[test]
+    fn probe_records_its_settings() {
+        let args = ProbeArgs {
+            open_loop: false,
+            stabilizer: Setting::Scale(0.3),
+            servo_damping: Some(150.0),
+        };
+        let p = args.resolve(&Robot::hrp2()).unwrap();
+        assert_eq!(p.cfg, weakened(&Robot::hrp2(), 0.3, Some(150.0)));
+        let mut j = json!({});
+        p.record(&mut j);
+        assert_eq!(
+            j,
+            json!({"stabilizer": true, "stabilizer_scale": 0.3, "servo_damping": 150.0})
+        );
+        assert_eq!(p.mode(), "stabilizer × 0.3, servo damping 150 N m s/rad");
+        let open = ProbeArgs {
+            open_loop: true,
+            ..ProbeArgs::default()
+        }
+        .resolve(&Robot::hrp2())
+        .unwrap();
+        assert!(!open.cfg.gains.enabled);
+        let mut j = json!({});
+        open.record(&mut j);
+        assert_eq!(j["stabilizer"], false);
+        assert_eq!(j["servo_damping"], 600.0);
+        assert!(open.ladder_markdown().is_empty());
     }
 
     #[test]

@@ -19,9 +19,7 @@
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::paper::{
-    self, without_adjustment, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS,
-};
+use crate::paper::{self, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS};
 use planner_core::gait::GaitParams;
 
 /// The paper's remark (section IV.C): walking was difficult in dynamic simulation when the ZMP
@@ -56,20 +54,20 @@ pub const MODIFIED_WINDOW_S: (f64, f64) = (4.0, 5.0);
 
 /// The worst logged 50 ms CoP error within [`MODIFIED_WINDOW_S`] \[m\].
 fn window_error(samples: &[super::PhysicsSample]) -> f64 {
+    window_error_in(samples, MODIFIED_WINDOW_S)
+}
+
+/// The worst logged 50 ms CoP error within the window `(t0, t1)` of trajectory time \[m\].
+pub fn window_error_in(samples: &[super::PhysicsSample], (t0, t1): (f64, f64)) -> f64 {
     samples
         .iter()
-        .filter(|s| s.t >= MODIFIED_WINDOW_S.0 && s.t <= MODIFIED_WINDOW_S.1)
+        .filter(|s| s.t >= t0 && s.t <= t1)
         .map(|s| s.cop_err)
         .filter(|e| e.is_finite())
         .fold(0.0, f64::max)
 }
 
-/// The plain re-plan's parameters of the gait `params`: no adjustment, no shaping (Table I).
-pub fn plain_params(params: GaitParams<f64>) -> GaitParams<f64> {
-    let mut p = without_adjustment(params);
-    p.shaping = false;
-    p
-}
+pub use crate::paper::plain_params;
 
 /// Runs one cell both ways with the gait `params` (the proposed method; the plain re-plan is
 /// [`plain_params`] of it) and the robot of `cfg` (its link table for the kinematic error).

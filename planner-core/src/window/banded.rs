@@ -14,7 +14,7 @@ use super::{
     hcol, solve_both, solve_plane_new, Basis, Plan, PlanError, PlaneBoundary, PlanePlan, Solver,
     Timing, LAST_BETA, M, N,
 };
-use crate::lipm::{add_particular, particular_ends, Particular, PARTICULAR_LEN};
+use crate::lipm::{monomial_ends, PARTICULAR_LEN};
 use crate::real::Real;
 
 /// Lower and upper bandwidth of `Z` in the ordering of the parent module (checked by a test
@@ -50,14 +50,6 @@ fn basis_block<T: Real>(basis: Basis, e: T, at_end: bool) -> [[T; 2]; 2] {
     }
 }
 
-/// `(x(0), ẋ(0)/ω, x(D), ẋ(D)/ω)` of the particular solution of the ZMP term `s^k`.
-#[inline]
-fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
-    let mut g: Particular<T> = [T::ZERO; PARTICULAR_LEN];
-    add_particular(&mut g, k, T::ONE, lambda);
-    particular_ends(&g, lambda)
-}
-
 /// Builds `Z` for a timing into `z` (no allocation; `z` is overwritten).
 pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, N>) {
     z.as_mut_slice().fill(T::ZERO);
@@ -85,14 +77,15 @@ pub fn build_z<T: Real>(timing: &Timing<T>, basis: Basis, z: &mut SMatrix<T, N, 
         z[(2 + r, hcol(0))] = b[r][0];
         z[(2 + r, hcol(0) + 1)] = b[r][1];
     }
+    let mut scratch = [T::ZERO; PARTICULAR_LEN];
     for k in 0..3 {
-        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_first);
+        let (x0, v0, x1, v1) = monomial_ends(&mut scratch, k + 2, l_first);
         z[(2, k)] = x0;
         z[(3, k)] = v0;
         // Continuity at the end of interval 1 (rows 4, 5).
         z[(4, k)] = x1;
         z[(5, k)] = v1;
-        let (x0, v0, x1, v1) = monomial_ends(k + 2, l_last);
+        let (x0, v0, x1, v1) = monomial_ends(&mut scratch, k + 2, l_last);
         // Continuity at the start of interval 7 (rows 14, 15) and terminal state (16, 17).
         z[(14, LAST_BETA + k)] = -x0;
         z[(15, LAST_BETA + k)] = -v0;

@@ -45,7 +45,7 @@
 //! checked against the banded LU of the dense `Z` by the tests.
 
 use super::{PlanError, Timing, LAST_BETA, M, N};
-use crate::lipm::{add_particular, particular_ends, Particular, PARTICULAR_LEN};
+use crate::lipm::{monomial_ends as ends_of, PARTICULAR_LEN};
 use crate::real::Real;
 
 /// `v`: the direction of the free quartic parameter (`β_4`) in `(β_2, β_3, β_4)`.
@@ -105,10 +105,9 @@ fn d_end<T: Real>(x: &[T; 4]) -> T {
 
 fn monomial_ends<T: Real>(lambda: T) -> Ends<T> {
     let mut out = [[T::ZERO; 4]; 3];
+    let mut scratch = [T::ZERO; PARTICULAR_LEN];
     for (k, o) in out.iter_mut().enumerate() {
-        let mut g: Particular<T> = [T::ZERO; PARTICULAR_LEN];
-        add_particular(&mut g, k + 2, T::ONE, lambda);
-        let (x0, v0, x1, v1) = particular_ends(&g, lambda);
+        let (x0, v0, x1, v1) = ends_of(&mut scratch, k + 2, lambda);
         *o = [x0, v0, x1, v1];
     }
     out

@@ -53,9 +53,7 @@ mod chain;
 pub use banded::{bandwidths, build_z, Banded, BANDWIDTH};
 use chain::Chain;
 
-use crate::lipm::{
-    add_particular, hermite, particular_ends, Poly, Sample, Segment, State, PARTICULAR_LEN,
-};
+use crate::lipm::{hermite, particular_ends, particular_over, Poly, Sample, Segment, State};
 use crate::real::Real;
 
 /// Number of intervals in a window.
@@ -254,11 +252,15 @@ fn build_rhs<T: Real>(
     let mut ends = [State::default(); M];
     for j in 0..M {
         let lambda = w * d[j];
+        // The segment written over is the one planned before into this buffer (or the
+        // default, λ = 1): a long interval's tail is zero already (see `particular_len`).
+        // The segment's λ is written with its particular solution, so that this holds even
+        // after a solve that failed half-way.
+        let old = segs[j].omega * segs[j].duration;
+        segs[j].omega = w;
+        segs[j].duration = d[j];
         let g = &mut segs[j].particular;
-        *g = [T::ZERO; PARTICULAR_LEN];
-        for (k, &ck) in polys[j].iter().enumerate() {
-            add_particular(g, k, ck, lambda);
-        }
+        particular_over(g, &polys[j], lambda, old);
         let (x0, v0, x1, v1) = particular_ends(g, lambda);
         starts[j] = State::new(x0, v0);
         ends[j] = State::new(x1, v1);
@@ -363,19 +365,17 @@ fn solve_plane_into<T: Real, S: Solver<T>>(
                 (half * (c0 - c1), half * (c0 + c1) / e)
             }
         };
-        seg.omega = w;
-        seg.duration = d[j];
         seg.p = p;
         seg.q = q;
         seg.zmp = polys[j];
     }
-    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4; their particular
-    // solutions are added to the known ones (linearity).
+    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4 of the first and the
+    // last interval: their particular solutions are those of the whole polynomials.
     for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
-        for k in 0..3 {
-            out[j].zmp[k + 2] = y[col + k];
-            add_particular(&mut out[j].particular, k + 2, y[col + k], w * d[j]);
-        }
+        let seg = &mut out[j];
+        seg.zmp[2..].copy_from_slice(&y[col..col + 3]);
+        // Same λ as in `build_rhs`: the tail is as it must be.
+        particular_over(&mut seg.particular, &seg.zmp, w * d[j], w * d[j]);
     }
     for seg in out.iter_mut() {
         seg.zmp[0] += origin;
@@ -571,6 +571,52 @@ mod tests {
             );
         }
         assert!(worst < 1e-10, "relative difference {worst}");
+    }
+
+    /// A plan solved over the plan of another timing (the node's two buffers take turns) is
+    /// exactly the plan solved into a fresh buffer: the particular solutions' unused tails
+    /// (`particular_len`) are zero in both, whatever the buffer held before, including after a
+    /// solve that failed half-way.
+    #[test]
+    fn a_reused_plan_buffer_gives_the_fresh_plan() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut reused = Plan::zeroed(timing());
+        for case in 0..300 {
+            let mut t = timing();
+            for d in t.durations.iter_mut() {
+                // 5 ms to 1.5 s: λ = ωD on both sides of 1.
+                *d = (libm::round(next() * 300.0)).max(1.0) * 0.005;
+            }
+            let mut bound = || {
+                let mut s = || State::new(next() - 0.5, next() - 0.5);
+                PlaneBoundary {
+                    cog_start: s(),
+                    zmp_start: s(),
+                    via: [s(), s(), s(), s(), s(), s(), s()],
+                    cog_end: s(),
+                }
+            };
+            let (mut bx, by) = (bound(), bound());
+            let f = Factorized::new(&t).unwrap();
+            if case % 7 == 3 {
+                // Fails in the solve of y (after x was written): the buffer is left dirty.
+                let mut bad = by;
+                bad.cog_end.pos = f64::MAX;
+                bad.via[3].pos = -f64::MAX;
+                let _ = f.solve(&bx, &bad, &mut reused);
+                bx.cog_start.vel += 1e-3;
+            }
+            let mut fresh = Plan::zeroed(t);
+            f.solve(&bx, &by, &mut fresh).unwrap();
+            f.solve(&bx, &by, &mut reused).unwrap();
+            assert_eq!(reused, fresh, "case {case}: {:?}", t.durations);
+        }
     }
 
     #[test]
