@@ -2,8 +2,10 @@
 //! `tests/tests/qemu_m4.rs` for the M4F): every built-in scenario and every TOML scenario of
 //! `host-sim/scenarios/` through `sim::simulate`, and one fault-sweep run (fig4, seed 1) per
 //! fault kind that the in-memory device replays as host-sim's bus does (not the flood at
-//! 100 % load: see `tests/tests/qemu.rs`), each with its candump log; [`binary`] encodes one for the image's
-//! `replay.wlog` (a file of such logs, one after the other).
+//! 100 % load: see `tests/tests/qemu.rs`), each with its candump log; [`binary`] encodes one
+//! for the image's `replay.wlog` (a file of such logs, one after the other); [`play`] plays
+//! one into a node of either scalar as the image does, [`compare`] checks the image's report
+//! against that.
 
 use std::borrow::Borrow;
 use std::path::{Path, PathBuf};
