@@ -137,6 +137,8 @@ SKIP=(
     timing::tests::random_quartics_match_brute_force
     window::tests::structured_elimination_agrees_with_banded_lu_over_many_timings
     wire::tests::round_to_i32_is_libm_round_saturated
+    # the f32 path of the same (400,000 cases; not measured under Miri): run by `cargo test`
+    wire::tests::round_to_i32_of_f32_is_libm_roundf_saturated
     # --test oracle
     planner_matches_the_general_44_unknown_formulation
     rk4_integration_matches_the_closed_form_cog

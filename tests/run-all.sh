@@ -15,7 +15,9 @@
 # 4. the firmware images: the STM32H743 one (workspace firmware/; its flash and RAM checked
 #    against firmware/README.md by firmware/size.sh) and the QEMU one
 #    (firmware/qemu; the walk-tests QEMU test in step 2 builds and runs it, which needs
-#    qemu-system-arm: step 1 installs it with apt-get);
+#    qemu-system-arm: step 1 installs it with apt-get), and the M4F one (firmware/qemu with
+#    the `m4f` feature: the f32 node on QEMU's mps2-an386, built for the Cortex-M4 into
+#    firmware/qemu/target/m4f; tests/tests/qemu_m4.rs in step 2 builds and runs it);
 # 5. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
 #    about 4 minutes; WALK_SKIP_MIRI=1 leaves it out).
 #
@@ -182,6 +184,15 @@ bash firmware/size.sh --check
     cd firmware/qemu
     cargo build --release
     elf="target/$TARGET/release/qemu"
+    test -f "$elf"
+    image_size "$elf"
+)
+# The M4F image (the f32 node; Cortex-M4 rustflags, so a target dir of its own), built and run
+# by tests/tests/qemu_m4.rs above.
+(
+    cd firmware/qemu
+    RUSTFLAGS="-C target-cpu=cortex-m4" cargo build --release --features m4f --target-dir target/m4f
+    elf="target/m4f/$TARGET/release/qemu"
     test -f "$elf"
     image_size "$elf"
 )

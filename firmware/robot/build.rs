@@ -37,25 +37,15 @@ fn main() {
             path.display()
         ));
     }
-    let cfg = planner_core::robot::node_config_source(&robot.node_config());
+    let node_config = robot.node_config();
+    let node_config_f32 = node_config.cast::<f32>();
+    let cfg = planner_core::robot::node_config_source(&node_config);
+    let cfg_f32 = planner_core::robot::node_config_source(&node_config_f32);
     // The preview gains, computed here once (the reader has checked that they can be), so
-    // that the image copies them at start-up instead of iterating the Riccati equation.
-    let gains = if robot.params.shaping {
-        let config = robot.params.preview_config();
-        let mut g = Box::new(planner_core::shaping::PreviewGains::<
-            f64,
-            { planner_core::gait::PREVIEW },
-        >::zeroed());
-        if let Err(e) = g.compute(&config, planner_core::shaping::Law::FromRest) {
-            fail(&format!(
-                "robot file {}: preview gains: {e:?}",
-                path.display()
-            ));
-        }
-        g.source()
-    } else {
-        "::planner_core::shaping::PreviewGains::zeroed()".to_string()
-    };
+    // that the image copies them at start-up instead of iterating the Riccati equation. The
+    // f32 node's from its own (rounded) parameters, as `Node::new` computes them on the host.
+    let gains = gains_source(&node_config.params, &path);
+    let gains_f32 = gains_source(&node_config_f32.params, &path);
     let out = format!(
         "/// The robot's name (`name` in its file).\n\
          pub const NAME: &str = {name:?};\n\
@@ -63,13 +53,42 @@ fn main() {
          pub const NODE_CONFIG: ::planner_core::node::NodeConfig = {cfg};\n\
          /// The preview-control gains of the robot file (in flash), for\n\
          /// `Node::with_gains(NODE_CONFIG, &GAINS)`.\n\
-         pub static GAINS: ::planner_core::shaping::PreviewGains<f64, {{ ::planner_core::gait::PREVIEW }}> = {gains};\n",
+         pub static GAINS: ::planner_core::shaping::PreviewGains<f64, {{ ::planner_core::gait::PREVIEW }}> = {gains};\n\
+         /// [`NODE_CONFIG`] in `f32` (every real rounded to the nearest `f32`), for the node of\n\
+         /// a single-precision FPU.\n\
+         pub const NODE_CONFIG_F32: ::planner_core::node::NodeConfig<f32> = {cfg_f32};\n\
+         /// The preview-control gains of [`NODE_CONFIG_F32`] (in flash; a `static` that only\n\
+         /// an image that uses it links), for `Node::with_gains(NODE_CONFIG_F32, &GAINS_F32)`.\n\
+         pub static GAINS_F32: ::planner_core::shaping::PreviewGains<f32, {{ ::planner_core::gait::PREVIEW }}> = {gains_f32};\n",
         name = robot.name,
     );
     let dest = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo")).join("robot.rs");
     if let Err(e) = std::fs::write(&dest, out) {
         fail(&format!("cannot write {}: {e}", dest.display()));
     }
+}
+
+/// The preview gains of `params` (computed in f64, rounded to `T`) as a constant expression;
+/// all-zero gains if the robot does not shape its ZMP.
+fn gains_source<T: planner_core::robot::Literal>(
+    params: &planner_core::gait::GaitParams<T>,
+    path: &std::path::Path,
+) -> String {
+    if !params.shaping {
+        return "::planner_core::shaping::PreviewGains::zeroed()".to_string();
+    }
+    let config = params.preview_config();
+    let mut g = Box::new(planner_core::shaping::PreviewGains::<
+        T,
+        { planner_core::gait::PREVIEW },
+    >::zeroed());
+    if let Err(e) = g.compute(&config, planner_core::shaping::Law::FromRest) {
+        fail(&format!(
+            "robot file {}: preview gains: {e:?}",
+            path.display()
+        ));
+    }
+    g.source()
 }
 
 fn fail(message: &str) -> ! {

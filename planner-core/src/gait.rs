@@ -270,9 +270,11 @@ impl<T: Real> GaitParams<T> {
     pub fn validate(&self) -> Result<(), GaitError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let dt = self.dt.f64();
+        // In `T`, as the window computes and checks its intervals (for `f32`, 1 tick of the
+        // rounded 5 ms is 4.99999989 ms in `f64`, but exactly the window's 5 ms in `f32`).
         let span = |ticks: i64| {
-            let d = ticks as f64 * dt;
-            (0.005 - 1e-12..=10.0 + 1e-12).contains(&d)
+            let d = (T::of(ticks as f64) * self.dt).f64();
+            (T::of(0.005).f64() - 1e-12..=T::of(10.0).f64() + 1e-12).contains(&d)
         };
         let single = i64::from(self.single_ticks);
         let ok = pos(dt)

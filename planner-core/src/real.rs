@@ -49,6 +49,17 @@ pub trait Real:
     fn acos(self) -> Self;
     /// Cosine (libm).
     fn cos(self) -> Self;
+    /// Sine (libm).
+    fn sin(self) -> Self;
+    /// Four-quadrant arc tangent of `self / x` (libm).
+    fn atan2(self, x: Self) -> Self;
+    /// Nearest integer, halves away from zero (libm).
+    fn round(self) -> Self;
+    /// Toward zero as an `i32`, saturated at the `i32` range, `NaN` to 0 (Rust's `as`: one
+    /// hardware conversion when the FPU has this precision).
+    fn trunc_i32(self) -> i32;
+    /// The nearest value of this type to `v` (exact for `f64`; the hardware conversion).
+    fn of_i32(v: i32) -> Self;
     /// Natural logarithm (libm).
     fn ln(self) -> Self;
     /// Absolute value.
@@ -113,6 +124,26 @@ impl Real for f64 {
         libm::cos(self)
     }
     #[inline]
+    fn sin(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline]
+    fn round(self) -> Self {
+        libm::round(self)
+    }
+    #[inline]
+    fn trunc_i32(self) -> i32 {
+        self as i32
+    }
+    #[inline]
+    fn of_i32(v: i32) -> Self {
+        f64::from(v)
+    }
+    #[inline]
     fn ln(self) -> Self {
         libm::log(self)
     }
@@ -157,6 +188,26 @@ impl Real for f32 {
     #[inline]
     fn cos(self) -> Self {
         libm::cosf(self)
+    }
+    #[inline]
+    fn sin(self) -> Self {
+        libm::sinf(self)
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        libm::atan2f(self, x)
+    }
+    #[inline]
+    fn round(self) -> Self {
+        libm::roundf(self)
+    }
+    #[inline]
+    fn trunc_i32(self) -> i32 {
+        self as i32
+    }
+    #[inline]
+    fn of_i32(v: i32) -> Self {
+        v as f32
     }
     #[inline]
     fn ln(self) -> Self {

@@ -417,25 +417,44 @@ fn bits(v: f64) -> String {
     format!("f64::from_bits({:#018x})", v.to_bits())
 }
 
+/// A scalar that the build-time writers ([`node_config_source`],
+/// [`PreviewGains::source`]) can write as a Rust constant expression with exactly its bits.
+pub trait Literal: crate::real::Real {
+    /// `self` as `f64::from_bits(…)` or `f32::from_bits(…)`.
+    fn literal(self) -> String;
+}
+
+impl Literal for f64 {
+    fn literal(self) -> String {
+        bits(self)
+    }
+}
+
+impl Literal for f32 {
+    fn literal(self) -> String {
+        format!("f32::from_bits({:#010x})", self.to_bits())
+    }
+}
+
 /// `cfg` as a Rust constant expression of type `planner_core::node::NodeConfig` (every float by
 /// its bits): what the firmware's build script writes for the robot file it compiles in.
-pub fn node_config_source(cfg: &NodeConfig) -> String {
+pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
     let p = &cfg.params;
     let r = &cfg.reach;
     let tail = match p.tail {
         Tail::Settle => "Settle",
         Tail::Single => "Single",
     };
-    let foot = |f: &crate::gait::Footstep<f64>| {
+    let foot = |f: &crate::gait::Footstep<T>| {
         let side = match f.side {
             crate::gait::Side::Left => "Left",
             crate::gait::Side::Right => "Right",
         };
         format!(
             "::planner_core::gait::Footstep {{ side: ::planner_core::gait::Side::{side}, x: {}, y: {}, yaw: {} }}",
-            bits(f.x),
-            bits(f.y),
-            bits(f.yaw)
+            f.x.literal(),
+            f.y.literal(),
+            f.yaw.literal()
         )
     };
     format!(
@@ -480,8 +499,8 @@ pub fn node_config_source(cfg: &NodeConfig) -> String {
         max_growth: {mg},
     }},
 }}",
-        omega = bits(p.omega),
-        dt = bits(p.dt),
+        omega = p.omega.literal(),
+        dt = p.dt.literal(),
         single = p.single_ticks,
         double = p.double_ticks,
         start = p.start_ticks,
@@ -490,10 +509,10 @@ pub fn node_config_source(cfg: &NodeConfig) -> String {
         rest = p.rest_ticks,
         amin = p.adjust_min_ticks,
         amax = p.adjust_max_ticks,
-        sw = bits(p.step_width),
-        shl = bits(p.sole_half_length),
-        shw = bits(p.sole_half_width),
-        sh = bits(p.step_height),
+        sw = p.step_width.literal(),
+        shl = p.sole_half_length.literal(),
+        shw = p.sole_half_width.literal(),
+        sh = p.step_height.literal(),
         shaping = p.shaping,
         zc = bits(p.cog_height),
         g = bits(p.gravity),
@@ -505,14 +524,14 @@ pub fn node_config_source(cfg: &NodeConfig) -> String {
         max_rx = cfg.max_rx,
         max_foreign = cfg.max_foreign,
         max_plans = cfg.max_plans,
-        mf = bits(r.max_forward),
-        mb = bits(r.max_backward),
-        minw = bits(r.min_width),
-        maxw = bits(r.max_width),
-        my = bits(r.max_yaw),
-        mfd = bits(r.max_feet_distance),
-        yc = bits(r.yaw_cost),
-        ms = bits(r.max_stride),
-        mg = bits(r.max_growth),
+        mf = r.max_forward.literal(),
+        mb = r.max_backward.literal(),
+        minw = r.min_width.literal(),
+        maxw = r.max_width.literal(),
+        my = r.max_yaw.literal(),
+        mfd = r.max_feet_distance.literal(),
+        yc = r.yaw_cost.literal(),
+        ms = r.max_stride.literal(),
+        mg = r.max_growth.literal(),
     )
 }

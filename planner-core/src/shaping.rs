@@ -260,18 +260,25 @@ impl Default for PreviewConfig {
 }
 
 #[cfg(feature = "robot")]
-impl<const NL: usize> PreviewGains<f64, NL> {
+impl<T: crate::robot::Literal, const NL: usize> PreviewGains<T, NL> {
     /// These gains as a Rust constant expression ([`PreviewGains::from_parts`], every float by
     /// its bits), for a build script (feature `robot`, std).
     pub fn source(&self) -> std::string::String {
         use core::fmt::Write;
         let mut s = std::string::String::new();
-        let f = |v: f64| std::format!("f64::from_bits({:#018x})", v.to_bits());
-        let list = |vs: &[f64]| {
+        let f = |v: T| v.literal();
+        let list = |vs: &[T]| {
             let items: std::vec::Vec<_> = vs.iter().map(|&v| f(v)).collect();
             std::format!("[{}]", items.join(", "))
         };
-        let tables = |t: &[[f64; NL]; MOMENTS]| {
+        let made_for = |vs: &[f64; 5]| {
+            let items: std::vec::Vec<_> = vs
+                .iter()
+                .map(|&v| crate::robot::Literal::literal(v))
+                .collect();
+            std::format!("[{}]", items.join(", "))
+        };
+        let tables = |t: &[[T; NL]; MOMENTS]| {
             let rows: std::vec::Vec<_> = t.iter().map(|r| list(r)).collect();
             std::format!("[{}]", rows.join(",\n"))
         };
@@ -283,7 +290,7 @@ impl<const NL: usize> PreviewGains<f64, NL> {
             s,
             "::planner_core::shaping::PreviewGains::from_parts(\n\
              ::planner_core::shaping::Law::{law},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{},\n{})",
-            list(&self.made_for),
+            made_for(&self.made_for),
             list(&self.dt),
             f(self.zg),
             f(self.k_int),

@@ -2,6 +2,8 @@
 
 use std::process::Command;
 
+pub mod logs;
+
 /// A `cargo` command run in `dir` (a firmware workspace) with this test's own build settings
 /// removed, so that they do not leak into the firmware's build: its target and rustflags come
 /// from `firmware/.cargo/config.toml`.
@@ -20,6 +22,141 @@ pub fn firmware_cargo(dir: &std::path::Path) -> Command {
         cmd.env_remove(var);
     }
     cmd
+}
+
+/// The QEMU images' report lines (`KIND key=value …`), as the QEMU tests read them.
+pub mod report {
+    use std::collections::BTreeMap;
+    use std::path::Path;
+    use std::process::Command;
+
+    /// One output line: its keyword and `key=value` fields.
+    #[derive(Debug, Clone)]
+    pub struct Record {
+        /// The first word.
+        pub kind: String,
+        /// The `key=value` words.
+        pub fields: BTreeMap<String, String>,
+    }
+
+    impl Record {
+        /// The line's record; `None` for an empty line.
+        pub fn parse(line: &str) -> Option<Record> {
+            let mut words = line.split_whitespace();
+            let kind = words.next()?.to_string();
+            let fields = words
+                .filter_map(|w| w.split_once('='))
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect();
+            Some(Record { kind, fields })
+        }
+
+        /// Field `key` (panics if missing: the image's report is malformed).
+        pub fn get(&self, key: &str) -> &str {
+            self.fields
+                .get(key)
+                .unwrap_or_else(|| panic!("{} line without `{key}`: {:?}", self.kind, self.fields))
+        }
+
+        /// Field `key` as a number (panics if it is not one).
+        pub fn num<T: std::str::FromStr>(&self, key: &str) -> T {
+            let v = self.get(key);
+            v.parse()
+                .unwrap_or_else(|_| panic!("{} line: `{key}={v}` is not a number", self.kind))
+        }
+    }
+
+    /// What one QEMU run printed.
+    pub struct QemuRun {
+        /// Everything it printed.
+        pub stdout: String,
+        /// Its lines' records.
+        pub records: Vec<Record>,
+    }
+
+    impl QemuRun {
+        /// The records of `kind`.
+        pub fn all<'a>(&'a self, kind: &'a str) -> impl Iterator<Item = &'a Record> + 'a {
+            self.records.iter().filter(move |r| r.kind == kind)
+        }
+
+        /// The records of `kind` for log `scenario`.
+        pub fn of<'a>(
+            &'a self,
+            kind: &'a str,
+            scenario: &'a str,
+        ) -> impl Iterator<Item = &'a Record> + 'a {
+            self.all(kind)
+                .filter(move |r| r.get("scenario") == scenario)
+        }
+
+        /// The one record of `kind` (panics unless there is exactly one).
+        pub fn one<'a>(&'a self, kind: &'a str) -> &'a Record {
+            let mut it = self.all(kind);
+            let r = it
+                .next()
+                .unwrap_or_else(|| panic!("no {kind} line in the QEMU output"));
+            assert!(it.next().is_none(), "more than one {kind} line");
+            r
+        }
+
+        /// The one record of `kind` for log `scenario` (panics unless there is exactly one).
+        pub fn one_of<'a>(&'a self, kind: &'a str, scenario: &'a str) -> &'a Record {
+            let mut it = self.of(kind, scenario);
+            let r = it
+                .next()
+                .unwrap_or_else(|| panic!("no {kind} line for {scenario}"));
+            assert!(
+                it.next().is_none(),
+                "more than one {kind} line for {scenario}"
+            );
+            r
+        }
+
+        /// The `TIMING` record of `kind` for `scenario` (`all`: over every log).
+        pub fn timing<'a>(&'a self, scenario: &'a str, kind: &'a str) -> Option<&'a Record> {
+            self.of("TIMING", scenario).find(|r| r.get("kind") == kind)
+        }
+    }
+
+    /// Runs a QEMU image (`elf`, on QEMU machine `machine`, counting instructions with
+    /// `-icount shift=0`, semihosting on) in `dir`, which holds its input files; its exit code
+    /// and output (the run is stopped after 300 s: exit code 124).
+    pub fn qemu(machine: &str, elf: &Path, dir: &Path) -> std::process::Output {
+        Command::new("timeout")
+            .arg("300")
+            .args(["qemu-system-arm", "-M", machine, "-nographic"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .args(["-icount", "shift=0"])
+            .arg("-kernel")
+            .arg(elf)
+            .current_dir(dir)
+            .output()
+            .expect("cannot run timeout/qemu-system-arm")
+    }
+
+    /// [`qemu`], which must succeed and print a `DONE` line; its report.
+    pub fn run_qemu(machine: &str, elf: &Path, dir: &Path) -> QemuRun {
+        let out = qemu(machine, elf, dir);
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "QEMU exited with {:?} (124: timed out)\nstdout (tail):\n{}\nstderr:\n{}",
+            out.status.code(),
+            tail(&stdout, 20),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let records = stdout.lines().filter_map(Record::parse).collect();
+        let run = QemuRun { stdout, records };
+        assert!(run.all("DONE").next().is_some(), "no DONE line");
+        run
+    }
+
+    /// The last `n` lines of `s`.
+    pub fn tail(s: &str, n: usize) -> String {
+        let lines: Vec<&str> = s.lines().collect();
+        lines[lines.len().saturating_sub(n)..].join("\n")
+    }
 }
 
 /// `false` when `qemu-system-arm` is missing and `WALK_SKIP_QEMU=1`; panics when it is missing
@@ -46,12 +183,31 @@ pub fn qemu_available() -> bool {
 /// `cargo build --release` in `firmware/<dir>` (a workspace with its own target dir); the ELF
 /// `target/thumbv7em-none-eabihf/release/<bin>`.
 pub fn build_firmware(dir: &str, bin: &str) -> std::path::PathBuf {
+    build_firmware_with(dir, bin, None, &[], "target")
+}
+
+/// [`build_firmware`] with `RUSTFLAGS` (e.g. another `target-cpu`), further arguments (e.g.
+/// `--features`) and a target dir of its own (relative to `firmware/<dir>`, so that builds with
+/// other flags do not replace each other's); the ELF
+/// `<target_dir>/thumbv7em-none-eabihf/release/<bin>`.
+pub fn build_firmware_with(
+    dir: &str,
+    bin: &str,
+    rustflags: Option<&str>,
+    args: &[&str],
+    target_dir: &str,
+) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("..")
         .join("firmware")
         .join(dir);
-    let out = firmware_cargo(&dir)
-        .args(["build", "--release"])
+    let mut cmd = firmware_cargo(&dir);
+    if let Some(flags) = rustflags {
+        cmd.env("RUSTFLAGS", flags);
+    }
+    let out = cmd
+        .args(["build", "--release", "--target-dir", target_dir])
+        .args(args)
         .output()
         .expect("cannot run cargo");
     assert!(
@@ -60,7 +216,10 @@ pub fn build_firmware(dir: &str, bin: &str) -> std::path::PathBuf {
         dir.display(),
         String::from_utf8_lossy(&out.stderr)
     );
-    let elf = dir.join("target/thumbv7em-none-eabihf/release").join(bin);
+    let elf = dir
+        .join(target_dir)
+        .join("thumbv7em-none-eabihf/release")
+        .join(bin);
     assert!(elf.is_file(), "no image at {}", elf.display());
     elf
 }

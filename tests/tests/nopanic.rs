@@ -9,7 +9,8 @@
 //!   board's CAN link adapter over its FDCAN1 register accesses, the slot pacer, the cycle
 //!   bookkeeping, the watchdog feed, every defmt call through the board's logger) links, and
 //!   the image holds the planner (a `.text` of tens of KB: nothing was optimised away); the
-//!   narrower `scoped` variant (arbitrary frames instead of the adapter, no logging) links too;
+//!   narrower `scoped` variant (arbitrary frames instead of the adapter, no logging) links too,
+//!   and so does the `f32` variant (the whole cycle with the f32 node of the M4F image);
 //!   then the negative control, the same build with `selftest-panic` (one reachable
 //!   out-of-range index), must FAIL to link with that symbol in the linker's message, which
 //!   shows that the check is live.
@@ -96,6 +97,8 @@ fn control_cycle_cannot_panic() {
     let _one = BUILD.lock().unwrap_or_else(|e| e.into_inner());
 
     links(&["--features", "scoped"]);
+    // The same cycle with the f32 node (the M4F image's).
+    links(&["--features", "f32"]);
     let elf = links(&[]);
     let bytes = std::fs::read(&elf).expect("cannot read the image");
     let text = section_size(&bytes, ".text").expect("no .text section in the image");

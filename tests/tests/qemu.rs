@@ -39,202 +39,22 @@
 //! `qemu-system-arm` comes from Debian's `qemu-system-arm` package, which `tests/run-all.sh`
 //! installs. Without it these tests fail, unless `WALK_SKIP_QEMU=1` is set.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command as Process;
 use std::sync::OnceLock;
 
-use gait_loop::binlog::{Frames, Header, SliceBytes};
-use gait_loop::{Fnv, Player};
-use host_sim::faults::{run_case_logged, FaultKind, HEAVY};
 use host_sim::replay;
-use host_sim::scenario::{built_in, BUILT_IN};
-use host_sim::sim::{simulate, start_config, SimConfig};
-use host_sim::toml_scenario;
-use planner_core::node::{Node, NodeConfig};
-use planner_core::playback::LogClock;
-use planner_core::wire::RawFrame;
+use host_sim::sim::SimConfig;
+use planner_core::node::Node;
+use walk_tests::logs::{self, compare, Case, Expected};
+use walk_tests::report::{self, tail, QemuRun, Record};
+use walk_tests::{build_firmware, qemu_available};
 
 /// 5 % of a 5 ms control cycle at 480 MHz, in cycles (compared with instruction counts).
 const BUDGET: u64 = 120_000;
+/// The QEMU machine of the M7 image.
+const MACHINE: &str = "mps2-an500";
 /// `firmware/qemu`'s report: instructions per CMSDK timer tick under `-icount shift=0`.
 const INSTRUCTIONS_PER_TICK: u64 = 40;
-/// The image's `CHECK` period \[cycles\].
-const CHECK_EVERY: u64 = 500;
-
-/// One output line: its keyword and `key=value` fields.
-#[derive(Debug, Clone)]
-struct Record {
-    kind: String,
-    fields: BTreeMap<String, String>,
-}
-
-impl Record {
-    fn parse(line: &str) -> Option<Record> {
-        let mut words = line.split_whitespace();
-        let kind = words.next()?.to_string();
-        let fields = words
-            .filter_map(|w| w.split_once('='))
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect();
-        Some(Record { kind, fields })
-    }
-
-    fn get(&self, key: &str) -> &str {
-        self.fields
-            .get(key)
-            .unwrap_or_else(|| panic!("{} line without `{key}`: {:?}", self.kind, self.fields))
-    }
-
-    fn num<T: std::str::FromStr>(&self, key: &str) -> T {
-        let v = self.get(key);
-        v.parse()
-            .unwrap_or_else(|_| panic!("{} line: `{key}={v}` is not a number", self.kind))
-    }
-}
-
-/// What one QEMU run printed.
-struct QemuRun {
-    stdout: String,
-    records: Vec<Record>,
-}
-
-impl QemuRun {
-    fn all<'a>(&'a self, kind: &'a str) -> impl Iterator<Item = &'a Record> + 'a {
-        self.records.iter().filter(move |r| r.kind == kind)
-    }
-
-    fn of<'a>(&'a self, kind: &'a str, scenario: &'a str) -> impl Iterator<Item = &'a Record> + 'a {
-        self.all(kind)
-            .filter(move |r| r.get("scenario") == scenario)
-    }
-
-    fn one<'a>(&'a self, kind: &'a str) -> &'a Record {
-        let mut it = self.all(kind);
-        let r = it
-            .next()
-            .unwrap_or_else(|| panic!("no {kind} line in the QEMU output"));
-        assert!(it.next().is_none(), "more than one {kind} line");
-        r
-    }
-
-    fn one_of<'a>(&'a self, kind: &'a str, scenario: &'a str) -> &'a Record {
-        let mut it = self.of(kind, scenario);
-        let r = it
-            .next()
-            .unwrap_or_else(|| panic!("no {kind} line for {scenario}"));
-        assert!(
-            it.next().is_none(),
-            "more than one {kind} line for {scenario}"
-        );
-        r
-    }
-
-    fn timing<'a>(&'a self, scenario: &'a str, kind: &'a str) -> Option<&'a Record> {
-        self.of("TIMING", scenario).find(|r| r.get("kind") == kind)
-    }
-}
-
-/// One host run to replay on the target.
-struct Case {
-    /// The log's name (`scenario=` in the image's report).
-    name: String,
-    /// The node's configuration (the run's start feet).
-    cfg: NodeConfig,
-    /// The run's candump log.
-    log: Vec<String>,
-    /// Whether the run must contain a single-support time adjustment.
-    adjusts: bool,
-}
-
-/// The fault-sweep runs (fig4, seed 1): one per kind, the flood excepted (module docs).
-fn fault_runs() -> Vec<(String, FaultKind, f64)> {
-    let mut v: Vec<(String, FaultKind, f64)> = [
-        (FaultKind::None, 0.0),
-        (FaultKind::Drop, 0.05),
-        (FaultKind::Duplicate, 0.05),
-        (FaultKind::Corrupt, 0.05),
-        (FaultKind::Delay, 0.05),
-        (FaultKind::Silence, 0.0),
-        (FaultKind::Flood, 0.2),
-        (FaultKind::Burst, 20.0),
-    ]
-    .into_iter()
-    .map(|(k, r)| (format!("fault-{}-{r}", k.name()), k, r))
-    .collect();
-    for i in 0..HEAVY.len() {
-        v.push((format!("fault-mixed-{i}"), FaultKind::Mixed(i), 0.0));
-    }
-    v
-}
-
-/// Every run this test replays (module docs), recorded on the host.
-fn cases() -> Vec<Case> {
-    let sim = SimConfig::default();
-    let mut out = Vec::new();
-    for name in BUILT_IN {
-        let s = built_in(name).unwrap();
-        let run = simulate(&s, &sim).unwrap_or_else(|e| panic!("{name}: {e}"));
-        out.push(Case {
-            name: name.to_string(),
-            cfg: start_config(&s, &sim.node),
-            log: run.can_log,
-            adjusts: matches!(name, "fig4" | "lateral"),
-        });
-    }
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    files.sort();
-    assert!(!files.is_empty(), "no TOML scenario in {}", dir.display());
-    for path in files {
-        let s = toml_scenario::load(&path).unwrap();
-        let run = simulate(&s, &sim).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let stem = path.file_stem().unwrap().to_string_lossy();
-        out.push(Case {
-            name: format!("toml-{stem}"),
-            cfg: start_config(&s, &sim.node),
-            log: run.can_log,
-            adjusts: true,
-        });
-    }
-    let fig4 = built_in("fig4").unwrap();
-    for (name, kind, rate) in fault_runs() {
-        let (_, log) =
-            run_case_logged(&fig4, kind, rate, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
-        out.push(Case {
-            name,
-            // `faults::run_case_logged` runs `NodeConfig::hrp2()` as it is.
-            cfg: NodeConfig::hrp2(),
-            log,
-            adjusts: false,
-        });
-    }
-    out
-}
-
-/// What the host computed for one log.
-struct Expected {
-    cycles: u64,
-    fed: u32,
-    cut: bool,
-    tx_frames: usize,
-    tx_digest: String,
-    ref_digest: String,
-    /// (cycle, frames so far, frame digest, reference digest) after every CHECK_EVERY-th cycle.
-    checks: Vec<(u64, usize, String, String)>,
-    /// (tick, adjust_ticks) of every re-plan.
-    replans: Vec<(u64, i32)>,
-    counters: (u16, u16, u16),
-    rx_overflow: u32,
-}
-
-fn hex(h: &Fnv) -> String {
-    format!("{:#018x}", h.0)
-}
 
 /// The log replayed on the host twice: by host-sim (`replay_into::<16>`, its virtual bus) and
 /// by the target's player compiled for the host, reading the binary log through the target's
@@ -250,146 +70,28 @@ fn expected(case: &Case, bytes: &[u8]) -> Expected {
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"));
 
-    let mut src = SliceBytes::new(bytes);
-    let header = Header::read(&mut src).unwrap().expect("a header");
-    assert_eq!(header.name(), name);
-    assert_eq!(header.feet, [case.cfg.left, case.cfg.right], "{name}: feet");
-    let mut frames = Frames::new(&header, &mut src);
-    let clock = LogClock::new(header.first_us, u64::from(header.period_us)).unwrap();
-    let mut player = Player::new(clock, header.count, header.last_us);
     let mut node: Node<16> = Node::new(case.cfg).unwrap();
-    let mut trajectory = vec![*node.gait().last()];
-    let mut sent: Vec<(u64, RawFrame)> = Vec::new();
-    let (mut tx, mut refs) = (Fnv::default(), Fnv::default());
-    refs.add_reference(node.gait().last());
-    let mut checks = Vec::new();
-    let mut replans = Vec::new();
-    while !player.done() {
-        let k = player.next_cycle();
-        let report = player
-            .cycle(
-                &mut node,
-                &mut frames,
-                |n, ms, bus| n.poll(ms, bus),
-                |c, f| {
-                    sent.push((c, *f));
-                    tx.add_sent(c, f);
-                },
-            )
-            .unwrap_or_else(|_| panic!("{name}: log truncated: {:?}", frames.error()));
-        trajectory.push(report.reference);
-        refs.add_reference(&report.reference);
-        let tick = node.gait().ticks();
-        if let Some(info) = node.gait().last_replan().filter(|i| i.tick == tick) {
-            replans.push((tick, info.adjust_ticks));
-        }
-        if (k + 1) % CHECK_EVERY == 0 {
-            checks.push((k, sent.len(), hex(&tx), hex(&refs)));
-        }
-    }
-    assert_eq!(frames.remaining(), 0, "{name}: frames left");
-    assert_eq!(frames.error(), None, "{name}: decoder");
-    assert_eq!(src.remaining(), 0, "{name}: bytes after the log");
-    assert_eq!(player.fed() as usize, host.replayed, "{name}: frames fed");
-    assert_eq!(player.cut(), host.cut, "{name}: cut");
+    let played = logs::play(name, bytes, &mut node);
+    assert_eq!(played.feet, [case.cfg.left, case.cfg.right], "{name}: feet");
+    let want = &played.expected;
+    assert_eq!(want.fed as usize, host.replayed, "{name}: frames fed");
+    assert_eq!(want.cut, host.cut, "{name}: cut");
     assert_eq!(
-        sent, host.node_frames,
+        played.sent, host.node_frames,
         "{name}: the node's frames, target player (host build) vs host-sim replay"
     );
-    assert_eq!(trajectory, host.trajectory, "{name}: references");
-    assert!(sent.len() > 1000, "{name}: only {} node frames", sent.len());
-    let c = node.counters();
-    Expected {
-        cycles: player.next_cycle(),
-        fed: player.fed(),
-        cut: player.cut(),
-        tx_frames: sent.len(),
-        tx_digest: hex(&tx),
-        ref_digest: hex(&refs),
-        checks,
-        replans,
-        counters: (c.refused, c.tx_dropped, c.bus_errors),
-        rx_overflow: player.bus().rx_overflow(),
-    }
+    assert_eq!(played.trajectory, host.trajectory, "{name}: references");
+    played.expected
 }
 
-fn firmware_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("firmware")
-        .join("qemu")
-}
-
-/// `false` when QEMU is missing and `WALK_SKIP_QEMU=1`; panics when it is missing otherwise.
-fn qemu_available() -> bool {
-    let found = Process::new("qemu-system-arm")
-        .arg("--version")
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if found {
-        return true;
-    }
-    if std::env::var("WALK_SKIP_QEMU").as_deref() == Ok("1") {
-        eprintln!("qemu-system-arm not found: QEMU checks skipped (WALK_SKIP_QEMU=1)");
-        return false;
-    }
-    panic!(
-        "qemu-system-arm not found: run tests/run-all.sh (it installs Debian's qemu-system-arm), \
-         or `apt-get install qemu-system-arm`; set WALK_SKIP_QEMU=1 to skip the QEMU checks"
-    );
-}
-
-/// `cargo build --release` in firmware/qemu (its own workspace and target dir); the ELF.
-fn build_image() -> PathBuf {
-    let dir = firmware_dir();
-    let mut cmd = walk_tests::firmware_cargo(&dir);
-    cmd.args(["build", "--release"]);
-    let out = cmd.output().expect("cannot run cargo");
-    assert!(
-        out.status.success(),
-        "building the QEMU image failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let elf = dir.join("target/thumbv7em-none-eabihf/release/qemu");
-    assert!(elf.is_file(), "no image at {}", elf.display());
-    elf
-}
-
-/// Runs the image in `dir` (which holds its `replay.wlog`): its exit code and output.
+/// Runs the M7 image in `dir` (which holds its `replay.wlog`): its exit code and output.
 fn qemu(elf: &Path, dir: &Path) -> std::process::Output {
-    Process::new("timeout")
-        .arg("300")
-        .args(["qemu-system-arm", "-M", "mps2-an500", "-nographic"])
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .args(["-icount", "shift=0"])
-        .arg("-kernel")
-        .arg(elf)
-        .current_dir(dir)
-        .output()
-        .expect("cannot run timeout/qemu-system-arm")
+    report::qemu(MACHINE, elf, dir)
 }
 
-/// Runs the image in `dir` (which holds its `replay.wlog`); it must succeed.
+/// Runs the M7 image in `dir`; it must succeed.
 fn run_qemu(elf: &Path, dir: &Path) -> QemuRun {
-    let out = qemu(elf, dir);
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "QEMU exited with {:?} (124: timed out)\nstdout (tail):\n{}\nstderr:\n{}",
-        out.status.code(),
-        tail(&stdout, 20),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let records = stdout.lines().filter_map(Record::parse).collect();
-    let run = QemuRun { stdout, records };
-    assert!(run.all("DONE").next().is_some(), "no DONE line");
-    run
-}
-
-fn tail(s: &str, n: usize) -> String {
-    let lines: Vec<&str> = s.lines().collect();
-    lines[lines.len().saturating_sub(n)..].join("\n")
+    report::run_qemu(MACHINE, elf, dir)
 }
 
 /// The cases, what the host expects of each, and the image's two runs on their logs (shared
@@ -408,12 +110,11 @@ fn runs() -> Option<&'static Runs> {
         if !qemu_available() {
             return None;
         }
-        let elf = build_image();
+        let elf = build_firmware("qemu", "qemu");
         let mut file = Vec::new();
         let mut cases = Vec::new();
-        for case in self::cases() {
-            let bytes = replay::binary_log(&case.name, &case.log, &case.cfg)
-                .unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        for case in logs::cases() {
+            let bytes = logs::binary(&case);
             let want = expected(&case, &bytes);
             file.extend_from_slice(&bytes);
             cases.push((case, want));
@@ -425,7 +126,7 @@ fn runs() -> Option<&'static Runs> {
         let second = run_qemu(&elf, &dir);
         // The smallest log, whole, then the same cut in the middle of its frames.
         let (stop, _) = cases.iter().find(|(c, _)| c.name == "stop").unwrap();
-        let whole = replay::binary_log(&stop.name, &stop.log, &stop.cfg).unwrap();
+        let whole = logs::binary(stop);
         let mut broken = whole.clone();
         broken.extend_from_slice(&whole[..whole.len() * 2 / 3]);
         std::fs::write(dir.join("replay.wlog"), &broken).unwrap();
@@ -456,107 +157,6 @@ fn runs() -> Option<&'static Runs> {
         })
     })
     .as_ref()
-}
-
-/// The target's report on one log against the host's replay of it.
-fn compare(q: &QemuRun, case: &Case, want: &Expected) {
-    let name = case.name.as_str();
-    let end = q.one_of("END", name);
-    assert_eq!(
-        (
-            end.num::<u64>("cycles"),
-            end.num::<u32>("fed"),
-            end.get("cut") == "1"
-        ),
-        (want.cycles, want.fed, want.cut),
-        "{name}: cycles run, frames fed, cut"
-    );
-    let checks: Vec<(u64, usize, String, String)> = q
-        .of("CHECK", name)
-        .map(|r| {
-            (
-                r.num("cycle"),
-                r.num("tx_frames"),
-                r.get("tx_digest").to_string(),
-                r.get("ref_digest").to_string(),
-            )
-        })
-        .collect();
-    if let Some((t, h)) = checks.iter().zip(&want.checks).find(|(t, h)| t != h) {
-        panic!(
-            "{name}: the target and the host differ by cycle {}: {t:?} vs {h:?}",
-            h.0
-        );
-    }
-    assert_eq!(checks.len(), want.checks.len(), "{name}: CHECK lines");
-    assert_eq!(
-        (end.num::<usize>("tx_frames"), end.get("tx_digest")),
-        (want.tx_frames, want.tx_digest.as_str()),
-        "{name}: the frames the node sent (count, digest with their cycles)"
-    );
-    assert_eq!(
-        end.get("ref_digest"),
-        want.ref_digest,
-        "{name}: the references of the target and the host are not bit-identical"
-    );
-    let replans: Vec<(u64, i32)> = q
-        .of("REPLAN", name)
-        .map(|r| (r.num("tick"), r.num("adjust_ticks")))
-        .collect();
-    assert_eq!(
-        replans, want.replans,
-        "{name}: re-plans and their adjustments"
-    );
-    if case.adjusts {
-        assert!(
-            replans.iter().any(|&(_, a)| a != 0),
-            "{name}: no adjustment at all"
-        );
-    }
-    let node = q.one_of("NODE", name);
-    assert_eq!(
-        (
-            node.num::<u16>("refused"),
-            node.num::<u16>("tx_dropped"),
-            node.num::<u16>("bus_errors")
-        ),
-        want.counters,
-        "{name}: the node's counters (refused, tx_dropped, bus_errors)"
-    );
-    assert_eq!(
-        node.num::<u32>("rx_overflow"),
-        want.rx_overflow,
-        "{name}: frames lost by the device"
-    );
-    // The board's bookkeeping ran around every poll: a summary per 200 cycles, no overrun
-    // (the worst cycle is far below a 5 ms slot), and the node was told none.
-    let board = q.one_of("BOARD", name);
-    assert_eq!(
-        board.num::<u64>("summaries"),
-        want.cycles / 200,
-        "{name}: summaries"
-    );
-    assert_eq!(
-        (
-            board.num::<u32>("overruns"),
-            board.num::<u16>("status_overruns")
-        ),
-        (0, 0),
-        "{name}: overruns"
-    );
-    println!(
-        "{name}: {} cycles, {} frames fed, {} node frames and every reference bit-identical, {} \
-         re-plans{}",
-        want.cycles,
-        want.fed,
-        want.tx_frames,
-        replans.len(),
-        if want.cut {
-            " (cut at its longest)"
-        } else {
-            ""
-        }
-    );
 }
 
 fn print_table(q: &QemuRun) {

@@ -7,6 +7,7 @@ use planner_core::gait::{Reference, ReplanInfo, PREVIEW};
 use planner_core::node::{Node, PollReport};
 use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
+use planner_core::Real;
 
 use crate::bus::{ScriptedBus, FIFO};
 use crate::stats::Kind;
@@ -18,9 +19,9 @@ pub trait Clock {
     fn now(&mut self) -> u32;
 }
 
-/// What one control cycle did.
+/// What one control cycle did (`T`: the node's scalar).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CycleRecord {
+pub struct CycleRecord<T = f64> {
     /// The gait's tick count after the cycle (the index of `report.reference` in the run's
     /// trajectory); the cycle ran at tick `tick - 1`.
     pub tick: u64,
@@ -29,9 +30,9 @@ pub struct CycleRecord {
     /// Clock units spent in `Node::poll`.
     pub units: u32,
     /// The node's report (its reference, frames received, refused and sent).
-    pub report: PollReport,
+    pub report: PollReport<T>,
     /// The re-plan done by this cycle's tick, if any.
-    pub replan: Option<ReplanInfo<f64>>,
+    pub replan: Option<ReplanInfo<T>>,
 }
 
 /// FNV-1a 64.
@@ -53,11 +54,12 @@ impl Fnv {
         }
     }
 
-    /// Adds the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x, then of y.
-    pub fn add_reference(&mut self, r: &Reference<f64>) {
+    /// Adds the bits of (cog, cog_vel, cog_acc, zmp, zmp_vel) of x, then of y (as `f64`:
+    /// an `f32` reference widened, exactly).
+    pub fn add_reference<T: Real>(&mut self, r: &Reference<T>) {
         for s in [&r.x, &r.y] {
             for v in [s.cog, s.cog_vel, s.cog_acc, s.zmp, s.zmp_vel] {
-                self.add(&v.to_bits().to_le_bytes());
+                self.add(&v.f64().to_bits().to_le_bytes());
             }
         }
     }
@@ -103,12 +105,12 @@ fn class(f: &RawFrame) -> u8 {
 /// (through [`poll`], a frame of its own), then classified (see [`Kind`]): by the classes of
 /// the frames the node took from the device's receive FIFO (a prefix of it), by whether its
 /// tick re-planned, and by whether the node stood before and after.
-pub fn timed_poll<C: Clock, const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
-    node: &mut Node<Q, G>,
+pub fn timed_poll<C: Clock, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+    node: &mut Node<Q, G, T>,
     now_ms: u32,
     bus: &mut ScriptedBus,
     clock: &mut C,
-) -> CycleRecord {
+) -> CycleRecord<T> {
     // What the node may take, by class: `seen[i]` covers the first i + 1 waiting frames.
     let mut seen = [0u8; FIFO];
     let mut acc = 0;
@@ -164,10 +166,10 @@ pub fn timed_poll<C: Clock, const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>
 
 /// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
 #[inline(never)]
-pub fn poll<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
-    node: &mut Node<Q, G>,
+pub fn poll<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+    node: &mut Node<Q, G, T>,
     now_ms: u32,
     bus: &mut ScriptedBus,
-) -> PollReport {
+) -> PollReport<T> {
     node.poll(now_ms, bus)
 }

@@ -16,6 +16,7 @@ use planner_core::node::Node;
 use planner_core::playback::{self, LogClock};
 use planner_core::shaping::PreviewGains;
 use planner_core::wire::RawFrame;
+use planner_core::Real;
 
 use crate::bus::ScriptedBus;
 use crate::cycle::Fnv;
@@ -108,16 +109,17 @@ impl Player {
     /// One control cycle: the frames due, one `poll(node, now_ms, device)` (which the image
     /// times; its result is returned), then `on_frame(cycle, frame)` for every frame the
     /// node sent. `Err(Truncated)` if `source` ended before the frames announced.
-    pub fn cycle<S, const Q: usize, G, R>(
+    pub fn cycle<S, const Q: usize, G, T, R>(
         &mut self,
-        node: &mut Node<Q, G>,
+        node: &mut Node<Q, G, T>,
         source: &mut S,
-        poll: impl FnOnce(&mut Node<Q, G>, u32, &mut ScriptedBus) -> R,
+        poll: impl FnOnce(&mut Node<Q, G, T>, u32, &mut ScriptedBus) -> R,
         mut on_frame: impl FnMut(u64, &RawFrame),
     ) -> Result<R, Truncated>
     where
         S: Source,
-        G: Borrow<PreviewGains<f64, PREVIEW>>,
+        G: Borrow<PreviewGains<T, PREVIEW>>,
+        T: Real,
     {
         let k = self.k;
         loop {

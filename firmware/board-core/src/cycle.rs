@@ -10,6 +10,7 @@ use core::borrow::Borrow;
 use planner_core::gait::PREVIEW;
 use planner_core::node::{Node, PollReport};
 use planner_core::shaping::PreviewGains;
+use planner_core::Real;
 
 /// Cycles per summary (1 s at 5 ms).
 pub const SUMMARY_EVERY: u32 = 200;
@@ -58,10 +59,10 @@ pub struct Outcome {
 impl Stats {
     /// Records one cycle: `spent` core cycles of `poll`, `late` if the work did not fit the
     /// slot or the next slot has already begun.
-    pub fn record<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
+    pub fn record<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
         &mut self,
-        node: &mut Node<Q, G>,
-        report: &PollReport,
+        node: &mut Node<Q, G, T>,
+        report: &PollReport<T>,
         spent: u32,
         late: bool,
     ) -> Outcome {

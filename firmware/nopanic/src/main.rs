@@ -79,7 +79,18 @@ use stm32h7xx_hal::pac;
 
 use planner_core::gait::GaitError;
 use planner_core::node::NodeConfig;
-use walk_robot::Node;
+#[cfg(not(feature = "f32"))]
+use walk_robot::{Node, GAINS as NODE_GAINS, NODE_CONFIG};
+// `--features f32`: the same cycle with the f32 node (the M4F image's).
+#[cfg(feature = "f32")]
+use walk_robot::{NodeF32 as Node, GAINS_F32 as NODE_GAINS, NODE_CONFIG_F32 as NODE_CONFIG};
+
+/// The node's scalar.
+#[cfg(not(feature = "f32"))]
+type Scalar = f64;
+/// The node's scalar.
+#[cfg(feature = "f32")]
+type Scalar = f32;
 
 /// The board's adapter over FDCAN1.
 #[cfg(not(feature = "mock-can"))]
@@ -129,8 +140,8 @@ mod stand_in {
 /// Builds the node and moves it into its `static`, as the board's `place_node` (which panics
 /// if called twice; here `None`).
 #[inline(never)]
-fn place_node(cfg: NodeConfig) -> Result<Option<&'static mut Node<QUEUE>>, GaitError> {
-    let node = Node::with_gains(cfg, &walk_robot::GAINS)?;
+fn place_node(cfg: NodeConfig<Scalar>) -> Result<Option<&'static mut Node<QUEUE>>, GaitError> {
+    let node = Node::with_gains(cfg, &NODE_GAINS)?;
     Ok(cortex_m::singleton!(: Node<QUEUE> = node))
 }
 
@@ -163,7 +174,7 @@ fn main() -> ! {
     #[cfg(feature = "mock-can")]
     let mut bus = Bus::default();
 
-    let cfg = walk_robot::NODE_CONFIG;
+    let cfg = NODE_CONFIG;
     let node = match place_node(cfg) {
         Ok(Some(n)) => n,
         Ok(None) | Err(_) => idle(),

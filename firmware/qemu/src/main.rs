@@ -14,6 +14,10 @@
 //! `tests/tests/qemu.rs` records host-sim runs, writes their logs into one such file and runs
 //! the image once on it.
 //!
+//! With the `m4f` feature the same code is the M4F image: the `f32` node
+//! (`walk_robot::NodeF32`) on QEMU's `mps2-an386` (Cortex-M4F), replaying the same logs
+//! (`machine.rs` says what differs; `tests/tests/qemu_m4.rs` runs it).
+//!
 //! Run (from firmware/qemu, after `cargo build --release`, in a directory holding a
 //! `replay.wlog`):
 //!
@@ -75,6 +79,7 @@
 #![deny(unsafe_code)]
 
 mod hw;
+mod machine;
 mod semihost;
 
 use core::fmt::{self, Write};
@@ -85,9 +90,9 @@ use panic_semihosting as _; // panics print over semihosting and exit with code 
 
 use gait_loop::binlog::{Bytes, Frames, Header};
 use gait_loop::{timed_poll, Clock, Fnv, Kind, Player, Stats, QUEUE};
+use machine::{Node, Scalar};
 use planner_core::gait::{Gait, GaitError};
 use planner_core::playback::LogClock;
-use walk_robot::Node;
 
 use semihost::HostFile;
 
@@ -185,14 +190,14 @@ type Slot = Result<Node<QUEUE>, GaitError>;
 /// through this frame once more). Not inlined: the temporaries of `Node::new` (the gait, the
 /// node returned by value) live in this frame only while it runs.
 ///
-/// From the constant `walk_robot::NODE_CONFIG`, as on the board: the compiler folds it into
+/// From the constant `machine::NODE_CONFIG` (`walk_robot::NODE_CONFIG`, or `NODE_CONFIG_F32`
+/// for the M4F), as on the board: the compiler folds it into
 /// `Node::with_gains` (24 k instructions and 23 KB of stack, against 45 k and 48 KB for a
 /// configuration known only at run time, such as other start feet read from a log; which is
 /// why the image replays only logs that start on the robot's stance).
 #[inline(never)]
 fn place_node() -> &'static mut Slot {
-    match cortex_m::singleton!(: Slot = Node::with_gains(walk_robot::NODE_CONFIG, &walk_robot::GAINS))
-    {
+    match cortex_m::singleton!(: Slot = Node::with_gains(machine::NODE_CONFIG, machine::gains())) {
         Some(slot) => slot,
         None => panic!("place_node called twice"),
     }
@@ -202,7 +207,7 @@ fn place_node() -> &'static mut Slot {
 /// its own like [`place_node`].
 #[inline(never)]
 fn renew_node(slot: &mut Slot) {
-    *slot = Node::with_gains(walk_robot::NODE_CONFIG, &walk_robot::GAINS);
+    *slot = Node::with_gains(machine::NODE_CONFIG, machine::gains());
 }
 
 /// Replays one log (its header read, its frames next in `frames`) into `node` (just created);
@@ -354,7 +359,13 @@ fn main() -> ! {
         out,
         "SIZE node={} gait={}",
         core::mem::size_of::<Node<QUEUE>>(),
-        core::mem::size_of::<Gait<f64, QUEUE, walk_robot::Gains>>()
+        core::mem::size_of::<Gait<Scalar, QUEUE, machine::Gains>>()
+    );
+    line!(
+        out,
+        "MACHINE name={} scalar={}",
+        machine::NAME,
+        core::any::type_name::<Scalar>()
     );
 
     let Some(mut file) = HostFile::open(LOG_FILE) else {
@@ -402,7 +413,7 @@ fn main() -> ! {
             ok = false;
             break;
         }
-        if header.feet != [cfg.left, cfg.right] {
+        if !machine::starts_at(&header.feet) {
             line!(out, "ERROR scenario={} feet_not_the_robots_stance=1", name);
             ok = false;
             break;

@@ -89,6 +89,7 @@ pub use steps::HISTORY;
 use steps::{Record, Steps};
 
 use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side, PREVIEW};
+use crate::real::Real;
 use crate::shaping::PreviewGains;
 use crate::wire::{
     ids, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Status, Stream, WireModify,
@@ -98,15 +99,16 @@ use crate::wire::{
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
 
-/// Node configuration.
+/// Node configuration, in the node's scalar `T` ([`NodeConfig::cast`] converts the `f64`
+/// configuration that a robot file gives).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NodeConfig {
+pub struct NodeConfig<T = f64> {
     /// Gait parameters.
-    pub params: GaitParams<f64>,
+    pub params: GaitParams<T>,
     /// Where the left foot stands at start-up.
-    pub left: Footstep<f64>,
+    pub left: Footstep<T>,
     /// Where the right foot stands at start-up.
-    pub right: Footstep<f64>,
+    pub right: Footstep<T>,
     /// Silence of the controller after which a moving robot stops \[ms\] (see the module
     /// docs: the supervision bound).
     pub heartbeat_timeout_ms: u32,
@@ -118,7 +120,7 @@ pub struct NodeConfig {
     /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
     /// Reach limits.
-    pub reach: Reach,
+    pub reach: Reach<T>,
 }
 
 impl NodeConfig {
@@ -146,13 +148,51 @@ impl NodeConfig {
             reach,
         }
     }
+
+    /// This configuration in the scalar `T` (every real rounded to the nearest `T`; exact for
+    /// `f64`): how the `f32` node is configured from a robot file.
+    pub fn cast<T: Real>(&self) -> NodeConfig<T> {
+        let foot = |f: &Footstep<f64>| Footstep::new(f.side, T::of(f.x), T::of(f.y), T::of(f.yaw));
+        let p = &self.params;
+        NodeConfig {
+            params: GaitParams {
+                omega: T::of(p.omega),
+                dt: T::of(p.dt),
+                single_ticks: p.single_ticks,
+                double_ticks: p.double_ticks,
+                start_ticks: p.start_ticks,
+                settle_ticks: p.settle_ticks,
+                stand_ticks: p.stand_ticks,
+                rest_ticks: p.rest_ticks,
+                adjust_min_ticks: p.adjust_min_ticks,
+                adjust_max_ticks: p.adjust_max_ticks,
+                step_width: T::of(p.step_width),
+                sole_half_length: T::of(p.sole_half_length),
+                sole_half_width: T::of(p.sole_half_width),
+                step_height: T::of(p.step_height),
+                tail: p.tail,
+                shaping: p.shaping,
+                cog_height: p.cog_height,
+                gravity: p.gravity,
+                preview_qe: p.preview_qe,
+                preview_r: p.preview_r,
+            },
+            left: foot(&self.left),
+            right: foot(&self.right),
+            heartbeat_timeout_ms: self.heartbeat_timeout_ms,
+            max_rx: self.max_rx,
+            max_foreign: self.max_foreign,
+            max_plans: self.max_plans,
+            reach: self.reach.cast(),
+        }
+    }
 }
 
 /// What one cycle did.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PollReport {
+pub struct PollReport<T = f64> {
     /// The reference of this cycle.
-    pub reference: Reference<f64>,
+    pub reference: Reference<T>,
     /// Frames received (the node's and foreign ones).
     pub received: u8,
     /// Commands refused.
@@ -197,11 +237,15 @@ pub enum NodeState {
 
 /// The node. `G` holds the preview-control gains, as in [`Gait`]: by value (the default,
 /// computed by [`Node::new`]) or lent, e.g. by a reference to gains in flash
-/// ([`Node::with_gains`]).
+/// ([`Node::with_gains`]). `T` is the scalar of the gait, the reach checks and the stream's
+/// encoding: `f64` (the default, for double-precision FPUs) or `f32` (single-precision
+/// FPUs: `Node<Q, PreviewGains<f32, PREVIEW>, f32>`, or lent gains of `f32`). The bus is the
+/// same for both: its fixed-point fields are decoded once ([`Command::decode`]) and
+/// converted to `T` at the edge, and the stream is rounded to the same integer units.
 #[derive(Clone, Debug)]
-pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>> {
-    cfg: NodeConfig,
-    gait: Gait<f64, Q, G>,
+pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
+    cfg: NodeConfig<T>,
+    gait: Gait<T, Q, G>,
     tx: Deque<RawFrame, TX_BACKLOG>,
     steps: Steps<Q>,
     last_append: Option<u8>,
@@ -238,9 +282,9 @@ fn ahead(seq: u8, last: u8) -> bool {
     (1..=127).contains(&seq.wrapping_sub(last))
 }
 
-impl<const Q: usize> Node<Q> {
+impl<const Q: usize, T: Real> Node<Q, PreviewGains<T, PREVIEW>, T> {
     /// A node standing still (computes the preview gains).
-    pub fn new(cfg: NodeConfig) -> Result<Self, GaitError> {
+    pub fn new(cfg: NodeConfig<T>) -> Result<Self, GaitError> {
         let () = Self::CAPACITY_OK;
         Ok(Self::around(
             cfg,
@@ -249,14 +293,14 @@ impl<const Q: usize> Node<Q> {
     }
 }
 
-impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
+impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
     /// Step ids are 8 bits: every queued step must have its own.
     const CAPACITY_OK: () = assert!(Q >= 1 && Q <= 128, "queue capacity 1 … 128");
 
     /// [`Node::new`] with the preview gains computed beforehand and lent by `gains`
     /// ([`Gait::with_gains`]: the firmware compiles them into flash from the robot file and
     /// passes a reference, so they are neither computed nor copied at start-up).
-    pub fn with_gains(cfg: NodeConfig, gains: G) -> Result<Self, GaitError> {
+    pub fn with_gains(cfg: NodeConfig<T>, gains: G) -> Result<Self, GaitError> {
         let () = Self::CAPACITY_OK;
         Ok(Self::around(
             cfg,
@@ -264,7 +308,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
         ))
     }
 
-    fn around(cfg: NodeConfig, gait: Gait<f64, Q, G>) -> Self {
+    fn around(cfg: NodeConfig<T>, gait: Gait<T, Q, G>) -> Self {
         Self {
             gait,
             cfg,
@@ -284,12 +328,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
     }
 
     /// The gait.
-    pub fn gait(&self) -> &Gait<f64, Q, G> {
+    pub fn gait(&self) -> &Gait<T, Q, G> {
         &self.gait
     }
 
     /// The configuration.
-    pub fn config(&self) -> &NodeConfig {
+    pub fn config(&self) -> &NodeConfig<T> {
         &self.cfg
     }
 
@@ -322,7 +366,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
 
     /// `true` if `other` is in the same state as `self`: everything but the counters (see
     /// [`Gait::same_state`] for what the gait compares). A refused command keeps it.
-    pub fn same_state<H: Borrow<PreviewGains<f64, PREVIEW>>>(&self, other: &Node<Q, H>) -> bool {
+    pub fn same_state<H: Borrow<PreviewGains<T, PREVIEW>>>(&self, other: &Node<Q, H, T>) -> bool {
         self.gait.same_state(&other.gait)
             && self.cfg == other.cfg
             && self.tx.iter().eq(other.tx.iter())
@@ -403,7 +447,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
 
     /// Reach and crossing check of a footstep: appended (`before` = `None`), or replacing the
     /// queued step `before`, with its two successors then checked against it.
-    fn check_reach(&self, step: &Footstep<f64>, before: Option<u16>) -> Result<(), Reason> {
+    fn check_reach(&self, step: &Footstep<T>, before: Option<u16>) -> Result<(), Reason> {
         let r = &self.cfg.reach;
         let feet = self.gait.previous_feet(before);
         let other = Frame::of(&feet[step.side.other().index()]);
@@ -429,10 +473,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
         Ok(())
     }
 
-    fn footstep(s: &WireStep) -> Footstep<f64> {
+    /// The footstep of a validated frame in `T`: the wire's integers in SI units (`f64`, as
+    /// [`WireStep::si`]), each rounded to the nearest `T` (exact for `f64`).
+    fn footstep(s: &WireStep) -> Footstep<T> {
         let (x, y, yaw) = s.si();
         let side = if s.left { Side::Left } else { Side::Right };
-        Footstep::new(side, x, y, yaw)
+        Footstep::new(side, T::of(x), T::of(y), T::of(yaw))
     }
 
     /// Handles one frame from the bus (validation, state checks, application) and returns the
@@ -580,11 +626,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
     /// A fresh start while standing (see the module docs): the frame is re-based on the feet.
     fn reset(&mut self) -> Result<(), Reason> {
         let [l, r] = *self.gait.feet();
-        let (x, y) = (0.5 * (l.x + r.x), 0.5 * (l.y + r.y));
-        let yaw = libm::atan2(
-            libm::sin(l.yaw) + libm::sin(r.yaw),
-            libm::cos(l.yaw) + libm::cos(r.yaw),
-        );
+        let half = T::of(0.5);
+        let (x, y) = (half * (l.x + r.x), half * (l.y + r.y));
+        let yaw = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
         self.gait.rebase(x, y, yaw).map_err(reason_of)?;
         self.estopped = false;
         self.lost = false;
@@ -689,7 +733,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
         }
     }
 
-    fn stream(&self, r: &Reference<f64>) -> Stream {
+    fn stream(&self, r: &Reference<T>) -> Stream<T> {
         let phase = match r.phase {
             Phase::Standing => 0,
             Phase::Double => 1,
@@ -714,7 +758,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<f64, PREVIEW>>> Node<Q, G> {
     }
 
     /// One control cycle (see the module docs).
-    pub fn poll<C>(&mut self, now_ms: u32, can: &mut C) -> PollReport
+    pub fn poll<C>(&mut self, now_ms: u32, can: &mut C) -> PollReport<T>
     where
         C: embedded_can::nb::Can,
     {

@@ -2,39 +2,41 @@
 //! docs for the rules and where they come from).
 
 use crate::gait::{Footstep, Side};
+use crate::real::Real;
 use crate::wire::Reason;
 
-/// Leg reach limits (see the module docs).
+/// Leg reach limits (see the module docs), in the node's scalar `T` (the robot file gives them
+/// in `f64`; [`Reach::cast`] converts).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "robot",
     derive(serde::Deserialize),
     serde(deny_unknown_fields)
 )]
-pub struct Reach {
+pub struct Reach<T = f64> {
     /// Largest forward step \[m\].
-    pub max_forward: f64,
+    pub max_forward: T,
     /// Largest backward step \[m\].
-    pub max_backward: f64,
+    pub max_backward: T,
     /// Smallest distance across the heading between the feet \[m\].
-    pub min_width: f64,
+    pub min_width: T,
     /// Largest distance across the heading between the feet \[m\].
-    pub max_width: f64,
+    pub max_width: T,
     /// Largest heading change \[rad\].
-    pub max_yaw: f64,
+    pub max_yaw: T,
     /// Largest distance between the feet \[m\].
-    pub max_feet_distance: f64,
+    pub max_feet_distance: T,
     /// Forward reach lost per radian of heading change \[m/rad\].
-    pub yaw_cost: f64,
+    pub yaw_cost: T,
     /// Largest travel of the swinging foot along the other foot's heading \[m\].
-    pub max_stride: f64,
+    pub max_stride: T,
     /// Largest growth of the forward step over the step before it \[m\].
-    pub max_growth: f64,
+    pub max_growth: T,
 }
 
-impl Default for Reach {
+impl<T: Real> Default for Reach<T> {
     fn default() -> Self {
-        Self {
+        Reach {
             max_forward: 0.30,
             max_backward: 0.20,
             min_width: 0.15,
@@ -45,33 +47,51 @@ impl Default for Reach {
             max_stride: 0.43,
             max_growth: 0.22,
         }
+        .cast()
+    }
+}
+
+impl Reach<f64> {
+    /// These limits in the scalar `T` (each rounded to the nearest `T`).
+    pub fn cast<T: Real>(&self) -> Reach<T> {
+        Reach {
+            max_forward: T::of(self.max_forward),
+            max_backward: T::of(self.max_backward),
+            min_width: T::of(self.min_width),
+            max_width: T::of(self.max_width),
+            max_yaw: T::of(self.max_yaw),
+            max_feet_distance: T::of(self.max_feet_distance),
+            yaw_cost: T::of(self.yaw_cost),
+            max_stride: T::of(self.max_stride),
+            max_growth: T::of(self.max_growth),
+        }
     }
 }
 
 /// A foot as a frame: its pose with the sine and cosine of its yaw (computed once per foot:
 /// the reach check runs on the Cortex-M for every footstep frame).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Frame {
-    x: f64,
-    y: f64,
-    yaw: f64,
-    sin: f64,
-    cos: f64,
+pub(super) struct Frame<T> {
+    x: T,
+    y: T,
+    yaw: T,
+    sin: T,
+    cos: T,
 }
 
-impl Frame {
-    pub(super) fn of(f: &Footstep<f64>) -> Self {
+impl<T: Real> Frame<T> {
+    pub(super) fn of(f: &Footstep<T>) -> Self {
         Self {
             x: f.x,
             y: f.y,
             yaw: f.yaw,
-            sin: libm::sin(f.yaw),
-            cos: libm::cos(f.yaw),
+            sin: f.yaw.sin(),
+            cos: f.yaw.cos(),
         }
     }
 
     /// `to` in this frame: forward and width (positive on `to_side`'s own side).
-    fn forward_width(&self, to: &Frame, to_side: Side) -> (f64, f64) {
+    fn forward_width(&self, to: &Frame<T>, to_side: Side) -> (T, T) {
         let (dx, dy) = (to.x - self.x, to.y - self.y);
         let forward = self.cos * dx + self.sin * dy;
         let width = -self.sin * dx + self.cos * dy;
@@ -84,20 +104,28 @@ impl Frame {
 
 /// `v²`. The feet distance is compared squared (no `hypot` on the Cortex-M): for the
 /// reach's sizes (≤ 1e3 m) the squares neither overflow nor underflow to a different decision,
-/// and they differ from `hypot` only within a few ulps of the limit, inside its `EPS`.
-fn square(v: f64) -> f64 {
+/// and they differ from `hypot` only within a few ulps of the limit, inside its margin.
+fn square<T: Real>(v: T) -> T {
     v * v
 }
 
-impl Reach {
+/// The margin by which values on the limits pass: 1 nm in `f64` (as before the node was
+/// generic); in `f32`, 80 ε ≈ 9.5 µm, a few roundings of coordinates of the ±32 m walking area
+/// (an `f32` ulp at 32 m is 3.8 µm), so that a step on a limit is taken by both scalars.
+#[inline]
+fn eps<T: Real>() -> T {
+    T::of(1e-9).max(T::EPSILON * T::of(80.0))
+}
+
+impl<T: Real> Reach<T> {
     /// Whether the legs can take `step`, where `other` is the previous foot of the other side
     /// (the support foot of this step) and `same` the previous foot of the same side (where
     /// the swinging foot lifts off). `Crossing` or `Reach` if not.
     pub fn check(
         &self,
-        other: &Footstep<f64>,
-        same: &Footstep<f64>,
-        step: &Footstep<f64>,
+        other: &Footstep<T>,
+        same: &Footstep<T>,
+        step: &Footstep<T>,
     ) -> Result<(), Reason> {
         self.check_with(other, same, step, false)
     }
@@ -106,9 +134,9 @@ impl Reach {
     /// its growth is measured from a step of 0 (whatever the stagger of the feet).
     pub fn check_with(
         &self,
-        other: &Footstep<f64>,
-        same: &Footstep<f64>,
-        step: &Footstep<f64>,
+        other: &Footstep<T>,
+        same: &Footstep<T>,
+        step: &Footstep<T>,
         from_rest: bool,
     ) -> Result<(), Reason> {
         self.check_frames(
@@ -122,42 +150,43 @@ impl Reach {
 
     pub(super) fn check_frames(
         &self,
-        other: &Frame,
-        same: &Frame,
-        step: &Frame,
+        other: &Frame<T>,
+        same: &Frame<T>,
+        step: &Frame<T>,
         side: Side,
         from_rest: bool,
     ) -> Result<(), Reason> {
-        const EPS: f64 = 1e-9; // values on the limits pass
+        let eps = eps::<T>(); // values on the limits pass
         let (forward, width) = other.forward_width(step, side);
-        if width < 0.0 {
+        if width < T::ZERO {
             return Err(Reason::Crossing);
         }
         // Heading change wrapped into [−π, π] (without a libm call when it is inside: the
         // wrap of an angle within ±π is itself, so both branches agree to the bit).
         let d = step.yaw - other.yaw;
-        let dyaw = if libm::fabs(d) <= core::f64::consts::PI {
-            libm::fabs(d)
+        let (pi, tau) = (T::of(core::f64::consts::PI), T::of(core::f64::consts::TAU));
+        let dyaw = if d.abs() <= pi {
+            d.abs()
         } else {
-            libm::fabs(d - core::f64::consts::TAU * libm::round(d / core::f64::consts::TAU))
+            (d - tau * (d / tau).round()).abs()
         };
         // The step before this one (`other` from `same`; none from rest), and where the
         // swinging foot was.
         let before = if from_rest {
-            0.0
+            T::ZERO
         } else {
             same.forward_width(other, side.other()).0
         };
         let lift = other.forward_width(same, side).0;
-        let ok = forward <= self.max_forward + EPS
-            && forward >= -self.max_backward - EPS
-            && width >= self.min_width - EPS
-            && width <= self.max_width + EPS
-            && dyaw <= self.max_yaw + EPS
-            && forward * forward + width * width <= square(self.max_feet_distance + EPS)
-            && forward + self.yaw_cost * dyaw <= self.max_forward + EPS
-            && libm::fabs(forward - lift) <= self.max_stride + EPS
-            && forward - before <= self.max_growth + EPS;
+        let ok = forward <= self.max_forward + eps
+            && forward >= -self.max_backward - eps
+            && width >= self.min_width - eps
+            && width <= self.max_width + eps
+            && dyaw <= self.max_yaw + eps
+            && forward * forward + width * width <= square(self.max_feet_distance + eps)
+            && forward + self.yaw_cost * dyaw <= self.max_forward + eps
+            && (forward - lift).abs() <= self.max_stride + eps
+            && forward - before <= self.max_growth + eps;
         if ok {
             Ok(())
         } else {

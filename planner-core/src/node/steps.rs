@@ -13,6 +13,7 @@ use crate::shaping::PreviewGains;
 use heapless::Deque;
 
 use crate::gait::Gait;
+use crate::real::Real;
 use crate::wire::{RawFrame, WireStep};
 
 /// Steps walked or dropped whose frames are still recognised as repeats.
@@ -94,9 +95,9 @@ impl<const Q: usize> Steps<Q> {
 
     /// Follows the gait after it changed: queued steps it no longer has were lifted off (the
     /// one it swings) or dropped; a swing it no longer has has landed.
-    pub fn sync<const GQ: usize, G: Borrow<PreviewGains<f64, PREVIEW>>>(
+    pub fn sync<T: Real, const GQ: usize, G: Borrow<PreviewGains<T, PREVIEW>>>(
         &mut self,
-        gait: &Gait<f64, GQ, G>,
+        gait: &Gait<T, GQ, G>,
     ) {
         // Ids are compared in place; a record is copied only when it moves (no 40-byte copies
         // on the steady cycle, where nothing changes).

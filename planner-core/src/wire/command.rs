@@ -1,0 +1,231 @@
+//! The commands from the bus, validated once ([`Command::decode`]), and their answer, the
+//! `ACK` ([`Ack`]).
+
+use super::step::{WireModify, WireStep, VERSIONS};
+use super::{crc8, crc_ok, ids, RawFrame, Reason};
+
+/// Control operations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ControlOp {
+    /// Keep-alive: the controller is there.
+    Heartbeat,
+    /// Start walking with the queued steps.
+    Start,
+    /// Walk the queued steps, then stop.
+    Stop,
+    /// Drop the queue and stop as soon as possible.
+    StopNow,
+    /// Leave the emergency-stopped state (only when standing).
+    Reset,
+}
+
+impl ControlOp {
+    fn code(self) -> u8 {
+        match self {
+            ControlOp::Heartbeat => 0,
+            ControlOp::Start => 1,
+            ControlOp::Stop => 2,
+            ControlOp::StopNow => 3,
+            ControlOp::Reset => 4,
+        }
+    }
+    fn from_code(c: u8) -> Option<Self> {
+        Some(match c {
+            0 => ControlOp::Heartbeat,
+            1 => ControlOp::Start,
+            2 => ControlOp::Stop,
+            3 => ControlOp::StopNow,
+            4 => ControlOp::Reset,
+            _ => return None,
+        })
+    }
+}
+
+/// A validated command from the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// Emergency stop with its sequence number.
+    EmergencyStop {
+        /// Sequence number.
+        seq: u8,
+    },
+    /// A control operation with its sequence number.
+    Control {
+        /// Sequence number.
+        seq: u8,
+        /// Operation.
+        op: ControlOp,
+    },
+    /// Append a footstep.
+    Append(WireStep),
+    /// Modify a queued footstep.
+    Modify(WireModify),
+}
+
+impl Command {
+    /// Validates a frame. On error, the reason and the sequence number or step id to answer
+    /// with (0 when the frame is too short to carry one).
+    pub fn decode(f: &RawFrame) -> Result<Self, (Reason, u8)> {
+        let b = f.bytes();
+        let first = b.first().copied().unwrap_or(0);
+        let need = |n: usize| {
+            if b.len() == n {
+                Ok(())
+            } else {
+                Err((Reason::BadLength, first))
+            }
+        };
+        match f.id {
+            ids::ESTOP => {
+                need(1)?;
+                Ok(Command::EmergencyStop { seq: first })
+            }
+            ids::CONTROL => {
+                need(3)?;
+                if !crc_ok(f.id, b) {
+                    return Err((Reason::BadCrc, first));
+                }
+                let op = ControlOp::from_code(b[1]).ok_or((Reason::OutOfRange, first))?;
+                Ok(Command::Control { seq: first, op })
+            }
+            ids::STEP_APPEND | ids::STEP_MODIFY => {
+                need(8)?;
+                if !crc_ok(f.id, b) {
+                    return Err((Reason::BadCrc, first));
+                }
+                let mut d = [0u8; 8];
+                d.copy_from_slice(b);
+                Ok(if f.id == ids::STEP_APPEND {
+                    Command::Append(WireStep::unpack(&d).map_err(|r| (r, first))?)
+                } else {
+                    Command::Modify(WireModify::unpack(&d))
+                })
+            }
+            _ => Err((Reason::UnknownId, 0)),
+        }
+    }
+
+    /// The frame that carries this command.
+    pub fn encode(&self) -> RawFrame {
+        let (id, data, n) = match self {
+            Command::EmergencyStop { seq } => (ids::ESTOP, [*seq, 0, 0, 0, 0, 0, 0, 0], 1),
+            Command::Control { seq, op } => {
+                let c = crc8(ids::CONTROL, &[*seq, op.code()]);
+                (ids::CONTROL, [*seq, op.code(), c, 0, 0, 0, 0, 0], 3)
+            }
+            Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
+            Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
+        };
+        RawFrame {
+            id,
+            len: n,
+            data: {
+                let mut d = [0u8; 8];
+                d[..usize::from(n)].copy_from_slice(&data[..usize::from(n)]);
+                d
+            },
+        }
+    }
+
+    /// The step id of a footstep command.
+    pub fn step_id(&self) -> Option<u8> {
+        match self {
+            Command::Append(s) => Some(s.id),
+            Command::Modify(m) => Some(m.id),
+            _ => None,
+        }
+    }
+
+    /// What an `ACK` to this command carries as `seq`: the step id or the sequence number.
+    pub fn key(&self) -> u8 {
+        match self {
+            Command::Append(s) => s.id,
+            Command::Modify(m) => m.id,
+            Command::Control { seq, .. } | Command::EmergencyStop { seq } => *seq,
+        }
+    }
+
+    /// The code of the command in `ACK` frames (the low byte of its identifier).
+    pub fn code(&self) -> u8 {
+        let id = match self {
+            Command::EmergencyStop { .. } => ids::ESTOP,
+            Command::Control { .. } => ids::CONTROL,
+            Command::Append(_) => ids::STEP_APPEND,
+            Command::Modify(_) => ids::STEP_MODIFY,
+        };
+        (id & 0xFF) as u8
+    }
+
+    /// What the `ACK` to this command echoes: the last byte of its frame (the CRC, except for
+    /// the emergency stop, whose only byte is its sequence number).
+    pub fn echo(&self) -> u8 {
+        echo_of(&self.encode())
+    }
+}
+
+/// The byte an `ACK` echoes of the frame it answers: its last data byte (0 if it has none).
+pub fn echo_of(f: &RawFrame) -> u8 {
+    f.bytes().last().copied().unwrap_or(0)
+}
+
+/// An `ACK` frame: the answer to a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Ack {
+    /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0x00 append,
+    /// 0x01 modify).
+    pub command: u8,
+    /// Sequence number or step id of the command.
+    pub seq: u8,
+    /// `None` when accepted.
+    pub reason: Option<Reason>,
+    /// Queued steps after the command.
+    pub queue: u8,
+    /// The last byte of the answered frame ([`echo_of`]; the command's CRC for `CONTROL` and
+    /// footsteps).
+    pub echo: u8,
+    /// For a footstep command: the version of that step in force after the command (0 as
+    /// appended), whatever the answer; `None` (0xFF on the wire) for other commands and for
+    /// steps the node does not know. A controller whose newer modification was refused learns
+    /// from it which of its versions the node walks.
+    pub version: Option<u8>,
+}
+
+impl Ack {
+    /// The frame (with its CRC).
+    pub fn encode(&self) -> RawFrame {
+        let r = self.reason.map(Reason::code).unwrap_or(0);
+        let v = self.version.unwrap_or(0xFF);
+        let body = [self.command, self.seq, r, self.queue, self.echo, v];
+        let c = crc8(ids::ACK, &body);
+        RawFrame {
+            id: ids::ACK,
+            len: 7,
+            data: [body[0], body[1], body[2], body[3], body[4], v, c, 0],
+        }
+    }
+    /// Decodes an `ACK` frame; `None` if it is not one or its CRC is wrong.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::ACK || f.len != 7 || !crc_ok(f.id, f.bytes()) {
+            return None;
+        }
+        let reason = match f.data[2] {
+            0 => None,
+            c => Some(Reason::from_code(c)?),
+        };
+        Some(Self {
+            command: f.data[0],
+            seq: f.data[1],
+            reason,
+            queue: f.data[3],
+            echo: f.data[4],
+            version: match f.data[5] {
+                0xFF => None,
+                v if v < VERSIONS => Some(v),
+                _ => return None,
+            },
+        })
+    }
+}

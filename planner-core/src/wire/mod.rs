@@ -1,0 +1,346 @@
+//! The CAN message set (classic CAN: 11-bit identifiers, at most 8 data bytes, 1 Mbit/s).
+//!
+//! Every frame from the bus is validated once, here, by [`Command::decode`]: identifier, length,
+//! and every field's range. What passes is a [`Command`] whose accessors cannot fail; what does
+//! not is a [`Reason`] that the node sends back in an [`ids::ACK`] frame. The same message set
+//! is described for CAN tools in `host-sim/can/walking.dbc` (a test checks that they agree).
+//!
+//! # Units (fixed point, little-endian, two's complement)
+//! | quantity | unit | range |
+//! |---|---|---|
+//! | footstep x, y | 0.5 mm (17 bits) | −32.768 … +32.7675 m |
+//! | modification dx, dy (from the appended x, y) | 0.5 mm (14 bits) | −4.096 … +4.0955 m |
+//! | footstep yaw | 2π/4096 rad ≈ 1.53 mrad (12 bits) | [−π, π) (any heading, wrapped) |
+//! | COG, ZMP position | 1 µm (32 bits) | ±2147 m |
+//! | COG velocity | 0.1 mm/s (16 bits) | ±3.27 m/s |
+//! | foot x, y | 0.1 mm (20 bits) | ±52.4 m |
+//! | foot height | 0.5 mm (8 bits) | 0 … 127.5 mm |
+//! | foot yaw | 1e-4 rad (16 bits) | ±3.27 rad |
+//!
+//! The paper's figures are given to 1 mm (positions) and 5 ms (times): footsteps travel at
+//! 0.5 mm and the published references at 1 µm, far below what the robot can follow. The
+//! footstep's 17-bit coordinates bound the walking area to ±32.77 m around the origin of the
+//! node's world frame; a `Reset` while standing re-bases that frame (its origin moves to the
+//! midpoint of the feet, its x axis to their mean heading: see `node`), so a longer walk is a
+//! sequence of walks of at most that size. Every range is one definition shared by the
+//! encoder ([`WireStep::from_si`]) and the decoder: what one accepts, the other does.
+//!
+//! # Versions of a footstep
+//! A footstep is appended once (`STEP_APPEND`, version 0) and may be modified many times
+//! (`STEP_MODIFY`); each modification carries a 7-bit version, one more (modulo 128) than the
+//! one before it for that step. The node takes a modification only if its version is newer
+//! than the version in force (1 … 63 ahead, modulo 128): an older modification that arrives
+//! late (overtaken by a newer one for the same step) is refused with [`Reason::Stale`], so the
+//! step is always walked at the newest version the node accepted. A frame equal to the version
+//! in force (or to the step's append) is answered [`Reason::Duplicate`]. The modification
+//! carries its position as the offset from the appended position (that makes room for the
+//! version), its heading absolute; [`StepBook`] keeps what a controller needs for that.
+//!
+//! # End-to-end protection (CRC-8)
+//! CAN's own CRC-15 catches errors on the wire, not a frame a faulty gateway or controller
+//! corrupts before it is sent. `CONTROL`, `STEP_APPEND`, `STEP_MODIFY` and `ACK` therefore
+//! end with a CRC-8 (AUTOSAR profile: polynomial 0x2F, initial value and final XOR 0xFF; Hamming
+//! distance 4 up to 119 data bits, so every 1-, 2- and 3-bit error of these frames is caught)
+//! computed over the identifier (two bytes, little-endian: a frame moved to another identifier
+//! fails) followed by the data bytes before the CRC. A command with a wrong CRC is refused
+//! with [`Reason::BadCrc`] and changes nothing; the controller sends it again. `ESTOP` has no
+//! CRC on purpose: any frame on its identifier with the right length stops the robot (a
+//! corrupted emergency stop errs on the safe side; the length is kept, so that no corrupted
+//! command of another identifier can become one: see the exhaustive 3-bit test). The stream and `STATUS` carry none: every
+//! value is superseded 5 ms (100 ms) later.
+//!
+//! The `ACK` echoes the last byte of the frame it answers (the CRC, for the protected
+//! commands), so the controller knows *which version* of a command was taken — a modification
+//! answered while a newer one for the same step is on its way is not mistaken for the newer
+//! one.
+//!
+//! # Frames
+//! Lower identifiers win arbitration, so commands come first, then answers, then the stream.
+//!
+//! | id | name | dir | dlc | layout |
+//! |---|---|---|---|---|
+//! | 0x010 | `ESTOP` | in | 1 | seq u8 |
+//! | 0x020 | `CONTROL` | in | 3 | seq u8, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
+//! | 0x100 | `STEP_APPEND` | in | 8 | step id u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
+//! | 0x101 | `STEP_MODIFY` | in | 8 | step id u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
+//! | 0x080 | `ACK` | out | 7 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8, echo u8, step version in force u8 (0xFF: none), crc u8 |
+//! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
+//! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
+//! | 0x202 | `COG_VEL` | out | 6 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u8 |
+//! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
+//! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
+//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 |
+//! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next side u8, last control seq u8 |
+//! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, reserved u2 (0), bus-offs u16, error-passive episodes u16, missed slots u8 |
+//!
+//! `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
+//! firmware has told it the link's health ([`crate::node::Node::set_link_health`]); a node
+//! without a CAN controller of its own (host-sim) never sends it.
+//!
+//! The node's own commands are [`ids::COMMANDS`]; a frame on any other identifier (or an
+//! extended or remote frame) is not the node's: it is counted and never answered (every CAN
+//! backend also filters the bus for exactly [`ids::COMMANDS`] in hardware where it can).
+//!
+//! Bits of a 64-bit field group are packed from the least significant bit of byte 0 upwards.
+//!
+//! # Files
+//! * `mod.rs` (this file): the identifiers ([`ids`]), [`RawFrame`], the refusal [`Reason`]s and
+//!   the CRC-8 ([`crc8`]);
+//! * `step.rs`: the footstep units and field widths, [`WireStep`] (`STEP_APPEND`),
+//!   [`WireModify`] (`STEP_MODIFY`) and the controller's [`StepBook`];
+//! * `command.rs`: [`ControlOp`], the validated [`Command`] (decoded once, at the edge) and
+//!   its answer, [`Ack`];
+//! * `status.rs`: the node's periodic reports [`Status`], [`Diag`] and [`LinkHealth`];
+//! * `stream.rs`: the 5 ms reference [`Stream`] and its fixed-point encoding;
+//! * `tests.rs`: the unit tests of the message set.
+
+mod command;
+mod status;
+mod step;
+mod stream;
+#[cfg(test)]
+mod tests;
+
+pub use command::{echo_of, Ack, Command, ControlOp};
+pub use status::{Diag, LinkHealth, Status};
+pub use step::{
+    signed_range, StepBook, WireModify, WireStep, FOOT_UNIT, OFFSET_BITS, STEP_BITS, STEP_UNIT,
+    VERSIONS, YAW_BITS, YAW_UNIT,
+};
+pub use stream::Stream;
+
+/// The identifiers of the message set.
+pub mod ids {
+    /// Emergency stop (controller → node).
+    pub const ESTOP: u16 = 0x010;
+    /// Start, stop, heartbeat, reset (controller → node).
+    pub const CONTROL: u16 = 0x020;
+    /// Acknowledge or reject a command (node → controller).
+    pub const ACK: u16 = 0x080;
+    /// Append a footstep (controller → node).
+    pub const STEP_APPEND: u16 = 0x100;
+    /// Modify a queued footstep (controller → node).
+    pub const STEP_MODIFY: u16 = 0x101;
+    /// COG position reference, every 5 ms.
+    pub const COG: u16 = 0x200;
+    /// ZMP reference, every 5 ms.
+    pub const ZMP: u16 = 0x201;
+    /// COG velocity, phase and tick counter, every 5 ms.
+    pub const COG_VEL: u16 = 0x202;
+    /// Left foot pose, every 5 ms.
+    pub const FOOT_LEFT: u16 = 0x210;
+    /// Right foot pose, every 5 ms.
+    pub const FOOT_RIGHT: u16 = 0x211;
+    /// Node status (also the node's heartbeat), every 100 ms.
+    pub const STATUS: u16 = 0x300;
+    /// Node diagnostics (foreign frames, bus errors, what the node expects next), every 100 ms.
+    pub const DIAG: u16 = 0x301;
+    /// Link health of the board (CAN error counters, bus state, reset reason), every 100 ms
+    /// once the firmware reports it.
+    pub const LINK: u16 = 0x302;
+
+    /// The identifiers the node receives: everything else on the bus is not its business.
+    pub const COMMANDS: [u16; 4] = [ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY];
+
+    /// `true` for one of [`COMMANDS`].
+    pub fn is_command(id: u16) -> bool {
+        COMMANDS.contains(&id)
+    }
+}
+
+/// A classic CAN data frame with a standard identifier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RawFrame {
+    /// 11-bit identifier.
+    pub id: u16,
+    /// Data length (0 … 8).
+    pub len: u8,
+    /// Data; bytes past `len` are zero.
+    pub data: [u8; 8],
+}
+
+impl RawFrame {
+    /// A frame from an identifier and up to 8 bytes; `None` if either is out of range.
+    pub fn new(id: u16, data: &[u8]) -> Option<Self> {
+        if id > 0x7FF || data.len() > 8 {
+            return None;
+        }
+        let mut d = [0u8; 8];
+        d[..data.len()].copy_from_slice(data);
+        Some(Self {
+            id,
+            len: data.len() as u8,
+            data: d,
+        })
+    }
+
+    /// The data bytes.
+    pub fn bytes(&self) -> &[u8] {
+        &self.data[..usize::from(self.len.min(8))]
+    }
+
+    /// From any `embedded-can` frame: `None` for extended or remote frames.
+    pub fn from_frame<F: embedded_can::Frame>(f: &F) -> Option<Self> {
+        match f.id() {
+            embedded_can::Id::Standard(id) if f.is_data_frame() => Self::new(id.as_raw(), f.data()),
+            _ => None,
+        }
+    }
+
+    /// Into any `embedded-can` frame type.
+    pub fn to_frame<F: embedded_can::Frame>(&self) -> Option<F> {
+        let id = embedded_can::StandardId::new(self.id)?;
+        F::new(id, self.bytes())
+    }
+
+    /// Worst-case length on the wire in bits, with bit stuffing (classic CAN, standard id):
+    /// `47 + 8n` bits of frame plus at most `⌊(34 + 8n − 1)/4⌋` stuff bits.
+    pub fn wire_bits(&self) -> u32 {
+        let n = u32::from(self.len);
+        47 + 8 * n + (34 + 8 * n - 1) / 4
+    }
+}
+
+/// `RawFrame` is itself an `embedded-can` frame (standard identifiers, data frames only), so
+/// test devices, the virtual bus and the fuzzers need no frame type of their own.
+impl embedded_can::Frame for RawFrame {
+    fn new(id: impl Into<embedded_can::Id>, data: &[u8]) -> Option<Self> {
+        match id.into() {
+            embedded_can::Id::Standard(s) => RawFrame::new(s.as_raw(), data),
+            embedded_can::Id::Extended(_) => None,
+        }
+    }
+    fn new_remote(_: impl Into<embedded_can::Id>, _: usize) -> Option<Self> {
+        None
+    }
+    fn is_extended(&self) -> bool {
+        false
+    }
+    fn is_remote_frame(&self) -> bool {
+        false
+    }
+    fn id(&self) -> embedded_can::Id {
+        let id = embedded_can::StandardId::new(self.id).unwrap_or(embedded_can::StandardId::ZERO);
+        embedded_can::Id::Standard(id)
+    }
+    fn dlc(&self) -> usize {
+        usize::from(self.len.min(8))
+    }
+    fn data(&self) -> &[u8] {
+        self.bytes()
+    }
+}
+
+/// Why a command was refused. `0` on the wire means accepted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Reason {
+    /// The identifier is not a command of this node. [`Command::decode`] says so; the node
+    /// never answers such a frame (it is not its business: counted in `DIAG`).
+    UnknownId = 1,
+    /// The data length does not match the message.
+    BadLength = 2,
+    /// A field has a value outside its range (e.g. an unknown control operation, reserved bits
+    /// set).
+    OutOfRange = 3,
+    /// The footstep queue is full.
+    QueueFull = 4,
+    /// The footstep has the same side as the one before it.
+    SideOrder = 5,
+    /// No queued step has this id (never queued, or already executed).
+    UnknownStep = 6,
+    /// The step is being swung: its foot has lifted off.
+    LiftedOff = 7,
+    /// The modification would put the ZMP outside the support foot even after adjustment.
+    Infeasible = 8,
+    /// The command is not valid in the present state.
+    WrongState = 9,
+    /// The step id is not the one after the last appended id.
+    SequenceGap = 10,
+    /// The frame equals the command in force (a repeat of the last accepted control
+    /// command, of an accepted append, of a step's version in force): nothing to do.
+    Duplicate = 11,
+    /// The footstep is out of the leg's reach from the previous one.
+    Reach = 12,
+    /// The footstep crosses the other foot.
+    Crossing = 13,
+    /// Emergency-stopped: only a reset is accepted once standing.
+    EmergencyStopped = 14,
+    /// The planner could not plan (numerically); the previous plan goes on.
+    PlanFailed = 15,
+    /// The frame's CRC-8 does not match its identifier and data (see the module docs).
+    BadCrc = 16,
+    /// Older than the command in force: a modification whose version is not newer than the
+    /// step's version in force, or a `Start`/`Reset` whose sequence number is behind the last
+    /// accepted control command (a late copy overtaken by newer commands).
+    Stale = 17,
+    /// The controller fell silent while the robot walked: motion commands are refused until
+    /// a `Reset` once standing.
+    ControllerLost = 18,
+}
+
+impl Reason {
+    /// Every reason, in code order.
+    pub const ALL: [Reason; 18] = [
+        Reason::UnknownId,
+        Reason::BadLength,
+        Reason::OutOfRange,
+        Reason::QueueFull,
+        Reason::SideOrder,
+        Reason::UnknownStep,
+        Reason::LiftedOff,
+        Reason::Infeasible,
+        Reason::WrongState,
+        Reason::SequenceGap,
+        Reason::Duplicate,
+        Reason::Reach,
+        Reason::Crossing,
+        Reason::EmergencyStopped,
+        Reason::PlanFailed,
+        Reason::BadCrc,
+        Reason::Stale,
+        Reason::ControllerLost,
+    ];
+
+    /// The wire code.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// From a wire code (`None` for 0 = accepted, and unknown codes).
+    pub fn from_code(c: u8) -> Option<Self> {
+        Self::ALL.iter().copied().find(|r| r.code() == c)
+    }
+}
+
+/// CRC-8 of a frame's identifier and data (AUTOSAR profile: polynomial 0x2F, initial value
+/// 0xFF, no reflection, final XOR 0xFF). The identifier enters as two little-endian bytes.
+pub fn crc8(id: u16, data: &[u8]) -> u8 {
+    let step = |mut c: u8, b: u8| {
+        c ^= b;
+        for _ in 0..8 {
+            c = if c & 0x80 != 0 {
+                (c << 1) ^ 0x2F
+            } else {
+                c << 1
+            };
+        }
+        c
+    };
+    let [lo, hi] = id.to_le_bytes();
+    let c = data
+        .iter()
+        .fold(step(step(0xFF, lo), hi), |c, &b| step(c, b));
+    c ^ 0xFF
+}
+
+/// CRC-8 of the bytes of `data` without the last one, as it is sent: a frame whose last byte
+/// is this CRC is intact. `data` must not be empty.
+fn crc_ok(id: u16, data: &[u8]) -> bool {
+    match data.split_last() {
+        Some((&c, body)) => crc8(id, body) == c,
+        None => false,
+    }
+}

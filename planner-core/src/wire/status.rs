@@ -1,0 +1,169 @@
+//! The node's periodic reports (every 100 ms): `STATUS`, `DIAG` and `LINK`.
+
+use super::{ids, RawFrame};
+
+/// The node's published state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// 0 standing, 1 walking, 2 emergency-stopped, 3 controller lost, 4 stopping (a `Stop`
+    /// or `StopNow` is being carried out). See the state table in the node's docs.
+    pub state: u8,
+    /// Queued steps.
+    pub queue: u8,
+    /// Commands rejected since start-up (saturating).
+    pub rejected: u16,
+    /// Control cycles that overran their budget (saturating; reported by the firmware).
+    pub overruns: u16,
+    /// Last single-support adjustment \[5 ms\].
+    pub last_adjust: i8,
+    /// Bit 0: shaping active; bit 1: last re-plan failed; bit 2: transmit backlog overflowed.
+    pub flags: u8,
+}
+
+impl Status {
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let r = self.rejected.to_le_bytes();
+        let o = self.overruns.to_le_bytes();
+        RawFrame {
+            id: ids::STATUS,
+            len: 8,
+            data: [
+                self.state,
+                self.queue,
+                r[0],
+                r[1],
+                o[0],
+                o[1],
+                self.last_adjust as u8,
+                self.flags,
+            ],
+        }
+    }
+    /// Decodes a `STATUS` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::STATUS || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            state: d[0],
+            queue: d[1],
+            rejected: u16::from_le_bytes([d[2], d[3]]),
+            overruns: u16::from_le_bytes([d[4], d[5]]),
+            last_adjust: d[6] as i8,
+            flags: d[7],
+        })
+    }
+}
+
+/// The node's diagnostics (every 100 ms, with `STATUS`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Diag {
+    /// Frames received that are not the node's (other identifiers, extended or remote
+    /// frames), saturating.
+    pub foreign: u16,
+    /// Bus errors on receive or transmit, saturating.
+    pub bus_errors: u16,
+    /// Frames dropped because the transmit backlog was full, saturating.
+    pub tx_dropped: u16,
+    /// The side the next appended step must have: 0 either, 1 left, 2 right.
+    pub next_side: u8,
+    /// Sequence number of the last accepted `Start`, `Stop`, `StopNow` or `Reset` (0 before
+    /// any): a controller that restarts continues from it.
+    pub last_control: u8,
+}
+
+impl Diag {
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let [f0, f1] = self.foreign.to_le_bytes();
+        let [b0, b1] = self.bus_errors.to_le_bytes();
+        let [t0, t1] = self.tx_dropped.to_le_bytes();
+        RawFrame {
+            id: ids::DIAG,
+            len: 8,
+            data: [f0, f1, b0, b1, t0, t1, self.next_side, self.last_control],
+        }
+    }
+    /// Decodes a `DIAG` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::DIAG || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            foreign: u16::from_le_bytes([d[0], d[1]]),
+            bus_errors: u16::from_le_bytes([d[2], d[3]]),
+            tx_dropped: u16::from_le_bytes([d[4], d[5]]),
+            next_side: d[6],
+            last_control: d[7],
+        })
+    }
+}
+
+/// The CAN link's health as the board reports it (`LINK`, every 100 ms with `STATUS`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkHealth {
+    /// Transmit error counter.
+    pub tec: u8,
+    /// Receive error counter (0 … 127).
+    pub rec: u8,
+    /// The receive error counter has reached the error-passive level.
+    pub rx_passive: bool,
+    /// 0 error-active, 1 warning (a counter ≥ 96), 2 error-passive, 3 bus-off.
+    pub bus_state: u8,
+    /// Why the board last started: 0 unknown, 1 power-on, 2 pin, 3 brown-out, 4 software,
+    /// 5 independent watchdog, 6 window watchdog, 7 fault handler, 8 clock failure,
+    /// 9 low-power.
+    pub reset: u8,
+    /// Bus-off events since start-up (each recovered), saturating.
+    pub bus_offs: u16,
+    /// Entries into error-passive since start-up, saturating.
+    pub passive_episodes: u16,
+    /// 5 ms slots the control loop missed since start-up (an overrun longer than a period),
+    /// saturating at 255.
+    pub missed_slots: u8,
+}
+
+impl LinkHealth {
+    /// The frame (fields beyond their widths are cut to them).
+    pub fn encode(&self) -> RawFrame {
+        let [b0, b1] = self.bus_offs.to_le_bytes();
+        let [p0, p1] = self.passive_episodes.to_le_bytes();
+        RawFrame {
+            id: ids::LINK,
+            len: 8,
+            data: [
+                self.tec,
+                (self.rec & 0x7F) | (u8::from(self.rx_passive) << 7),
+                (self.bus_state & 0x3) | ((self.reset & 0xF) << 2),
+                b0,
+                b1,
+                p0,
+                p1,
+                self.missed_slots,
+            ],
+        }
+    }
+    /// Decodes a `LINK` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::LINK || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            tec: d[0],
+            rec: d[1] & 0x7F,
+            rx_passive: d[1] & 0x80 != 0,
+            bus_state: d[2] & 0x3,
+            reset: (d[2] >> 2) & 0xF,
+            bus_offs: u16::from_le_bytes([d[3], d[4]]),
+            passive_episodes: u16::from_le_bytes([d[5], d[6]]),
+            missed_slots: d[7],
+        })
+    }
+}

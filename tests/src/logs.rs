@@ -1,0 +1,327 @@
+//! The host runs that the QEMU images replay (`tests/tests/qemu.rs` for the M7,
+//! `tests/tests/qemu_m4.rs` for the M4F): every built-in scenario and every TOML scenario of
+//! `host-sim/scenarios/` through `sim::simulate`, and one fault-sweep run (fig4, seed 1) per
+//! fault kind that the in-memory device replays as host-sim's bus does (not the flood at
+//! 100 % load: see `tests/tests/qemu.rs`), each with its candump log; [`binary`] encodes one
+//! for the image's `replay.wlog` (a file of such logs, one after the other); [`play`] plays
+//! one into a node of either scalar as the image does, [`compare`] checks the image's report
+//! against that.
+
+use std::borrow::Borrow;
+use std::path::{Path, PathBuf};
+
+use gait_loop::binlog::{Frames, Header, SliceBytes};
+use gait_loop::{Fnv, Player};
+
+use host_sim::faults::{run_case_logged, FaultKind, HEAVY};
+use host_sim::replay;
+use host_sim::scenario::{built_in, BUILT_IN};
+use host_sim::sim::{simulate, start_config, SimConfig};
+use host_sim::toml_scenario;
+use planner_core::gait::{Footstep, Reference, PREVIEW};
+use planner_core::node::{Node, NodeConfig};
+use planner_core::playback::LogClock;
+use planner_core::shaping::PreviewGains;
+use planner_core::wire::RawFrame;
+use planner_core::Real;
+
+use crate::report::QemuRun;
+
+/// The image's `CHECK` period \[cycles\].
+pub const CHECK_EVERY: u64 = 500;
+
+/// One host run to replay on the target.
+pub struct Case {
+    /// The log's name (`scenario=` in the image's report).
+    pub name: String,
+    /// The node's configuration (the run's start feet).
+    pub cfg: NodeConfig,
+    /// The run's candump log.
+    pub log: Vec<String>,
+    /// Whether the run must contain a single-support time adjustment.
+    pub adjusts: bool,
+}
+
+/// The fault-sweep runs (fig4, seed 1): one per kind, the flood excepted (module docs).
+pub fn fault_runs() -> Vec<(String, FaultKind, f64)> {
+    let mut v: Vec<(String, FaultKind, f64)> = [
+        (FaultKind::None, 0.0),
+        (FaultKind::Drop, 0.05),
+        (FaultKind::Duplicate, 0.05),
+        (FaultKind::Corrupt, 0.05),
+        (FaultKind::Delay, 0.05),
+        (FaultKind::Silence, 0.0),
+        (FaultKind::Flood, 0.2),
+        (FaultKind::Burst, 20.0),
+    ]
+    .into_iter()
+    .map(|(k, r)| (format!("fault-{}-{r}", k.name()), k, r))
+    .collect();
+    for i in 0..HEAVY.len() {
+        v.push((format!("fault-mixed-{i}"), FaultKind::Mixed(i), 0.0));
+    }
+    v
+}
+
+/// Every run the QEMU tests replay (module docs), recorded on the host, in file order.
+pub fn cases() -> Vec<Case> {
+    let sim = SimConfig::default();
+    let mut out = Vec::new();
+    for name in BUILT_IN {
+        let s = built_in(name).unwrap();
+        let run = simulate(&s, &sim).unwrap_or_else(|e| panic!("{name}: {e}"));
+        out.push(Case {
+            name: name.to_string(),
+            cfg: start_config(&s, &sim.node),
+            log: run.can_log,
+            adjusts: matches!(name, "fig4" | "lateral"),
+        });
+    }
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../host-sim/scenarios");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "no TOML scenario in {}", dir.display());
+    for path in files {
+        let s = toml_scenario::load(&path).unwrap();
+        let run = simulate(&s, &sim).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let stem = path.file_stem().unwrap().to_string_lossy();
+        out.push(Case {
+            name: format!("toml-{stem}"),
+            cfg: start_config(&s, &sim.node),
+            log: run.can_log,
+            adjusts: true,
+        });
+    }
+    let fig4 = built_in("fig4").unwrap();
+    for (name, kind, rate) in fault_runs() {
+        let (_, log) =
+            run_case_logged(&fig4, kind, rate, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+        out.push(Case {
+            name,
+            // `faults::run_case_logged` runs `NodeConfig::hrp2()` as it is.
+            cfg: NodeConfig::hrp2(),
+            log,
+            adjusts: false,
+        });
+    }
+    out
+}
+
+/// `case`'s log in the image's binary format (`host_sim::replay::binary_log`).
+pub fn binary(case: &Case) -> Vec<u8> {
+    replay::binary_log(&case.name, &case.log, &case.cfg)
+        .unwrap_or_else(|e| panic!("{}: {e}", case.name))
+}
+
+/// What the host computed for one log.
+pub struct Expected {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Frames fed to the node.
+    pub fed: u32,
+    /// Whether the replay was cut at its longest.
+    pub cut: bool,
+    /// Frames the node sent.
+    pub tx_frames: usize,
+    /// Their digest (`Fnv::add_sent`), as the image prints it.
+    pub tx_digest: String,
+    /// The digest of every reference (`Fnv::add_reference`), as the image prints it.
+    pub ref_digest: String,
+    /// (cycle, frames so far, frame digest, reference digest) after every CHECK_EVERY-th cycle.
+    pub checks: Vec<(u64, usize, String, String)>,
+    /// (tick, adjust_ticks) of every re-plan.
+    pub replans: Vec<(u64, i32)>,
+    /// The node's counters: refused, tx_dropped, bus_errors.
+    pub counters: (u16, u16, u16),
+    /// Frames the device lost.
+    pub rx_overflow: u32,
+}
+
+/// A digest as the image prints it.
+pub fn hex(h: &Fnv) -> String {
+    format!("{:#018x}", h.0)
+}
+
+/// What the target's player, compiled for the host, did with one log.
+pub struct Played<T> {
+    /// What the image must print of it.
+    pub expected: Expected,
+    /// The log's start feet.
+    pub feet: [Footstep<f64>; 2],
+    /// The frames the node sent, with their cycles.
+    pub sent: Vec<(u64, RawFrame)>,
+    /// Every reference, the start-up one first.
+    pub trajectory: Vec<Reference<T>>,
+}
+
+/// Plays the binary log `bytes` (one log, named `name`) into `node` (just created) with the
+/// target's player and decoder compiled for the host, as the image does (with `Node::poll`
+/// untimed), and what the image must print of it.
+pub fn play<const Q: usize, G, T>(name: &str, bytes: &[u8], node: &mut Node<Q, G, T>) -> Played<T>
+where
+    G: Borrow<PreviewGains<T, PREVIEW>>,
+    T: Real,
+{
+    let mut src = SliceBytes::new(bytes);
+    let header = Header::read(&mut src).unwrap().expect("a header");
+    assert_eq!(header.name(), name);
+    let mut frames = Frames::new(&header, &mut src);
+    let clock = LogClock::new(header.first_us, u64::from(header.period_us)).unwrap();
+    let mut player = Player::new(clock, header.count, header.last_us);
+    let mut trajectory = vec![*node.gait().last()];
+    let mut sent: Vec<(u64, RawFrame)> = Vec::new();
+    let (mut tx, mut refs) = (Fnv::default(), Fnv::default());
+    refs.add_reference(node.gait().last());
+    let mut checks = Vec::new();
+    let mut replans = Vec::new();
+    while !player.done() {
+        let k = player.next_cycle();
+        let report = player
+            .cycle(
+                node,
+                &mut frames,
+                |n, ms, bus| n.poll(ms, bus),
+                |c, f| {
+                    sent.push((c, *f));
+                    tx.add_sent(c, f);
+                },
+            )
+            .unwrap_or_else(|_| panic!("{name}: log truncated: {:?}", frames.error()));
+        trajectory.push(report.reference);
+        refs.add_reference(&report.reference);
+        let tick = node.gait().ticks();
+        if let Some(info) = node.gait().last_replan().filter(|i| i.tick == tick) {
+            replans.push((tick, info.adjust_ticks));
+        }
+        if (k + 1) % CHECK_EVERY == 0 {
+            checks.push((k, sent.len(), hex(&tx), hex(&refs)));
+        }
+    }
+    assert_eq!(frames.remaining(), 0, "{name}: frames left");
+    assert_eq!(frames.error(), None, "{name}: decoder");
+    assert_eq!(src.remaining(), 0, "{name}: bytes after the log");
+    assert!(sent.len() > 1000, "{name}: only {} node frames", sent.len());
+    let c = node.counters();
+    Played {
+        expected: Expected {
+            cycles: player.next_cycle(),
+            fed: player.fed(),
+            cut: player.cut(),
+            tx_frames: sent.len(),
+            tx_digest: hex(&tx),
+            ref_digest: hex(&refs),
+            checks,
+            replans,
+            counters: (c.refused, c.tx_dropped, c.bus_errors),
+            rx_overflow: player.bus().rx_overflow(),
+        },
+        feet: header.feet,
+        sent,
+        trajectory,
+    }
+}
+
+/// The target's report on one log against the host's replay of it.
+pub fn compare(q: &QemuRun, case: &Case, want: &Expected) {
+    let name = case.name.as_str();
+    let end = q.one_of("END", name);
+    assert_eq!(
+        (
+            end.num::<u64>("cycles"),
+            end.num::<u32>("fed"),
+            end.get("cut") == "1"
+        ),
+        (want.cycles, want.fed, want.cut),
+        "{name}: cycles run, frames fed, cut"
+    );
+    let checks: Vec<(u64, usize, String, String)> = q
+        .of("CHECK", name)
+        .map(|r| {
+            (
+                r.num("cycle"),
+                r.num("tx_frames"),
+                r.get("tx_digest").to_string(),
+                r.get("ref_digest").to_string(),
+            )
+        })
+        .collect();
+    if let Some((t, h)) = checks.iter().zip(&want.checks).find(|(t, h)| t != h) {
+        panic!(
+            "{name}: the target and the host differ by cycle {}: {t:?} vs {h:?}",
+            h.0
+        );
+    }
+    assert_eq!(checks.len(), want.checks.len(), "{name}: CHECK lines");
+    assert_eq!(
+        (end.num::<usize>("tx_frames"), end.get("tx_digest")),
+        (want.tx_frames, want.tx_digest.as_str()),
+        "{name}: the frames the node sent (count, digest with their cycles)"
+    );
+    assert_eq!(
+        end.get("ref_digest"),
+        want.ref_digest,
+        "{name}: the references of the target and the host are not bit-identical"
+    );
+    let replans: Vec<(u64, i32)> = q
+        .of("REPLAN", name)
+        .map(|r| (r.num("tick"), r.num("adjust_ticks")))
+        .collect();
+    assert_eq!(
+        replans, want.replans,
+        "{name}: re-plans and their adjustments"
+    );
+    if case.adjusts {
+        assert!(
+            replans.iter().any(|&(_, a)| a != 0),
+            "{name}: no adjustment at all"
+        );
+    }
+    let node = q.one_of("NODE", name);
+    assert_eq!(
+        (
+            node.num::<u16>("refused"),
+            node.num::<u16>("tx_dropped"),
+            node.num::<u16>("bus_errors")
+        ),
+        want.counters,
+        "{name}: the node's counters (refused, tx_dropped, bus_errors)"
+    );
+    assert_eq!(
+        node.num::<u32>("rx_overflow"),
+        want.rx_overflow,
+        "{name}: frames lost by the device"
+    );
+    // The board's bookkeeping ran around every poll: a summary per 200 cycles, no overrun
+    // (the worst cycle is far below a 5 ms slot), and the node was told none.
+    let board = q.one_of("BOARD", name);
+    assert_eq!(
+        board.num::<u64>("summaries"),
+        want.cycles / 200,
+        "{name}: summaries"
+    );
+    assert_eq!(
+        (
+            board.num::<u32>("overruns"),
+            board.num::<u16>("status_overruns")
+        ),
+        (0, 0),
+        "{name}: overruns"
+    );
+    println!(
+        "{name}: {} cycles, {} frames fed, {} node frames and every reference bit-identical, {} \
+         re-plans{}",
+        want.cycles,
+        want.fed,
+        want.tx_frames,
+        replans.len(),
+        if want.cut {
+            " (cut at its longest)"
+        } else {
+            ""
+        }
+    );
+}
