@@ -166,8 +166,9 @@ impl RawFrame {
         if id > 0x7FF || data.len() > 8 {
             return None;
         }
-        let mut d = [0u8; 8];
-        d[..data.len()].copy_from_slice(data);
+        // All 8 bytes, each taken or zero (a fixed-length loop: no `memcpy` call for a
+        // length known only here).
+        let d: [u8; 8] = core::array::from_fn(|i| data.get(i).copied().unwrap_or(0));
         Some(Self {
             id,
             len: data.len() as u8,
