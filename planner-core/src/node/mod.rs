@@ -692,7 +692,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.steps.swinging() == Some(m.id) {
             return Err(Reason::LiftedOff);
         }
-        let Some(rec) = self.steps.queued_mut(m.id).copied() else {
+        let Some((at, rec)) = self.steps.queued_find(m.id) else {
             return Err(Reason::UnknownStep);
         };
         if !m.is_newer_than(rec.version) {
@@ -706,7 +706,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let id = u16::from(m.id);
         self.check_reach(&step, Some(id))?;
         self.gait.modify(id, step).map_err(reason_of)?;
-        if let Some(r) = self.steps.queued_mut(m.id) {
+        if let Some(r) = self.steps.queued_at_mut(at, m.id) {
             r.version = m.version;
             r.in_force = Some(*frame);
         }

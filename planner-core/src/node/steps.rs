@@ -76,9 +76,25 @@ impl<const Q: usize> Steps<Q> {
             || self.done.iter().any(same)
     }
 
-    /// The record of queued step `id`.
-    pub fn queued_mut(&mut self, id: u8) -> Option<&mut Record> {
-        self.queued.iter_mut().find(|r| r.append.id == id)
+    /// The record of queued step `id` and its position among the queued records (for
+    /// [`Steps::queued_at_mut`]).
+    pub fn queued_find(&self, id: u8) -> Option<(usize, Record)> {
+        self.queued
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.append.id == id)
+            .map(|(i, r)| (i, *r))
+    }
+
+    /// The record of queued step `id`, looked for at `index` first (where
+    /// [`Steps::queued_find`] found it), then among all.
+    pub fn queued_at_mut(&mut self, index: usize, id: u8) -> Option<&mut Record> {
+        let i = if self.queued.get(index).is_some_and(|r| r.append.id == id) {
+            Some(index)
+        } else {
+            self.queued.iter().position(|r| r.append.id == id)
+        };
+        i.and_then(move |i| self.queued.get_mut(i))
     }
 
     /// Records an accepted append (the gait queued it: there is room).
