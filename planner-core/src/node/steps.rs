@@ -68,8 +68,21 @@ impl<const Q: usize> Steps<Q> {
 
     /// `true` if `f` equals an accepted append or a version in force. (The first data byte of
     /// a footstep frame is its step id: only that step's records are compared.)
+    ///
+    /// Ids are appended in sequence from 0 (after start-up and every `Reset`, which clears the
+    /// records), so while the records hold at most 256 steps no id is held twice: the first
+    /// record of that id decides, and the search stops there.
     pub fn is_repeat(&self, f: &RawFrame) -> bool {
         let id = f.data[0];
+        if Q + 1 + HISTORY <= 256 {
+            let first = self
+                .queued
+                .iter()
+                .chain(self.swing.as_ref())
+                .chain(self.done.iter())
+                .find(|r| r.append.id == id);
+            return first.is_some_and(|r| r.is_repeat(f));
+        }
         let same = |r: &Record| r.append.id == id && r.is_repeat(f);
         self.queued.iter().any(same)
             || self.swing.as_ref().is_some_and(same)
