@@ -451,8 +451,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let r = &self.cfg.reach;
         let feet = self.gait.previous_feet(before);
         let other = Frame::of(&feet[step.side.other().index()]);
-        let same = Frame::of(&feet[step.side.index()]);
-        let f = Frame::of(step);
+        let same = Frame::like(&feet[step.side.index()], &[&other]);
+        let f = Frame::like(step, &[&other, &same]);
         // The first swing of a walk from standing: its growth counts from a step of 0.
         let position = match before {
             Some(id) => self.gait.position(id),
@@ -463,10 +463,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if let Some(id) = before {
             let next = |k: u16| self.gait.queued_step(id.wrapping_add(k) & 0xFF);
             if let Some(s1) = next(1) {
-                let f1 = Frame::of(&s1);
+                let f1 = Frame::like(&s1, &[&f, &other]);
                 r.check_frames(&f, &other, &f1, s1.side, false)?;
                 if let Some(s2) = next(2) {
-                    r.check_frames(&f1, &f, &Frame::of(&s2), s2.side, false)?;
+                    let f2 = Frame::like(&s2, &[&f1, &f]);
+                    r.check_frames(&f1, &f, &f2, s2.side, false)?;
                 }
             }
         }

@@ -81,12 +81,25 @@ pub(super) struct Frame<T> {
 
 impl<T: Real> Frame<T> {
     pub(super) fn of(f: &Footstep<T>) -> Self {
+        Self::like(f, &[])
+    }
+
+    /// [`Frame::of`], taking the sine and cosine from a frame in `known` of the same yaw (bit
+    /// for bit) if there is one: the feet of a reach check often share their heading.
+    pub(super) fn like(f: &Footstep<T>, known: &[&Frame<T>]) -> Self {
+        let (sin, cos) = match known
+            .iter()
+            .find(|k| k.yaw.f64().to_bits() == f.yaw.f64().to_bits())
+        {
+            Some(k) => (k.sin, k.cos),
+            None => (f.yaw.sin(), f.yaw.cos()),
+        };
         Self {
             x: f.x,
             y: f.y,
             yaw: f.yaw,
-            sin: f.yaw.sin(),
-            cos: f.yaw.cos(),
+            sin,
+            cos,
         }
     }
 
