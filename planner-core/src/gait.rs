@@ -139,17 +139,17 @@ impl<T: Real> Footstep<T> {
 /// `a` wrapped into [−π, π] (unchanged, and no libm call, when it is already inside: the
 /// usual case, on every tick for every foot).
 fn wrap_angle<T: Real>(a: T) -> T {
-    let v = a.f64();
-    if v.abs() <= core::f64::consts::PI {
+    // In the scalar itself (no software double on a single-precision FPU) while inside.
+    if a.abs() <= T::of(core::f64::consts::PI) {
         a
     } else {
-        T::of(libm::remainder(v, core::f64::consts::TAU))
+        T::of(libm::remainder(a.f64(), core::f64::consts::TAU))
     }
 }
 
+/// In the scalar itself: `libm`'s `sin`/`cos` for `f64`, `sinf`/`cosf` for `f32`.
 fn sin_cos<T: Real>(a: T) -> (T, T) {
-    let v = a.f64();
-    (T::of(libm::sin(v)), T::of(libm::cos(v)))
+    (a.sin(), a.cos())
 }
 
 fn midpoint<T: Real>(a: [T; 2], b: [T; 2]) -> [T; 2] {
