@@ -147,9 +147,9 @@ fn wrap_angle<T: Real>(a: T) -> T {
     }
 }
 
-/// In the scalar itself: `libm`'s `sin`/`cos` for `f64`, `sinf`/`cosf` for `f32`.
+/// In the scalar itself ([`Real::sin_cos`]).
 fn sin_cos<T: Real>(a: T) -> (T, T) {
-    (a.sin(), a.cos())
+    a.sin_cos()
 }
 
 fn midpoint<T: Real>(a: [T; 2], b: [T; 2]) -> [T; 2] {

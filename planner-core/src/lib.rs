@@ -31,6 +31,7 @@ pub mod real;
 pub mod robot;
 pub mod shaping;
 pub mod timing;
+mod trig;
 pub mod window;
 pub mod wire;
 

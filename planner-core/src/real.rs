@@ -47,10 +47,13 @@ pub trait Real:
     fn cbrt(self) -> Self;
     /// Arc cosine (libm).
     fn acos(self) -> Self;
-    /// Cosine (libm).
+    /// Cosine (libm for `f64`; [`sin_cos`](Self::sin_cos)'s for `f32`).
     fn cos(self) -> Self;
-    /// Sine (libm).
+    /// Sine (libm for `f64`; [`sin_cos`](Self::sin_cos)'s for `f32`).
     fn sin(self) -> Self;
+    /// `(sin, cos)`: libm's for `f64`; for `f32` computed in single precision
+    /// (`crate::trig`: libm's `sinf`/`cosf` work in `f64`, software on a Cortex-M4F).
+    fn sin_cos(self) -> (Self, Self);
     /// Four-quadrant arc tangent of `self / x` (libm).
     fn atan2(self, x: Self) -> Self;
     /// Nearest integer, halves away from zero (libm).
@@ -128,6 +131,10 @@ impl Real for f64 {
         libm::sin(self)
     }
     #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        (libm::sin(self), libm::cos(self))
+    }
+    #[inline]
     fn atan2(self, x: Self) -> Self {
         libm::atan2(self, x)
     }
@@ -187,11 +194,15 @@ impl Real for f32 {
     }
     #[inline]
     fn cos(self) -> Self {
-        libm::cosf(self)
+        crate::trig::sin_cos_f32(self).1
     }
     #[inline]
     fn sin(self) -> Self {
-        libm::sinf(self)
+        crate::trig::sin_cos_f32(self).0
+    }
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        crate::trig::sin_cos_f32(self)
     }
     #[inline]
     fn atan2(self, x: Self) -> Self {

@@ -92,7 +92,7 @@ impl<T: Real> Frame<T> {
             .find(|k| k.yaw.f64().to_bits() == f.yaw.f64().to_bits())
         {
             Some(k) => (k.sin, k.cos),
-            None => (f.yaw.sin(), f.yaw.cos()),
+            None => f.yaw.sin_cos(),
         };
         Self {
             x: f.x,
