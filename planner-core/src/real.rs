@@ -54,6 +54,9 @@ pub trait Real:
     /// `(sin, cos)`: libm's for `f64`; for `f32` computed in single precision
     /// (`crate::trig`: libm's `sinf`/`cosf` work in `f64`, software on a Cortex-M4F).
     fn sin_cos(self) -> (Self, Self);
+    /// The bits of the value (`f32`'s widened to `u64`): equal exactly for equal values of
+    /// equal sign.
+    fn bits(self) -> u64;
     /// Four-quadrant arc tangent of `self / x` (libm).
     fn atan2(self, x: Self) -> Self;
     /// Nearest integer, halves away from zero (libm).
@@ -135,6 +138,10 @@ impl Real for f64 {
         (libm::sin(self), libm::cos(self))
     }
     #[inline]
+    fn bits(self) -> u64 {
+        self.to_bits()
+    }
+    #[inline]
     fn atan2(self, x: Self) -> Self {
         libm::atan2(self, x)
     }
@@ -203,6 +210,10 @@ impl Real for f32 {
     #[inline]
     fn sin_cos(self) -> (Self, Self) {
         crate::trig::sin_cos_f32(self)
+    }
+    #[inline]
+    fn bits(self) -> u64 {
+        u64::from(self.to_bits())
     }
     #[inline]
     fn atan2(self, x: Self) -> Self {

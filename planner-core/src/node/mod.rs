@@ -477,9 +477,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The footstep of a validated frame in `T`: the wire's integers in SI units (`f64`, as
     /// [`WireStep::si`]), each rounded to the nearest `T` (exact for `f64`).
     fn footstep(s: &WireStep) -> Footstep<T> {
-        let (x, y, yaw) = s.si();
+        let (x, y, yaw) = s.si_in::<T>();
         let side = if s.left { Side::Left } else { Side::Right };
-        Footstep::new(side, T::of(x), T::of(y), T::of(yaw))
+        Footstep::new(side, x, y, yaw)
     }
 
     /// Handles one frame from the bus (validation, state checks, application) and returns the

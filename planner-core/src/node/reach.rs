@@ -87,10 +87,7 @@ impl<T: Real> Frame<T> {
     /// [`Frame::of`], taking the sine and cosine from a frame in `known` of the same yaw (bit
     /// for bit) if there is one: the feet of a reach check often share their heading.
     pub(super) fn like(f: &Footstep<T>, known: &[&Frame<T>]) -> Self {
-        let (sin, cos) = match known
-            .iter()
-            .find(|k| k.yaw.f64().to_bits() == f.yaw.f64().to_bits())
-        {
+        let (sin, cos) = match known.iter().find(|k| k.yaw.bits() == f.yaw.bits()) {
             Some(k) => (k.sin, k.cos),
             None => f.yaw.sin_cos(),
         };

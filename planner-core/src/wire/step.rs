@@ -2,6 +2,7 @@
 //! ([`WireModify`]) and the controller's [`StepBook`].
 
 use super::{crc8, ids, Command, Reason};
+use crate::real::Real;
 
 /// Footstep yaw unit \[rad\].
 pub const YAW_UNIT: f64 = core::f64::consts::TAU / 4096.0;
@@ -90,6 +91,16 @@ impl WireStep {
             f64::from(self.x) * STEP_UNIT,
             f64::from(self.y) * STEP_UNIT,
             f64::from(self.yaw) * YAW_UNIT,
+        )
+    }
+
+    /// [`WireStep::si`] in the scalar `T`, computed in `T` (`x · STEP_UNIT` with both rounded
+    /// to `T`: for `f64` exactly `si`; for `f32` no double-precision operation).
+    pub fn si_in<T: Real>(&self) -> (T, T, T) {
+        (
+            T::of_i32(self.x) * T::of(STEP_UNIT),
+            T::of_i32(self.y) * T::of(STEP_UNIT),
+            T::of_i32(i32::from(self.yaw)) * T::of(YAW_UNIT),
         )
     }
 
