@@ -48,3 +48,15 @@ pub const HRP2_COG_HEIGHT: f64 = 0.814;
 pub fn omega<T: Real>(g: T, z_c: T) -> T {
     (g / z_c).sqrt()
 }
+
+/// The unit tests' deterministic generator: xorshift64 from `seed`, uniform in `[0, 1)`.
+#[cfg(test)]
+pub(crate) fn test_uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

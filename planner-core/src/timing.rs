@@ -246,13 +246,8 @@ mod tests {
     /// (`½ max|p''| (Δ/2)²` ≤ 2e-8 here), and never less than the grid's.
     #[test]
     fn random_quartics_match_brute_force() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = crate::test_uniform(0x9e37_79b9_7f4a_7c15_u64);
+        let mut next = || uniform() - 0.5;
         for _ in 0..200 {
             let zmp = [
                 next() * 0.2,

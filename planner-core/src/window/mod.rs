@@ -521,13 +521,7 @@ mod tests {
     /// and its residual in the dense system is at rounding level (rows are in metres).
     #[test]
     fn structured_elimination_agrees_with_banded_lu_over_many_timings() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_uniform(0x2545_f491_4f6c_dd1d_u64);
         let mut worst = 0.0_f64;
         for case in 0..2128 {
             let mut t = timing();
@@ -578,13 +572,7 @@ mod tests {
     /// solve that failed half-way.
     #[test]
     fn a_reused_plan_buffer_gives_the_fresh_plan() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_uniform(0x9e37_79b9_7f4a_7c15_u64);
         let mut reused = Plan::zeroed(timing());
         for case in 0..300 {
             let mut t = timing();
