@@ -47,6 +47,13 @@ flash=$((vt + text + rodata + data))
 ram=$((data + bss + uninit))
 line="board image: flash ${flash} B (.vector_table ${vt}, .text ${text}, .rodata ${rodata}, .data ${data}); static RAM ${ram} B (.data ${data}, .bss ${bss}, .uninit ${uninit})"
 echo "$line"
+# The node's `static` is parked (`Node::parked`: every byte zero) so that it lives in .bss; a
+# value with a non-zero byte would put its 14 KB into .data, i.e. into flash as well.
+if [ "$data" -gt 1024 ]; then
+    echo ".data is ${data} B: a large static has a non-zero initializer (is the node's parked" >&2
+    echo "value still all zero bytes? see planner_core::node::Node::parked)" >&2
+    exit 1
+fi
 if [ "${1:-}" = "--check" ]; then
     if ! grep -qF -- "$line" README.md; then
         echo "firmware/README.md does not quote the board image's sizes; expected the line:" >&2

@@ -112,6 +112,14 @@ pub struct Footstep<T> {
 }
 
 impl<T: Real> Footstep<T> {
+    /// The left foot at the origin (every byte zero: see [`Gait::parked`]).
+    pub(crate) const PARKED: Self = Self {
+        side: Side::Left,
+        x: T::ZERO,
+        y: T::ZERO,
+        yaw: T::ZERO,
+    };
+
     /// A footstep.
     pub fn new(side: Side, x: T, y: T, yaw: T) -> Self {
         Self { side, x, y, yaw }
@@ -213,6 +221,31 @@ pub struct GaitParams<T> {
 }
 
 impl<T: Real> GaitParams<T> {
+    /// Every value zero, `false` and the first variant (not parameters to walk with: see
+    /// [`Gait::parked`]).
+    pub(crate) const PARKED: Self = Self {
+        omega: T::ZERO,
+        dt: T::ZERO,
+        single_ticks: 0,
+        double_ticks: 0,
+        start_ticks: 0,
+        settle_ticks: 0,
+        stand_ticks: 0,
+        rest_ticks: 0,
+        adjust_min_ticks: 0,
+        adjust_max_ticks: 0,
+        step_width: T::ZERO,
+        sole_half_length: T::ZERO,
+        sole_half_width: T::ZERO,
+        step_height: T::ZERO,
+        tail: Tail::Settle,
+        shaping: false,
+        cog_height: 0.0,
+        gravity: 0.0,
+        preview_qe: 0.0,
+        preview_r: 0.0,
+    };
+
     /// The HRP-2 defaults: z_c 0.814 m, g 9.8 m/s², 5 ms cycle, single support 0.7 s, double
     /// support 0.1 s, start 0.8 s, stop: settle 0.7 s and rest 0.5 s, adjustments
     /// −0.2 … +0.35 s, feet 0.2 m apart, sole
@@ -457,6 +490,18 @@ struct Inputs<T> {
     first_ticks: u32,
 }
 
+impl<T: Real> Inputs<T> {
+    /// Every byte zero (see [`Gait::parked`]).
+    pub(crate) const PARKED: Self = Self {
+        kind: WindowKind::Start,
+        support: Footstep::PARKED,
+        other: Footstep::PARKED,
+        land: [Footstep::PARKED; 3],
+        n_land: 0,
+        first_ticks: 0,
+    };
+}
+
 /// A window's intervals.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spec<T> {
@@ -635,9 +680,28 @@ struct Active<T: Real> {
 }
 
 impl<T: Real> Active<T> {
-    /// An unused window buffer.
-    fn empty(p: &GaitParams<T>, feet: &[Footstep<T>; 2]) -> Self {
-        let inputs = Inputs {
+    /// A parked window buffer (every byte zero: see [`Gait::parked`]).
+    pub(crate) const PARKED: Self = Self {
+        inputs: Inputs::PARKED,
+        spec: Spec {
+            ticks: [0; M],
+            kinds: [Kind::Start; M],
+            // `Some(Left)`, not `None`: its bytes are the zero ones (`None` is the niche).
+            support: [Some(Side::Left); M],
+            via: [[T::ZERO; 2]; M],
+            replan: None,
+        },
+        bounds: [PlaneBoundary::ZERO; 2],
+        factor: Factorized::empty(),
+        plan: Plan::ZERO,
+        tick: 0,
+        starts: [0; M + 1],
+    };
+
+    /// Makes this buffer an unused one for `p` and `feet`, in place (the buffer is 6 KB: it is
+    /// never built on the stack).
+    fn clear(&mut self, p: &GaitParams<T>, feet: &[Footstep<T>; 2]) {
+        self.inputs = Inputs {
             kind: WindowKind::Stop,
             support: feet[0],
             other: feet[1],
@@ -645,24 +709,24 @@ impl<T: Real> Active<T> {
             n_land: 0,
             first_ticks: p.settle_ticks,
         };
-        Self {
-            inputs,
-            spec: Spec {
-                ticks: [1; M],
-                kinds: [Kind::Stand; M],
-                support: [None; M],
-                via: [[T::ZERO; 2]; M],
-                replan: None,
-            },
-            bounds: [PlaneBoundary::default(); 2],
-            factor: Factorized::empty(),
-            plan: Plan::zeroed(Timing {
-                omega: p.omega,
-                durations: [T::ONE; M],
-            }),
-            tick: 0,
-            starts: [0; M + 1],
+        self.spec = Spec {
+            ticks: [1; M],
+            kinds: [Kind::Stand; M],
+            support: [None; M],
+            via: [[T::ZERO; 2]; M],
+            replan: None,
+        };
+        self.bounds = [PlaneBoundary::default(); 2];
+        self.factor = Factorized::empty();
+        self.plan.timing = Timing {
+            omega: p.omega,
+            durations: [T::ONE; M],
+        };
+        for seg in self.plan.x.iter_mut().chain(self.plan.y.iter_mut()) {
+            *seg = Segment::default();
         }
+        self.tick = 0;
+        self.starts = [0; M + 1];
     }
 
     /// Plans a window in this buffer, in place (the buffer is 9 KB: never moved on the control
@@ -866,91 +930,162 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         left: Footstep<T>,
         right: Footstep<T>,
     ) -> Result<Self, GaitError> {
-        let mut g = Self::build(params, left, right, PreviewGains::zeroed())?;
+        Self::check(&params, &left, &right)?;
+        let mut g = Self::parked(PreviewGains::zeroed());
         if params.shaping {
             g.gains
                 .compute(&params.preview_config(), Law::FromRest)
                 .map_err(GaitError::Gains)?;
         }
+        g.restart(params, left, right)?;
         Ok(g)
+    }
+}
+
+impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
+    /// A gait that is not configured yet, holding `gains`: zero parameters, both feet at the
+    /// origin, empty buffers. Its one use is to be configured in place by
+    /// [`Gait::restart`] (the node's [`ParkedNode`](crate::node::ParkedNode)): a `static`
+    /// initialised with it needs no start-up stack, and, when `G` is zero-sized (gains named
+    /// by a type, not a reference), no flash either, because every byte of it is zero (the
+    /// fields with a niche hold the value whose bytes are zero, e.g. `Some(Side::Left)`; the
+    /// firmware's size check fails if the node's static leaves .bss). Not a gait to tick.
+    pub(crate) const fn parked(gains: G) -> Self {
+        Self {
+            params: GaitParams::PARKED,
+            queue: Deque::new(),
+            feet: [Footstep::PARKED; 2],
+            swing: Some(Queued {
+                id: 0,
+                step: Footstep::PARKED,
+                modified: false,
+            }),
+            landed: Some(Side::Left),
+            failed: false,
+            mode: Mode::Standing,
+            stop_requested: false,
+            wins: [Active::PARKED, Active::PARKED],
+            cur: None,
+            gen: 0,
+            serial: 0,
+            predicted: Some(Predicted {
+                gen: 0,
+                serial: 0,
+                at: 0,
+                inputs: Inputs::PARKED,
+                cog: [State::ZERO; 2],
+                zmp: [State::ZERO; 2],
+            }),
+            predicted_worst: [T::ZERO; 2],
+            target: None,
+            tick: 0,
+            last: Reference {
+                x: Sample::ZERO,
+                y: Sample::ZERO,
+                phase: Phase::Single(Side::Left),
+                feet: [FootPose {
+                    x: T::ZERO,
+                    y: T::ZERO,
+                    z: T::ZERO,
+                    yaw: T::ZERO,
+                }; 2],
+            },
+            info: None,
+            gains,
+            comp: [Compensator::new(), Compensator::new()],
+        }
+    }
+
+    /// Why `params`, `left` and `right` start no gait (in [`Gait::restart`]'s order), if they
+    /// do not.
+    fn check(
+        params: &GaitParams<T>,
+        left: &Footstep<T>,
+        right: &Footstep<T>,
+    ) -> Result<(), GaitError> {
+        if !(left.is_finite() && right.is_finite()) {
+            return Err(GaitError::NonFinite);
+        }
+        params.validate()
     }
 }
 
 impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G> {
     /// [`Gait::new`] with preview gains computed beforehand (the firmware compiles them into
-    /// flash from the robot file) and lent by `gains` (a reference: nothing is copied).
-    /// `Gains(BadConfig)` unless they are the gains [`Gait::new`] would compute for `params`
-    /// ([`PreviewGains::are_for`]); not used when `params.shaping` is off.
+    /// flash from the robot file) and lent by `gains` (a reference, or a type that names
+    /// them: nothing is copied). `Gains(BadConfig)` unless they are the gains [`Gait::new`]
+    /// would compute for `params` ([`PreviewGains::are_for`]); not used when `params.shaping`
+    /// is off.
     pub fn with_gains(
         params: GaitParams<T>,
         left: Footstep<T>,
         right: Footstep<T>,
         gains: G,
     ) -> Result<Self, GaitError> {
-        let g = Self::build(params, left, right, gains)?;
+        let mut g = Self::parked(gains);
+        g.restart(params, left, right)?;
+        Ok(g)
+    }
+
+    /// Makes this gait, in place, the one [`Gait::with_gains`] would build for `params`,
+    /// `left` and `right` with its own gains: standing, the queue empty, the buffers unused,
+    /// tick 0. Nothing is built on the stack (the gait is 12 KB; a `static` parked gait,
+    /// [`Gait::parked`], is configured this way). On error (the same checks and the same
+    /// errors as [`Gait::with_gains`]) nothing changes.
+    pub fn restart(
+        &mut self,
+        params: GaitParams<T>,
+        left: Footstep<T>,
+        right: Footstep<T>,
+    ) -> Result<(), GaitError> {
+        Self::check(&params, &left, &right)?;
         if params.shaping
-            && !g
+            && !self
                 .gains
                 .borrow()
                 .are_for(&params.preview_config(), Law::FromRest)
         {
             return Err(GaitError::Gains(GainError::BadConfig));
         }
-        Ok(g)
-    }
-
-    fn build(
-        params: GaitParams<T>,
-        left: Footstep<T>,
-        right: Footstep<T>,
-        gains: G,
-    ) -> Result<Self, GaitError> {
         let mut left = left;
         let mut right = right;
         left.side = Side::Left;
         right.side = Side::Right;
+        let feet = [left, right];
         let mid = midpoint(left.centre(), right.centre());
         let at = |v: T| Sample {
             cog: v,
             zmp: v,
             ..Sample::default()
         };
-        let mut g = Self {
-            params,
-            queue: Deque::new(),
-            feet: [left, right],
-            swing: None,
-            landed: None,
-            failed: false,
-            mode: Mode::Standing,
-            stop_requested: false,
-            wins: [
-                Active::empty(&params, &[left, right]),
-                Active::empty(&params, &[left, right]),
-            ],
-            cur: None,
-            gen: 0,
-            serial: 0,
-            predicted: None,
-            predicted_worst: [T::ZERO; 2],
-            target: None,
-            tick: 0,
-            last: Reference {
-                x: at(mid[0]),
-                y: at(mid[1]),
-                phase: Phase::Standing,
-                feet: [FootPose::default(); 2],
-            },
-            info: None,
-            gains,
-            comp: [Compensator::new(), Compensator::new()],
-        };
-        g.last.feet = g.ground_poses();
-        if !(left.is_finite() && right.is_finite()) {
-            return Err(GaitError::NonFinite);
+        self.params = params;
+        self.queue.clear();
+        self.feet = feet;
+        self.swing = None;
+        self.landed = None;
+        self.failed = false;
+        self.mode = Mode::Standing;
+        self.stop_requested = false;
+        for w in &mut self.wins {
+            w.clear(&params, &feet);
         }
-        params.validate()?;
-        Ok(g)
+        self.cur = None;
+        self.gen = 0;
+        self.serial = 0;
+        self.predicted = None;
+        self.predicted_worst = [T::ZERO; 2];
+        self.target = None;
+        self.tick = 0;
+        self.last = Reference {
+            x: at(mid[0]),
+            y: at(mid[1]),
+            phase: Phase::Standing,
+            feet: [FootPose::default(); 2],
+        };
+        self.info = None;
+        self.comp = [Compensator::new(), Compensator::new()];
+        self.last.feet = self.ground_poses();
+        Ok(())
     }
 
     /// The parameters.

@@ -85,6 +85,12 @@ pub struct State<T> {
 }
 
 impl<T: Real> State<T> {
+    /// Position and velocity zero.
+    pub const ZERO: Self = Self {
+        pos: T::ZERO,
+        vel: T::ZERO,
+    };
+
     /// A state from position and velocity.
     pub fn new(pos: T, vel: T) -> Self {
         Self { pos, vel }
@@ -108,6 +114,17 @@ pub struct Sample<T> {
     pub zmp: T,
     /// ZMP velocity \[m/s\].
     pub zmp_vel: T,
+}
+
+impl<T: Real> Sample<T> {
+    /// Every value zero.
+    pub const ZERO: Self = Self {
+        cog: T::ZERO,
+        cog_vel: T::ZERO,
+        cog_acc: T::ZERO,
+        zmp: T::ZERO,
+        zmp_vel: T::ZERO,
+    };
 }
 
 /// Evaluates a polynomial and its first two derivatives at `t` (Horner).
@@ -346,6 +363,17 @@ impl<T: Real> Default for Segment<T> {
 }
 
 impl<T: Real> Segment<T> {
+    /// Every field zero (ω and `D` too: not a segment to sample; a placeholder in a buffer
+    /// that is filled before use).
+    pub const ZERO: Self = Self {
+        omega: T::ZERO,
+        duration: T::ZERO,
+        p: T::ZERO,
+        q: T::ZERO,
+        zmp: [T::ZERO; N_COEFFS],
+        particular: [T::ZERO; PARTICULAR_LEN],
+    };
+
     /// A segment from its normalised ZMP polynomial `zmp` and homogeneous coefficients `P, Q`.
     pub fn new(omega: T, duration: T, zmp: Poly<T>, p: T, q: T) -> Self {
         Self {

@@ -123,6 +123,12 @@ pub mod report {
     /// `-icount shift=0`, semihosting on) in `dir`, which holds its input files; its exit code
     /// and output (the run is stopped after 300 s: exit code 124).
     pub fn qemu(machine: &str, elf: &Path, dir: &Path) -> std::process::Output {
+        qemu_with(machine, elf, dir, &[])
+    }
+
+    /// [`qemu`] with further arguments for QEMU (e.g. `-append overflow`, the image's
+    /// semihosting command line).
+    pub fn qemu_with(machine: &str, elf: &Path, dir: &Path, args: &[&str]) -> std::process::Output {
         Command::new("timeout")
             .arg("300")
             .args(["qemu-system-arm", "-M", machine, "-nographic"])
@@ -130,6 +136,7 @@ pub mod report {
             .args(["-icount", "shift=0"])
             .arg("-kernel")
             .arg(elf)
+            .args(args)
             .current_dir(dir)
             .output()
             .expect("cannot run timeout/qemu-system-arm")

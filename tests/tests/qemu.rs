@@ -102,6 +102,8 @@ struct Runs {
     second: QemuRun,
     /// The run on a file whose second log is cut short: exit code, output.
     broken: (Option<i32>, String),
+    /// The run that overflows the stack on purpose (`-append overflow`): exit code, output.
+    overflow: (Option<i32>, String),
 }
 
 fn runs() -> Option<&'static Runs> {
@@ -135,6 +137,15 @@ fn runs() -> Option<&'static Runs> {
             out.status.code(),
             String::from_utf8_lossy(&out.stdout).into_owned(),
         );
+        let out = report::qemu_with(MACHINE, &elf, &dir, &["-append", "overflow"]);
+        let overflow = (
+            out.status.code(),
+            format!(
+                "{}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            ),
+        );
         let _ = std::fs::remove_dir_all(&dir);
         // WALK_QEMU_KEEP=DIR keeps the file and the first run's report (e.g. to run the image
         // under a QEMU trace on the same logs).
@@ -154,6 +165,7 @@ fn runs() -> Option<&'static Runs> {
             first,
             second,
             broken,
+            overflow,
         })
     })
     .as_ref()
@@ -330,12 +342,49 @@ fn a_log_cut_short_fails_the_run() {
     assert!(stdout.contains("RUNS count=1"), "{}", tail(stdout, 10));
 }
 
-/// Issue 12's instruction and stack targets, over every replayed log. Met, and asserted:
-/// `Node::new` ≤ 100,000 instructions, the worst control cycle ≤ 40,000, the re-plan at the
-/// start of single support ≤ 20,000 (plain and adjusted), the control loop's stack ≤ 12 KiB,
-/// the steady cycle's mean ≤ 3,000. Not met yet, asserted as a ceiling against regression
-/// (the issue's target in brackets): the start-up stack ≤ 24,000 B (16 KiB; the node is still
-/// built by value).
+/// A stack overflow reaches the fault handler (issue 11): the image's stack runs below its
+/// region, where nothing is accessible (as on the board; the image's MPU makes QEMU's memory
+/// below 0x2000_0000 so), and the HardFault entry (board-core's `fault_entry!`, the board's)
+/// moves the stack pointer back before any Rust code runs, so the handler reports and ends the
+/// run. With cortex-m-rt's own entry the core locks up instead (QEMU: "Lockup: can't escalate
+/// 3 to HardFault", exit code 134; checked by hand when the entry was written).
+#[test]
+fn a_stack_overflow_reaches_the_fault_handler() {
+    let Some(runs) = runs() else {
+        return;
+    };
+    let (code, out) = &runs.overflow;
+    assert_eq!(
+        *code,
+        Some(1),
+        "exit code (134: lockup):\n{}",
+        tail(out, 10)
+    );
+    assert!(!out.contains("Lockup"), "{}", tail(out, 10));
+    let records: Vec<Record> = out.lines().filter_map(Record::parse).collect();
+    let start = records
+        .iter()
+        .find(|r| r.kind == "OVERFLOW")
+        .unwrap_or_else(|| panic!("no OVERFLOW line:\n{}", tail(out, 10)));
+    assert_eq!(start.num::<u64>("stack_bytes"), 65_536);
+    let fault = records
+        .iter()
+        .find(|r| r.kind == "FAULT")
+        .unwrap_or_else(|| panic!("no FAULT line:\n{}", tail(out, 10)));
+    assert_eq!(fault.get("overflow"), "1", "{}", tail(out, 10));
+    let sp = u32::from_str_radix(fault.get("sp").trim_start_matches("0x"), 16).unwrap();
+    assert!(
+        (0x1FFF_0000..0x2000_0000).contains(&sp),
+        "the stack pointer at the fault, {sp:#x}, is not just below the stack region"
+    );
+}
+
+/// Issue 12's instruction and stack targets, over every replayed log, all met and asserted:
+/// `Node::new` (the node configured in place) ≤ 100,000 instructions, the worst control cycle
+/// ≤ 40,000, the re-plan at the start of single support ≤ 20,000 (plain and adjusted), the
+/// control loop's stack ≤ 12 KiB, the steady cycle's mean ≤ 3,000, the start-up stack
+/// ≤ 16 KiB; the start-up stack also ≤ 4 KiB (issue 11: "a few KB"; the node is configured
+/// in place, nothing of it is built on the stack).
 #[test]
 fn issue_12_targets() {
     let Some(runs) = runs() else {
@@ -355,14 +404,14 @@ fn issue_12_targets() {
         ("re-plan (max)", max("replan") as f64, 20_000.0, 20_000.0),
         ("control-loop stack [B]", control as f64, 12_288.0, 12_288.0),
         ("steady (mean)", steady_mean, 3_000.0, 3_000.0),
-        ("worst cycle", max("cycle") as f64, 40_000.0, 46_000.0),
+        ("worst cycle", max("cycle") as f64, 40_000.0, 40_000.0),
         (
             "adjusted re-plan (max)",
             max("adjust") as f64,
             20_000.0,
-            23_000.0,
+            20_000.0,
         ),
-        ("start-up stack [B]", startup as f64, 16_384.0, 24_000.0),
+        ("start-up stack [B]", startup as f64, 16_384.0, 4_096.0),
     ];
     for (name, value, target, ceiling) in checks {
         let met = if value <= target { "met" } else { "NOT met" };

@@ -59,7 +59,7 @@ fn build_image() -> std::path::PathBuf {
 fn expected_f32(case: &Case, bytes: &[u8]) -> Expected {
     let name = &case.name;
     let mut node: walk_robot::NodeF32<16> =
-        Node::with_gains(walk_robot::NODE_CONFIG_F32, &walk_robot::GAINS_F32)
+        Node::with_gains(walk_robot::NODE_CONFIG_F32, walk_robot::GainsF32)
             .unwrap_or_else(|e| panic!("{name}: {e:?}"));
     let played = logs::play(name, bytes, &mut node);
     // The image replays a log only from the robot's stance (its f64 feet, rounded).

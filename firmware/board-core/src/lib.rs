@@ -9,6 +9,8 @@
 //! * [`pace`]: the 5 ms slots from a free-running 32-bit counter, missed slots counted;
 //! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
 //! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
+//! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
+//!   before any Rust code runs;
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
 //!   statistics window summarised once per second).
 //!
@@ -20,6 +22,7 @@
 #![warn(missing_docs)]
 
 pub mod cycle;
+pub mod fault_entry;
 pub mod frame;
 pub mod link;
 pub mod pace;

@@ -1,6 +1,9 @@
 //! The safe state: what HardFault, an unexpected interrupt, a panic and the clock security
 //! system's NMI all do, and the reset reason read at start-up.
 //!
+//! HardFault and the NMI enter through `board_core::fault_entry!`, which first moves the stack
+//! pointer back to the top of the stack region (a stack overflow leaves none).
+//!
 //! [`fail_safe`]: interrupts off; FDCAN1 into its initialisation state with every pending TX
 //! buffer cancelled (the node falls silent on the bus at once: recessive, no error frames,
 //! no stale references); the fault pin (PB14 = LD3, red, on the NUCLEO-H743ZI2;
@@ -17,7 +20,7 @@ use core::mem::MaybeUninit;
 
 use board_core::reset::{MARK_CLOCK, MARK_FAULT};
 use board_core::ResetReason;
-use cortex_m_rt::{exception, ExceptionFrame};
+use cortex_m_rt::exception;
 use stm32h7xx_hal::pac;
 
 use crate::fdcan1;
@@ -61,8 +64,16 @@ pub fn fail_safe(mark: u32) -> ! {
     cortex_m::peripheral::SCB::sys_reset()
 }
 
-#[exception]
-unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+// HardFault and the clock security system's NMI enter through board-core's `fault_entry!`:
+// the main stack pointer is moved back to the top of the stack region before any Rust code
+// runs, so a stack overflow (a fault below 0x2000_0000, with no stack left for the handler's
+// frame) reaches the safe state instead of locking the core up until the watchdog bites.
+board_core::fault_entry!(HardFault => hard_fault);
+board_core::fault_entry!(NonMaskableInt => clock_failure);
+
+/// HardFault (any fault: none of the configurable ones is enabled, so all escalate here),
+/// stack overflow included (`_sp`, the stack pointer at the fault, is then below 0x2000_0000).
+extern "C" fn hard_fault(_sp: u32) -> ! {
     fail_safe(MARK_FAULT)
 }
 
@@ -72,12 +83,11 @@ unsafe fn DefaultHandler(_irqn: i16) {
     fail_safe(MARK_FAULT)
 }
 
-/// The clock security system: the HSE failed and the hardware switched the system clock to the
-/// HSI (the PLLs, and with them the FDCAN kernel clock, stop). The node cannot keep its bit
-/// timing: safe state and reset (the next start-up waits for the HSE; if it never comes back,
-/// the IWDG resets the MCU every watchdog period and the node stays off the bus).
-#[exception]
-unsafe fn NonMaskableInt() {
+/// The clock security system's NMI: the HSE failed and the hardware switched the system clock
+/// to the HSI (the PLLs, and with them the FDCAN kernel clock, stop). The node cannot keep its
+/// bit timing: safe state and reset (the next start-up waits for the HSE; if it never comes
+/// back, the IWDG resets the MCU every watchdog period and the node stays off the bus).
+extern "C" fn clock_failure(_sp: u32) -> ! {
     fail_safe(MARK_CLOCK)
 }
 

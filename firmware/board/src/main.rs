@@ -31,8 +31,9 @@
 //!   cycle: warnings on overruns, missed slots and refusals, and a summary once a second.
 //!
 //! The node (`walk_robot::Node<16>`, ~14 KB: the gait's two plan windows; the preview gains
-//! stay in flash, borrowed) is built once in a function of its own and moved into a `static`
-//! in .bss (DTCM) by `cortex_m::singleton!`: no `static mut` in this crate, no allocator. The
+//! stay in flash, borrowed) is a `static` in .bss (DTCM), parked ([`ParkedNode`], every byte
+//! zero) and configured in place at start-up by [`ParkedNode::start`] ([`place_node`]): nothing
+//! of it is built on the stack, no `static mut` in this crate, no allocator. The
 //! stack is the lower 64 KiB of the DTCM, below .data and .bss (board/stack.x), painted at
 //! reset; its high-water mark is logged ([`stack`]).
 #![no_std]
@@ -67,7 +68,8 @@ use stm32h7xx_hal::{pac, prelude::*};
 use planner_core::gait::GaitError;
 use planner_core::node::NodeConfig;
 use planner_core::wire::ids;
-use walk_robot::Node;
+use static_cell::ConstStaticCell;
+use walk_robot::{Gains, Node, ParkedNode};
 
 use crate::fdcan1::Fdcan1;
 
@@ -179,16 +181,18 @@ impl<const P: char, const N: u8> OutputPin for BusyPin<P, N> {
     }
 }
 
-/// Builds the node and moves it into its `static` (in .bss). Not inlined: the temporaries of
-/// `Node::new` (the gait and the preview-gain computation) live in this frame and are gone
-/// once the node is in place, instead of staying reserved in `main`'s frame forever.
+/// The node's `static`: parked ([`ParkedNode`]: every byte zero, so it is in .bss, DTCM, and
+/// costs no flash), configured once by [`place_node`].
+static NODE: ConstStaticCell<ParkedNode<QUEUE>> = ConstStaticCell::new(ParkedNode::new(Gains));
+
+/// Takes the node's `static` and configures it in place ([`ParkedNode::start`]): nothing of the
+/// node's 14 KB is built on the stack. Not inlined: its frame is the start-up's only.
 #[inline(never)]
 fn place_node(cfg: NodeConfig) -> Result<&'static mut Node<QUEUE>, GaitError> {
-    let node = Node::with_gains(cfg, &walk_robot::GAINS)?;
-    match cortex_m::singleton!(: Node<QUEUE> = node) {
-        Some(n) => Ok(n),
-        None => panic!("place_node called twice"),
-    }
+    let Some(parked) = NODE.try_take() else {
+        panic!("place_node called twice");
+    };
+    parked.start(cfg)
 }
 
 /// Waits for the next slot of `pacer`, servicing the CAN link meanwhile.

@@ -16,8 +16,9 @@
 //! same per-cycle work and the board's own code, compiled into this crate from its source
 //! (`#[path]`) or taken from board-core:
 //!
-//! * `Node::<16>::new(walk_robot::NODE_CONFIG)` in a frame of its own, moved into a `static` by
-//!   `cortex_m::singleton!` (the board's `place_node`); an error idles instead of panicking;
+//! * the node's `static`, parked (`ParkedNode`) and configured in place by `ParkedNode::start`
+//!   from `walk_robot::NODE_CONFIG` (the board's `place_node`); an error idles instead of
+//!   panicking;
 //! * the CAN link: board-core's `Link` (software queues, bus-off recovery, error counters,
 //!   stale-frame replacement) over the board's `fdcan1::Fdcan1` (`board/src/fdcan1.rs`: the
 //!   register and message-RAM accesses of FDCAN1), so the frames the node receives are
@@ -75,15 +76,19 @@ use core::hint::black_box;
 use board_core::{cycle, Pacer, ResetReason, Slot};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
+use static_cell::ConstStaticCell;
 use stm32h7xx_hal::pac;
 
 use planner_core::gait::GaitError;
 use planner_core::node::NodeConfig;
 #[cfg(not(feature = "f32"))]
-use walk_robot::{Node, GAINS as NODE_GAINS, NODE_CONFIG};
+use walk_robot::{Gains as NodeGains, Node, ParkedNode, NODE_CONFIG};
 // `--features f32`: the same cycle with the f32 node (the M4F image's).
 #[cfg(feature = "f32")]
-use walk_robot::{NodeF32 as Node, GAINS_F32 as NODE_GAINS, NODE_CONFIG_F32 as NODE_CONFIG};
+use walk_robot::{
+    GainsF32 as NodeGains, NodeF32 as Node, ParkedNodeF32 as ParkedNode,
+    NODE_CONFIG_F32 as NODE_CONFIG,
+};
 
 /// The node's scalar.
 #[cfg(not(feature = "f32"))]
@@ -137,12 +142,17 @@ mod stand_in {
     }
 }
 
-/// Builds the node and moves it into its `static`, as the board's `place_node` (which panics
-/// if called twice; here `None`).
+/// The node's `static`, parked (all zero bytes, .bss), as the board's.
+static NODE: ConstStaticCell<ParkedNode<QUEUE>> = ConstStaticCell::new(ParkedNode::new(NodeGains));
+
+/// Takes the node's `static` and configures it in place, as the board's `place_node` (which
+/// panics if called twice; here `None`).
 #[inline(never)]
 fn place_node(cfg: NodeConfig<Scalar>) -> Result<Option<&'static mut Node<QUEUE>>, GaitError> {
-    let node = Node::with_gains(cfg, &NODE_GAINS)?;
-    Ok(cortex_m::singleton!(: Node<QUEUE> = node))
+    let Some(parked) = NODE.try_take() else {
+        return Ok(None);
+    };
+    parked.start(cfg).map(Some)
 }
 
 /// The board's `wait_slot`.

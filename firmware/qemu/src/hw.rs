@@ -107,15 +107,74 @@ pub fn repaint_stack() {
     }
 }
 
-/// A fault (e.g. the stack running below the start of RAM) ends the run with exit code 1
-/// instead of cortex-m-rt's default endless loop, which would only show as a timeout.
-#[cortex_m_rt::exception]
-unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    cortex_m_semihosting::hprintln!(
-        "FAULT hardfault pc={:#010x} lr={:#010x}",
-        frame.pc(),
-        frame.lr()
-    );
+/// Makes the 64 KiB below the stack region (`_stack_end` = 0x2000_0000) inaccessible, as on the
+/// board, where nothing is mapped below its DTCM: QEMU's MPS2 machines map memory there, so
+/// without this a stack overflow would run on silently. One MPU region (region 0, no access
+/// at any privilege, never executable; the default memory map elsewhere, `PRIVDEFENA`; off in
+/// HardFault, `HFNMIENA` clear). Instruction counts are not affected (QEMU counts
+/// instructions, and the MPU adds none to the code).
+pub fn guard_below_stack() {
+    const MPU_CTRL: usize = 0xE000_ED94;
+    const MPU_RNR: usize = 0xE000_ED98;
+    const MPU_RBAR: usize = 0xE000_ED9C;
+    const MPU_RASR: usize = 0xE000_EDA0;
+    const SIZE: u32 = 64 * 1024;
+    let bottom = addr_of!(_stack_end) as u32;
+    let base = bottom.wrapping_sub(SIZE);
+    // XN, AP = 000 (no access), SIZE field = log2(64 KiB) - 1, enabled.
+    let rasr = (1 << 28) | ((SIZE.trailing_zeros() - 1) << 1) | 1;
+    // SAFETY: the architectural MPU registers of the Cortex-M (PMSAv7, present on QEMU's M7
+    // and M4 cores); region 0 is otherwise unused, `base` is aligned to the region's size
+    // (the stack region starts on a 64 KiB boundary: memory.x), and only the 64 KiB below the
+    // stack region, which holds nothing of the image's, becomes inaccessible. The barriers make
+    // the new map apply to what follows.
+    unsafe {
+        write_volatile(MPU_RNR as *mut u32, 0);
+        write_volatile(MPU_RBAR as *mut u32, base);
+        write_volatile(MPU_RASR as *mut u32, rasr);
+        write_volatile(MPU_CTRL as *mut u32, 0b101);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
+}
+
+// HardFault enters through the board's entry (board-core's `fault_entry!`): the stack pointer
+// is moved back to the top of the stack region before any Rust code runs, so a stack overflow
+// (the stack running below 0x2000_0000, which QEMU does not map) reaches the handler instead of
+// locking the core up. `tests/tests/qemu.rs` overflows the stack on purpose (`-append
+// overflow`) and expects the `FAULT` line.
+board_core::fault_entry!(HardFault => hard_fault);
+
+/// A fault ends the run with exit code 1 and a `FAULT hardfault sp=… overflow=…` line
+/// (`overflow=1`: the stack pointer at the fault was below the stack region) instead of
+/// cortex-m-rt's default endless loop, which would only show as a timeout; with the faulting
+/// code's `pc` and `lr` when its exception frame was stacked inside the stack region.
+extern "C" fn hard_fault(sp: u32) -> ! {
+    let top = addr_of!(_stack_start) as usize;
+    let bottom = addr_of!(_stack_end) as usize;
+    let sp = sp as usize;
+    if (bottom..top.saturating_sub(32)).contains(&sp) {
+        // SAFETY: the 8-word exception frame at `sp` lies inside the stack region (checked),
+        // 4-byte aligned (the hardware stacks it so); reading it has no side effect.
+        let (lr, pc) = unsafe {
+            (
+                read_volatile((sp + 20) as *const u32),
+                read_volatile((sp + 24) as *const u32),
+            )
+        };
+        cortex_m_semihosting::hprintln!(
+            "FAULT hardfault sp={:#010x} overflow=0 pc={:#010x} lr={:#010x}",
+            sp,
+            pc,
+            lr
+        );
+    } else {
+        cortex_m_semihosting::hprintln!(
+            "FAULT hardfault sp={:#010x} overflow={}",
+            sp,
+            u8::from(sp < bottom)
+        );
+    }
     cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
     loop {
         cortex_m::asm::wfi();

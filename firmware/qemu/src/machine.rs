@@ -19,16 +19,22 @@ pub type Scalar = f64;
 #[cfg(feature = "m4f")]
 pub type Scalar = f32;
 
-/// How the node holds its gains (a reference to the gains in flash).
+/// How the node holds its gains (a zero-sized name of the gains in flash).
 #[cfg(not(feature = "m4f"))]
 pub type Gains = walk_robot::Gains;
-/// How the node holds its gains (a reference to the gains in flash).
+/// How the node holds its gains (a zero-sized name of the gains in flash).
 #[cfg(feature = "m4f")]
 pub type Gains = walk_robot::GainsF32;
 
 /// The image's node type, with `Q` queued steps.
 #[cfg(not(feature = "m4f"))]
 pub type Node<const Q: usize> = walk_robot::Node<Q>;
+/// The image's node before it is configured.
+#[cfg(not(feature = "m4f"))]
+pub type ParkedNode<const Q: usize> = walk_robot::ParkedNode<Q>;
+/// The image's node before it is configured.
+#[cfg(feature = "m4f")]
+pub type ParkedNode<const Q: usize> = walk_robot::ParkedNodeF32<Q>;
 /// The image's node type, with `Q` queued steps.
 #[cfg(feature = "m4f")]
 pub type Node<const Q: usize> = walk_robot::NodeF32<Q>;
@@ -43,14 +49,14 @@ pub const NODE_CONFIG: planner_core::node::NodeConfig<Scalar> = walk_robot::NODE
 /// The node's preview gains in flash.
 #[cfg(not(feature = "m4f"))]
 #[inline(always)]
-pub fn gains() -> Gains {
-    &walk_robot::GAINS
+pub const fn gains() -> Gains {
+    walk_robot::Gains
 }
 /// The node's preview gains in flash.
 #[cfg(feature = "m4f")]
 #[inline(always)]
-pub fn gains() -> Gains {
-    &walk_robot::GAINS_F32
+pub const fn gains() -> Gains {
+    walk_robot::GainsF32
 }
 
 /// The QEMU machine the image is built for.

@@ -10,7 +10,7 @@
 //! log is played by `gait_loop::Player` (`planner_core::playback`'s rule, as `host-sim replay`
 //! plays a candump log) into a node built afresh from the robot's compiled-in configuration
 //! (`walk_robot::NODE_CONFIG`, as on the board; a log must start on that stance and be for
-//! its control period: see `place_node`).
+//! its control period: see `restart_node`).
 //! `tests/tests/qemu.rs` records host-sim runs, writes their logs into one such file and runs
 //! the image once on it.
 //!
@@ -42,9 +42,10 @@
 //!
 //! # Memory (as on the board)
 //! The node (`walk_robot::Node<16>`, ~14 KB: it borrows its preview gains from flash) is a
-//! `static` in .bss, placed once by `cortex_m::singleton!` (and built again in place of the
-//! previous one for every further log). Building it takes ~25 KB of stack once (the gait and
-//! the node are built by value), the control loop ~10 KB (`STACK ... control=`);
+//! `static` in .bss, parked (`ParkedNode`: every byte zero) and configured in place for the
+//! first log (`ParkedNode::start`, as the board at start-up) and by `Node::restart` for every
+//! further one: nothing of the node is built on the stack (`STACK ... startup=` is the first
+//! log's start-up, `control=` the loops').
 //! `memory.x` puts the stack into a 64 KiB region of its own below the 64 KiB RAM, as
 //! `board/stack.x` does on the board (the lower half of its DTCM).
 //!
@@ -90,9 +91,10 @@ use panic_semihosting as _; // panics print over semihosting and exit with code 
 
 use gait_loop::binlog::{Bytes, Frames, Header};
 use gait_loop::{timed_poll, Clock, Fnv, Kind, Player, Stats, QUEUE};
-use machine::{Node, Scalar};
+use machine::{Node, ParkedNode, Scalar};
 use planner_core::gait::{Gait, GaitError};
 use planner_core::playback::LogClock;
+use static_cell::ConstStaticCell;
 
 use semihost::HostFile;
 
@@ -182,32 +184,28 @@ fn print_timing(out: &mut Console, scenario: &str, stats: &Stats) {
     }
 }
 
-/// The node's `static`: `Node::new`'s result, kept where it was returned.
-type Slot = Result<Node<QUEUE>, GaitError>;
+/// The node's `static`: parked ([`ParkedNode`]: every byte zero, so it is in .bss and costs
+/// no flash), configured in place for the first log ([`start_node`]) and restarted in place
+/// for every further one ([`restart_node`]).
+static NODE: ConstStaticCell<ParkedNode<QUEUE>> =
+    ConstStaticCell::new(ParkedNode::new(machine::gains()));
 
-/// Builds the node into its `static` (in .bss) with `cortex_m::singleton!`, as the board's
-/// `place_node` does, but keeps the `Result` (moving the node out of it would copy its 14 KB
-/// through this frame once more). Not inlined: the temporaries of `Node::new` (the gait, the
-/// node returned by value) live in this frame only while it runs.
-///
-/// From the constant `machine::NODE_CONFIG` (`walk_robot::NODE_CONFIG`, or `NODE_CONFIG_F32`
-/// for the M4F), as on the board: the compiler folds it into
-/// `Node::with_gains` (24 k instructions and 23 KB of stack, against 45 k and 48 KB for a
-/// configuration known only at run time, such as other start feet read from a log; which is
-/// why the image replays only logs that start on the robot's stance).
+/// Configures the parked node in place, as the board does at start-up: from the constant
+/// `machine::NODE_CONFIG` (`walk_robot::NODE_CONFIG`, or `NODE_CONFIG_F32` for the M4F).
+/// Nothing of the node's 14 KB is built on the stack. Not inlined: its frame is the start-up's
+/// stack, measured apart from the control loop's. (The image replays only logs that start on
+/// the robot's stance, the one the board starts on.)
 #[inline(never)]
-fn place_node() -> &'static mut Slot {
-    match cortex_m::singleton!(: Slot = Node::with_gains(machine::NODE_CONFIG, machine::gains())) {
-        Some(slot) => slot,
-        None => panic!("place_node called twice"),
-    }
+fn start_node(
+    parked: &'static mut ParkedNode<QUEUE>,
+) -> Result<&'static mut Node<QUEUE>, GaitError> {
+    parked.start(machine::NODE_CONFIG)
 }
 
-/// A fresh node in place of the old one (the next log starts from start-up), in a frame of
-/// its own like [`place_node`].
+/// The node afresh, in place (the next log starts from start-up): `Node::restart`.
 #[inline(never)]
-fn renew_node(slot: &mut Slot) {
-    *slot = Node::with_gains(machine::NODE_CONFIG, machine::gains());
+fn restart_node(node: &mut Node<QUEUE>) -> Result<(), GaitError> {
+    node.restart(machine::NODE_CONFIG)
 }
 
 /// Replays one log (its header read, its frames next in `frames`) into `node` (just created);
@@ -339,6 +337,16 @@ fn main() -> ! {
         host,
         buf: heapless::Vec::new(),
     };
+    // Nothing below the stack, as on the board: an overflow faults.
+    hw::guard_below_stack();
+    if semihost::cmdline_has("overflow") {
+        // The fault entry's test (`tests/tests/qemu.rs`): run the stack below its region.
+        line!(out, "OVERFLOW stack_bytes={}", hw::stack_usage().1);
+        let depth = overflow(0);
+        // Not reached: the fault handler ends the run.
+        line!(out, "ERROR overflow_returned={}", depth);
+        exit(debug::EXIT_FAILURE);
+    }
     let Some(mut timer) = hw::Timer0::take() else {
         panic!("timer taken twice");
     };
@@ -375,12 +383,17 @@ fn main() -> ! {
     line!(out, "LOG file=replay.wlog bytes={}", file.len());
 
     // The robot file compiled in (walk-robot's build script): host-sim's default robot. Each
-    // log's control period and start feet must be the robot's (see `place_node`).
+    // log's control period and start feet must be the robot's (see `restart_node`).
     let cfg = walk_robot::NODE_CONFIG;
     let period_us = (cfg.params.dt * 1e6 + 0.5) as u32;
     let mut all = Stats::new();
     let mut ok = true;
-    let mut placed: Option<&'static mut Slot> = None;
+    let Some(parked) = NODE.try_take() else {
+        line!(out, "ERROR node_taken_twice=1");
+        exit(debug::EXIT_FAILURE);
+    };
+    let mut parked = Some(parked);
+    let mut started: Option<&'static mut Node<QUEUE>> = None;
     let (mut startup_stack, mut control_stack) = (0, 0);
     let mut runs = 0u32;
     loop {
@@ -419,19 +432,22 @@ fn main() -> ! {
             break;
         }
         let t0 = timer.now();
-        let slot = match placed.take() {
-            None => place_node(),
-            Some(slot) => {
-                renew_node(slot);
-                slot
+        let configured = match (started.take(), parked.take()) {
+            (Some(node), _) => restart_node(node).map(|()| node),
+            (None, Some(p)) => start_node(p),
+            (None, None) => {
+                line!(out, "ERROR scenario={} no_node=1", name);
+                exit(debug::EXIT_FAILURE);
             }
         };
         let new_units = timer.now().wrapping_sub(t0);
-        // The start-up's high-water mark (building the node), then a fresh paint for the
-        // control loop's.
-        startup_stack = startup_stack.max(hw::stack_usage().0);
+        // The start-up's high-water mark (configuring the node; the first log's: later ones
+        // include the control loop before them), then a fresh paint for the control loop's.
+        if runs == 0 {
+            startup_stack = hw::stack_usage().0;
+        }
         hw::repaint_stack();
-        let node = match slot {
+        let node = match configured {
             Ok(n) => n,
             Err(e) => {
                 line!(out, "ERROR scenario={} node_new={:?}", name, e);
@@ -455,7 +471,7 @@ fn main() -> ! {
         }
         control_stack = control_stack.max(hw::stack_usage().0);
         all.merge(&stats);
-        placed = Some(slot);
+        started = Some(node);
         runs += 1;
     }
     if file.failed() {
@@ -480,6 +496,17 @@ fn main() -> ! {
     } else {
         debug::EXIT_FAILURE
     })
+}
+
+/// Recurses with a 256-byte frame until the stack runs out (`-append overflow`): the stack
+/// overflow the fault entry must survive.
+#[inline(never)]
+fn overflow(depth: u32) -> u32 {
+    let frame = core::hint::black_box([depth; 64]);
+    if core::hint::black_box(depth) == u32::MAX {
+        return depth;
+    }
+    overflow(depth + 1).wrapping_add(frame[(depth % 64) as usize])
 }
 
 /// Ends the QEMU run with `code` (semihosting `SYS_EXIT`).

@@ -218,6 +218,18 @@ pub struct Counters {
     pub bus_errors: u16,
 }
 
+impl Counters {
+    /// Every counter zero.
+    pub const ZERO: Self = Self {
+        refused: 0,
+        by_reason: [0; 19],
+        foreign: 0,
+        tx_dropped: 0,
+        overruns: 0,
+        bus_errors: 0,
+    };
+}
+
 /// The published state (the `state` field of `STATUS`; the README's state table).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -264,6 +276,44 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     link: Option<LinkHealth>,
 }
 
+/// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
+/// (with gains named by a zero-sized type, such as the firmware's `walk_robot::Gains`), so the
+/// `static` is in .bss (no flash, nothing copied at reset). [`ParkedNode::start`] configures it
+/// in place and only then hands out the [`Node`]: nothing of the node's 14 KB is built on the
+/// stack (a node built by value and moved into place needs that much stack and more), and a
+/// node that was never configured cannot be polled.
+///
+/// ```
+/// use planner_core::gait::PREVIEW;
+/// use planner_core::node::{NodeConfig, ParkedNode};
+/// use planner_core::shaping::{Law, PreviewGains};
+///
+/// let cfg = NodeConfig::hrp2();
+/// let gains = PreviewGains::<f64, PREVIEW>::new(&cfg.params.preview_config(), Law::FromRest)?;
+/// let mut parked = ParkedNode::<16, _>::new(&gains); // a `static` in the firmware
+/// let node = parked.start(cfg).expect("the gains are the robot's");
+/// assert!(node.gait().is_standing());
+/// # Ok::<(), planner_core::shaping::GainError>(())
+/// ```
+#[derive(Debug)]
+pub struct ParkedNode<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64>(Node<Q, G, T>);
+
+impl<const Q: usize, G, T: Real> ParkedNode<Q, G, T> {
+    /// The parked node, holding `gains` (see the type's docs).
+    pub const fn new(gains: G) -> Self {
+        Self(Node::parked(gains))
+    }
+}
+
+impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> ParkedNode<Q, G, T> {
+    /// Configures the node in place for `cfg` ([`Node::restart`]: it is then the node
+    /// [`Node::with_gains`] would build) and hands it out. On error the node stays parked.
+    pub fn start(&mut self, cfg: NodeConfig<T>) -> Result<&mut Node<Q, G, T>, GaitError> {
+        self.0.restart(cfg)?;
+        Ok(&mut self.0)
+    }
+}
+
 fn reason_of(e: GaitError) -> Reason {
     match e {
         GaitError::QueueFull => Reason::QueueFull,
@@ -286,45 +336,83 @@ impl<const Q: usize, T: Real> Node<Q, PreviewGains<T, PREVIEW>, T> {
     /// A node standing still (computes the preview gains).
     pub fn new(cfg: NodeConfig<T>) -> Result<Self, GaitError> {
         let () = Self::CAPACITY_OK;
-        Ok(Self::around(
-            cfg,
-            Gait::new(cfg.params, cfg.left, cfg.right)?,
-        ))
+        let mut node = Self::parked(PreviewGains::zeroed());
+        node.gait = Gait::new(cfg.params, cfg.left, cfg.right)?;
+        node.restart(cfg)?;
+        Ok(node)
     }
 }
 
-impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
+impl<const Q: usize, G, T: Real> Node<Q, G, T> {
     /// Step ids are 8 bits: every queued step must have its own.
     const CAPACITY_OK: () = assert!(Q >= 1 && Q <= 128, "queue capacity 1 … 128");
 
-    /// [`Node::new`] with the preview gains computed beforehand and lent by `gains`
-    /// ([`Gait::with_gains`]: the firmware compiles them into flash from the robot file and
-    /// passes a reference, so they are neither computed nor copied at start-up).
-    pub fn with_gains(cfg: NodeConfig<T>, gains: G) -> Result<Self, GaitError> {
+    /// A node that is not configured yet, holding `gains` ([`Gait::parked`]): every byte zero
+    /// when `G` is zero-sized (see [`ParkedNode`], which holds it until [`Node::restart`]
+    /// has configured it).
+    const fn parked(gains: G) -> Self {
         let () = Self::CAPACITY_OK;
-        Ok(Self::around(
-            cfg,
-            Gait::with_gains(cfg.params, cfg.left, cfg.right, gains)?,
-        ))
-    }
-
-    fn around(cfg: NodeConfig<T>, gait: Gait<T, Q, G>) -> Self {
         Self {
-            gait,
-            cfg,
+            cfg: NodeConfig {
+                params: GaitParams::PARKED,
+                left: Footstep::PARKED,
+                right: Footstep::PARKED,
+                heartbeat_timeout_ms: 0,
+                max_rx: 0,
+                max_foreign: 0,
+                max_plans: 0,
+                reach: Reach::PARKED,
+            },
+            gait: Gait::parked(gains),
             tx: Deque::new(),
-            steps: Steps::new(),
+            steps: Steps::PARKED,
+            // `Some` of zeros, not `None`: the bytes are the zero ones (`None` is a niche).
             last_append: None,
-            last_control: None,
+            last_control: Some((0, ControlOp::Heartbeat)),
             last_heartbeat: None,
             last_estop: None,
             estopped: false,
             lost: false,
             last_heard: None,
-            counters: Counters::default(),
+            counters: Counters::ZERO,
             cycle: 0,
-            link: None,
+            link: Some(LinkHealth::ZERO),
         }
+    }
+}
+
+impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
+    /// [`Node::new`] with the preview gains computed beforehand and lent by `gains`
+    /// ([`Gait::with_gains`]: the firmware compiles them into flash from the robot file and
+    /// passes a reference or a type that names them, so they are neither computed nor copied
+    /// at start-up).
+    pub fn with_gains(cfg: NodeConfig<T>, gains: G) -> Result<Self, GaitError> {
+        let mut node = Self::parked(gains);
+        node.restart(cfg)?;
+        Ok(node)
+    }
+
+    /// Makes this node, in place, the one [`Node::with_gains`] would build for `cfg` with its
+    /// own gains: standing on `cfg`'s feet, nothing queued or remembered, every counter and
+    /// the cycle count zero, no link health. This is how the firmware configures its node in
+    /// its `static` ([`ParkedNode::start`]) without building 14 KB on the stack, and how it
+    /// starts afresh. On error (the checks of [`Gait::restart`]) nothing changes.
+    pub fn restart(&mut self, cfg: NodeConfig<T>) -> Result<(), GaitError> {
+        self.gait.restart(cfg.params, cfg.left, cfg.right)?;
+        self.cfg = cfg;
+        self.tx.clear();
+        self.steps.clear();
+        self.last_append = None;
+        self.last_control = None;
+        self.last_heartbeat = None;
+        self.last_estop = None;
+        self.estopped = false;
+        self.lost = false;
+        self.last_heard = None;
+        self.counters = Counters::ZERO;
+        self.cycle = 0;
+        self.link = None;
+        Ok(())
     }
 
     /// The gait.

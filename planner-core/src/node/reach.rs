@@ -51,6 +51,21 @@ impl<T: Real> Default for Reach<T> {
     }
 }
 
+impl<T: Real> Reach<T> {
+    /// Every limit zero (see `Node::parked`).
+    pub(crate) const PARKED: Self = Self {
+        max_forward: T::ZERO,
+        max_backward: T::ZERO,
+        min_width: T::ZERO,
+        max_width: T::ZERO,
+        max_yaw: T::ZERO,
+        max_feet_distance: T::ZERO,
+        yaw_cost: T::ZERO,
+        max_stride: T::ZERO,
+        max_growth: T::ZERO,
+    };
+}
+
 impl Reach<f64> {
     /// These limits in the scalar `T` (each rounded to the nearest `T`).
     pub fn cast<T: Real>(&self) -> Reach<T> {

@@ -51,13 +51,28 @@ pub(super) struct Steps<const Q: usize> {
 }
 
 impl<const Q: usize> Steps<Q> {
-    pub fn new() -> Self {
-        Self {
-            queued: Deque::new(),
-            swing: None,
-            done: Deque::new(),
-        }
-    }
+    /// No records, with every byte zero (see `Node::parked`: `swing` is `Some` of zeros,
+    /// whose bytes are the zero ones, where `None` is a niche).
+    pub const PARKED: Self = Self {
+        queued: Deque::new(),
+        swing: Some(Record {
+            append: WireStep {
+                id: 0,
+                left: false,
+                x: 0,
+                y: 0,
+                yaw: 0,
+            },
+            append_frame: RawFrame {
+                id: 0,
+                len: 0,
+                data: [0; 8],
+            },
+            version: 0,
+            in_force: None,
+        }),
+        done: Deque::new(),
+    };
 
     /// Forgets everything (a `Reset`).
     pub fn clear(&mut self) {

@@ -149,6 +149,14 @@ pub struct PlaneBoundary<T> {
 }
 
 impl<T: Real> PlaneBoundary<T> {
+    /// Every value zero.
+    pub const ZERO: Self = Self {
+        cog_start: State::ZERO,
+        zmp_start: State::ZERO,
+        via: [State::ZERO; M],
+        cog_end: State::ZERO,
+    };
+
     /// Every value finite: `v · 0` is `0` for a finite `v` and NaN for an infinite or NaN
     /// one, so the sum of those products is `0` exactly when all are finite (no branch per
     /// value, and no overflow whatever the magnitudes).
@@ -177,6 +185,17 @@ pub struct Plan<T> {
 }
 
 impl<T: Real> Plan<T> {
+    /// Every value zero, the timing too (ω = 0: no plan; a placeholder in a buffer that is
+    /// filled before use, e.g. a `static`).
+    pub const ZERO: Self = Self {
+        timing: Timing {
+            omega: T::ZERO,
+            durations: [T::ZERO; M],
+        },
+        x: [Segment::ZERO; M],
+        y: [Segment::ZERO; M],
+    };
+
     /// An empty plan (all zero) for the given timing, to be filled by [`Factorized::solve`].
     pub fn zeroed(timing: Timing<T>) -> Self {
         Self {

@@ -130,6 +130,18 @@ pub struct LinkHealth {
 }
 
 impl LinkHealth {
+    /// Every field zero.
+    pub const ZERO: Self = Self {
+        tec: 0,
+        rec: 0,
+        rx_passive: false,
+        bus_state: 0,
+        reset: 0,
+        bus_offs: 0,
+        passive_episodes: 0,
+        missed_slots: 0,
+    };
+
     /// The frame (fields beyond their widths are cut to them).
     pub fn encode(&self) -> RawFrame {
         let [b0, b1] = self.bus_offs.to_le_bytes();
