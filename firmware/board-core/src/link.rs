@@ -205,6 +205,12 @@ impl<P: Fdcan> Link<P> {
         self.health
     }
 
+    /// The frames waiting in the software receive queue, oldest first (the node receives them
+    /// before those still in RX FIFO0).
+    pub fn rx_waiting(&self) -> impl Iterator<Item = &ClassicFrame> {
+        self.rx.iter()
+    }
+
     /// Frames waiting in the software transmit queue.
     pub fn tx_waiting(&self) -> usize {
         self.tx.len()
