@@ -1,7 +1,8 @@
 //! planner-core's CAN node on QEMU's `mps2-an500` (Cortex-M7, double-precision FPU): replays
-//! CAN logs recorded on the host into the node through an in-memory device, counts the
-//! instructions of every `Node::poll` (one 5 ms control cycle, as the board runs it), and
-//! prints a machine-readable report over semihosting.
+//! CAN logs recorded on the host into the node through the board's own control cycle
+//! (board-core's `ControlLoop`) and link adapter (board-core's `Link` over an in-memory FDCAN),
+//! counts the instructions of every `Node::poll` and of every whole cycle, and prints a
+//! machine-readable report over semihosting.
 //!
 //! The logs are read from the file `replay.wlog` in QEMU's working directory (semihosting
 //! `SYS_OPEN`, `SYS_FLEN`, `SYS_READ`: `semihost.rs`), in the compact binary format of
@@ -65,9 +66,14 @@
 //!     the replay ended at its longest rather than standing and idle)
 //!   * `NODE scenario=… refused=… tx_dropped=… bus_errors=… rx_overflow=…` (the node's
 //!     counters, the device's lost frames)
-//!   * `BOARD scenario=… summaries=… worst=… overruns=… status_overruns=…`
-//!   * `TIMING scenario=… kind=… n=… max=… mean=… max_tick=… max_timer=…` (instructions)
-//! * `TIMING scenario=all …`: over every log
+//!   * `BOARD scenario=… summaries=… worst=… overruns=… status_overruns=… feeds=…
+//!     busy_pulses=… busy_high=… missed_slots=… log_missed=… log_overruns=… log_refused=…
+//!     link_frames=… link_digest=… rx_lost=… replaced=… rx_foreign=… wire_lost=…` (the board's
+//!     cycle, board-core's `ControlLoop`, run around every poll: `board.rs`; `LINK` frames
+//!     are digested apart from `tx_digest`)
+//!   * `TIMING scenario=… kind=… n=… max=… mean=… max_tick=… max_timer=…` (instructions of
+//!     the poll), and `WHOLE …` the same for the board's whole cycle (slot start to feed)
+//! * `TIMING scenario=all …`, `WHOLE scenario=all …`: over every log
 //! * `STACK used=… size=… startup=… control=…` (bytes: the high-water mark, of the stack
 //!   region's size; `startup`: while building the node, `control`: while replaying,
 //!   measured after painting the stack again once the node is built)
