@@ -22,7 +22,7 @@ use planner_core::gait::{Footstep, Reference, PREVIEW};
 use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::LogClock;
 use planner_core::shaping::PreviewGains;
-use planner_core::wire::RawFrame;
+use planner_core::wire::{ids, LinkHealth, RawFrame};
 use planner_core::Real;
 
 use crate::report::QemuRun;
@@ -139,6 +139,18 @@ pub struct Expected {
     pub counters: (u16, u16, u16),
     /// Frames the device lost.
     pub rx_overflow: u32,
+    /// Cycles that refused a command (each one a log line of the board's cycle).
+    pub refusing_cycles: u64,
+    /// The `LINK` frames the board's cycle makes the node send: one with every `STATUS`, as
+    /// (count, digest with their cycles, `Fnv::add_sent`), for the QEMU image's link health
+    /// (the in-memory FDCAN's: no errors, reset reason unknown, no missed slot).
+    pub link: (usize, String),
+}
+
+/// The `LINK` frame of the QEMU image's board cycle: the in-memory FDCAN's health (error
+/// counters 0, error-active, no bus-off), reset reason unknown, no missed slot.
+pub fn qemu_link_frame() -> RawFrame {
+    LinkHealth::default().encode()
 }
 
 /// A digest as the image prints it.
@@ -178,6 +190,7 @@ where
     refs.add_reference(node.gait().last());
     let mut checks = Vec::new();
     let mut replans = Vec::new();
+    let mut refusing_cycles = 0;
     while !player.done() {
         let k = player.next_cycle();
         let report = player
@@ -193,6 +206,7 @@ where
             .unwrap_or_else(|_| panic!("{name}: log truncated: {:?}", frames.error()));
         trajectory.push(report.reference);
         refs.add_reference(&report.reference);
+        refusing_cycles += u64::from(report.refused > 0);
         let tick = node.gait().ticks();
         if let Some(info) = node.gait().last_replan().filter(|i| i.tick == tick) {
             replans.push((tick, info.adjust_ticks));
@@ -206,6 +220,13 @@ where
     assert_eq!(src.remaining(), 0, "{name}: bytes after the log");
     assert!(sent.len() > 1000, "{name}: only {} node frames", sent.len());
     let c = node.counters();
+    let link_frame = qemu_link_frame();
+    let mut link = Fnv::default();
+    let mut links = 0;
+    for (cycle, _) in sent.iter().filter(|(_, f)| f.id == ids::STATUS) {
+        link.add_sent(*cycle, &link_frame);
+        links += 1;
+    }
     Played {
         expected: Expected {
             cycles: player.next_cycle(),
@@ -218,6 +239,8 @@ where
             replans,
             counters: (c.refused, c.tx_dropped, c.bus_errors),
             rx_overflow: player.bus().rx_overflow(),
+            refusing_cycles,
+            link: (links, hex(&link)),
         },
         feet: header.feet,
         sent,
@@ -295,21 +318,49 @@ pub fn compare(q: &QemuRun, case: &Case, want: &Expected) {
         want.rx_overflow,
         "{name}: frames lost by the device"
     );
-    // The board's bookkeeping ran around every poll: a summary per 200 cycles, no overrun
-    // (the worst cycle is far below a 5 ms slot), and the node was told none.
+    // The board's control cycle ran around every poll (board-core's `ControlLoop`): a summary
+    // per 200 cycles, no overrun (the worst cycle is far below a 5 ms slot) and the node told
+    // none, one watchdog feed and one busy pulse per cycle, no missed slot, a refusal line per
+    // refusing cycle; the link adapter lost, replaced and dropped nothing (so the frames on
+    // the in-memory wire are the node's, in its order: compared above), and the node
+    // published the link's health in `LINK` with every `STATUS`.
     let board = q.one_of("BOARD", name);
+    let num = |k: &str| board.num::<u64>(k);
+    assert_eq!(num("summaries"), want.cycles / 200, "{name}: summaries");
     assert_eq!(
-        board.num::<u64>("summaries"),
-        want.cycles / 200,
-        "{name}: summaries"
+        (num("overruns"), num("status_overruns"), num("log_overruns")),
+        (0, 0, 0),
+        "{name}: overruns"
+    );
+    assert_eq!(
+        (num("feeds"), num("busy_pulses"), num("busy_high")),
+        (want.cycles, want.cycles, 0),
+        "{name}: watchdog feeds and busy pulses"
+    );
+    assert_eq!(
+        (num("missed_slots"), num("log_missed")),
+        (0, 0),
+        "{name}: missed slots"
+    );
+    assert_eq!(
+        num("log_refused"),
+        want.refusing_cycles,
+        "{name}: refusal log lines"
     );
     assert_eq!(
         (
-            board.num::<u32>("overruns"),
-            board.num::<u16>("status_overruns")
+            num("rx_lost"),
+            num("replaced"),
+            num("rx_foreign"),
+            num("wire_lost")
         ),
-        (0, 0),
-        "{name}: overruns"
+        (0, 0, 0, 0),
+        "{name}: the link adapter"
+    );
+    assert_eq!(
+        (num("link_frames") as usize, board.get("link_digest")),
+        (want.link.0, want.link.1.as_str()),
+        "{name}: LINK frames (count, digest with their cycles)"
     );
     println!(
         "{name}: {} cycles, {} frames fed, {} node frames and every reference bit-identical, {} \

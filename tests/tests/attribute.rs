@@ -92,7 +92,7 @@ fn attribution_agrees_with_the_image_timer() {
     };
     let inclusive = section("INCLUSIVE");
     assert_eq!(inclusive[0].0, max, "{report}");
-    assert!(inclusive[0].1.contains("cycle::poll"), "{report}");
+    assert!(inclusive[0].1.contains("control::poll"), "{report}");
     let own = section("SELF");
     assert!(own.iter().map(|(n, _)| n).sum::<i64>() <= max, "{report}");
     assert!(

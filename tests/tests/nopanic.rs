@@ -26,7 +26,7 @@ use std::sync::Mutex;
 
 const SYMBOL: &str = "walk_control_path_can_panic";
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// The whole cycle's `.text` is ~84 KB (the planner: window solver, gait, shaping, node
+/// The whole cycle's `.text` is ~66 KB (the planner: window solver, gait, shaping, node
 /// command handling, wire codec); far less would mean that the cycle was optimised away.
 const MIN_TEXT: u64 = 40_000;
 

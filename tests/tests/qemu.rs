@@ -204,6 +204,21 @@ fn print_table(q: &QemuRun) {
             r.get("max_tick")
         );
     }
+    println!(
+        "instructions per whole board cycle (board-core's ControlLoop::run: link health, busy \
+         pin, the timed poll, the late decision, the statistics, the watchdog feed; the wait for \
+         the slot and the log lines not included), by kind of cycle"
+    );
+    println!("{:<14} {:>6} {:>10} {:>10}", "kind", "n", "max", "mean");
+    for r in q.of("WHOLE", "all") {
+        println!(
+            "{:<14} {:>6} {:>10} {:>10}",
+            r.get("kind"),
+            r.get("n"),
+            r.get("max"),
+            r.get("mean")
+        );
+    }
     let stack = q.one("STACK");
     println!(
         "stack high-water: {} of {} bytes (building the node {}, control loop {})",

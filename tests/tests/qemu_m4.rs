@@ -171,6 +171,16 @@ fn m4f_image_matches_the_host_f32_node() {
         }
     }
     assert!(worst > 0, "no TIMING line for kind=cycle");
+    println!("instructions per whole board cycle (board-core's ControlLoop::run, wait and log lines excluded)");
+    for t in q.of("WHOLE", "all") {
+        println!(
+            "{:<16} {:>6} {:>10} {:>10}",
+            t.get("kind"),
+            t.get("n"),
+            t.get("max"),
+            t.get("mean")
+        );
+    }
     println!(
         "stack high-water: {used} of {size} bytes (building the node {}, control loop {})",
         stack.get("startup"),

@@ -14,6 +14,24 @@
 use heapless::Deque;
 use planner_core::wire::RawFrame;
 
+/// The replay's side of the node's CAN device: what the [`Player`](crate::Player) and the
+/// classification of a cycle ([`crate::cycle::Pending`]) need. Implemented by
+/// [`ScriptedBus`] and by the board's link adapter over the in-memory FDCAN
+/// ([`crate::fdcan::ReplayLink`]).
+pub trait Device {
+    /// A frame from the log arrives (lost and counted if the receive side is full).
+    fn deliver(&mut self, f: RawFrame);
+    /// The oldest frame the node transmitted that the player has not read yet.
+    fn take_sent(&mut self) -> Option<RawFrame>;
+    /// Number of frames waiting for the node.
+    fn pending_len(&self) -> usize;
+    /// The frames waiting for the node, oldest (the next one it receives) first, each given to
+    /// `f` until it returns `false`.
+    fn each_pending(&self, f: impl FnMut(&RawFrame) -> bool);
+    /// Frames lost because the receive side was full.
+    fn rx_overflow(&self) -> u32;
+}
+
 /// Capacity of each FIFO (host-sim's mailbox and receive FIFO hold 64 frames too).
 pub const FIFO: usize = 64;
 
@@ -66,6 +84,28 @@ impl ScriptedBus {
     /// Frames lost because the receive FIFO was full.
     pub fn rx_overflow(&self) -> u32 {
         self.rx_overflow
+    }
+}
+
+impl Device for ScriptedBus {
+    fn deliver(&mut self, f: RawFrame) {
+        ScriptedBus::deliver(self, f);
+    }
+    fn take_sent(&mut self) -> Option<RawFrame> {
+        ScriptedBus::take_sent(self)
+    }
+    fn pending_len(&self) -> usize {
+        ScriptedBus::pending_len(self)
+    }
+    fn each_pending(&self, mut f: impl FnMut(&RawFrame) -> bool) {
+        for frame in self.rx.iter() {
+            if !f(frame) {
+                break;
+            }
+        }
+    }
+    fn rx_overflow(&self) -> u32 {
+        ScriptedBus::rx_overflow(self)
     }
 }
 

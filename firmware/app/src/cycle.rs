@@ -1,5 +1,6 @@
-//! One timed control cycle: one `Node::poll` over the in-memory device, timed by a [`Clock`]
-//! and classified by [`Kind`] from the frames it took and what its tick did.
+//! What one control cycle did: its [`CycleRecord`], classified by [`Kind`] from the frames
+//! the node took ([`Pending`]) and what its tick did; the [`Fnv`] digests of the replay. The
+//! cycle itself is the board's (board-core's `control::ControlLoop`, which times the poll).
 
 use core::borrow::Borrow;
 
@@ -9,15 +10,8 @@ use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
 use planner_core::Real;
 
-use crate::bus::{ScriptedBus, FIFO};
+use crate::bus::Device;
 use crate::stats::Kind;
-
-/// A free-running up-counter provided by the image (wrapping `u32`; only differences are
-/// used).
-pub trait Clock {
-    /// The present count.
-    fn now(&mut self) -> u32;
-}
 
 /// What one control cycle did (`T`: the node's scalar).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,7 +21,7 @@ pub struct CycleRecord<T = f64> {
     pub tick: u64,
     /// The kind of the cycle.
     pub kind: Kind,
-    /// Clock units spent in `Node::poll`.
+    /// Timer units spent in `Node::poll`.
     pub units: u32,
     /// The node's report (its reference, frames received, refused and sent).
     pub report: PollReport<T>,
@@ -101,75 +95,94 @@ fn class(f: &RawFrame) -> u8 {
     }
 }
 
-/// One control cycle: `Node::poll(now_ms, bus)`, and only it, timed with `clock`
-/// (through [`poll`], a frame of its own), then classified (see [`Kind`]): by the classes of
-/// the frames the node took from the device's receive FIFO (a prefix of it), by whether its
-/// tick re-planned, and by whether the node stood before and after.
-pub fn timed_poll<C: Clock, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
-    node: &mut Node<Q, G, T>,
-    now_ms: u32,
-    bus: &mut ScriptedBus,
-    clock: &mut C,
-) -> CycleRecord<T> {
-    // What the node may take, by class: `seen[i]` covers the first i + 1 waiting frames.
-    let mut seen = [0u8; FIFO];
-    let mut acc = 0;
-    for (s, f) in seen.iter_mut().zip(bus.pending()) {
-        acc |= class(f);
-        *s = acc;
-    }
-    let waiting = bus.pending_len();
-    let was_standing = node.gait().is_standing();
+/// Frames the classification looks at (the node takes at most its `max_rx` commands and
+/// `max_foreign` foreign frames per poll; beyond this many the classes of the rest count as
+/// one).
+const SEEN: usize = 128;
 
-    let t0 = clock.now();
-    let report = poll(node, now_ms, bus);
-    let units = clock.now().wrapping_sub(t0);
-
-    let taken = waiting.saturating_sub(bus.pending_len());
-    let rx = match taken.checked_sub(1) {
-        None => 0,
-        Some(i) => seen.get(i).copied().unwrap_or(acc),
-    };
-    let tick = node.gait().ticks();
-    let replan = node
-        .gait()
-        .last_replan()
-        .filter(|i| i.tick == tick)
-        .copied();
-    let kind = if rx & RX_MODIFY != 0 {
-        Kind::Modify
-    } else if rx & RX_START != 0 {
-        Kind::Start
-    } else if let Some(info) = replan {
-        if info.adjust_ticks != 0 {
-            Kind::Adjust
-        } else {
-            Kind::Replan
-        }
-    } else if rx & RX_STOP != 0 {
-        Kind::StopCommand
-    } else if rx & RX_PUSH != 0 {
-        Kind::Push
-    } else if was_standing && node.gait().is_standing() {
-        Kind::Standing
-    } else {
-        Kind::Steady
-    };
-    CycleRecord {
-        tick,
-        kind,
-        units,
-        report,
-        replan,
-    }
+/// What waited for the node before a cycle, to classify the cycle after it ([`Kind`]): by the
+/// classes of the frames the node took from its device (a prefix of what waited), by whether
+/// its tick re-planned, and by whether the node stood before and after. Taken outside the
+/// timed poll.
+#[derive(Clone, Debug)]
+pub struct Pending {
+    /// `seen[i]`: the classes of the first i + 1 waiting frames.
+    seen: [u8; SEEN],
+    /// The classes of every waiting frame.
+    all: u8,
+    waiting: usize,
+    was_standing: bool,
 }
 
-/// `Node::poll`, in a frame of its own (as the board's loop calls it once per cycle).
-#[inline(never)]
-pub fn poll<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
-    node: &mut Node<Q, G, T>,
-    now_ms: u32,
-    bus: &mut ScriptedBus,
-) -> PollReport<T> {
-    node.poll(now_ms, bus)
+impl Pending {
+    /// Before the cycle: what waits in `bus` for `node`.
+    pub fn before<D: Device, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+        node: &Node<Q, G, T>,
+        bus: &D,
+    ) -> Self {
+        let mut seen = [0u8; SEEN];
+        let (mut acc, mut i) = (0u8, 0usize);
+        bus.each_pending(|f| {
+            acc |= class(f);
+            if let Some(s) = seen.get_mut(i) {
+                *s = acc;
+            }
+            i += 1;
+            true
+        });
+        Self {
+            seen,
+            all: acc,
+            waiting: bus.pending_len(),
+            was_standing: node.gait().is_standing(),
+        }
+    }
+
+    /// After the cycle: its record (`units` of the clock spent in the poll, the node's
+    /// `report`).
+    pub fn after<D: Device, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+        &self,
+        node: &Node<Q, G, T>,
+        bus: &D,
+        units: u32,
+        report: PollReport<T>,
+    ) -> CycleRecord<T> {
+        let taken = self.waiting.saturating_sub(bus.pending_len());
+        let rx = match taken.checked_sub(1) {
+            None => 0,
+            Some(i) => self.seen.get(i).copied().unwrap_or(self.all),
+        };
+        let tick = node.gait().ticks();
+        let replan = node
+            .gait()
+            .last_replan()
+            .filter(|i| i.tick == tick)
+            .copied();
+        let kind = if rx & RX_MODIFY != 0 {
+            Kind::Modify
+        } else if rx & RX_START != 0 {
+            Kind::Start
+        } else if let Some(info) = replan {
+            if info.adjust_ticks != 0 {
+                Kind::Adjust
+            } else {
+                Kind::Replan
+            }
+        } else if rx & RX_STOP != 0 {
+            Kind::StopCommand
+        } else if rx & RX_PUSH != 0 {
+            Kind::Push
+        } else if self.was_standing && node.gait().is_standing() {
+            Kind::Standing
+        } else {
+            Kind::Steady
+        };
+        CycleRecord {
+            tick,
+            kind,
+            units,
+            report,
+            replan,
+        }
+    }
 }

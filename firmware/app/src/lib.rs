@@ -8,13 +8,15 @@
 //!   feet; then the frames to replay with their times), a validated, panic-free decoder;
 //! * [`player`]: the player of such a log by `planner_core::playback`'s rule (the one
 //!   `host-sim replay` uses): each frame delivered before the poll of its cycle;
-//! * [`bus`]: an in-memory `embedded_can::nb::Can` device between the log and the node;
-//! * [`cycle`]: one 5 ms control cycle: one
-//!   [`Node::poll`](planner_core::node::Node::poll) timed by a [`cycle::Clock`] that the image
-//!   provides and classified by [`Kind`];
+//! * [`bus`]: an in-memory `embedded_can::nb::Can` device between the log and the node, and
+//!   the [`Device`] trait of the replay's side of a device;
+//! * [`fdcan`]: an in-memory FDCAN under the board's own link adapter (board-core's `Link`):
+//!   the QEMU image's device;
+//! * [`cycle`]: what one 5 ms control cycle did (the board's cycle, board-core's
+//!   `control::ControlLoop`, runs and times it), classified by [`Kind`];
 //! * [`stats`]: count, maximum and sum per kind.
 //!
-//! The board image runs the same `Node::poll` over FDCAN1 instead of the in-memory device.
+//! The board image runs the same control cycle over FDCAN1 instead of the in-memory one.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
@@ -22,11 +24,13 @@
 pub mod binlog;
 pub mod bus;
 pub mod cycle;
+pub mod fdcan;
 pub mod player;
 pub mod stats;
 
-pub use bus::ScriptedBus;
-pub use cycle::{timed_poll, Clock, CycleRecord, Fnv};
+pub use bus::{Device, ScriptedBus};
+pub use cycle::{CycleRecord, Fnv, Pending};
+pub use fdcan::{ReplayFdcan, ReplayLink};
 pub use player::{LogFrame, Player, Source, Truncated};
 pub use stats::{Kind, Stat, Stats};
 

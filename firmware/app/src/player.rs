@@ -1,7 +1,8 @@
 //! The target's player of a recorded CAN log (issue 12's record and replay): the QEMU image
 //! replays host-sim's logs with it ([`crate::binlog`] reads them).
 //!
-//! [`Player`] feeds logged frames into the node through the in-memory [`ScriptedBus`] by the
+//! [`Player`] feeds logged frames into the node through an in-memory [`Device`] (the
+//! [`ScriptedBus`], or the board's link adapter over [`crate::fdcan::ReplayFdcan`]) by the
 //! rule of `planner_core::playback`, the one `host-sim replay` uses: a frame is for cycle
 //! [`LogClock::cycle`] of its time; before the poll of cycle `k` every frame for a cycle
 //! `≤ k` is delivered, in log order (the in-memory device has no bus time: a log denser than
@@ -15,10 +16,10 @@ use planner_core::gait::PREVIEW;
 use planner_core::node::Node;
 use planner_core::playback::{self, LogClock};
 use planner_core::shaping::PreviewGains;
-use planner_core::wire::RawFrame;
+use planner_core::wire::{ids, RawFrame};
 use planner_core::Real;
 
-use crate::bus::ScriptedBus;
+use crate::bus::{Device, ScriptedBus};
 use crate::cycle::Fnv;
 
 /// A logged frame: its time \[µs, in the log's time\] and the frame.
@@ -40,25 +41,36 @@ pub trait Source {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Truncated;
 
-/// Plays one log into a node, one control cycle per [`Player::cycle`].
+/// Plays one log into a node through the device `D`, one control cycle per [`Player::cycle`].
 #[derive(Clone, Debug)]
-pub struct Player {
+pub struct Player<D = ScriptedBus> {
     clock: LogClock,
     remaining: u32,
     ahead: Option<(u64, RawFrame)>,
     last: u64,
     max: u64,
-    bus: ScriptedBus,
+    bus: D,
     k: u64,
     finished: bool,
     fed: u32,
     tx_frames: u32,
     tx_digest: Fnv,
+    link_frames: u32,
+    link_digest: Fnv,
 }
 
 impl Player {
-    /// A log of `count` frames to replay, the last one at `last_us`, on the grid `clock`.
+    /// A log of `count` frames to replay, the last one at `last_us`, on the grid `clock`,
+    /// through a [`ScriptedBus`].
     pub fn new(clock: LogClock, count: u32, last_us: u64) -> Self {
+        Self::with_device(clock, count, last_us, ScriptedBus::new())
+    }
+}
+
+impl<D: Device> Player<D> {
+    /// [`Player::new`] through `device` (e.g. the board's link adapter over the in-memory
+    /// FDCAN, [`crate::fdcan::ReplayLink`]).
+    pub fn with_device(clock: LogClock, count: u32, last_us: u64, device: D) -> Self {
         let last = if count == 0 { 0 } else { clock.cycle(last_us) };
         Self {
             clock,
@@ -66,12 +78,14 @@ impl Player {
             ahead: None,
             last,
             max: playback::max_cycles(last, clock.period_us()),
-            bus: ScriptedBus::new(),
+            bus: device,
             k: 0,
             finished: false,
             fed: 0,
             tx_frames: 0,
             tx_digest: Fnv::default(),
+            link_frames: 0,
+            link_digest: Fnv::default(),
         }
     }
 
@@ -91,14 +105,22 @@ impl Player {
     }
 
     /// The device (frame counters).
-    pub fn bus(&self) -> &ScriptedBus {
+    pub fn bus(&self) -> &D {
         &self.bus
     }
 
     /// Frames the node transmitted, and their digest ([`Fnv::add_sent`]: each with the cycle
-    /// that sent it).
+    /// that sent it), `LINK` frames left out (see [`Player::link`]).
     pub fn transmitted(&self) -> (u32, u64) {
         (self.tx_frames, self.tx_digest.0)
+    }
+
+    /// The `LINK` frames the node transmitted and their digest (as [`Player::transmitted`]).
+    /// Only a node told its link health sends `LINK` (the board's control cycle does, every
+    /// cycle): kept apart, so that [`Player::transmitted`] is comparable with a node that is
+    /// never told, such as host-sim's.
+    pub fn link(&self) -> (u32, u64) {
+        (self.link_frames, self.link_digest.0)
     }
 
     /// The control cycle that [`Player::cycle`] runs next.
@@ -113,7 +135,7 @@ impl Player {
         &mut self,
         node: &mut Node<Q, G, T>,
         source: &mut S,
-        poll: impl FnOnce(&mut Node<Q, G, T>, u32, &mut ScriptedBus) -> R,
+        poll: impl FnOnce(&mut Node<Q, G, T>, u32, &mut D) -> R,
         mut on_frame: impl FnMut(u64, &RawFrame),
     ) -> Result<R, Truncated>
     where
@@ -143,8 +165,13 @@ impl Player {
             &mut self.bus,
         );
         while let Some(f) = self.bus.take_sent() {
-            self.tx_frames = self.tx_frames.saturating_add(1);
-            self.tx_digest.add_sent(k, &f);
+            if f.id == ids::LINK {
+                self.link_frames = self.link_frames.saturating_add(1);
+                self.link_digest.add_sent(k, &f);
+            } else {
+                self.tx_frames = self.tx_frames.saturating_add(1);
+                self.tx_digest.add_sent(k, &f);
+            }
             on_frame(k, &f);
         }
         let idle = self.remaining == 0 && self.ahead.is_none() && self.bus.pending_len() == 0;

@@ -1,16 +1,13 @@
 //! The bookkeeping of one control cycle: overruns (counted and reported to the node, which
 //! publishes them in its status) and the statistics window summarised once per second.
 //!
-//! Used by the board image, the link-time no-panic check (`firmware/nopanic`) and the QEMU
-//! image, so that all three run the board's own bookkeeping; host-tested (`tests/cycle.rs`).
-//! Logging stays with the callers.
+//! Part of the board's control cycle ([`crate::control`]), which the board image, the
+//! link-time no-panic check (`firmware/nopanic`) and the QEMU image all run; host-tested
+//! (`tests/cycle.rs`).
 
-use core::borrow::Borrow;
+use planner_core::node::PollReport;
 
-use planner_core::gait::PREVIEW;
-use planner_core::node::{Node, PollReport};
-use planner_core::shaping::PreviewGains;
-use planner_core::Real;
+use crate::control::ControlNode;
 
 /// Cycles per summary (1 s at 5 ms).
 pub const SUMMARY_EVERY: u32 = 200;
@@ -59,10 +56,10 @@ pub struct Outcome {
 impl Stats {
     /// Records one cycle: `spent` core cycles of `poll`, `late` if the work did not fit the
     /// slot or the next slot has already begun.
-    pub fn record<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real>(
+    pub fn record<N: ControlNode>(
         &mut self,
-        node: &mut Node<Q, G, T>,
-        report: &PollReport<T>,
+        node: &mut N,
+        report: &PollReport<N::Scalar>,
         spent: u32,
         late: bool,
     ) -> Outcome {

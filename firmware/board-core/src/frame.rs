@@ -64,10 +64,9 @@ impl Frame for ClassicFrame {
         if data.len() > 8 {
             return None;
         }
-        let mut buf = [0; 8];
-        for (b, d) in buf.iter_mut().zip(data) {
-            *b = *d;
-        }
+        // All 8 bytes, each taken or zero (a fixed-length loop, as planner-core's
+        // `RawFrame::new`: no copy loop of a length known only here).
+        let buf: [u8; 8] = core::array::from_fn(|i| data.get(i).copied().unwrap_or(0));
         Some(Self {
             id,
             len: data.len() as u8,

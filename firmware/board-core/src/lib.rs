@@ -12,15 +12,21 @@
 //! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
 //!   before any Rust code runs;
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
-//!   statistics window summarised once per second).
+//!   statistics window summarised once per second);
+//! * [`control`]: the board's whole control cycle over small traits of its hardware (the
+//!   wait for the slot, the link health, the timed poll, the late decision, the statistics,
+//!   the watchdog feed, what to log), run by the board image, the QEMU image and the no-panic
+//!   check alike.
 //!
 //! The board implements [`link::Fdcan`] on FDCAN1 (`firmware/board/src/fdcan1.rs`); the tests
 //! (`tests/link.rs`) on a model of the peripheral, with planner-core's node on top. The QEMU
-//! image runs [`cycle`] around its timed polls too.
+//! image runs [`control`] around its replayed polls, over the real [`Link`] on an in-memory
+//! FDCAN.
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod control;
 pub mod cycle;
 pub mod fault_entry;
 pub mod frame;
@@ -29,6 +35,7 @@ pub mod pace;
 pub mod reset;
 pub mod rtt;
 
+pub use control::{ControlLoop, ControlNode, Io, LogSink, Port, SlotRun};
 pub use frame::ClassicFrame;
 pub use link::{BusState, Fdcan, Health, Link, RxLost};
 pub use pace::{Pacer, Slot};

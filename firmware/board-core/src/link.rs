@@ -205,6 +205,12 @@ impl<P: Fdcan> Link<P> {
         self.health
     }
 
+    /// The frames waiting in the software receive queue, oldest first (the node receives them
+    /// before those still in RX FIFO0).
+    pub fn rx_waiting(&self) -> impl Iterator<Item = &ClassicFrame> {
+        self.rx.iter()
+    }
+
     /// Frames waiting in the software transmit queue.
     pub fn tx_waiting(&self) -> usize {
         self.tx.len()
@@ -326,22 +332,38 @@ impl<P: Fdcan> Link<P> {
             *old = *f;
             queued = true;
         }
-        let pending = self.hw.tx_pending() & ALL_SLOTS & !self.cancelling;
-        let mut hit = 0u32;
-        for (slot, sid) in self.slot_id.iter().enumerate() {
-            if pending & (1 << slot) != 0 && *sid == id {
-                hit |= 1 << slot;
-            }
-        }
-        if hit != 0 {
-            self.hw.tx_cancel(hit);
-            self.cancelling |= hit;
-        }
-        if queued || hit != 0 {
+        let cancelled = self.cancel_stale(id);
+        if queued && !cancelled {
             self.health.replaced = self.health.replaced.saturating_add(1);
         }
         // Replaced in the queue: done; only cancelled in a buffer: still to be queued.
         queued
+    }
+
+    /// Cancels the pending TX buffers that hold a frame of identifier `id` if it is a stream
+    /// ([`supersedes`]); `true` if there was one (counted as replaced).
+    fn cancel_stale(&mut self, id: u16) -> bool {
+        if !supersedes(id) {
+            return false;
+        }
+        // Only the pending buffers (a few: what the bus has not sent yet), lowest first.
+        let mut pending = self.hw.tx_pending() & ALL_SLOTS & !self.cancelling;
+        let mut hit = 0u32;
+        while pending != 0 {
+            let bit = pending & pending.wrapping_neg();
+            let slot = pending.trailing_zeros() as usize;
+            if self.slot_id.get(slot) == Some(&id) {
+                hit |= bit;
+            }
+            pending &= !bit;
+        }
+        if hit == 0 {
+            return false;
+        }
+        self.hw.tx_cancel(hit);
+        self.cancelling |= hit;
+        self.health.replaced = self.health.replaced.saturating_add(1);
+        true
     }
 }
 
@@ -352,12 +374,21 @@ impl<P: Fdcan> Can for Link<P> {
     /// Never displaces a frame (`Ok(None)`); `WouldBlock` only when every TX buffer and the
     /// software queue are taken.
     fn transmit(&mut self, frame: &ClassicFrame) -> nb::Result<Option<ClassicFrame>, RxLost> {
-        if self.replace(frame) {
-            return Ok(None);
-        }
-        self.pump_tx();
-        if self.tx.is_empty() && self.start(frame) {
-            return Ok(None);
+        if self.tx.is_empty() {
+            // The common case: nothing waits in software, so only a TX buffer can hold a
+            // stale frame of this identifier.
+            self.cancel_stale(frame.raw_id());
+            if self.start(frame) {
+                return Ok(None);
+            }
+        } else {
+            if self.replace(frame) {
+                return Ok(None);
+            }
+            self.pump_tx();
+            if self.tx.is_empty() && self.start(frame) {
+                return Ok(None);
+            }
         }
         match self.tx.push_back(*frame) {
             Ok(()) => Ok(None),

@@ -14,8 +14,8 @@
 pub struct Slot {
     /// Index of the slot since the start (wrapping).
     pub index: u32,
-    /// The slot's start in milliseconds since the pacer started (wrapping): the `now_ms` of
-    /// the poll.
+    /// The slot's start in milliseconds since the pacer started (wrapping; plus
+    /// [`Pacer::with_first_ms`]'s offset): the `now_ms` of the poll.
     pub now_ms: u32,
     /// Slots skipped right before this one (0 when on time).
     pub skipped: u32,
@@ -28,6 +28,8 @@ pub struct Slot {
 pub struct Pacer {
     period: u32,
     ms_per_slot: u32,
+    /// `now_ms` of slot 0.
+    first_ms: u32,
     /// Counter value at which the next slot begins.
     next: u32,
     /// Index of the next slot.
@@ -41,10 +43,23 @@ impl Pacer {
         Self {
             period: period.clamp(1, 1 << 30),
             ms_per_slot,
+            first_ms: 0,
             next: start,
             index: 0,
             missed: 0,
         }
+    }
+
+    /// The same slots with `first_ms` as slot 0's `now_ms` (instead of 0): slot `k` is at
+    /// `first_ms + k · ms_per_slot` (wrapping). The QEMU image replays a log on its grid.
+    pub fn with_first_ms(mut self, first_ms: u32) -> Self {
+        self.first_ms = first_ms;
+        self
+    }
+
+    /// Counter value at which the next slot begins.
+    pub fn next_start(&self) -> u32 {
+        self.next
     }
 
     /// The slot that has begun at counter value `now`, if the next one has: `None` while it
@@ -62,7 +77,9 @@ impl Pacer {
         self.next = begun.wrapping_add(self.period);
         Some(Slot {
             index,
-            now_ms: index.wrapping_mul(self.ms_per_slot),
+            now_ms: self
+                .first_ms
+                .wrapping_add(index.wrapping_mul(self.ms_per_slot)),
             skipped,
             late_ticks: now.wrapping_sub(begun),
         })
@@ -110,6 +127,18 @@ mod tests {
         // Back on the grid: slot 4 at 20,000 µs.
         assert_eq!(p.due(19_999), None);
         assert_eq!(p.due(20_000).unwrap().index, 4);
+    }
+
+    #[test]
+    fn first_ms_offsets_every_slot_and_next_start_is_the_next_slot() {
+        let mut p = Pacer::new(0, 5000, 5).with_first_ms(2);
+        assert_eq!(p.next_start(), 0);
+        assert_eq!(p.due(0).unwrap().now_ms, 2);
+        assert_eq!(p.next_start(), 5000);
+        assert_eq!(p.due(5000).unwrap().now_ms, 7);
+        let s = p.due(21_000).unwrap(); // slots 2 and 3 are over, 4 has begun
+        assert_eq!((s.index, s.now_ms, s.skipped), (4, 22, 2));
+        assert_eq!(p.next_start(), 25_000);
     }
 
     #[test]

@@ -12,6 +12,9 @@
 //!   driven at run time by [`fdcan1`] (64 RX FIFO elements, 32 dedicated TX buffers) behind
 //!   board-core's [`Link`] adapter (queues, bus-off recovery, error counters, stale frames
 //!   replaced);
+//! * the loop is board-core's [`ControlLoop`] (`board_core::control`: the same cycle code the
+//!   QEMU image and the no-panic check run) over the board's hardware ([`cycle_io`]: TIM2,
+//!   DWT, IWDG; [`Busy`]; [`cycle_log`]: defmt);
 //! * TIM2 counts microseconds, free-running over 32 bits; board-core's [`Pacer`] cuts it into
 //!   5 ms slots. The loop waits for a slot (servicing the CAN meanwhile) and runs one
 //!   [`Node::poll`] in it with the slot's time as `now_ms`; slots missed by a long overrun are
@@ -26,7 +29,7 @@
 //!   reset reason and the missed slots go to the node ([`Node::set_link_health`]), which
 //!   publishes them in `LINK` every 100 ms;
 //! * PE1 (LD2 on the Nucleo-H743ZI) is held high while the node works, for a scope or a logic
-//!   analyser (through embedded-hal 1.0's `OutputPin`); PB14 (LD3) is the fault pin;
+//!   analyser (board-core's `BusyPin`); PB14 (LD3) is the fault pin;
 //! * logging (defmt over [`logger`], never blocking) happens after the timed part of the
 //!   cycle: warnings on overruns, missed slots and refusals, and a summary once a second.
 //!
@@ -40,19 +43,20 @@
 #![no_main]
 #![deny(unsafe_code)]
 
+mod cycle_io;
+mod cycle_log;
 mod fault;
 mod fdcan1;
 mod hw;
 mod logger;
 mod stack;
 
-use core::convert::Infallible;
 use core::num::{NonZeroU16, NonZeroU8};
 
+use board_core::control::{BusyPin, ControlLoop, Io};
 use board_core::{cycle, Link, Pacer};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
-use embedded_hal::digital::{ErrorType, OutputPin};
 use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
 use fdcan::filter::{
     Action, ExtendedFilter, ExtendedFilterSlot, FilterType, StandardFilter, STANDARD_FILTER_MAX,
@@ -163,21 +167,16 @@ fn bit_timing() -> NominalBitTiming {
     }
 }
 
-/// The busy pin at the seam: the HAL's push-pull output behind embedded-hal 1.0.
-struct BusyPin<const P: char, const N: u8>(Pin<P, N, Output<PushPull>>);
+/// The busy pin: the HAL's push-pull output behind board-core's [`BusyPin`].
+struct Busy<const P: char, const N: u8>(Pin<P, N, Output<PushPull>>);
 
-impl<const P: char, const N: u8> ErrorType for BusyPin<P, N> {
-    type Error = Infallible;
-}
-
-impl<const P: char, const N: u8> OutputPin for BusyPin<P, N> {
-    fn set_low(&mut self) -> Result<(), Infallible> {
-        self.0.set_low();
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Infallible> {
-        self.0.set_high();
-        Ok(())
+impl<const P: char, const N: u8> BusyPin for Busy<P, N> {
+    fn set_busy(&mut self, busy: bool) {
+        if busy {
+            self.0.set_high();
+        } else {
+            self.0.set_low();
+        }
     }
 }
 
@@ -193,16 +192,6 @@ fn place_node(cfg: NodeConfig) -> Result<&'static mut Node<QUEUE>, GaitError> {
         panic!("place_node called twice");
     };
     parked.start(cfg)
-}
-
-/// Waits for the next slot of `pacer`, servicing the CAN link meanwhile.
-fn wait_slot(tim2: &pac::TIM2, pacer: &mut Pacer, bus: &mut Link<Fdcan1>) -> board_core::Slot {
-    loop {
-        bus.service();
-        if let Some(slot) = pacer.due(hw::now_us(tim2)) {
-            return slot;
-        }
-    }
 }
 
 #[entry]
@@ -250,8 +239,8 @@ fn main() -> ! {
     cp.DWT.enable_cycle_counter();
 
     let gpioe = dp.GPIOE.split(ccdr.peripheral.GPIOE);
-    let mut busy = BusyPin(gpioe.pe1.into_push_pull_output());
-    let _ = busy.set_low();
+    let mut busy = Busy(gpioe.pe1.into_push_pull_output());
+    busy.set_busy(false);
     // The fault pin, low until `fault::fail_safe` raises it.
     let gpiob = dp.GPIOB.split(ccdr.peripheral.GPIOB);
     let mut fault_pin = gpiob.pb14.into_push_pull_output();
@@ -312,77 +301,26 @@ fn main() -> ! {
     // The microsecond counter; slot 0 begins one period from now.
     ccdr.peripheral.TIM2.enable().reset();
     hw::start_us_counter(&dp.TIM2, ccdr.clocks.timx_ker_ck().raw());
-    let mut pacer = Pacer::new(
+    let pacer = Pacer::new(
         hw::now_us(&dp.TIM2).wrapping_add(PERIOD_US),
         PERIOD_US,
         CYCLE_MS,
     );
-    let mut stats = cycle::Stats::default();
+    let mut ctl = ControlLoop::new(
+        Io {
+            clock: cycle_io::Tim2Clock(dp.TIM2),
+            counter: cycle_io::Dwt,
+            watchdog: cycle_io::Iwdg(watchdog),
+            busy,
+            log: cycle_log::DefmtLog,
+        },
+        pacer,
+        PERIOD_CYCLES,
+        reset,
+    );
+    // board-core's control cycle: wait (servicing the link), link health, the timed poll, the
+    // late decision, the statistics, the watchdog feed, then the log lines.
     loop {
-        let slot = wait_slot(&dp.TIM2, &mut pacer, &mut bus);
-        node.set_link_health(bus.health().to_wire(reset, pacer.missed()));
-
-        let _ = busy.set_high();
-        let t0 = DWT::cycle_count();
-        let report = node.poll(slot.now_ms, &mut bus);
-        let spent = DWT::cycle_count().wrapping_sub(t0);
-        let _ = busy.set_low();
-
-        // Late: the work did not fit the slot, or the next slot has already begun.
-        let late = spent > PERIOD_CYCLES || pacer.behind(hw::now_us(&dp.TIM2));
-        let outcome = stats.record(node, &report, spent, late);
-        // The cycle is complete.
-        watchdog.feed();
-
-        // Logging, outside the timed part (and never blocking).
-        if slot.skipped > 0 {
-            defmt::warn!(
-                "{=u32} slot(s) missed before slot {=u32} ({=u32} so far)",
-                slot.skipped,
-                slot.index,
-                pacer.missed()
-            );
-        }
-        if outcome.overrun {
-            defmt::warn!(
-                "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
-                node.cycles(),
-                spent,
-                PERIOD_CYCLES,
-                stats.overruns
-            );
-        }
-        if report.refused > 0 {
-            defmt::warn!(
-                "cycle {=u32}: {=u8} of {=u8} commands refused",
-                node.cycles(),
-                report.refused,
-                report.received
-            );
-        }
-        if let Some(w) = outcome.summary {
-            let h = bus.health();
-            defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
-                node.cycles(),
-                w.worst,
-                w.mean(),
-                PERIOD_CYCLES,
-                w.received,
-                w.refused,
-                w.sent,
-                stats.overruns,
-                pacer.missed(),
-                h.tec,
-                h.rec,
-                h.state as u8,
-                h.bus_offs,
-                h.passive_episodes,
-                h.rx_lost,
-                h.replaced,
-                logger::dropped(),
-                stack::high_water()
-            );
-        }
+        ctl.step(node, &mut bus);
     }
 }

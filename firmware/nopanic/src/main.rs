@@ -25,11 +25,14 @@
 //!   whatever the message RAM holds and every register value is the hardware's;
 //! * the slot pacer (board-core's `Pacer`) over the board's microsecond counter
 //!   (`board/src/hw.rs`: TIM2's `CNT`);
-//! * per cycle: `wait_slot` (`Link::service` until `Pacer::due`), `Node::set_link_health`
-//!   with `Health::to_wire`, busy pin high, DWT CYCCNT, `node.poll(slot.now_ms, &mut bus)`,
-//!   busy pin low, the overrun test (cycles spent or `Pacer::behind`), `cycle::Stats::record`
-//!   (board-core's `cycle`), the watchdog feed (the HAL's `IndependentWatchdog::feed`: one
-//!   write of `IWDG_KR`), and every defmt call of the board's loop through the board's logger
+//! * per cycle: board-core's `ControlLoop::step` (`board_core::control`, the board's own loop
+//!   body), over the board's hardware types (`board/src/cycle_io.rs`: TIM2's `CNT` as the
+//!   clock, DWT CYCCNT, the HAL's `IndependentWatchdog::feed`, one write of `IWDG_KR`) and its
+//!   log lines (`board/src/cycle_log.rs`): the wait (`Link::service` until `Pacer::due`),
+//!   `Node::set_link_health` with `Health::to_wire`, busy pin high (here PE1's `BSRR`
+//!   directly: the HAL's pin needs the clock set-up), DWT CYCCNT, the poll, busy pin low, the
+//!   overrun test (cycles spent or `Pacer::behind`), `cycle::Stats::record`, the watchdog
+//!   feed, and every defmt call of the board's loop through the board's logger
 //!   (`board/src/logger.rs`: non-blocking RTT; its reentrancy is handled without panics), the
 //!   summary's stack high-water mark (`board/src/stack.rs`) included.
 //!
@@ -52,6 +55,13 @@
 #![no_main]
 #![deny(unsafe_code)]
 
+/// The board's hardware behind board-core's control-cycle traits, compiled from its source.
+#[path = "../../board/src/cycle_io.rs"]
+mod cycle_io;
+/// The board's log lines of the control cycle, compiled from its source.
+#[cfg(not(feature = "no-log"))]
+#[path = "../../board/src/cycle_log.rs"]
+mod cycle_log;
 /// The board's FDCAN1 accesses, compiled from its source.
 #[path = "../../board/src/fdcan1.rs"]
 #[allow(dead_code)] // `layout` and `silence` are start-up and fault-handler code
@@ -73,10 +83,11 @@ mod stack;
 
 use core::hint::black_box;
 
-use board_core::{cycle, Pacer, ResetReason, Slot};
-use cortex_m::peripheral::DWT;
+use board_core::control::{BusyPin, ControlLoop, Io};
+use board_core::{Pacer, ResetReason};
 use cortex_m_rt::entry;
 use static_cell::ConstStaticCell;
+use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
 use stm32h7xx_hal::pac;
 
 use planner_core::gait::GaitError;
@@ -115,6 +126,53 @@ const PERIOD_US: u32 = 1_000_000 / CYCLE_HZ;
 const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node (the board's).
 const QUEUE: usize = 16;
+
+/// The busy pin, PE1, by its `BSRR` (the board drives it through the HAL's pin, which needs
+/// the clock set-up this image leaves out: the same single store).
+struct Pe1(pac::GPIOE);
+
+impl BusyPin for Pe1 {
+    fn set_busy(&mut self, busy: bool) {
+        if busy {
+            self.0.bsrr.write(|w| w.bs1().set_bit());
+        } else {
+            self.0.bsrr.write(|w| w.br1().set_bit());
+        }
+    }
+}
+
+/// The log sink: the board's (defmt through its logger).
+#[cfg(not(feature = "no-log"))]
+type Log = cycle_log::DefmtLog;
+/// `no-log`: every log call's arguments to `black_box` instead.
+#[cfg(feature = "no-log")]
+type Log = black_box_log::BlackBoxLog;
+
+#[cfg(feature = "no-log")]
+mod black_box_log {
+    use board_core::control::{LogSink, SummaryLine};
+    use board_core::Slot;
+    use core::hint::black_box;
+
+    /// Opaque log calls (the scoped check's: no logger).
+    #[derive(Default)]
+    pub struct BlackBoxLog;
+
+    impl LogSink for BlackBoxLog {
+        fn missed_slots(&mut self, slot: &Slot, total: u32) {
+            black_box((slot, total));
+        }
+        fn overrun(&mut self, cycle: u32, spent: u32, period: u32, total: u32) {
+            black_box((cycle, spent, period, total));
+        }
+        fn refused(&mut self, cycle: u32, refused: u8, received: u8) {
+            black_box((cycle, refused, received));
+        }
+        fn summary(&mut self, line: &SummaryLine) {
+            black_box((line, line.window.mean(), crate::stack::high_water()));
+        }
+    }
+}
 
 /// The only `unsafe` of this crate apart from the board's files: the panic handler. It never
 /// runs (the image is only linked).
@@ -155,16 +213,6 @@ fn place_node(cfg: NodeConfig<Scalar>) -> Result<Option<&'static mut Node<QUEUE>
     parked.start(cfg).map(Some)
 }
 
-/// The board's `wait_slot`.
-fn wait_slot(tim2: &pac::TIM2, pacer: &mut Pacer, bus: &mut Bus) -> Slot {
-    loop {
-        bus.service();
-        if let Some(slot) = pacer.due(hw::now_us(tim2)) {
-            return slot;
-        }
-    }
-}
-
 /// Start-up failed (the board panics here): idle.
 fn idle() -> ! {
     loop {
@@ -190,89 +238,34 @@ fn main() -> ! {
         Ok(None) | Err(_) => idle(),
     };
 
-    let mut pacer = Pacer::new(
+    let pacer = Pacer::new(
         hw::now_us(&dp.TIM2).wrapping_add(PERIOD_US),
         PERIOD_US,
         CYCLE_MS,
     );
-    let mut stats = cycle::Stats::default();
+    let mut ctl = ControlLoop::new(
+        Io {
+            clock: cycle_io::Tim2Clock(dp.TIM2),
+            counter: cycle_io::Dwt,
+            watchdog: cycle_io::Iwdg(IndependentWatchdog::new(dp.IWDG)),
+            busy: Pe1(dp.GPIOE),
+            log: Log::default(),
+        },
+        pacer,
+        PERIOD_CYCLES,
+        reset,
+    );
     loop {
-        let slot = wait_slot(&dp.TIM2, &mut pacer, &mut bus);
-        node.set_link_health(bus.health().to_wire(reset, pacer.missed()));
-
-        dp.GPIOE.bsrr.write(|w| w.bs1().set_bit()); // busy pin high
-        let t0 = DWT::cycle_count();
-        let report = node.poll(slot.now_ms, &mut bus);
-        let spent = DWT::cycle_count().wrapping_sub(t0);
-        dp.GPIOE.bsrr.write(|w| w.br1().set_bit()); // busy pin low
-
-        let late = spent > PERIOD_CYCLES || pacer.behind(hw::now_us(&dp.TIM2));
-        let outcome = stats.record(node, &report, spent, late);
-        dp.IWDG.kr.write(|w| w.key().reset()); // the HAL's IndependentWatchdog::feed
+        // board-core's control cycle, as the board runs it.
+        let run = ctl.step(node, &mut bus);
 
         // The negative control: a panic the optimiser cannot rule out.
         #[cfg(feature = "selftest-panic")]
         {
             let table = black_box([0u8; 4]);
-            black_box(table[black_box(slot.now_ms) as usize]);
+            black_box(table[black_box(run.slot.now_ms) as usize]);
         }
-
-        #[cfg(feature = "no-log")]
-        black_box((slot, outcome.overrun, stats.overruns, report.refused));
-        #[cfg(not(feature = "no-log"))]
-        {
-            if slot.skipped > 0 {
-                defmt::warn!(
-                    "{=u32} slot(s) missed before slot {=u32} ({=u32} so far)",
-                    slot.skipped,
-                    slot.index,
-                    pacer.missed()
-                );
-            }
-            if outcome.overrun {
-                defmt::warn!(
-                    "overrun: cycle {=u32} took {=u32} cycles (slot {=u32}), {=u32} so far",
-                    node.cycles(),
-                    spent,
-                    PERIOD_CYCLES,
-                    stats.overruns
-                );
-            }
-            if report.refused > 0 {
-                defmt::warn!(
-                    "cycle {=u32}: {=u8} of {=u8} commands refused",
-                    node.cycles(),
-                    report.refused,
-                    report.received
-                );
-            }
-        }
-        if let Some(w) = outcome.summary {
-            let h = bus.health();
-            #[cfg(feature = "no-log")]
-            black_box((w.mean(), w, h, stack::high_water()));
-            #[cfg(not(feature = "no-log"))]
-            defmt::info!(
-                "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
-                node.cycles(),
-                w.worst,
-                w.mean(),
-                PERIOD_CYCLES,
-                w.received,
-                w.refused,
-                w.sent,
-                stats.overruns,
-                pacer.missed(),
-                h.tec,
-                h.rec,
-                h.state as u8,
-                h.bus_offs,
-                h.passive_episodes,
-                h.rx_lost,
-                h.replaced,
-                logger::dropped(),
-                stack::high_water()
-            );
-        }
+        #[cfg(not(feature = "selftest-panic"))]
+        black_box(run.spent);
     }
 }

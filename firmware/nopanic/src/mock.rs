@@ -10,21 +10,21 @@ use core::hint::black_box;
 use board_core::{ClassicFrame, Health};
 use embedded_can::{Frame, StandardId};
 
-/// The board adapter's interface (`service`, `health`, `embedded_can::nb::Can`) over
+/// The board adapter's interface (board-core's `control::Port`) over
 /// arbitrary frames.
 #[derive(Default)]
 pub struct VolatileBus {
     health: Health,
 }
 
-impl VolatileBus {
+impl board_core::control::Port for VolatileBus {
     /// Nothing to move (the board's adapter empties the hardware FIFOs here).
-    pub fn service(&mut self) {
+    fn service(&mut self) {
         self.health = black_box(self.health);
     }
 
     /// The health (arbitrary).
-    pub fn health(&self) -> Health {
+    fn health(&self) -> Health {
         self.health
     }
 }

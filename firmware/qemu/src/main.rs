@@ -1,7 +1,8 @@
 //! planner-core's CAN node on QEMU's `mps2-an500` (Cortex-M7, double-precision FPU): replays
-//! CAN logs recorded on the host into the node through an in-memory device, counts the
-//! instructions of every `Node::poll` (one 5 ms control cycle, as the board runs it), and
-//! prints a machine-readable report over semihosting.
+//! CAN logs recorded on the host into the node through the board's own control cycle
+//! (board-core's `ControlLoop`) and link adapter (board-core's `Link` over an in-memory FDCAN),
+//! counts the instructions of every `Node::poll` and of every whole cycle, and prints a
+//! machine-readable report over semihosting.
 //!
 //! The logs are read from the file `replay.wlog` in QEMU's working directory (semihosting
 //! `SYS_OPEN`, `SYS_FLEN`, `SYS_READ`: `semihost.rs`), in the compact binary format of
@@ -66,9 +67,14 @@
 //!     the replay ended at its longest rather than standing and idle)
 //!   * `NODE scenario=… refused=… tx_dropped=… bus_errors=… rx_overflow=…` (the node's
 //!     counters, the device's lost frames)
-//!   * `BOARD scenario=… summaries=… worst=… overruns=… status_overruns=…`
-//!   * `TIMING scenario=… kind=… n=… max=… mean=… max_tick=… max_timer=…` (instructions)
-//! * `TIMING scenario=all …`: over every log
+//!   * `BOARD scenario=… summaries=… worst=… overruns=… status_overruns=… feeds=…
+//!     busy_pulses=… busy_high=… missed_slots=… log_missed=… log_overruns=… log_refused=…
+//!     link_frames=… link_digest=… rx_lost=… replaced=… rx_foreign=… wire_lost=…` (the board's
+//!     cycle, board-core's `ControlLoop`, run around every poll: `board.rs`; `LINK` frames
+//!     are digested apart from `tx_digest`)
+//!   * `TIMING scenario=… kind=… n=… max=… mean=… max_tick=… max_timer=…` (instructions of
+//!     the poll), and `WHOLE …` the same for the board's whole cycle (slot start to feed)
+//! * `TIMING scenario=all …`, `WHOLE scenario=all …`: over every log
 //! * `STACK used=… size=… startup=… control=…` (bytes: the high-water mark, of the stack
 //!   region's size; `startup`: while building the node, `control`: while replaying,
 //!   measured after painting the stack again once the node is built)
@@ -79,6 +85,7 @@
 #![no_main]
 #![deny(unsafe_code)]
 
+mod board;
 mod hw;
 mod machine;
 mod semihost;
@@ -89,17 +96,19 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
 use panic_semihosting as _; // panics print over semihosting and exit with code 1
 
+use board_core::control::{ControlLoop, Io, MicrosClock};
+use board_core::{Pacer, ResetReason};
 use gait_loop::binlog::{Bytes, Frames, Header};
-use gait_loop::{timed_poll, Clock, Fnv, Kind, Player, Stats, QUEUE};
+use gait_loop::{Device, Fnv, Kind, Pending, Player, ReplayFdcan, ReplayLink, Stats, QUEUE};
 use machine::{Node, ParkedNode, Scalar};
 use planner_core::gait::{Gait, GaitError};
-use planner_core::playback::LogClock;
+use planner_core::playback::{self, LogClock};
 use static_cell::ConstStaticCell;
 
 use semihost::HostFile;
 
 /// Instructions per CMSDK timer tick under `-icount shift=0` (1 ns per instruction, 25 MHz).
-const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / hw::TIMER_HZ;
+const INSTRUCTIONS_PER_TICK: u32 = board::INSTRUCTIONS_PER_TICK;
 /// Iterations of the calibration loop (two instructions each: `subs`, `bne`).
 const CALIB_LOOPS: u32 = 1_000_000;
 /// A `CHECK` line every this many cycles.
@@ -109,12 +118,6 @@ const CHECK_EVERY: u64 = 500;
 const BOARD_PERIOD_CYCLES: u32 = 2_400_000;
 /// The logs to replay, in QEMU's working directory (NUL-terminated for `SYS_OPEN`).
 const LOG_FILE: &[u8] = b"replay.wlog\0";
-
-impl Clock for hw::Timer0 {
-    fn now(&mut self) -> u32 {
-        self.count()
-    }
-}
 
 /// Semihosting stdout with a line buffer (one host call per line instead of one per
 /// formatted piece).
@@ -163,7 +166,8 @@ fn instructions(timer_ticks: u32) -> u64 {
     u64::from(timer_ticks) * u64::from(INSTRUCTIONS_PER_TICK)
 }
 
-fn print_timing(out: &mut Console, scenario: &str, stats: &Stats) {
+/// `what` lines (`TIMING`: the poll; `WHOLE`: the board's whole cycle) of `stats`.
+fn print_timing(out: &mut Console, what: &str, scenario: &str, stats: &Stats) {
     for kind in Kind::ALL {
         let s = stats.get(kind);
         if s.n == 0 {
@@ -172,7 +176,8 @@ fn print_timing(out: &mut Console, scenario: &str, stats: &Stats) {
         let mean = instructions(1) as f64 * s.sum as f64 / f64::from(s.n);
         line!(
             out,
-            "TIMING scenario={} kind={} n={} max={} mean={:.0} max_tick={} max_timer={}",
+            "{} scenario={} kind={} n={} max={} mean={:.0} max_tick={} max_timer={}",
+            what,
             scenario,
             kind.name(),
             s.n,
@@ -208,43 +213,92 @@ fn restart_node(node: &mut Node<QUEUE>) -> Result<(), GaitError> {
     node.restart(machine::NODE_CONFIG)
 }
 
-/// Replays one log (its header read, its frames next in `frames`) into `node` (just created);
-/// returns `false` if the log's frames were refused or ended early.
+/// The board's control loop over the image's hardware (`board.rs`).
+type Board<'a> = ControlLoop<
+    board::ReplayClock<'a>,
+    board::Instructions<'a>,
+    board::CountingWatchdog,
+    board::CountingBusy,
+    board::CountingLog,
+>;
+
+/// Replays one log (its header read, its frames next in `frames`) into `node` (just created)
+/// through the board's control cycle (board-core's `ControlLoop`: a board started afresh with
+/// the node) and link adapter (over the in-memory FDCAN); returns `false` if the log's frames
+/// were refused or ended early, or the cycle's slots left the log's grid.
 #[inline(never)]
 fn replay<B: Bytes>(
     out: &mut Console,
-    timer: &mut hw::Timer0,
+    timer: &hw::Timer0,
     header: &Header,
     frames: &mut Frames<'_, B>,
     node: &mut Node<QUEUE>,
     stats: &mut Stats,
+    whole: &mut Stats,
 ) -> bool {
     let name = header.name();
-    let Some(clock) = LogClock::new(header.first_us, u64::from(header.period_us)) else {
-        line!(
-            out,
-            "ERROR scenario={} period_us={}",
-            name,
-            header.period_us
-        );
-        return false;
+    let period_us = header.period_us;
+    let clock = match LogClock::new(header.first_us, u64::from(period_us)) {
+        // The slots' `now_ms` are the log's poll times (`playback::poll_ms`, linear for a
+        // whole number of milliseconds).
+        Some(clock) if period_us % 1000 == 0 => clock,
+        _ => {
+            line!(out, "ERROR scenario={} period_us={}", name, period_us);
+            return false;
+        }
     };
-    let mut player = Player::new(clock, header.count, header.last_us);
+    let mut player = Player::with_device(
+        clock,
+        header.count,
+        header.last_us,
+        ReplayLink::new(ReplayFdcan::new()),
+    );
     let mut ref_digest = Fnv::default();
     ref_digest.add_reference(node.gait().last());
-    // The board's bookkeeping around each poll (board-core's `cycle`), with the instructions
-    // as its cycles: overruns told to the node, a summary per 200 cycles.
-    let mut board = board_core::cycle::Stats::default();
-    let (mut summaries, mut worst_window) = (0u32, 0u32);
+    // The board's cycle around each poll, on the log's grid: slot k at `poll_ms(k)`.
+    let mut micros = board::ReplayClock::new(timer);
+    let first = micros.now_us().wrapping_add(period_us);
+    let pacer = Pacer::new(first, period_us, period_us / 1000)
+        .with_first_ms(playback::poll_ms(0, u64::from(period_us)));
+    let mut ctl: Board<'_> = ControlLoop::new(
+        Io {
+            clock: micros,
+            counter: board::Instructions(timer),
+            watchdog: board::CountingWatchdog::default(),
+            busy: board::CountingBusy::default(),
+            log: board::CountingLog::default(),
+        },
+        pacer,
+        BOARD_PERIOD_CYCLES,
+        ResetReason::Unknown,
+    );
     while !player.done() {
         let cycle = player.next_cycle();
-        let record = match player.cycle(
+        let step = player.cycle(
             node,
             frames,
-            |n, ms, bus| timed_poll(n, ms, bus, timer),
+            |n, ms, link| {
+                let pending = Pending::before(n, link);
+                let run = ctl.step(n, link);
+                let on_grid = run.slot.now_ms == ms && u64::from(run.slot.index) == cycle;
+                let spent = run.spent / board::INSTRUCTIONS_PER_TICK;
+                (pending.after(n, link, spent, run.report), run, on_grid)
+            },
             |_, _| {},
-        ) {
-            Ok(r) => r,
+        );
+        let (record, run) = match step {
+            Ok((record, run, true)) => (record, run),
+            Ok((_, run, false)) => {
+                line!(
+                    out,
+                    "ERROR scenario={} cycle={} slot={} now_ms={}",
+                    name,
+                    cycle,
+                    run.slot.index,
+                    run.slot.now_ms
+                );
+                return false;
+            }
             Err(_) => {
                 line!(
                     out,
@@ -258,12 +312,9 @@ fn replay<B: Bytes>(
         };
         stats.record(record.kind, record.units, record.tick);
         stats.record(Kind::Cycle, record.units, record.tick);
-        let spent = u32::try_from(instructions(record.units)).unwrap_or(u32::MAX);
-        let outcome = board.record(node, &record.report, spent, spent > BOARD_PERIOD_CYCLES);
-        if let Some(w) = outcome.summary {
-            summaries += 1;
-            worst_window = worst_window.max(w.worst);
-        }
+        let whole_units = run.whole / board::INSTRUCTIONS_PER_TICK;
+        whole.record(record.kind, whole_units, record.tick);
+        whole.record(Kind::Cycle, whole_units, record.tick);
         ref_digest.add_reference(&record.report.reference);
         if let Some(info) = record.replan {
             line!(
@@ -306,6 +357,7 @@ fn replay<B: Bytes>(
         ref_digest.0
     );
     let c = node.counters();
+    let link = player.bus();
     line!(
         out,
         "NODE scenario={} refused={} tx_dropped={} bus_errors={} rx_overflow={}",
@@ -313,18 +365,35 @@ fn replay<B: Bytes>(
         c.refused,
         c.tx_dropped,
         c.bus_errors,
-        player.bus().rx_overflow()
+        link.rx_overflow()
     );
+    let io = &ctl.io;
+    let (link_frames, link_digest) = player.link();
+    let h = link.health();
     line!(
         out,
-        "BOARD scenario={} summaries={} worst={} overruns={} status_overruns={}",
+        "BOARD scenario={} summaries={} worst={} overruns={} status_overruns={} feeds={} busy_pulses={} busy_high={} missed_slots={} log_missed={} log_overruns={} log_refused={} link_frames={} link_digest={:#018x} rx_lost={} replaced={} rx_foreign={} wire_lost={}",
         name,
-        summaries,
-        worst_window,
-        board.overruns,
-        node.counters().overruns
+        io.log.summaries,
+        io.log.worst,
+        ctl.stats().overruns,
+        node.counters().overruns,
+        io.watchdog.feeds,
+        io.busy.pulses,
+        u8::from(io.busy.high),
+        ctl.pacer().missed(),
+        io.log.missed,
+        io.log.overruns,
+        io.log.refused,
+        link_frames,
+        link_digest,
+        h.rx_lost,
+        h.replaced,
+        h.rx_foreign,
+        link.peripheral().wire_lost()
     );
-    print_timing(out, name, stats);
+    print_timing(out, "TIMING", name, stats);
+    print_timing(out, "WHOLE", name, whole);
     true
 }
 
@@ -353,9 +422,9 @@ fn main() -> ! {
     timer.start_free_running();
 
     // The instructions-per-tick factor, checked: CALIB_LOOPS iterations of `subs; bne`.
-    let t0 = timer.now();
+    let t0 = timer.count();
     cortex_m::asm::delay(CALIB_LOOPS - 1);
-    let calib = timer.now().wrapping_sub(t0);
+    let calib = timer.count().wrapping_sub(t0);
     line!(
         out,
         "CALIB loop_instructions={} timer_ticks={} instructions_per_tick={}",
@@ -387,6 +456,7 @@ fn main() -> ! {
     let cfg = walk_robot::NODE_CONFIG;
     let period_us = (cfg.params.dt * 1e6 + 0.5) as u32;
     let mut all = Stats::new();
+    let mut all_whole = Stats::new();
     let mut ok = true;
     let Some(parked) = NODE.try_take() else {
         line!(out, "ERROR node_taken_twice=1");
@@ -431,7 +501,7 @@ fn main() -> ! {
             ok = false;
             break;
         }
-        let t0 = timer.now();
+        let t0 = timer.count();
         let configured = match (started.take(), parked.take()) {
             (Some(node), _) => restart_node(node).map(|()| node),
             (None, Some(p)) => start_node(p),
@@ -440,7 +510,7 @@ fn main() -> ! {
                 exit(debug::EXIT_FAILURE);
             }
         };
-        let new_units = timer.now().wrapping_sub(t0);
+        let new_units = timer.count().wrapping_sub(t0);
         // The start-up's high-water mark (configuring the node; the first log's: later ones
         // include the control loop before them), then a fresh paint for the control loop's.
         if runs == 0 {
@@ -456,8 +526,17 @@ fn main() -> ! {
         };
         let mut stats = Stats::new();
         stats.record(Kind::New, new_units, 0);
+        let mut whole = Stats::new();
         let mut frames = Frames::new(&header, &mut file);
-        if !replay(&mut out, &mut timer, &header, &mut frames, node, &mut stats) {
+        if !replay(
+            &mut out,
+            &timer,
+            &header,
+            &mut frames,
+            node,
+            &mut stats,
+            &mut whole,
+        ) {
             // The log was refused (its ERROR line says why): where the next one would begin
             // is unknown.
             ok = false;
@@ -471,6 +550,7 @@ fn main() -> ! {
         }
         control_stack = control_stack.max(hw::stack_usage().0);
         all.merge(&stats);
+        all_whole.merge(&whole);
         started = Some(node);
         runs += 1;
     }
@@ -478,7 +558,8 @@ fn main() -> ! {
         line!(out, "ERROR file=replay.wlog read_failed=1");
         ok = false;
     }
-    print_timing(&mut out, "all", &all);
+    print_timing(&mut out, "TIMING", "all", &all);
+    print_timing(&mut out, "WHOLE", "all", &all_whole);
 
     let (_, size) = hw::stack_usage();
     line!(

@@ -5,7 +5,7 @@
 //! (QEMU prints every translated block's instructions once, `in_asm`, and a line for every
 //! execution of a block, `exec`; `nochain` makes it print every one), follows the trace as it
 //! streams, and cuts it into *calls* of one function (`--function`, by default the QEMU
-//! image's `gait_loop::cycle::poll`, the wrapper around one `Node::poll`): a call starts when a
+//! image's `board_core::control::poll`, the wrapper around one `Node::poll`): a call starts when a
 //! block at the function's entry runs and ends when the block at its return address (the
 //! address after the branch-and-link that entered it) runs.
 //!
@@ -70,7 +70,7 @@ fn usage() -> ! {
 fn parse_options() -> Options {
     let mut o = Options {
         machine: "mps2-an500".into(),
-        function: "gait_loop::cycle::poll".into(),
+        function: "board_core::control::poll".into(),
         call: None,
         stop_after: None,
         top: 25,
