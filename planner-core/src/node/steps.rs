@@ -153,7 +153,8 @@ impl<const Q: usize> Steps<Q> {
             }
         }
         while let Some(id) = self.queued.front().map(Record::id) {
-            if gait.is_queued(id) {
+            // Still the gait's next target (every steady cycle): no search of its queue.
+            if gait.next_target() == Some(id) || gait.is_queued(id) {
                 break;
             }
             let Some(r) = self.queued.pop_front() else {
