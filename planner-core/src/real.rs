@@ -39,6 +39,8 @@ pub trait Real:
     fn of(v: f64) -> Self;
     /// This value as an `f64` (exact for both implementations).
     fn f64(self) -> f64;
+    /// `v` in this type (exact for both implementations).
+    fn of_f32(v: f32) -> Self;
     /// e^self (libm).
     fn exp(self) -> Self;
     /// Square root (libm).
@@ -108,6 +110,10 @@ impl Real for f64 {
     #[inline]
     fn f64(self) -> f64 {
         self
+    }
+    #[inline]
+    fn of_f32(v: f32) -> Self {
+        f64::from(v)
     }
     #[inline]
     fn exp(self) -> Self {
@@ -182,6 +188,10 @@ impl Real for f32 {
     #[inline]
     fn f64(self) -> f64 {
         self as f64
+    }
+    #[inline]
+    fn of_f32(v: f32) -> Self {
+        v
     }
     #[inline]
     fn exp(self) -> Self {
