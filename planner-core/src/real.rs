@@ -1,9 +1,10 @@
 //! The scalar type of the planner: `f64` on the host and on double-precision FPUs (Cortex-M7),
 //! `f32` on single-precision FPUs (Cortex-M4F).
 //!
-//! Every transcendental function goes through [`libm`], on the host as on the target, so the
-//! host simulation and the firmware compute the same numbers bit for bit (the standard
-//! library's `f64::exp` may round differently from `libm::exp`). nalgebra is only used for
+//! Every transcendental function goes through [`libm`] or this crate's own (sine and cosine,
+//! `crate::trig`), on the host as on the target, so the host simulation and the firmware
+//! compute the same numbers bit for bit (the standard library's `f64::exp` may round
+//! differently from `libm::exp`). nalgebra is only used for
 //! fixed-size storage; none of its maths (which switches to `std` when another crate in the
 //! build enables that feature) is on the planner's path.
 
@@ -39,6 +40,8 @@ pub trait Real:
     fn of(v: f64) -> Self;
     /// This value as an `f64` (exact for both implementations).
     fn f64(self) -> f64;
+    /// `v` in this type (exact for both implementations).
+    fn of_f32(v: f32) -> Self;
     /// e^self (libm).
     fn exp(self) -> Self;
     /// Square root (libm).
@@ -47,12 +50,13 @@ pub trait Real:
     fn cbrt(self) -> Self;
     /// Arc cosine (libm).
     fn acos(self) -> Self;
-    /// Cosine (libm for `f64`; [`sin_cos`](Self::sin_cos)'s for `f32`).
+    /// Cosine ([`sin_cos`](Self::sin_cos)'s).
     fn cos(self) -> Self;
-    /// Sine (libm for `f64`; [`sin_cos`](Self::sin_cos)'s for `f32`).
+    /// Sine ([`sin_cos`](Self::sin_cos)'s).
     fn sin(self) -> Self;
-    /// `(sin, cos)`: libm's for `f64`; for `f32` computed in single precision
-    /// (`crate::trig`: libm's `sinf`/`cosf` work in `f64`, software on a Cortex-M4F).
+    /// `(sin, cos)`, from `crate::trig`: for `f32` computed in single precision (libm's
+    /// `sinf`/`cosf` work in `f64`, software on a Cortex-M4F); for `f64` within an ulp of
+    /// libm's `sin`/`cos`, without their reduction of arguments of any size (4 KB of flash).
     fn sin_cos(self) -> (Self, Self);
     /// The bits of the value (`f32`'s widened to `u64`): equal exactly for equal values of
     /// equal sign.
@@ -110,6 +114,10 @@ impl Real for f64 {
         self
     }
     #[inline]
+    fn of_f32(v: f32) -> Self {
+        f64::from(v)
+    }
+    #[inline]
     fn exp(self) -> Self {
         libm::exp(self)
     }
@@ -127,15 +135,15 @@ impl Real for f64 {
     }
     #[inline]
     fn cos(self) -> Self {
-        libm::cos(self)
+        crate::trig::sin_cos_f64(self).1
     }
     #[inline]
     fn sin(self) -> Self {
-        libm::sin(self)
+        crate::trig::sin_cos_f64(self).0
     }
     #[inline]
     fn sin_cos(self) -> (Self, Self) {
-        (libm::sin(self), libm::cos(self))
+        crate::trig::sin_cos_f64(self)
     }
     #[inline]
     fn bits(self) -> u64 {
@@ -182,6 +190,10 @@ impl Real for f32 {
     #[inline]
     fn f64(self) -> f64 {
         self as f64
+    }
+    #[inline]
+    fn of_f32(v: f32) -> Self {
+        v
     }
     #[inline]
     fn exp(self) -> Self {

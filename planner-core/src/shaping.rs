@@ -159,8 +159,8 @@
 //! buffer refill. Measured on the host (release build): 51 ns per call with 4 long pieces
 //! (f64), 41 ns (f32).
 //!
-//! Memory: `PreviewGains<T, NL>` holds `11·NL` scalars (the gains and ten tables): 28 KB in
-//! `f64`, 14 KB in `f32` for `NL = 320`. Share one between the x and y compensators (they take
+//! Memory: `PreviewGains<T, NL>` holds `11·NL` scalars (the gains and ten tables, the five
+//! remainder tables in `f32`): 22 KB in `f64`, 14 KB in `f32` for `NL = 320`. Share one between the x and y compensators (they take
 //! it by reference on every step), and build it in place with [`PreviewGains::zeroed`] +
 //! [`PreviewGains::compute`] to keep it off the stack.
 
@@ -282,6 +282,19 @@ impl<T: crate::robot::Literal, const NL: usize> PreviewGains<T, NL> {
             let rows: std::vec::Vec<_> = t.iter().map(|r| list(r)).collect();
             std::format!("[{}]", rows.join(",\n"))
         };
+        let tables_f32 = |t: &[[f32; NL]; MOMENTS]| {
+            let rows: std::vec::Vec<_> = t
+                .iter()
+                .map(|r| {
+                    let items: std::vec::Vec<_> = r
+                        .iter()
+                        .map(|&v| crate::robot::Literal::literal(v))
+                        .collect();
+                    std::format!("[{}]", items.join(", "))
+                })
+                .collect();
+            std::format!("[{}]", rows.join(",\n"))
+        };
         let law = match self.law {
             Law::FromRest => "FromRest",
             Law::Integral => "Integral",
@@ -298,7 +311,7 @@ impl<T: crate::robot::Literal, const NL: usize> PreviewGains<T, NL> {
             f(self.tail),
             list(&self.preview),
             tables(&self.moments),
-            tables(&self.moments_lo),
+            tables_f32(&self.moments_lo),
             self.iterations
         );
         s
@@ -401,7 +414,7 @@ pub fn solve_dare<const S: usize>(
 /// `u(k) = −G_i Σ_{i≤k} e(i) − K X(k) + Σ_{j=1}^{NL} f_j r(k+j) + f_∞ r(k+NL)`, with the
 /// moment tables `M_q[J] = Σ_{j=1}^{J} f_j (j/NL)^q` of the closed-form preview sum.
 ///
-/// `11·NL` scalars (28 KB for `f64`, 14 KB for `f32`, `NL = 320`): compute once and share
+/// `11·NL` scalars (22 KB for `f64`, 14 KB for `f32`, `NL = 320`): compute once and share
 /// between the x and y compensators (they take the gains by reference on every step).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreviewGains<T, const NL: usize> {
@@ -416,9 +429,11 @@ pub struct PreviewGains<T, const NL: usize> {
     tail: T,
     preview: [T; NL],
     /// `moments[q][J−1] + moments_lo[q][J−1] = M_q[J]` (a double-length value: the leading
-    /// part and the rounding remainder).
+    /// part and the rounding remainder). The remainder is stored in `f32` whatever `T`: it is
+    /// below half a unit in the last place of the leading part, so its own rounding to `f32`
+    /// (2⁻²⁴ of it) is far below the precision of `T` (for `f64` it halves the tables' flash).
     moments: [[T; NL]; MOMENTS],
-    moments_lo: [[T; NL]; MOMENTS],
+    moments_lo: [[f32; NL]; MOMENTS],
     iterations: u32,
 }
 
@@ -436,7 +451,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
             tail: T::ZERO,
             preview: [T::ZERO; NL],
             moments: [[T::ZERO; NL]; MOMENTS],
-            moments_lo: [[T::ZERO; NL]; MOMENTS],
+            moments_lo: [[0.0; NL]; MOMENTS],
             iterations: 0,
         }
     }
@@ -564,7 +579,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
                 lo[q] += err;
                 let lead = T::of(hi[q]);
                 self.moments[q][j] = lead;
-                self.moments_lo[q][j] = T::of((hi[q] - lead.f64()) + lo[q]);
+                self.moments_lo[q][j] = ((hi[q] - lead.f64()) + lo[q]) as f32;
                 w *= sigma;
             }
             self.preview[j] = T::of(fj);
@@ -593,9 +608,9 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
         &self.preview
     }
     /// The prefix moment table `M_q[J] = Σ_{j=1}^{J} f_j (j/NL)^q` at index `J − 1`: its
-    /// leading part and its remainder (`M_q[J] ≈ lead[J−1] + rest[J−1]` to about twice the
-    /// precision of `T`). `q > 4` returns the last table.
-    pub fn moment(&self, q: usize) -> (&[T; NL], &[T; NL]) {
+    /// leading part and its remainder, in `f32` (`M_q[J] ≈ lead[J−1] + rest[J−1]` to about
+    /// twice the precision of `T`). `q > 4` returns the last table.
+    pub fn moment(&self, q: usize) -> (&[T; NL], &[f32; NL]) {
         let q = q.min(MOMENTS - 1);
         (&self.moments[q], &self.moments_lo[q])
     }
@@ -616,7 +631,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
         self.law == law && self.made_for == [m.dt, m.z_c, m.g, config.qe, config.r]
     }
 
-    /// Copies `other` into `self` in place (the tables are 28 KB: no temporary copy).
+    /// Copies `other` into `self` in place (the tables are 22 KB: no temporary copy).
     pub fn copy_from(&mut self, other: &Self) {
         self.law = other.law;
         self.made_for = other.made_for;
@@ -649,7 +664,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
         tail: T,
         preview: [T; NL],
         moments: [[T; NL]; MOMENTS],
-        moments_lo: [[T; NL]; MOMENTS],
+        moments_lo: [[f32; NL]; MOMENTS],
         iterations: u32,
     ) -> Self {
         Self {
@@ -675,10 +690,12 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
     #[inline]
     fn moment_range(&self, q: usize, lo: usize, hi: usize) -> T {
         let at = |t: &[T; NL], i: usize| t.get(i).copied().unwrap_or(T::ZERO);
+        let at_lo = |t: &[f32; NL], i: usize| t.get(i).copied().unwrap_or(0.0);
         let (lead, rest) = (&self.moments[q], &self.moments_lo[q]);
         let (u, l) = (hi.wrapping_sub(1), lo.wrapping_sub(2));
-        // Leading parts first (exact when they are within a factor 2), then the remainders.
-        (at(lead, u) - at(lead, l)) + (at(rest, u) - at(rest, l))
+        // Leading parts first (exact when they are within a factor 2), then the remainders
+        // (their difference in `f32`: its rounding is 2⁻²⁴ of a remainder).
+        (at(lead, u) - at(lead, l)) + T::of_f32(at_lo(rest, u) - at_lo(rest, l))
     }
 }
 

@@ -30,9 +30,25 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// Mean core cycles per control cycle.
+    /// Mean core cycles per control cycle: `sum / cycles` rounded down (`sum` for no cycle),
+    /// exactly while `sum < 2⁵³` (a window of [`Stats::record`] holds at most 200 × 2³² < 2⁴⁰),
+    /// beyond that within 2⁻⁵² of it (relative) and one.
+    ///
+    /// In `f64`, not by a `u64` division: that is a library routine on the Cortex-M
+    /// (`__aeabi_uldivmod`, 0.9 KB of flash), which the board image would link for this
+    /// once-a-second figure alone; the FPU divides and converts `u32`s in hardware. Exact: for
+    /// `sum < 2⁵³` both operands are exact, and the rounded quotient cannot reach the next
+    /// integer, whose distance from `sum / cycles` is at least `1 / cycles`, more than the
+    /// rounding (`2⁻⁵³ · sum / cycles`).
     pub fn mean(&self) -> u64 {
-        self.sum / u64::from(self.cycles.max(1))
+        const TWO_32: f64 = 4_294_967_296.0;
+        let (hi, lo) = ((self.sum >> 32) as u32, self.sum as u32);
+        let q = (f64::from(hi) * TWO_32 + f64::from(lo)) / f64::from(self.cycles.max(1));
+        // q < 2⁶⁴ + 1: its integer part in two `u32` halves (the conversions truncate and
+        // saturate; q − h·2³² is exact).
+        let h = (q / TWO_32) as u32;
+        let l = (q - f64::from(h) * TWO_32) as u32;
+        (u64::from(h) << 32) | u64::from(l)
     }
 }
 

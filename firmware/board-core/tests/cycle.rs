@@ -1,7 +1,7 @@
 //! The board's cycle bookkeeping with planner-core's node: a late cycle is counted and reaches
 //! `STATUS.overruns`; the window closes every `SUMMARY_EVERY` cycles with its sums.
 
-use board_core::cycle::{Stats, SUMMARY_EVERY};
+use board_core::cycle::{Stats, Summary, SUMMARY_EVERY};
 use planner_core::node::{Node, NodeConfig, PollReport};
 use planner_core::wire::{ids, RawFrame, Status};
 
@@ -55,4 +55,56 @@ fn late_cycles_reach_status_and_the_window_closes_each_second() {
     assert_eq!(s.sum, sum);
     assert_eq!(s.mean(), sum / u64::from(SUMMARY_EVERY));
     assert!(s.sent >= 5 * SUMMARY_EVERY, "{}", s.sent);
+}
+
+/// `Summary::mean` (in `f64`) is `sum / cycles` exactly below `sum = 2⁵³` (the extremes and a
+/// pseudo-random sample of every magnitude and divisor), and within 2⁻⁵² of it (and one) above.
+#[test]
+fn the_mean_is_the_integer_quotient() {
+    let mean = |sum: u64, cycles: u32| {
+        Summary {
+            sum,
+            cycles,
+            ..Summary::default()
+        }
+        .mean()
+    };
+    assert_eq!(mean(0, 0), 0);
+    assert_eq!(mean(7, 0), 7);
+    let top = (1_u64 << 53) - 1;
+    for (sum, cycles) in [
+        (top, 1),
+        (top, 3),
+        (top, u32::MAX),
+        (top - 1, 2),
+        (199, 200),
+    ] {
+        assert_eq!(
+            mean(sum, cycles),
+            sum / u64::from(cycles),
+            "{sum} / {cycles}"
+        );
+    }
+    let mut x = 0x2545_F491_4F6C_DD1D_u64;
+    for _ in 0..200_000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let sum = x >> (11 + x % 53);
+        let cycles = ((x >> 7) as u32 >> (x % 32)).max(1);
+        assert_eq!(
+            mean(sum, cycles),
+            sum / u64::from(cycles),
+            "{sum} / {cycles}"
+        );
+        // Above 2⁵³: within 2⁻⁵² (relative) and one of the quotient.
+        let big = x | 1 << 63;
+        let (got, want) = (mean(big, cycles), big / u64::from(cycles));
+        let off = got.abs_diff(want) as f64;
+        assert!(
+            off <= want as f64 * 2.0_f64.powi(-52) + 1.0,
+            "{big} / {cycles}"
+        );
+    }
+    assert_eq!(mean(u64::MAX, 1), u64::MAX);
 }
