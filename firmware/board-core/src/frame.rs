@@ -64,9 +64,13 @@ impl Frame for ClassicFrame {
         if data.len() > 8 {
             return None;
         }
-        // All 8 bytes, each taken or zero (a fixed-length loop, as planner-core's
+        // All 8 bytes: a full frame (every stream frame) as one 8-byte copy, a shorter one
+        // byte by byte, each taken or zero (a fixed-length loop, as planner-core's
         // `RawFrame::new`: no copy loop of a length known only here).
-        let buf: [u8; 8] = core::array::from_fn(|i| data.get(i).copied().unwrap_or(0));
+        let buf: [u8; 8] = match <[u8; 8]>::try_from(data) {
+            Ok(full) => full,
+            Err(_) => core::array::from_fn(|i| data.get(i).copied().unwrap_or(0)),
+        };
         Some(Self {
             id,
             len: data.len() as u8,

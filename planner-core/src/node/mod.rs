@@ -631,8 +631,17 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         // Steps the command dropped (emergency stop, stop now) leave the step records. A
         // footstep command drops none (an append adds its record with its step, a modification
-        // changes a queued step in place, or nothing if refused).
-        if !matches!(decoded, Ok(Command::Append(_) | Command::Modify(_))) {
+        // changes a queued step in place, or nothing if refused), and a heartbeat does not
+        // touch the gait.
+        if !matches!(
+            decoded,
+            Ok(Command::Append(_)
+                | Command::Modify(_)
+                | Command::Control {
+                    op: ControlOp::Heartbeat,
+                    ..
+                })
+        ) {
             self.steps.sync(&self.gait);
         }
         let version = match decoded {
