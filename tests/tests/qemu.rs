@@ -270,7 +270,7 @@ fn qemu_image_replays_host_runs_and_is_repeatable() {
     );
 
     // The stack stayed inside its region (its own, as on the board: an overflow would have
-    // run below the start of SSRAM2 and faulted).
+    // run into the MPU guard below it and faulted).
     let stack = first.one("STACK");
     let (used, size): (u64, u64) = (stack.num("used"), stack.num("size"));
     let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
@@ -358,8 +358,8 @@ fn a_log_cut_short_fails_the_run() {
 }
 
 /// A stack overflow reaches the fault handler (issue 11): the image's stack runs below its
-/// region, where nothing is accessible (as on the board; the image's MPU makes QEMU's memory
-/// below 0x2000_0000 so), and the HardFault entry (board-core's `fault_entry!`, the board's)
+/// region into the MPU guard (board-core's `StackGuard`, which the board programs too), and the
+/// HardFault entry (board-core's `fault_entry!`, the board's)
 /// moves the stack pointer back before any Rust code runs, so the handler reports and ends the
 /// run. With cortex-m-rt's own entry the core locks up instead (QEMU: "Lockup: can't escalate
 /// 3 to HardFault", exit code 134; checked by hand when the entry was written).
@@ -387,6 +387,9 @@ fn a_stack_overflow_reaches_the_fault_handler() {
         .find(|r| r.kind == "FAULT")
         .unwrap_or_else(|| panic!("no FAULT line:\n{}", tail(out, 10)));
     assert_eq!(fault.get("overflow"), "1", "{}", tail(out, 10));
+    // The FPU's lazy save into the abandoned stack was dropped by the entry (it would fault
+    // at HardFault priority on the board at the handler's first floating-point instruction).
+    assert_eq!(fault.get("lspact"), "0", "{}", tail(out, 10));
     let sp = u32::from_str_radix(fault.get("sp").trim_start_matches("0x"), 16).unwrap();
     assert!(
         (0x1FFF_0000..0x2000_0000).contains(&sp),

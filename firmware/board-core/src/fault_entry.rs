@@ -14,14 +14,22 @@
 //! that use no stack: the main stack pointer at the fault into `r0` (the handler's argument:
 //! below `_stack_end` for an overflow), `_stack_start` (the top of the stack region, from the
 //! linker script) into the main stack pointer, and a branch to the handler, a Rust
-//! `extern "C" fn(u32) -> !` that then has the whole stack region. What the interrupted code
+//! `extern "C" fn(u32) -> !` that then has the whole stack region. The entry also clears
+//! `FPCCR.LSPACT`: the faulting code has usually used the FPU, so the hardware reserved room for
+//! its floating-point registers in the exception frame and saves them lazily, at the handler's
+//! first floating-point instruction, to `FPCAR`, an address in the abandoned (for an overflow:
+//! inaccessible) stack; that deferred save would fault at HardFault priority, a lock-up. With
+//! `LSPACT` clear the save is dropped (nothing returns to that context). The handler's type is
+//! checked at compile time (a handler that returned would take an exception return from the
+//! reset stack pointer). What the interrupted code
 //! had on the stack is abandoned, which is all a handler that never returns needs (the
 //! board's safe state ends in a reset). The QEMU image uses the same entry, and
 //! `tests/tests/qemu.rs` overflows its stack on purpose: the handler reports, where a Rust
 //! entry locks the emulated core up.
 
 /// Defines exception vector `$vector` (`HardFault` or `NonMaskableInt`) as an entry that moves
-/// the main stack pointer to `_stack_start` and branches to `$handler`, an
+/// the main stack pointer to `_stack_start`, drops a pending lazy floating-point save (for
+/// cores with an FPU: every image of this project) and branches to `$handler`, an
 /// `extern "C" fn(sp: u32) -> !` called with the main stack pointer at the fault (see the
 /// [module docs](crate::fault_entry)). Replaces cortex-m-rt's
 /// `#[exception]` for that vector; use it once per vector, in a module that allows
@@ -29,6 +37,7 @@
 #[macro_export]
 macro_rules! fault_entry {
     ($vector:ident => $handler:path) => {
+        const _: extern "C" fn(u32) -> ! = $handler;
         #[cfg(all(target_arch = "arm", target_os = "none"))]
         ::core::arch::global_asm!(
             concat!(".section .HardFault.entry_", stringify!($vector), ",\"ax\",%progbits"),
@@ -40,10 +49,72 @@ macro_rules! fault_entry {
             "movw r1, :lower16:_stack_start",
             "movt r1, :upper16:_stack_start",
             "msr MSP, r1",
+            // FPCCR (0xE000_EF34): clear LSPACT, the pending lazy save into the old frame.
+            "movw r2, #0xEF34",
+            "movt r2, #0xE000",
+            "ldr r3, [r2]",
+            "bic r3, r3, #1",
+            "str r3, [r2]",
             "isb",
             "b.w {handler}",
             concat!(".size ", stringify!($vector), ", . - ", stringify!($vector)),
             handler = sym $handler,
         );
     };
+}
+
+/// One PMSAv7 MPU region that makes `size` bytes below `stack_end` (the bottom of the stack
+/// region) inaccessible: no access at any privilege, never executable (the images program it
+/// as region 0, with the default memory map elsewhere, `PRIVDEFENA`, and the MPU off in
+/// HardFault and NMI, `HFNMIENA` clear, so the fault handler is not stopped by it). A stack
+/// overflow then faults on its first store below the stack, precisely (MemManage, escalated
+/// to HardFault), whatever the memory map there is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StackGuard {
+    /// `MPU_RBAR`: the region's base address (region number taken from `MPU_RNR`).
+    pub rbar: u32,
+    /// `MPU_RASR`: `XN`, `AP = 000` (no access), the size field, enabled.
+    pub rasr: u32,
+}
+
+impl StackGuard {
+    /// `MPU_CTRL` with the guard: enabled, `PRIVDEFENA`, `HFNMIENA` clear.
+    pub const CTRL: u32 = 0b101;
+
+    /// The guard of `size` bytes below `stack_end`; `None` unless `size` is a power of two
+    /// from 32 B to 4 GiB and `stack_end` a multiple of it above it (the region must be
+    /// aligned to its size).
+    pub const fn below(stack_end: u32, size: u32) -> Option<StackGuard> {
+        if size < 32 || !size.is_power_of_two() || stack_end % size != 0 || stack_end < size {
+            return None;
+        }
+        Some(StackGuard {
+            rbar: stack_end - size,
+            rasr: (1 << 28) | ((size.trailing_zeros() - 1) << 1) | 1,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StackGuard;
+
+    #[test]
+    fn the_guard_below_the_dtcm_stack_is_64_kib_no_access() {
+        let g = StackGuard::below(0x2000_0000, 64 * 1024).unwrap();
+        assert_eq!(g.rbar, 0x1FFF_0000);
+        // XN (28), AP = 000 (26:24), SIZE = 15 (5:1: 2^(15+1) = 64 KiB), ENABLE (0).
+        assert_eq!(g.rasr, 0x1000_001F);
+        assert_eq!((g.rasr >> 24) & 7, 0);
+        assert_eq!(1u64 << (((g.rasr >> 1) & 0x1F) + 1), 64 * 1024);
+    }
+
+    #[test]
+    fn a_misaligned_or_odd_sized_guard_is_refused() {
+        assert_eq!(StackGuard::below(0x2000_0100, 64 * 1024), None);
+        assert_eq!(StackGuard::below(0x2000_0000, 48 * 1024), None);
+        assert_eq!(StackGuard::below(0x2000_0000, 16), None);
+        assert_eq!(StackGuard::below(0x8000, 64 * 1024), None);
+        assert!(StackGuard::below(0x2000_0000, 32).is_some());
+    }
 }

@@ -10,7 +10,7 @@
 //! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
 //! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
 //! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
-//!   before any Rust code runs;
+//!   before any Rust code runs, and the MPU guard below the stack ([`StackGuard`]);
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
 //!   statistics window summarised once per second);
 //! * [`control`]: the board's whole control cycle over small traits of its hardware (the
@@ -36,6 +36,7 @@ pub mod reset;
 pub mod rtt;
 
 pub use control::{ControlLoop, ControlNode, Io, LogSink, Port, SlotRun};
+pub use fault_entry::StackGuard;
 pub use frame::ClassicFrame;
 pub use link::{BusState, Fdcan, Health, Link, RxLost};
 pub use pace::{Pacer, Slot};

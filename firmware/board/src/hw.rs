@@ -1,6 +1,6 @@
 //! Start-up register accesses the HAL does not offer: the brown-out level (an option byte),
-//! the clock security system, the free-running microsecond counter on TIM2, and the IWDG's
-//! freeze while a debugger halts the core.
+//! the clock security system, the free-running microsecond counter on TIM2, the IWDG's
+//! freeze while a debugger halts the core, and the MPU guard below the stack.
 
 #![allow(unsafe_code)]
 
@@ -67,4 +67,35 @@ pub fn start_us_counter(tim2: &pac::TIM2, timer_hz: u32) {
 /// The microsecond counter (TIM2's `CNT`).
 pub fn now_us(tim2: &pac::TIM2) -> u32 {
     tim2.cnt.read().bits()
+}
+
+extern "C" {
+    /// The bottom of the stack region (board/stack.x: 0x2000_0000, the start of the DTCM).
+    static _stack_end: u32;
+}
+
+/// Makes the 64 KiB below the stack region inaccessible (board-core's
+/// [`StackGuard`](board_core::StackGuard), MPU region 0, the default map elsewhere): a stack
+/// overflow then faults precisely on its first store below 0x2000_0000 (MemManage, escalated to
+/// HardFault, whose entry leaves the overflowed stack behind) instead of depending on what
+/// the bus does with the reserved addresses there (an imprecise BusFault, later). `false` if
+/// the stack region is not aligned for the guard (then nothing is changed).
+pub fn guard_below_stack(mpu: &mut cortex_m::peripheral::MPU) -> bool {
+    let bottom = core::ptr::addr_of!(_stack_end) as u32;
+    let Some(guard) = board_core::StackGuard::below(bottom, 64 * 1024) else {
+        return false;
+    };
+    // SAFETY: the MPU's own registers through the owned peripheral; region 0 is otherwise
+    // unused (neither the HAL nor this image programs the MPU), only the 64 KiB below the
+    // stack region (reserved addresses, nothing of the image's) become inaccessible, and the
+    // barriers make the map apply to what follows.
+    unsafe {
+        mpu.rnr.write(0);
+        mpu.rbar.write(guard.rbar);
+        mpu.rasr.write(guard.rasr);
+        mpu.ctrl.write(board_core::StackGuard::CTRL);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
+    true
 }

@@ -203,6 +203,8 @@ fn main() -> ! {
         panic!("device peripherals taken twice");
     };
 
+    // Nothing accessible below the stack: an overflow faults at once, into the safe state.
+    let guarded = hw::guard_below_stack(&mut cp.MPU);
     // Why we started (before anything can reset again), then the watchdog, so that every
     // later start-up step is bounded by it too, then the brown-out level.
     let reset = fault::take_reset_reason(&dp.RCC);
@@ -271,7 +273,7 @@ fn main() -> ! {
     let mut bus = Link::new(Fdcan1::new());
 
     defmt::info!(
-        "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1",
+        "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1; stack guard {=bool}",
         reset as u8,
         ccdr.clocks.sys_ck().raw(),
         BOR_LEVEL,
@@ -280,6 +282,7 @@ fn main() -> ! {
         } else {
             ""
         },
+        guarded,
     );
 
     let t0 = DWT::cycle_count();

@@ -107,41 +107,38 @@ pub fn repaint_stack() {
     }
 }
 
-/// Makes the 64 KiB below the stack region (`_stack_end` = 0x2000_0000) inaccessible, as on the
-/// board, where nothing is mapped below its DTCM: QEMU's MPS2 machines map memory there, so
-/// without this a stack overflow would run on silently. One MPU region (region 0, no access
-/// at any privilege, never executable; the default memory map elsewhere, `PRIVDEFENA`; off in
-/// HardFault, `HFNMIENA` clear). Instruction counts are not affected (QEMU counts
-/// instructions, and the MPU adds none to the code).
-pub fn guard_below_stack() {
+/// Makes the 64 KiB below the stack region (`_stack_end` = 0x2000_0000) inaccessible with
+/// board-core's [`StackGuard`](board_core::StackGuard), as the board does: QEMU's MPS2 machines
+/// map memory (or nothing that faults) there, so without it a stack overflow would run on
+/// silently. Instruction counts are not affected (QEMU counts instructions, and the MPU adds
+/// none to the code). `false` if the stack region is not aligned for the guard.
+pub fn guard_below_stack() -> bool {
     const MPU_CTRL: usize = 0xE000_ED94;
     const MPU_RNR: usize = 0xE000_ED98;
     const MPU_RBAR: usize = 0xE000_ED9C;
     const MPU_RASR: usize = 0xE000_EDA0;
-    const SIZE: u32 = 64 * 1024;
-    let bottom = addr_of!(_stack_end) as u32;
-    let base = bottom.wrapping_sub(SIZE);
-    // XN, AP = 000 (no access), SIZE field = log2(64 KiB) - 1, enabled.
-    let rasr = (1 << 28) | ((SIZE.trailing_zeros() - 1) << 1) | 1;
+    let Some(guard) = board_core::StackGuard::below(addr_of!(_stack_end) as u32, 64 * 1024) else {
+        return false;
+    };
     // SAFETY: the architectural MPU registers of the Cortex-M (PMSAv7, present on QEMU's M7
-    // and M4 cores); region 0 is otherwise unused, `base` is aligned to the region's size
-    // (the stack region starts on a 64 KiB boundary: memory.x), and only the 64 KiB below the
-    // stack region, which holds nothing of the image's, becomes inaccessible. The barriers make
-    // the new map apply to what follows.
+    // and M4 cores); region 0 is otherwise unused, and only the 64 KiB below the stack region,
+    // which holds nothing of the image's, becomes inaccessible. The barriers make the new map
+    // apply to what follows.
     unsafe {
         write_volatile(MPU_RNR as *mut u32, 0);
-        write_volatile(MPU_RBAR as *mut u32, base);
-        write_volatile(MPU_RASR as *mut u32, rasr);
-        write_volatile(MPU_CTRL as *mut u32, 0b101);
+        write_volatile(MPU_RBAR as *mut u32, guard.rbar);
+        write_volatile(MPU_RASR as *mut u32, guard.rasr);
+        write_volatile(MPU_CTRL as *mut u32, board_core::StackGuard::CTRL);
     }
     cortex_m::asm::dsb();
     cortex_m::asm::isb();
+    true
 }
 
 // HardFault enters through the board's entry (board-core's `fault_entry!`): the stack pointer
 // is moved back to the top of the stack region before any Rust code runs, so a stack overflow
-// (the stack running below 0x2000_0000, which QEMU does not map) reaches the handler instead of
-// locking the core up. `tests/tests/qemu.rs` overflows the stack on purpose (`-append
+// (the stack running below 0x2000_0000 into the MPU guard, `guard_below_stack`) reaches the
+// handler instead of locking the core up. `tests/tests/qemu.rs` overflows the stack on purpose (`-append
 // overflow`) and expects the `FAULT` line.
 board_core::fault_entry!(HardFault => hard_fault);
 
@@ -150,6 +147,10 @@ board_core::fault_entry!(HardFault => hard_fault);
 /// cortex-m-rt's default endless loop, which would only show as a timeout; with the faulting
 /// code's `pc` and `lr` when its exception frame was stacked inside the stack region.
 extern "C" fn hard_fault(sp: u32) -> ! {
+    // SAFETY: FPCCR (0xE000_EF34), an architectural register of the FPU; reading it has no
+    // side effect. Bit 0 (LSPACT) must be clear: the entry dropped the lazy save into the
+    // abandoned stack (`lspact=` below, checked by the test).
+    let lspact = unsafe { read_volatile(0xE000_EF34 as *const u32) } & 1;
     let top = addr_of!(_stack_start) as usize;
     let bottom = addr_of!(_stack_end) as usize;
     let sp = sp as usize;
@@ -163,16 +164,18 @@ extern "C" fn hard_fault(sp: u32) -> ! {
             )
         };
         cortex_m_semihosting::hprintln!(
-            "FAULT hardfault sp={:#010x} overflow=0 pc={:#010x} lr={:#010x}",
+            "FAULT hardfault sp={:#010x} overflow=0 lspact={} pc={:#010x} lr={:#010x}",
             sp,
+            lspact,
             pc,
             lr
         );
     } else {
         cortex_m_semihosting::hprintln!(
-            "FAULT hardfault sp={:#010x} overflow={}",
+            "FAULT hardfault sp={:#010x} overflow={} lspact={}",
             sp,
-            u8::from(sp < bottom)
+            u8::from(sp < bottom),
+            lspact
         );
     }
     cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);

@@ -406,8 +406,11 @@ fn main() -> ! {
         host,
         buf: heapless::Vec::new(),
     };
-    // Nothing below the stack, as on the board: an overflow faults.
-    hw::guard_below_stack();
+    // Nothing accessible below the stack, as on the board: an overflow faults.
+    if !hw::guard_below_stack() {
+        line!(out, "ERROR stack_guard=0");
+        exit(debug::EXIT_FAILURE);
+    }
     if semihost::cmdline_has("overflow") {
         // The fault entry's test (`tests/tests/qemu.rs`): run the stack below its region.
         line!(out, "OVERFLOW stack_bytes={}", hw::stack_usage().1);
@@ -580,14 +583,18 @@ fn main() -> ! {
 }
 
 /// Recurses with a 256-byte frame until the stack runs out (`-append overflow`): the stack
-/// overflow the fault entry must survive.
+/// overflow the fault entry must survive. Each level also computes in floating point, so the
+/// fault finds the FPU's context active and its lazy save pending (which the entry drops).
 #[inline(never)]
 fn overflow(depth: u32) -> u32 {
     let frame = core::hint::black_box([depth; 64]);
+    let scaled = core::hint::black_box(f64::from(depth) * 1.5);
     if core::hint::black_box(depth) == u32::MAX {
         return depth;
     }
-    overflow(depth + 1).wrapping_add(frame[(depth % 64) as usize])
+    overflow(depth + 1)
+        .wrapping_add(frame[(depth % 64) as usize])
+        .wrapping_add(scaled as u32)
 }
 
 /// Ends the QEMU run with `code` (semihosting `SYS_EXIT`).

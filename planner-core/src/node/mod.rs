@@ -278,10 +278,11 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
 
 /// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
 /// (with gains named by a zero-sized type, such as the firmware's `walk_robot::Gains`), so the
-/// `static` is in .bss (no flash, nothing copied at reset). [`ParkedNode::start`] configures it
-/// in place and only then hands out the [`Node`]: nothing of the node's 14 KB is built on the
-/// stack (a node built by value and moved into place needs that much stack and more), and a
-/// node that was never configured cannot be polled.
+/// `static` is in .bss (no flash, nothing copied at reset). `G` lends gains computed
+/// beforehand ([`PreviewGains::are_for`] the configuration; nothing computes them in place).
+/// [`ParkedNode::start`] configures it in place and only then hands out the [`Node`]: nothing
+/// of the node's 14 KB is built on the stack (a node built by value and moved into place needs
+/// that much stack and more), and a node that was never configured cannot be polled.
 ///
 /// ```
 /// use planner_core::gait::PREVIEW;
@@ -296,7 +297,7 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
 /// # Ok::<(), planner_core::shaping::GainError>(())
 /// ```
 #[derive(Debug)]
-pub struct ParkedNode<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64>(Node<Q, G, T>);
+pub struct ParkedNode<const Q: usize, G, T: Real = f64>(Node<Q, G, T>);
 
 impl<const Q: usize, G, T: Real> ParkedNode<Q, G, T> {
     /// The parked node, holding `gains` (see the type's docs).
@@ -366,8 +367,8 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             gait: Gait::parked(gains),
             tx: Deque::new(),
             steps: Steps::PARKED,
-            // `Some` of zeros, not `None`: the bytes are the zero ones (`None` is a niche).
             last_append: None,
+            // `Some` of zeros, not `None`: the bytes are the zero ones (`None` is a niche).
             last_control: Some((0, ControlOp::Heartbeat)),
             last_heartbeat: None,
             last_estop: None,
