@@ -230,3 +230,30 @@ pub fn build_firmware_with(
     assert!(elf.is_file(), "no image at {}", elf.display());
     elf
 }
+
+/// The size of section `name` of the 32-bit little-endian ELF file `elf` (the firmware
+/// images), from its section headers; `None` if the file is not such an ELF or has no such
+/// section.
+pub fn elf32_section_size(elf: &std::path::Path, name: &str) -> Option<u32> {
+    let b = std::fs::read(elf).ok()?;
+    let u16_at = |o: usize| Some(u16::from_le_bytes(b.get(o..o + 2)?.try_into().ok()?));
+    let u32_at = |o: usize| Some(u32::from_le_bytes(b.get(o..o + 4)?.try_into().ok()?));
+    // ELFCLASS32, little-endian.
+    if b.get(0..6)? != [0x7F, b'E', b'L', b'F', 1, 1] {
+        return None;
+    }
+    let shoff = u32_at(0x20)? as usize;
+    let shentsize = usize::from(u16_at(0x2E)?);
+    let shnum = usize::from(u16_at(0x30)?);
+    let shstrndx = usize::from(u16_at(0x32)?);
+    let header = |i: usize| shoff + i * shentsize;
+    let strtab = u32_at(header(shstrndx) + 16)? as usize;
+    (0..shnum).find_map(|i| {
+        let h = header(i);
+        let name_at = strtab + u32_at(h)? as usize;
+        let end = name_at + b.get(name_at..)?.iter().position(|&c| c == 0)?;
+        (b.get(name_at..end)? == name.as_bytes())
+            .then(|| u32_at(h + 20))
+            .flatten()
+    })
+}

@@ -357,6 +357,26 @@ fn a_log_cut_short_fails_the_run() {
     assert!(stdout.contains("RUNS count=1"), "{}", tail(stdout, 10));
 }
 
+/// The image's parked node (`walk_robot::ParkedNode<16>` in a `static`) is all zero bytes: it
+/// lies in .bss, and .data stays empty. A non-zero byte in `ParkedNode::new`'s value (an enum
+/// whose zero bytes are not the variant chosen) would move its 14 KB into .data, i.e. into
+/// flash too. (The board image is checked by `firmware/size.sh`, the M4F image by
+/// `qemu_m4.rs`.)
+#[test]
+fn the_parked_node_is_in_bss() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = build_firmware("qemu", "qemu");
+    let data = walk_tests::elf32_section_size(&elf, ".data").unwrap_or(0);
+    let bss = walk_tests::elf32_section_size(&elf, ".bss").expect("no .bss");
+    assert!(
+        data <= 1024,
+        ".data is {data} B: the parked node is not all zero bytes"
+    );
+    assert!(bss >= 10_000, ".bss is {bss} B: where is the node?");
+}
+
 /// A stack overflow reaches the fault handler (issue 11): the image's stack runs below its
 /// region into the MPU guard (board-core's `StackGuard`, which the board programs too), and the
 /// HardFault entry (board-core's `fault_entry!`, the board's)

@@ -53,6 +53,23 @@ fn build_image() -> std::path::PathBuf {
     )
 }
 
+/// The image's parked `f32` node (`walk_robot::ParkedNodeF32<16>`) is all zero bytes: it lies
+/// in .bss, and .data stays empty (see `qemu.rs`'s `the_parked_node_is_in_bss`).
+#[test]
+fn the_parked_f32_node_is_in_bss() {
+    if !qemu_available() {
+        return;
+    }
+    let elf = build_image();
+    let data = walk_tests::elf32_section_size(&elf, ".data").unwrap_or(0);
+    let bss = walk_tests::elf32_section_size(&elf, ".bss").expect("no .bss");
+    assert!(
+        data <= 1024,
+        ".data is {data} B: the parked node is not all zero bytes"
+    );
+    assert!(bss >= 6_000, ".bss is {bss} B: where is the node?");
+}
+
 /// The log played on the host into the image's `f32` node (`walk_robot::NodeF32<16>` from
 /// `NODE_CONFIG_F32` and `GAINS_F32`, as the image builds it), by the target's player
 /// compiled for the host.
