@@ -437,6 +437,49 @@ impl embedded_can::nb::Can for Port {
     }
 }
 
+/// A port that records every frame the bus accepted from it, with the cycle (`cycle`, set by
+/// its user) it was handed over in: what a node sent in a cycle, before the bus delivers it
+/// (the fault sweep reads the node's answers there, the replay its whole output).
+pub struct Tap<'a> {
+    /// The port written through.
+    pub port: &'a mut Port,
+    /// The cycle the frames are recorded with.
+    pub cycle: u64,
+    /// The frames the bus accepted, with their cycle.
+    pub sent: Vec<(u64, RawFrame)>,
+}
+
+impl<'a> Tap<'a> {
+    /// A tap on `port` for cycle `cycle`, nothing recorded yet.
+    pub fn new(port: &'a mut Port, cycle: u64) -> Self {
+        Self {
+            port,
+            cycle,
+            sent: Vec::new(),
+        }
+    }
+
+    /// The frames recorded, without their cycles.
+    pub fn frames(&self) -> impl Iterator<Item = &RawFrame> {
+        self.sent.iter().map(|(_, f)| f)
+    }
+}
+
+impl embedded_can::nb::Can for Tap<'_> {
+    type Frame = VFrame;
+    type Error = BusError;
+    fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
+        let r = self.port.transmit(frame);
+        if r.is_ok() {
+            self.sent.push((self.cycle, *frame));
+        }
+        r
+    }
+    fn receive(&mut self) -> nb::Result<VFrame, BusError> {
+        self.port.receive()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -36,7 +36,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::bus::{parse_log_line, Bus, BusError, Faults, LogEntry, Port, VFrame, LOG_IFACE};
+use crate::bus::{parse_log_line, Bus, Faults, LogEntry, Tap, LOG_IFACE};
 use embedded_can::nb::Can;
 
 /// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).
@@ -213,28 +213,6 @@ pub fn binary_log(name: &str, log: &[String], cfg: &NodeConfig) -> Result<Vec<u8
     Ok(out)
 }
 
-/// The node's port, recording what the node hands to it (with the cycle).
-struct Tap<'a> {
-    port: &'a mut Port,
-    cycle: u64,
-    sent: Vec<(u64, RawFrame)>,
-}
-
-impl Can for Tap<'_> {
-    type Frame = VFrame;
-    type Error = BusError;
-    fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
-        let r = self.port.transmit(frame);
-        if r.is_ok() {
-            self.sent.push((self.cycle, *frame));
-        }
-        r
-    }
-    fn receive(&mut self) -> nb::Result<VFrame, BusError> {
-        self.port.receive()
-    }
-}
-
 /// Plays `frames` into a node (`Node<64>`) configured by `cfg` over the virtual bus at
 /// `bitrate` (see the module docs).
 pub fn replay(frames: &[Timed], cfg: &NodeConfig, bitrate: u32) -> Result<Replayed, String> {
@@ -281,11 +259,7 @@ pub fn replay_into<const Q: usize>(
         }
         bus.advance(poll);
         let now_ms = playback::poll_ms(k, period_us);
-        let mut tap = Tap {
-            port: &mut nport,
-            cycle: k,
-            sent: Vec::new(),
-        };
+        let mut tap = Tap::new(&mut nport, k);
         trajectory.push(node.poll(now_ms, &mut tap).reference);
         node_frames.append(&mut tap.sent);
         bus.advance(t0 + period_ns);

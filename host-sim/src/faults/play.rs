@@ -9,9 +9,9 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{ids, Ack, Command, ControlOp, Reason, StepBook, Stream};
 
 use super::polygon::{landings, outside, support_polygon};
-use super::ports::{Flood, Rng, Tap};
+use super::ports::{Flood, Rng};
 use super::{CaseResult, FaultKind, DELAY_NS, FALL_MARGIN, HEAVY, MAX_RETRIES, RETRY_TICKS};
-use crate::bus::{Bus, Faults};
+use crate::bus::{Bus, Faults, Tap};
 use crate::multibody::{evaluate, max_zmp_error, MbError, Model};
 use crate::scenario::{self, Scenario};
 
@@ -291,13 +291,10 @@ pub(super) fn play(
         // 4. The node's cycle (the babbling port runs with the bus).
         flood.run(&bus, t0, t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
-        let mut tap = Tap {
-            port: &mut nport,
-            sent: Vec::new(),
-        };
+        let mut tap = Tap::new(&mut nport, k);
         let report = node.poll(now_ms, &mut tap);
         // What the node accepted, from its own answers as it sent them (before the bus).
-        for a in tap.sent.iter().filter_map(Ack::decode) {
+        for a in tap.frames().filter_map(Ack::decode) {
             if let (0x00 | 0x01, None, Some(v)) = (a.command, a.reason, a.version) {
                 let id = u16::from(a.seq);
                 if let Some(&(f, u)) = versions.get(&(id, v)) {
@@ -314,7 +311,7 @@ pub(super) fn play(
         ];
         let one_each = stream_ids
             .iter()
-            .all(|id| tap.sent.iter().filter(|f| f.id == *id).count() == 1);
+            .all(|id| tap.frames().filter(|f| f.id == *id).count() == 1);
         if !one_each || !report.reference.is_finite() {
             ticks_without_reference += 1;
         }

@@ -1,32 +1,11 @@
-//! What a fault run puts on the bus besides the controller: the node's port wrapped to record
-//! what the node hands to the bus in a cycle ([`Tap`]), the babbling port of the `flood`
-//! fault ([`Flood`]), and the seeded random numbers every fault draws from ([`Rng`]).
+//! What a fault run puts on the bus besides the controller: the babbling port of the `flood`
+//! fault ([`Flood`]) and the seeded random numbers every fault draws from ([`Rng`]). (The
+//! node's port is wrapped in [`crate::bus::Tap`] to record what the node hands to the bus.)
 
 use embedded_can::nb::Can;
 use planner_core::wire::RawFrame;
 
-use crate::bus::{Bus, BusError, Port, VFrame};
-
-/// The node's port, recording what the node hands to the bus in a cycle.
-pub(super) struct Tap<'a> {
-    pub(super) port: &'a mut Port,
-    pub(super) sent: Vec<RawFrame>,
-}
-
-impl Can for Tap<'_> {
-    type Frame = VFrame;
-    type Error = BusError;
-    fn transmit(&mut self, frame: &VFrame) -> nb::Result<Option<VFrame>, BusError> {
-        let r = self.port.transmit(frame);
-        if r.is_ok() {
-            self.sent.push(*frame);
-        }
-        r
-    }
-    fn receive(&mut self) -> nb::Result<VFrame, BusError> {
-        self.port.receive()
-    }
-}
+use crate::bus::{Bus, Port};
 
 pub(super) struct Rng(u64);
 
