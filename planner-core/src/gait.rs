@@ -1692,13 +1692,12 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 self.swing = None;
             }
         }
-        let feet = self.foot_poses(&self.wins[c], j, t);
-        self.last = Reference {
-            x: sx,
-            y: sy,
-            phase,
-            feet,
-        };
+        // Field by field (small copies the compiler does in registers, not one 150-byte
+        // `memcpy` of a whole `Reference` built aside).
+        self.last.feet = self.foot_poses(&self.wins[c], j, t);
+        self.last.x = sx;
+        self.last.y = sy;
+        self.last.phase = phase;
         self.last
     }
 
