@@ -804,8 +804,9 @@ enum Mode {
 /// The gait generator: a footstep queue of capacity `Q` and the window being executed.
 ///
 /// `G` holds the preview-control gains: by value (the default, computed by [`Gait::new`]) or
-/// anything that lends them ([`Borrow`]), such as a reference to gains in flash (the firmware
-/// keeps its 28 KB of gains out of RAM this way: [`Gait::with_gains`]).
+/// anything that lends them ([`Borrow`]), such as a reference to gains in flash or a
+/// zero-sized type that names them (the firmware keeps its 22 KB of gains out of RAM this way:
+/// [`Gait::with_gains`]).
 #[derive(Clone, Debug)]
 pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     params: GaitParams<T>,
