@@ -931,15 +931,25 @@ impl<T: Real, const Q: usize> Gait<T, Q> {
         left: Footstep<T>,
         right: Footstep<T>,
     ) -> Result<Self, GaitError> {
-        Self::check(&params, &left, &right)?;
-        let mut g = Self::parked(PreviewGains::zeroed());
+        let gains = Self::gains_for(&params, &left, &right)?;
+        Self::with_gains(params, left, right, gains)
+    }
+
+    /// The preview gains [`Gait::new`] computes for `params` (all zero when it does not shape),
+    /// after the checks of [`Gait::restart`] (whose errors come first).
+    pub(crate) fn gains_for(
+        params: &GaitParams<T>,
+        left: &Footstep<T>,
+        right: &Footstep<T>,
+    ) -> Result<PreviewGains<T, PREVIEW>, GaitError> {
+        Self::check(params, left, right)?;
+        let mut gains = PreviewGains::zeroed();
         if params.shaping {
-            g.gains
+            gains
                 .compute(&params.preview_config(), Law::FromRest)
                 .map_err(GaitError::Gains)?;
         }
-        g.restart(params, left, right)?;
-        Ok(g)
+        Ok(gains)
     }
 }
 

@@ -257,3 +257,16 @@ pub fn elf32_section_size(elf: &std::path::Path, name: &str) -> Option<u32> {
             .flatten()
     })
 }
+
+/// Asserts that the firmware image `elf` keeps its parked node in .bss: .data at most 1 KiB (a
+/// non-zero byte in `ParkedNode::new`'s value would move the node's kilobytes there, and so into
+/// flash) and .bss at least `min_bss` bytes (the node is there).
+pub fn assert_parked_node_in_bss(elf: &std::path::Path, min_bss: u32) {
+    let data = elf32_section_size(elf, ".data").unwrap_or(0);
+    let bss = elf32_section_size(elf, ".bss").expect("no .bss");
+    assert!(
+        data <= 1024,
+        ".data is {data} B: the parked node is not all zero bytes"
+    );
+    assert!(bss >= min_bss, ".bss is {bss} B: where is the node?");
+}

@@ -367,14 +367,7 @@ fn the_parked_node_is_in_bss() {
     if !qemu_available() {
         return;
     }
-    let elf = build_firmware("qemu", "qemu");
-    let data = walk_tests::elf32_section_size(&elf, ".data").unwrap_or(0);
-    let bss = walk_tests::elf32_section_size(&elf, ".bss").expect("no .bss");
-    assert!(
-        data <= 1024,
-        ".data is {data} B: the parked node is not all zero bytes"
-    );
-    assert!(bss >= 10_000, ".bss is {bss} B: where is the node?");
+    walk_tests::assert_parked_node_in_bss(&build_firmware("qemu", "qemu"), 10_000);
 }
 
 /// A stack overflow reaches the fault handler (issue 11): the image's stack runs below its

@@ -60,14 +60,7 @@ fn the_parked_f32_node_is_in_bss() {
     if !qemu_available() {
         return;
     }
-    let elf = build_image();
-    let data = walk_tests::elf32_section_size(&elf, ".data").unwrap_or(0);
-    let bss = walk_tests::elf32_section_size(&elf, ".bss").expect("no .bss");
-    assert!(
-        data <= 1024,
-        ".data is {data} B: the parked node is not all zero bytes"
-    );
-    assert!(bss >= 6_000, ".bss is {bss} B: where is the node?");
+    walk_tests::assert_parked_node_in_bss(&build_image(), 6_000);
 }
 
 /// The log played on the host into the image's `f32` node (`walk_robot::NodeF32<16>` from

@@ -336,11 +336,8 @@ fn ahead(seq: u8, last: u8) -> bool {
 impl<const Q: usize, T: Real> Node<Q, PreviewGains<T, PREVIEW>, T> {
     /// A node standing still (computes the preview gains).
     pub fn new(cfg: NodeConfig<T>) -> Result<Self, GaitError> {
-        let () = Self::CAPACITY_OK;
-        let mut node = Self::parked(PreviewGains::zeroed());
-        node.gait = Gait::new(cfg.params, cfg.left, cfg.right)?;
-        node.restart(cfg)?;
-        Ok(node)
+        let gains = Gait::<T, Q>::gains_for(&cfg.params, &cfg.left, &cfg.right)?;
+        Self::with_gains(cfg, gains)
     }
 }
 
