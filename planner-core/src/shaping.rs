@@ -140,24 +140,27 @@
 //! lo = max(1, k0 − k),  hi = min(N_L, k0 + n − 1 − k).
 //! ```
 //!
-//! Precision. The tables are stored as double-length values (leading part + remainder,
-//! accumulated with two-sum), so `M_q[hi] − M_q[lo−1]` keeps the precision of `T` relative to
-//! the difference itself. What remains is that the moment form extrapolates a piece from its
-//! own ticks back to `j = 0`: a piece of `n` ticks `k0 − k` ticks ahead loses about
-//! `((k0 − k)/n)⁴` in relative precision, damped by the small `|f_j|` there. Overlaps of at most
-//! [`DIRECT_MAX`] (16) ticks are therefore summed directly. Measured against the `f64` direct
-//! sum, relative to `Σ|f_j| · max|r|`, over every distance 1…330 ticks: `f64` ≤ 2.2e-13 (pieces
-//! of 17 ticks, the worst), ≤ 8e-16 for 140 ticks; `f32` ≤ 1.0e-4 (17 ticks), 3.9e-7 (140).
+//! Precision. The tables are stored as double-length values (leading part + remainder, accumulated
+//! with two-sum), so `M_q[hi] − M_q[lo−1]` keeps the precision of `T` relative to the difference
+//! itself. What remains is that the moment form extrapolates a piece from its own ticks back to `j
+//! = 0`: a piece of `n` ticks `k0 − k` ticks ahead loses about `((k0 − k)/n)⁴` in relative
+//! precision, damped by the small `|f_j|` there. Overlaps of at most [`DIRECT_MAX`] (16) ticks at
+//! a piece's start (`k0 > k`) are therefore summed directly, by forward differences from `s = 0`
+//! (four additions per tap). A piece that has started (`k0 ≤ k`, so `0 ≤ a < 1`) is never
+//! extrapolated: it always takes the moment form, however short its overlap (measured: ≤ 2.5e-16
+//! in `f64`, ≤ 1.2e-7 in `f32`, relative to the scale below). Measured against the `f64` direct
+//! sum, relative to `Σ|f_j| · max|r|`, over every distance 1…330 ticks: `f64` ≤ 2.2e-13 (pieces of
+//! 17 ticks, the worst), ≤ 8e-16 for 140 ticks; `f32` ≤ 1.0e-4 (17 ticks), 3.9e-7 (140).
 //! On a 4-piece reference the `f32` compensator stays within 6.2e-8 m of ZMP of the `f64` one.
 //!
-//! Cost of [`Compensator::step`], per piece that overlaps the window: closed form 53 flops
-//! (`a`, `b`: 2; Taylor shift: 20; five double-length table differences: 15; Horner in `b`
-//! with the differences: 15; accumulate: 1) or, for a short overlap, at most 16 × 13 + 3 = 211
-//! flops directly; plus 12 flops for each of `r(k)` and `r(k+N_L)`. Common part (ZMP, error,
-//! feedback, state update): 26 flops. With `P = 4` pieces: 334 flops per call with long
-//! pieces, 966 in the worst case (four short overlaps), independent of `N_L`; no division, no
-//! buffer refill. Measured on the host (release build): 51 ns per call with 4 long pieces
-//! (f64), 41 ns (f32).
+//! Cost of [`Compensator::step`], per piece that overlaps the window: closed form 53 flops (`a`,
+//! `b`: 2; Taylor shift: 20; five double-length table differences: 15; Horner in `b` with the
+//! differences: 15; accumulate: 1) or, for a short overlap at a piece's start, at most 19 + 16 × 6
+//! = 115 flops by forward differences; plus 8 flops per piece for each of `r(k)` and `r(k+N_L)`.
+//! Common part (ZMP, error, feedback, state update): 26 flops. With `P = 4` pieces: 302 flops per
+//! call with long pieces, 550 in the worst case (four short overlaps), independent of `N_L`; no
+//! division, no buffer refill. Measured on the host (release build): 51 ns per call with 4 long
+//! pieces (f64), 41 ns (f32).
 //!
 //! Memory: `PreviewGains<T, NL>` holds `11·NL` scalars (the gains and ten tables, the five
 //! remainder tables in `f32`): 22 KB in `f64`, 14 KB in `f32` for `NL = 320`. Share one between the x and y compensators (they take
@@ -318,12 +321,40 @@ impl<T: crate::robot::Literal, const NL: usize> PreviewGains<T, NL> {
     }
 }
 
-/// A tick count as `f64`: exact, by the hardware's 32-bit conversion (an `i64` would take a
-/// software routine on the Cortex-M). Counts here are within a window (well inside ±2³¹);
-/// beyond that they saturate.
+/// A tick count as `i32` (converted to `T` exactly by the hardware's 32-bit conversion; an
+/// `i64` or `u32` would take a software routine on the Cortex-M). Counts here are within a
+/// window (well inside 2³¹); beyond that they saturate.
 #[inline]
-fn tick_f64(x: i64) -> f64 {
-    f64::from(x.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+fn tick_i32(x: u32) -> i32 {
+    i32::try_from(x).unwrap_or(i32::MAX)
+}
+
+/// `Σ_i f_i g(i)` over the taps `f` (tap `i` at `s = i h`) for the piece `g(i) = Σ_q c_q (i h)^q`,
+/// by forward differences: with `g_q = c_q h^q`, the differences at `i = 0` are
+/// `Δ⁰ = g_0`, `Δ¹ = g_1 + g_2 + g_3 + g_4`, `Δ² = 2g_2 + 6g_3 + 14g_4`, `Δ³ = 6g_3 + 36g_4`,
+/// `Δ⁴ = 24g_4`, and each tap costs four additions. Rounding grows about linearly with the
+/// number of taps (at most [`DIRECT_MAX`]), each `|Δ^m|` being about `|g^{(m)}| h^m` with
+/// `i h ≤ 1` over the piece: within `DIRECT_MAX · ε · Σ|c_q|`.
+#[inline]
+fn forward_sum<T: Real>(c: &Poly<T>, h: T, taps: &[T]) -> T {
+    let h2 = h * h;
+    let (g1, g2, g3, g4) = (c[1] * h, c[2] * h2, c[3] * (h2 * h), c[4] * (h2 * h2));
+    let mut d = [
+        c[0],
+        g1 + g2 + g3 + g4,
+        T::of(2.0) * g2 + T::of(6.0) * g3 + T::of(14.0) * g4,
+        T::of(6.0) * g3 + T::of(36.0) * g4,
+    ];
+    let d4 = T::of(24.0) * g4;
+    let mut acc = T::ZERO;
+    for &f in taps {
+        acc += f * d[0];
+        d[0] += d[1];
+        d[1] += d[2];
+        d[2] += d[3];
+        d[3] += d4;
+    }
+    acc
 }
 
 /// Which preview-control law the gains implement (see the module documentation).
@@ -607,6 +638,12 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
     pub fn preview(&self) -> &[T; NL] {
         &self.preview
     }
+    /// `f_lo … f_hi` (1 ≤ lo ≤ hi ≤ NL; empty otherwise).
+    #[inline]
+    fn preview_range(&self, lo: u32, hi: u32) -> &[T] {
+        let lo = (lo as usize).wrapping_sub(1);
+        self.preview.get(lo..hi as usize).unwrap_or(&[])
+    }
     /// The prefix moment table `M_q[J] = Σ_{j=1}^{J} f_j (j/NL)^q` at index `J − 1`: its
     /// leading part and its remainder, in `f32` (`M_q[J] ≈ lead[J−1] + rest[J−1]` to about
     /// twice the precision of `T`). `q > 4` returns the last table.
@@ -686,16 +723,21 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
     pub fn zmp_factor(&self) -> T {
         self.zg
     }
-    /// `M_q[hi] − M_q[lo − 1]` for `1 ≤ lo ≤ hi ≤ NL`.
+    /// `M_q[hi] − M_q[lo − 1]` for `1 ≤ lo ≤ hi ≤ NL`, from the table indices `u = hi − 1`
+    /// and `l = lo − 2` (`None` for `lo = 1`: `M_q[0] = 0`). Indices are clamped to the table,
+    /// which also lets the compiler drop the bounds checks.
     #[inline]
-    fn moment_range(&self, q: usize, lo: usize, hi: usize) -> T {
-        let at = |t: &[T; NL], i: usize| t.get(i).copied().unwrap_or(T::ZERO);
-        let at_lo = |t: &[f32; NL], i: usize| t.get(i).copied().unwrap_or(0.0);
+    fn moment_range(&self, q: usize, u: usize, l: Option<usize>) -> T {
+        let last = NL.saturating_sub(1);
+        let at = |t: &[T; NL], i: usize| t.get(i.min(last)).copied().unwrap_or(T::ZERO);
+        let at_lo = |t: &[f32; NL], i: usize| t.get(i.min(last)).copied().unwrap_or(0.0);
         let (lead, rest) = (&self.moments[q], &self.moments_lo[q]);
-        let (u, l) = (hi.wrapping_sub(1), lo.wrapping_sub(2));
-        // Leading parts first (exact when they are within a factor 2), then the remainders
-        // (their difference in `f32`: its rounding is 2⁻²⁴ of a remainder).
-        (at(lead, u) - at(lead, l)) + T::of_f32(at_lo(rest, u) - at_lo(rest, l))
+        match l {
+            // Leading parts first (exact when they are within a factor 2), then the
+            // remainders (their difference in `f32`: its rounding is 2⁻²⁴ of a remainder).
+            Some(l) => (at(lead, u) - at(lead, l)) + T::of_f32(at_lo(rest, u) - at_lo(rest, l)),
+            None => at(lead, u) + T::of_f32(at_lo(rest, u)),
+        }
     }
 }
 
@@ -728,15 +770,12 @@ impl<T: Real> Piece<T> {
     /// [`value`](Self::value) with `1/ticks` precomputed (Horner, value only).
     #[inline]
     fn value_with(&self, k: u32, inv_ticks: T) -> T {
-        let rel = i64::from(k) - i64::from(self.start);
-        if rel < 0 || rel >= i64::from(self.ticks) {
+        if k < self.start || k - self.start >= self.ticks {
             return T::ZERO;
         }
-        let s = T::of(tick_f64(rel)) * inv_ticks;
-        self.coeffs
-            .iter()
-            .rev()
-            .fold(T::ZERO, |acc, &c| acc * s + c)
+        let s = T::of_i32(tick_i32(k - self.start)) * inv_ticks;
+        let [c0, c1, c2, c3, c4] = self.coeffs;
+        (((c4 * s + c3) * s + c2) * s + c1) * s + c0
     }
 }
 
@@ -865,34 +904,31 @@ impl<T: Real, const P: usize> Compensator<T, P> {
     /// overlaps of at most [`DIRECT_MAX`] ticks are summed directly.
     pub fn preview_sum<const NL: usize>(&self, gains: &PreviewGains<T, NL>, k: u32) -> T {
         let mut sum = T::ZERO;
-        let k = i64::from(k);
-        let nl = NL as i64;
+        let nl = u32::try_from(NL).unwrap_or(u32::MAX);
         for (p, &inv_n) in self.pieces.iter().zip(self.inv_ticks.iter()) {
-            let k0 = i64::from(p.start);
-            let n = i64::from(p.ticks);
-            let lo = (k0 - k).max(1);
-            let hi = (k0 + n - 1 - k).min(nl);
-            if lo > hi {
+            // The taps j = lo ..= hi see the piece (ticks k0 ≤ k + j < k0 + n).
+            let (k0, last) = (p.start, p.start.saturating_add(p.ticks.saturating_sub(1)));
+            let ahead = k0 > k;
+            let lo = if ahead { k0 - k } else { 1 };
+            if lo > nl || last <= k {
                 continue;
             }
-            let a = T::of(tick_f64(k - k0)) * inv_n;
-            if hi - lo < DIRECT_MAX as i64 {
-                // Short overlap: the direct sum (the moment form would extrapolate the piece
-                // far outside its ticks).
-                let mut s = a + T::of(tick_f64(lo)) * inv_n;
-                let mut acc = T::ZERO;
-                for f in gains
-                    .preview
-                    .get(lo as usize - 1..hi as usize)
-                    .unwrap_or(&[])
-                {
-                    acc += *f * p.coeffs.iter().rev().fold(T::ZERO, |v, &c| v * s + c);
-                    s += inv_n;
-                }
-                sum += acc;
+            let hi = (last - k).min(nl);
+            if ahead && hi - lo < DIRECT_MAX as u32 {
+                // A short overlap at a piece's start: summed directly (the moment form would
+                // extrapolate the piece far outside its ticks). From s = 0 at tap `lo` in
+                // steps of h = 1/n by forward differences of g(i) = Σ c_q (i h)^q.
+                sum += forward_sum(&p.coeffs, inv_n, gains.preview_range(lo, hi));
                 continue;
             }
-            let b = T::of(tick_f64(nl)) * inv_n;
+            // s at tap 0: a = (k − k0)/n (negative ahead of the piece).
+            let rel = if ahead {
+                -tick_i32(k0 - k)
+            } else {
+                tick_i32(k - k0)
+            };
+            let a = T::of_i32(rel) * inv_n;
+            let b = T::of_i32(tick_i32(nl)) * inv_n;
             // Taylor shift: e(t) = c(a + t).
             let mut e = p.coeffs;
             for i in 0..MOMENTS - 1 {
@@ -901,10 +937,10 @@ impl<T: Real, const P: usize> Compensator<T, P> {
                 }
             }
             // Σ_q e_q b^q ΔM_q by Horner in b.
-            let (lo, hi) = (lo as usize, hi as usize);
+            let (u, l) = ((hi - 1) as usize, (lo as usize).checked_sub(2));
             let mut acc = T::ZERO;
             for q in (0..MOMENTS).rev() {
-                acc = acc * b + e[q] * gains.moment_range(q, lo, hi);
+                acc = acc * b + e[q] * gains.moment_range(q, u, l);
             }
             sum += acc;
         }

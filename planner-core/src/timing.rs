@@ -15,15 +15,17 @@
 //! polynomial of order ≤ 4 and any reference (end velocities not zero), which finds every
 //! critical point in `[0, D]` by bracketing: the roots of `p''` split the interval into pieces on
 //! which `ṗ` is monotone, so each piece holds at most one root of `ṗ`, found by Newton's method
-//! safeguarded by the bracket (a step that would leave it bisects; at most 56 steps, typically
-//! 4–6, started at the chord between the bracket's ends). The value at the extremum is
-//! insensitive to the root's error to first order.
+//! safeguarded by the bracket (a step that would leave it takes the bracket's chord instead; at
+//! most 56 steps, about two on average, started at the chord between the bracket's ends). A
+//! bracket end where `ṗ` vanishes to rounding (the planner's zero end velocities) is the root
+//! without a search. The value at the extremum is insensitive to the root's error to first
+//! order.
 
 use crate::lipm::{poly_eval, Poly, Segment};
 use crate::real::Real;
 
 /// Most root-finding steps per bracket (bisection alone would reach the resolution of `f64`
-/// on `[0, 1]` in 56; the safeguarded Newton iteration stops after 4–6).
+/// on `[0, 1]` in 56; the safeguarded Newton iteration takes about two).
 const MAX_STEPS: usize = 56;
 
 /// The time and value of the largest ZMP deviation in an interval.
@@ -55,6 +57,13 @@ pub fn eq17_tau<T: Real>(a2: T, a3: T, duration: T) -> Option<T> {
 
 /// The largest `|p(τ) − reference|` over `τ ∈ [0, D]` for the ZMP polynomial `zmp`.
 pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Extremum<T> {
+    search(zmp, duration, reference).0
+}
+
+/// [`worst_deviation`] and the number of root-finding steps it took (each one evaluation of
+/// `p`, `ṗ` and `p̈`).
+fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u32) {
+    let mut steps = 0u32;
     let eval = |tau: T| poly_eval(zmp, tau);
     let mut best = Extremum {
         tau: T::ZERO,
@@ -117,50 +126,68 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
     if n == 3 && cuts[2] < cuts[1] {
         cuts.swap(1, 2);
     }
+    // `ṗ(x) = v` is zero to rounding where `p(x)` is within about `ε·scale` of the value at
+    // the root (near a simple root the extremum lies ≈ v²/(2|p̈|) from p(x)).
+    let settled = |v: T, a: T| v == T::ZERO || v * v <= T::EPSILON * a.abs() * scale;
     for piece in 0..n {
         let (mut lo, mut hi) = (cuts[piece], cuts[piece + 1]);
-        let (_, vlo, _) = eval(lo);
-        let (_, vhi, _) = eval(hi);
-        if vlo == T::ZERO {
+        let (_, mut vlo, alo) = eval(lo);
+        let (_, mut vhi, ahi) = eval(hi);
+        // An end where ṗ vanishes to rounding (the planner's zero end velocities) is the
+        // piece's critical point (ṗ is monotone on the piece): no search. Considering an end
+        // is always safe (it is a point of [0, D]).
+        if settled(vlo, alo) {
             consider(lo);
+            continue;
         }
-        if (vlo < T::ZERO) == (vhi < T::ZERO) || vhi == T::ZERO {
-            if vhi == T::ZERO {
-                consider(hi);
-            }
+        if settled(vhi, ahi) {
+            consider(hi);
+            continue;
+        }
+        if (vlo < T::ZERO) == (vhi < T::ZERO) {
             continue;
         }
         let lo_negative = vlo < T::ZERO;
-        // Newton's method on ṗ inside the bracket, which every step shrinks; a step that
-        // would leave it bisects instead. ṗ is monotone on the piece, so the root is unique
-        // and Newton converges quadratically once close (typically 4–6 steps); the count is
-        // bounded by `MAX_STEPS` whatever the polynomial.
-        // Started where the chord between the bracket's ends crosses zero (ṗ is monotone
-        // there, so that is inside; the midpoint if rounding says otherwise).
-        let chord = lo - vlo * (hi - lo) / (vhi - vlo);
-        let mut x = if chord > lo && chord < hi {
-            chord
-        } else {
-            T::of(0.5) * (lo + hi)
+        // The chord between the bracket's ends crosses zero inside it (ṗ is monotone there;
+        // the midpoint if rounding says otherwise).
+        let chord = |lo: T, vlo: T, hi: T, vhi: T| {
+            let c = lo - vlo * (hi - lo) / (vhi - vlo);
+            if c > lo && c < hi {
+                c
+            } else {
+                T::of(0.5) * (lo + hi)
+            }
         };
+        // Newton's method on ṗ inside the bracket, which every step shrinks; a step that
+        // would leave it takes the chord of the bracket instead (regula falsi: a root close to
+        // an end, where Newton overshoots, is reached in a step or two; bisection took up to
+        // ~25), or bisects after a chord. ṗ is monotone on the piece, so the root is unique and Newton converges
+        // quadratically once close (typically 2–5 steps); the count is bounded by
+        // `MAX_STEPS` whatever the polynomial.
+        let mut x = chord(lo, vlo, hi, vhi);
+        let mut chord_before = false;
         for _ in 0..MAX_STEPS {
+            steps += 1;
             let (_, v, a) = eval(x);
-            // Done once the value at the root is reached to rounding: near a simple root the
-            // extremum lies ≈ v²/(2|p''|) from p(x) (the root's own error is ~|v/p''|, harmless).
-            if v == T::ZERO || v * v <= T::EPSILON * a.abs() * scale {
+            if settled(v, a) {
                 break;
             }
             if (v < T::ZERO) == lo_negative {
-                lo = x;
+                (lo, vlo) = (x, v);
             } else {
-                hi = x;
+                (hi, vhi) = (x, v);
             }
             let newton = x - v / a;
-            // The bracket's ends are allowed: a root within an ulp of one (a zero end
-            // velocity, rounded) is reached in one step instead of ~50 bisections.
             let next = if newton >= lo && newton <= hi {
+                chord_before = false;
                 newton
+            } else if !chord_before {
+                chord_before = true;
+                chord(lo, vlo, hi, vhi)
             } else {
+                // Two fallbacks in a row: bisect (regula falsi alone can creep from one
+                // end; alternating keeps bisection's halving every second fallback).
+                chord_before = false;
                 T::of(0.5) * (lo + hi)
             };
             let done = (next - x).abs() <= T::EPSILON * T::of(4.0) * duration;
@@ -171,7 +198,7 @@ pub fn worst_deviation<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> Ext
         }
         consider(x);
     }
-    best
+    (best, steps)
 }
 
 /// [`worst_deviation`] of a planned segment's ZMP from `reference` (typically the via point at
@@ -270,5 +297,56 @@ mod tests {
             let (p, _, _) = poly_eval(&zmp, e.tau);
             assert!((p - r - e.deviation).abs() < 1e-15);
         }
+    }
+
+    /// The root-finding cost is small and does not depend on the last bits of the
+    /// polynomial. A quartic from a fig4 fault run whose `ṗ` vanishes at the end to within
+    /// 4e-20 (a root an ulp from the bracket's end, where Newton overshoots: it took 21
+    /// bisection steps there, 24 in all, before the end test) needs no search there; random quartics, and random
+    /// quartics with zero end velocities (the planner's via points), need about two steps
+    /// each.
+    #[test]
+    fn the_search_takes_few_steps() {
+        let zmp = [
+            0.299982839148372,
+            5.8765227902614475e-5,
+            0.0014009850089965756,
+            -0.002909622295188969,
+            0.0014670329099177853,
+        ];
+        let (e, steps) = search(&zmp, 1.0, 0.3);
+        let (_, g) = grid_max(&zmp, 1.0, 0.3);
+        assert!((e.deviation.abs() - g.abs()).abs() < 1e-12, "{e:?} vs {g}");
+        // Its other bracket, [0.20, 0.79], holds an interior root (3 steps).
+        assert!(steps <= 4, "a root at the end: {steps} steps");
+        let mut uniform = crate::test_uniform(0x2545_f491_4f6c_dd1d_u64);
+        let mut next = || uniform() - 0.5;
+        let (mut worst, mut total, mut calls) = (0u32, 0u32, 0u32);
+        for i in 0..2000 {
+            let d = 0.3 + next().abs();
+            let mut zmp = [
+                next() * 0.2,
+                next(),
+                next() * 4.0,
+                next() * 8.0,
+                next() * 8.0,
+            ];
+            if i % 2 == 0 {
+                // ṗ(0) = ṗ(D) = 0, as the planner's via points: a1 = 0, a4 from ṗ(D) = 0.
+                zmp[1] = 0.0;
+                zmp[4] = -(2.0 * zmp[2] + 3.0 * zmp[3] * d) / (4.0 * d * d);
+            }
+            let r = next() * 0.2;
+            let (e, steps) = search(&zmp, d, r);
+            let (_, g) = grid_max(&zmp, d, r);
+            assert!(e.deviation.abs() >= g.abs() - 1e-12, "{zmp:?}: {e:?} < {g}");
+            worst = worst.max(steps);
+            total += steps;
+            calls += 1;
+        }
+        println!("search: {calls} quartics, {total} steps, at most {worst}");
+        // Two brackets whose Newton starts beside an inflection cut (p̈ ≈ 0 there) take ~16.
+        assert!(worst <= 20, "{worst} steps");
+        assert!(total <= 3 * calls, "{total} steps for {calls} quartics");
     }
 }

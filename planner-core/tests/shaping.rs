@@ -452,9 +452,28 @@ fn b_short_and_far_pieces_keep_their_precision() {
             w64 = w64.max((c64.preview_sum(&g64, 0) - direct).abs() / scale);
             w32 = w32.max((f64::from(c32.preview_sum(&g32, 0)) - direct).abs() / scale);
         }
+        // The same piece leaving the window: started at tick 0, seen from every tick k of it
+        // (overlaps of n − k taps, short ones included: always the moment form).
+        let p = Piece::new(0, n, coeffs);
+        let mut c64: Compensator<f64, 1> = Compensator::new();
+        c64.set_pieces(&[p]).expect("piece");
+        let mut c32: Compensator<f32, 1> = Compensator::new();
+        c32.set_pieces(&[Piece::new(0, n, coeffs.map(|c| c as f32))])
+            .expect("piece");
+        let (mut l64, mut l32) = (0.0_f64, 0.0_f64);
+        for k in 0..=n {
+            let direct: f64 = (1..=NL)
+                .map(|j| g64.preview()[j - 1] * direct_reference(&[p], i64::from(k) + j as i64))
+                .sum();
+            l64 = l64.max((c64.preview_sum(&g64, k) - direct).abs() / scale);
+            l32 = l32.max((f64::from(c32.preview_sum(&g32, k)) - direct).abs() / scale);
+        }
         println!(
-            "(b) piece of {n:>3} ticks, 1…330 ticks ahead: max |Δ| / (Σ|f|·max|r|) f64 {w64:.2e}, f32 {w32:.2e}"
+            "(b) piece of {n:>3} ticks, 1…330 ticks ahead: max |Δ| / (Σ|f|·max|r|) f64 {w64:.2e}, f32 {w32:.2e}; \
+             leaving: f64 {l64:.2e}, f32 {l32:.2e}"
         );
+        assert!(l64 < 1e-14, "f64, n = {n}, leaving: {l64:e}");
+        assert!(l32 < 1e-6, "f32, n = {n}, leaving: {l32:e}");
         assert!(w64 < 1e-12, "f64, n = {n}: {w64:e}");
         assert!(w32 < 2e-4, "f32, n = {n}: {w32:e}");
     }
