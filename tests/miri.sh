@@ -146,6 +146,9 @@ SKIP=(
     # run by `cargo test`
     trig::tests::double_precision_sine_and_cosine_are_libms_within_an_ulp
     window::tests::a_reused_plan_buffer_gives_the_fresh_plan
+    # the root search's step count over 2,000 quartics against a grid (not measured under Miri):
+    # run by `cargo test`
+    timing::tests::the_search_takes_few_steps
     # --test oracle
     planner_matches_the_general_44_unknown_formulation
     rk4_integration_matches_the_closed_form_cog
