@@ -1114,6 +1114,13 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.info.as_ref()
     }
 
+    /// How many windows have been planned and made current since the last (re)start,
+    /// wrapping: the start window, every re-plan and every stop window. A change between two
+    /// ticks means the tick in between planned one.
+    pub fn plans(&self) -> u32 {
+        self.serial
+    }
+
     /// Where the foot of the other side than `side` will be just before a step of `side` is
     /// taken: the last such step queued before the step `before` (or before the end of the
     /// queue), else the one being swung, else where that foot stands. Used to check reach.

@@ -413,7 +413,8 @@ fn a_stack_overflow_reaches_the_fault_handler() {
 /// Issue 12's instruction and stack targets, over every replayed log, all met and asserted:
 /// `Node::new` (the node configured in place) ≤ 100,000 instructions, the worst control cycle
 /// ≤ 40,000, the re-plan at the start of single support ≤ 20,000 (plain and adjusted), the
-/// control loop's stack ≤ 12 KiB, the steady cycle's mean ≤ 3,000, the start-up stack
+/// control loop's stack ≤ 12 KiB, the steady cycle's mean and maximum ≤ 3,000 (steady: at
+/// least 90 % of the walking cycles), the start-up stack
 /// ≤ 16 KiB; the start-up stack also ≤ 4 KiB (issue 11: "a few KB"; the node is configured
 /// in place, nothing of it is built on the stack).
 #[test]
@@ -428,13 +429,28 @@ fn issue_12_targets() {
             .num("max")
     };
     let steady_mean: f64 = q.timing("all", "steady").expect("steady").num("mean");
+    // The steady kind is most of the walk, not what is left after the costly cycles were
+    // taken out: every walking cycle but those that took a command, planned a window, changed
+    // the node's state or took more than one heartbeat (firmware/app/src/cycle.rs).
+    let count = |kind: &str| -> u64 {
+        q.timing("all", kind)
+            .unwrap_or_else(|| panic!("no TIMING line for {kind}"))
+            .num("n")
+    };
+    let walking = count("cycle") - count("standing");
+    assert!(
+        count("steady") * 10 >= walking * 9,
+        "steady cycles {} of {walking} walking ones: below 90 %",
+        count("steady")
+    );
     let stack = q.one("STACK");
     let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
-    let checks: [(&str, f64, f64, f64); 7] = [
+    let checks: [(&str, f64, f64, f64); 8] = [
         ("Node::new", max("new") as f64, 100_000.0, 100_000.0),
         ("re-plan (max)", max("replan") as f64, 20_000.0, 20_000.0),
         ("control-loop stack [B]", control as f64, 12_288.0, 12_288.0),
         ("steady (mean)", steady_mean, 3_000.0, 3_000.0),
+        ("steady (max)", max("steady") as f64, 3_000.0, 3_000.0),
         ("worst cycle", max("cycle") as f64, 40_000.0, 40_000.0),
         (
             "adjusted re-plan (max)",

@@ -5,7 +5,7 @@
 use core::borrow::Borrow;
 
 use planner_core::gait::{Reference, ReplanInfo, PREVIEW};
-use planner_core::node::{Node, PollReport};
+use planner_core::node::{Node, NodeState, PollReport};
 use planner_core::shaping::PreviewGains;
 use planner_core::wire::{Command, ControlOp, RawFrame};
 use planner_core::Real;
@@ -77,6 +77,9 @@ const RX_PUSH: u8 = 1;
 const RX_MODIFY: u8 = 2;
 const RX_START: u8 = 4;
 const RX_STOP: u8 = 8;
+const RX_HEARTBEAT: u8 = 16;
+/// A reset, an invalid frame, or a frame of another node.
+const RX_OTHER: u8 = 32;
 
 fn class(f: &RawFrame) -> u8 {
     match Command::decode(f) {
@@ -91,7 +94,11 @@ fn class(f: &RawFrame) -> u8 {
             ..
         })
         | Ok(Command::EmergencyStop { .. }) => RX_STOP,
-        _ => 0, // heartbeat, reset, invalid, foreign
+        Ok(Command::Control {
+            op: ControlOp::Heartbeat,
+            ..
+        }) => RX_HEARTBEAT,
+        _ => RX_OTHER,
     }
 }
 
@@ -112,6 +119,8 @@ pub struct Pending {
     all: u8,
     waiting: usize,
     was_standing: bool,
+    plans: u32,
+    state: NodeState,
 }
 
 impl Pending {
@@ -135,6 +144,8 @@ impl Pending {
             all: acc,
             waiting: bus.pending_len(),
             was_standing: node.gait().is_standing(),
+            plans: node.gait().plans(),
+            state: node.state(),
         }
     }
 
@@ -174,6 +185,12 @@ impl Pending {
             Kind::Push
         } else if self.was_standing && node.gait().is_standing() {
             Kind::Standing
+        } else if node.gait().plans() != self.plans {
+            Kind::Settle
+        } else if node.state() != self.state {
+            Kind::Transition
+        } else if taken > 1 || rx & RX_OTHER != 0 {
+            Kind::Traffic
         } else {
             Kind::Steady
         };

@@ -6,8 +6,10 @@
 /// A kind of timed work: `New` is the node's start-up, every other kind is a whole
 /// `Node::poll` (one control cycle), classified by what it did, first match wins:
 /// a cycle that received a `STEP_MODIFY` is `Modify`, one that received a `Start` is `Start`,
-/// then by its tick (`Adjust`, `Replan`), then `StopCommand`, `Push`, `Standing`, `Steady`.
-/// Heartbeats do not count as commands. Every cycle is also recorded as `Cycle`.
+/// then by its tick (`Adjust`, `Replan`), then `StopCommand`, `Push`, `Standing`, then by
+/// whether its tick planned a window (`Settle`), the node's state changed (`Transition`) or it
+/// took more than a heartbeat (`Traffic`), else `Steady`. One heartbeat does not count as a command. Every cycle is also recorded as
+/// `Cycle`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     /// `Node::new` (the preview-control gains: about 1100 Riccati iterations), moved into its
@@ -24,8 +26,19 @@ pub enum Kind {
     StopCommand,
     /// A cycle standing, no command.
     Standing,
-    /// A walking cycle without re-plan and without command.
+    /// A walking cycle that planned no window and took no frame but at most one heartbeat.
     Steady,
+    /// A walking cycle whose tick planned a window other than a re-plan at the start of a
+    /// single support: the stop window (the robot settles after a `Stop`, a supervision stop
+    /// or a failed re-plan).
+    Settle,
+    /// A walking cycle without plan and without command in which the node's published state
+    /// changed: a supervision stop (the controller fell silent: the queue is dropped), the end
+    /// of a walk.
+    Transition,
+    /// A walking cycle without plan and without planning command that took more than one
+    /// frame, or a reset, an invalid frame or another node's frame (duplicates, floods).
+    Traffic,
     /// A cycle whose tick re-plans at the start of a single support, no time adjustment.
     Replan,
     /// A cycle whose tick re-plans with a single-support time adjustment
@@ -37,7 +50,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 10] = [
+    pub const ALL: [Kind; 13] = [
         Kind::New,
         Kind::Push,
         Kind::Start,
@@ -45,6 +58,9 @@ impl Kind {
         Kind::StopCommand,
         Kind::Standing,
         Kind::Steady,
+        Kind::Settle,
+        Kind::Transition,
+        Kind::Traffic,
         Kind::Replan,
         Kind::Adjust,
         Kind::Cycle,
@@ -60,6 +76,9 @@ impl Kind {
             Kind::StopCommand => "stop-command",
             Kind::Standing => "standing",
             Kind::Steady => "steady",
+            Kind::Settle => "settle",
+            Kind::Transition => "transition",
+            Kind::Traffic => "traffic",
             Kind::Replan => "replan",
             Kind::Adjust => "adjust",
             Kind::Cycle => "cycle",

@@ -24,7 +24,8 @@
 //!
 //! The image replays recorded CAN logs (`replay.wlog` in its working directory, see
 //! `gait_loop::binlog`): the tool records one, host-sim's run of `--scenario` (a built-in
-//! scenario or a TOML file; `fig4` by default), in a directory of its own and runs QEMU there. `--stop-after N` kills QEMU
+//! scenario, a TOML file or a fault row of the QEMU test such as `fault-mixed-0`; `fig4` by
+//! default), in a directory of its own and runs QEMU there. `--stop-after N` kills QEMU
 //! after N calls (for a quick look at the first cycles, and for the smoke test in
 //! `tests/tests/qemu.rs`).
 
@@ -62,7 +63,7 @@ struct Options {
 fn usage() -> ! {
     eprintln!(
         "usage: qemu-attribute [--machine M] [--function SUBSTR] [--call N] [--stop-after N] \
-         [--top K] [--lines] [--counts FILE] [--stdout FILE] [--scenario NAME|FILE.toml] ELF"
+         [--top K] [--lines] [--counts FILE] [--stdout FILE] [--scenario NAME|FILE.toml|fault-KIND-RATE] ELF"
     );
     std::process::exit(2)
 }
@@ -230,15 +231,27 @@ fn write_log(scenario: &str) -> PathBuf {
         eprintln!("qemu-attribute: scenario {scenario}: {e}");
         std::process::exit(1)
     };
-    let s = if scenario.ends_with(".toml") {
-        host_sim::toml_scenario::load(std::path::Path::new(scenario))
-            .unwrap_or_else(|e| fail(e.to_string()))
+    // A fault-sweep row the QEMU test replays (`fault-drop-0.05`, `fault-mixed-0`, …: fig4,
+    // seed 1, the node as `faults::run_case_logged` runs it).
+    let fault = walk_tests::logs::fault_runs()
+        .into_iter()
+        .find(|(name, _, _)| name == scenario);
+    let (log, cfg) = if let Some((_, kind, rate)) = fault {
+        let fig4 = host_sim::scenario::built_in("fig4").unwrap_or_else(|| fail("no fig4".into()));
+        let (_, log) = host_sim::faults::run_case_logged(&fig4, kind, rate, 1)
+            .unwrap_or_else(|e| fail(e.to_string()));
+        (log, planner_core::node::NodeConfig::hrp2())
     } else {
-        host_sim::scenario::built_in(scenario).unwrap_or_else(|| fail("not built in".into()))
+        let s = if scenario.ends_with(".toml") {
+            host_sim::toml_scenario::load(std::path::Path::new(scenario))
+                .unwrap_or_else(|e| fail(e.to_string()))
+        } else {
+            host_sim::scenario::built_in(scenario).unwrap_or_else(|| fail("not built in".into()))
+        };
+        let sim = host_sim::sim::SimConfig::default();
+        let run = host_sim::sim::simulate(&s, &sim).unwrap_or_else(|e| fail(e));
+        (run.can_log, host_sim::sim::start_config(&s, &sim.node))
     };
-    let sim = host_sim::sim::SimConfig::default();
-    let run = host_sim::sim::simulate(&s, &sim).unwrap_or_else(|e| fail(e));
-    let cfg = host_sim::sim::start_config(&s, &sim.node);
     let name: String = scenario
         .rsplit('/')
         .next()
@@ -247,7 +260,7 @@ fn write_log(scenario: &str) -> PathBuf {
         .chars()
         .take(32)
         .collect();
-    let bytes = host_sim::replay::binary_log(&name, &run.can_log, &cfg).unwrap_or_else(|e| fail(e));
+    let bytes = host_sim::replay::binary_log(&name, &log, &cfg).unwrap_or_else(|e| fail(e));
     let dir = std::env::temp_dir().join(format!("qemu-attribute-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| fail(e.to_string()));
     std::fs::write(dir.join("replay.wlog"), bytes).unwrap_or_else(|e| fail(e.to_string()));
