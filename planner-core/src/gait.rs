@@ -819,6 +819,11 @@ pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     landed: Option<Side>,
     /// The last re-plan failed (see [`Gait::replan_failed`]).
     failed: bool,
+    /// The queued ids are consecutive (each the successor of the one before it: `+1`, or
+    /// 255 → 0 as the node's 8-bit ids wrap), so they are distinct and a lookup by id is
+    /// arithmetic ([`Gait::index_of`]). A lookup hint (set by `push`), always `false` while
+    /// the queue is empty, so that a gait emptied and a fresh one compare equal.
+    consecutive: bool,
     mode: Mode,
     stop_requested: bool,
     /// Two window buffers: the one being executed and the one the next re-plan is built in.
@@ -973,6 +978,7 @@ impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
             }),
             landed: Some(Side::Left),
             failed: false,
+            consecutive: false,
             mode: Mode::Standing,
             stop_requested: false,
             wins: [Active::PARKED, Active::PARKED],
@@ -1071,6 +1077,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         };
         self.params = params;
         self.queue.clear();
+        self.consecutive = false;
         self.feet = feet;
         self.swing = None;
         self.landed = None;
@@ -1135,11 +1142,21 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// them).
     pub fn previous_feet(&self, before: Option<u16>) -> [Footstep<T>; 2] {
         let mut last: [Option<&Footstep<T>>; 2] = [None, None];
-        for q in self.queue.iter() {
-            if before == Some(q.id) {
+        // Backwards from the step before `before`: the queue alternates sides, so two steps
+        // settle both (the first of each side met is the last before `before`).
+        let end = before
+            .and_then(|id| self.index_of(id))
+            .unwrap_or(self.queue.len());
+        for i in (0..end).rev() {
+            if let Some(q) = self.queue.get(i) {
+                let l = &mut last[q.step.side.index()];
+                if l.is_none() {
+                    *l = Some(&q.step);
+                }
+            }
+            if last[0].is_some() && last[1].is_some() {
                 break;
             }
-            last[q.step.side.index()] = Some(&q.step);
         }
         let resolve = |side: Side| match (last[side.index()], self.swing) {
             (Some(step), _) => *step,
@@ -1151,7 +1168,22 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
 
     /// `true` if the step `id` is queued (not yet swung).
     pub fn is_queued(&self, id: u16) -> bool {
-        self.queue.iter().any(|q| q.id == id)
+        self.index_of(id).is_some()
+    }
+
+    /// The position of the first queued step `id`. With consecutive ids (every walk the node
+    /// drives) the position is `id − front` (in 16 or, across the 8-bit wrap, 8 bits),
+    /// checked; otherwise a search of the queue.
+    fn index_of(&self, id: u16) -> Option<usize> {
+        let front = self.queue.front()?.id;
+        if self.consecutive && Q <= 256 {
+            // At most 256 consecutive ids are distinct: the one match is at one of these.
+            let d = id.wrapping_sub(front);
+            return [usize::from(d), usize::from(d & 0xFF)]
+                .into_iter()
+                .find(|&i| self.queue.get(i).is_some_and(|q| q.id == id));
+        }
+        self.queue.iter().position(|q| q.id == id)
     }
 
     /// The id of the next swing target (the first queued step), if any. While walking, a
@@ -1162,7 +1194,9 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
 
     /// The footstep queued as `id` (not yet swung), if any.
     pub fn queued_step(&self, id: u16) -> Option<Footstep<T>> {
-        self.queue.iter().find(|q| q.id == id).map(|q| q.step)
+        self.index_of(id)
+            .and_then(|i| self.queue.get(i))
+            .map(|q| q.step)
     }
 
     /// The id of the step being swung, if any.
@@ -1255,6 +1289,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         };
         self.last.feet = self.ground_poses();
         self.queue.clear();
+        self.consecutive = false;
         self.landed = None;
         self.stop_requested = false;
         self.target = None;
@@ -1278,6 +1313,10 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 return Err((GaitError::SideOrder, step));
             }
         }
+        let consecutive = match self.queue.back() {
+            None => true,
+            Some(b) => self.consecutive && (id == b.id.wrapping_add(1) || (b.id == 255 && id == 0)),
+        };
         self.queue
             .push_back(Queued {
                 id,
@@ -1285,6 +1324,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 modified: false,
             })
             .map_err(|q| (GaitError::QueueFull, q.step))?;
+        self.consecutive = consecutive;
         self.gen = self.gen.wrapping_add(1);
         Ok(())
     }
@@ -1337,6 +1377,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// Drops every queued step (not the one being swung) and stops after the present swing.
     pub fn clear_and_stop(&mut self) {
         self.queue.clear();
+        self.consecutive = false;
         self.stop_requested = true;
         self.gen = self.gen.wrapping_add(1);
     }
@@ -1350,7 +1391,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         if self.swing.map(|s| s.id) == Some(id) {
             return Err(GaitError::LiftedOff);
         }
-        let Some(pos) = self.queue.iter().position(|q| q.id == id) else {
+        let Some(pos) = self.index_of(id) else {
             return Err(GaitError::UnknownStep);
         };
         if self.queue.get(pos).map(|q| q.step.side) != Some(step.side) {
@@ -1750,6 +1791,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 modified: false,
             },
         };
+        // The hint is false whenever the queue is empty (as after every `clear`).
+        self.consecutive &= !self.queue.is_empty();
         // Planned already by the feasibility check of a modification, with the same inputs
         // from the same state? Then the spare buffer holds this very plan.
         let this = self.prediction(at, inputs, cog, zmp);
@@ -1764,6 +1807,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             // between the feet where they stand; flagged until a walking plan succeeds.
             self.failed = true;
             self.queue.clear();
+            self.consecutive = false;
             self.stop_requested = true;
             self.gen = self.gen.wrapping_add(1);
             return self.plan_stop(c, j, cog, zmp);
@@ -1846,7 +1890,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
 
     /// The position of the queued step `id` in the queue (0: the next swing target).
     pub fn position(&self, id: u16) -> Option<usize> {
-        self.queue.iter().position(|q| q.id == id)
+        self.index_of(id)
     }
 
     /// The current window's analytic plan at window tick `t` minus the compensation of this

@@ -90,6 +90,9 @@ impl<const Q: usize> Steps<Q> {
     pub fn is_repeat(&self, f: &RawFrame) -> bool {
         let id = f.data[0];
         if Q + 1 + HISTORY <= 256 {
+            if let Some(r) = self.queued_guess(id).and_then(|i| self.queued.get(i)) {
+                return r.is_repeat(f);
+            }
             let first = self
                 .queued
                 .iter()
@@ -107,6 +110,9 @@ impl<const Q: usize> Steps<Q> {
     /// The record of queued step `id` and its position among the queued records (for
     /// [`Steps::queued_at_mut`]).
     pub fn queued_find(&self, id: u8) -> Option<(usize, Record)> {
+        if let Some(i) = self.queued_guess(id) {
+            return self.queued.get(i).map(|r| (i, *r));
+        }
         self.queued
             .iter()
             .enumerate()
@@ -123,6 +129,21 @@ impl<const Q: usize> Steps<Q> {
             self.queued.iter().position(|r| r.append.id == id)
         };
         i.and_then(move |i| self.queued.get_mut(i))
+    }
+
+    /// Where queued step `id` is if the queued ids run on from the front's (appends are in
+    /// sequence: the common case), checked; `None` if it is not there (then search). Only
+    /// while no id is held twice (see [`Steps::is_repeat`]), so the record found is the one.
+    fn queued_guess(&self, id: u8) -> Option<usize> {
+        if Q + 1 + HISTORY > 256 {
+            return None;
+        }
+        let front = self.queued.front()?.append.id;
+        let i = usize::from(id.wrapping_sub(front));
+        self.queued
+            .get(i)
+            .is_some_and(|r| r.append.id == id)
+            .then_some(i)
     }
 
     /// Records an accepted append (the gait queued it: there is room).
@@ -173,6 +194,9 @@ impl<const Q: usize> Steps<Q> {
 
     /// The version in force of step `id` (queued, swinging or among the last done), if known.
     pub fn version(&self, id: u8) -> Option<u8> {
+        if let Some(r) = self.queued_guess(id).and_then(|i| self.queued.get(i)) {
+            return Some(r.version);
+        }
         let of = |r: &Record| (r.append.id == id).then_some(r.version);
         self.queued
             .iter()
