@@ -513,14 +513,14 @@ struct Spec<T> {
     replan: Option<usize>,
 }
 
-fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
-    let mut spec = Spec {
-        ticks: [p.stand_ticks; M],
-        kinds: [Kind::Stand; M],
-        support: [None; M],
-        via: [[T::ZERO; 2]; M],
-        replan: None,
-    };
+/// Writes the window's intervals into `spec` (in place: a `Spec` returned by value costs two
+/// copies of its 180 bytes on the Cortex-M).
+fn build_spec<T: Real>(spec: &mut Spec<T>, p: &GaitParams<T>, inp: &Inputs<T>) {
+    spec.ticks = [p.stand_ticks; M];
+    spec.kinds = [Kind::Stand; M];
+    spec.support = [None; M];
+    spec.via = [[T::ZERO; 2]; M];
+    spec.replan = None;
     let mut n = 0;
     fn push<T: Copy>(
         spec: &mut Spec<T>,
@@ -544,7 +544,7 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
     match inp.kind {
         WindowKind::Stop => {
             push(
-                &mut spec,
+                spec,
                 &mut n,
                 Kind::Settle,
                 inp.first_ticks,
@@ -556,25 +556,18 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
             // A start window shifts the ZMP onto the support foot first; a walking window
             // begins with the (possibly adjusted) single support itself.
             let single = if inp.kind == WindowKind::Start {
-                push(&mut spec, &mut n, Kind::Start, inp.first_ticks, last, None);
+                push(spec, &mut n, Kind::Start, inp.first_ticks, last, None);
                 p.single_ticks
             } else {
                 inp.first_ticks
             };
-            push(&mut spec, &mut n, Kind::Single, single, last, Some(s0.side));
+            push(spec, &mut n, Kind::Single, single, last, Some(s0.side));
             let mut last_side = s0.side;
             for (i, l) in inp.land.iter().take(inp.n_land).enumerate() {
                 if n >= M - 1 {
                     break;
                 }
-                push(
-                    &mut spec,
-                    &mut n,
-                    Kind::Double,
-                    p.double_ticks,
-                    l.centre(),
-                    None,
-                );
+                push(spec, &mut n, Kind::Double, p.double_ticks, l.centre(), None);
                 prev = last;
                 last = l.centre();
                 last_side = l.side;
@@ -585,7 +578,7 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
                 let more = i + 1 < inp.n_land;
                 if more {
                     push(
-                        &mut spec,
+                        spec,
                         &mut n,
                         Kind::Single,
                         p.single_ticks,
@@ -599,7 +592,7 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
             let walking_on = inp.n_land == 3 && n == M - 1;
             if walking_on && p.tail == Tail::Single {
                 push(
-                    &mut spec,
+                    spec,
                     &mut n,
                     Kind::Single,
                     p.single_ticks,
@@ -608,7 +601,7 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
                 );
             } else {
                 push(
-                    &mut spec,
+                    spec,
                     &mut n,
                     Kind::Settle,
                     p.settle_ticks,
@@ -626,13 +619,12 @@ fn build_spec<T: Real>(p: &GaitParams<T>, inp: &Inputs<T>) -> Spec<T> {
         None => spec.via[0],
     };
     while n < M - 1 {
-        push(&mut spec, &mut n, Kind::Stand, p.stand_ticks, rest, None);
+        push(spec, &mut n, Kind::Stand, p.stand_ticks, rest, None);
     }
     if n < M {
-        push(&mut spec, &mut n, Kind::Stand, p.rest_ticks, rest, None);
+        push(spec, &mut n, Kind::Stand, p.rest_ticks, rest, None);
     }
     spec.replan = (1..M).find(|&j| spec.kinds[j] == Kind::Single);
-    spec
 }
 
 /// Timing and boundary values of a window from its spec and the initial state.
@@ -738,7 +730,7 @@ impl<T: Real> Active<T> {
         cog: [State<T>; 2],
         zmp: [State<T>; 2],
     ) -> Result<(), PlanError> {
-        self.spec = build_spec(p, inputs);
+        build_spec(&mut self.spec, p, inputs);
         let (timing, bounds) = boundaries(p, &self.spec, cog, zmp);
         self.bounds = bounds;
         self.factor.refactor(&timing)?;
@@ -1613,7 +1605,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         }
         inputs.land = land;
         inputs.n_land = n;
-        let spec = build_spec(&self.params, &inputs);
+        let mut spec = Active::<T>::PARKED.spec;
+        build_spec(&mut spec, &self.params, &inputs);
         let (_, bounds) = boundaries(
             &self.params,
             &spec,
