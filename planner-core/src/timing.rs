@@ -161,11 +161,11 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
         // Newton's method on ṗ inside the bracket, which every step shrinks; a step that
         // would leave it takes the chord of the bracket instead (regula falsi: a root close to
         // an end, where Newton overshoots, is reached in a step or two; bisection took up to
-        // ~25), or bisects after a chord. ṗ is monotone on the piece, so the root is unique and Newton converges
+        // ~25), or, every second time, bisects. ṗ is monotone on the piece, so the root is unique and Newton converges
         // quadratically once close (typically 2–5 steps); the count is bounded by
         // `MAX_STEPS` whatever the polynomial.
         let mut x = chord(lo, vlo, hi, vhi);
-        let mut chord_before = false;
+        let mut fallbacks = 0u32;
         for _ in 0..MAX_STEPS {
             steps += 1;
             let (_, v, a) = eval(x);
@@ -179,16 +179,17 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
             }
             let newton = x - v / a;
             let next = if newton >= lo && newton <= hi {
-                chord_before = false;
                 newton
-            } else if !chord_before {
-                chord_before = true;
-                chord(lo, vlo, hi, vhi)
             } else {
-                // Two fallbacks in a row: bisect (regula falsi alone can creep from one
-                // end; alternating keeps bisection's halving every second fallback).
-                chord_before = false;
-                T::of(0.5) * (lo + hi)
+                // Fallbacks alternate chord and bisection (regula falsi alone can creep from
+                // one end; every second fallback halves the bracket, whatever Newton does in
+                // between).
+                fallbacks += 1;
+                if fallbacks % 2 == 1 {
+                    chord(lo, vlo, hi, vhi)
+                } else {
+                    T::of(0.5) * (lo + hi)
+                }
             };
             let done = (next - x).abs() <= T::EPSILON * T::of(4.0) * duration;
             x = next;

@@ -658,8 +658,17 @@ fn lookups_by_id_match_a_search_of_the_queue() {
         }
         assert!(model.is_empty(), "{name}: the walk did not take every step");
         check_lookups(&g, &model, &probe, &format!("{name}, walked"));
-        // Cleared, then filled again from another id: the lookups follow.
-        g.push(40, Footstep::new(Side::Right, 3.0, -0.1, 0.0)).ok();
+        // Emptied by the walk, then filled again from other ids (the 8-bit wrap, then a
+        // gap): the lookups follow; then cleared.
+        let side = g.next_side().expect("a side comes next");
+        for (k, id) in [254_u16, 255, 0, 1, 5, 6].into_iter().enumerate() {
+            let side = if k % 2 == 0 { side } else { side.other() };
+            let y = if side == Side::Left { 0.1 } else { -0.1 };
+            let step = Footstep::new(side, 3.0 + 0.1 * k as f64, y, 0.0);
+            g.push(id, step).expect("room in the queue");
+            model.push((id, step));
+            check_lookups(&g, &model, &probe, &format!("{name}, refilled with {id}"));
+        }
         g.clear_and_stop();
         model.clear();
         check_lookups(&g, &model, &probe, &format!("{name}, cleared"));

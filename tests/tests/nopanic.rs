@@ -10,7 +10,8 @@
 //!   bookkeeping, the watchdog feed, every defmt call through the board's logger) links, and
 //!   the image holds the planner (a `.text` of tens of KB: nothing was optimised away); the
 //!   narrower `scoped` variant (arbitrary frames instead of the adapter, no logging) links too,
-//!   and so does the `f32` variant (the whole cycle with the f32 node of the M4F image);
+//!   and so does the `f32` variant (the whole cycle with the f32 node of the M4F image); both
+//!   whole-cycle images keep their parked node in .bss (all zero bytes: no flash, no copy);
 //!   then the negative control, the same build with `selftest-panic` (one reachable
 //!   out-of-range index), must FAIL to link with that symbol in the linker's message, which
 //!   shows that the check is live.
@@ -28,7 +29,7 @@ const SYMBOL: &str = "walk_control_path_can_panic";
 const TARGET: &str = "thumbv7em-none-eabihf";
 /// The whole cycle's `.text` is ~66 KB (the planner: window solver, gait, shaping, node
 /// command handling, wire codec); far less would mean that the cycle was optimised away.
-const MIN_TEXT: u64 = 40_000;
+const MIN_TEXT: u32 = 40_000;
 
 /// The builds share `firmware/target` and the same output file: one at a time.
 static BUILD: Mutex<()> = Mutex::new(());
@@ -72,36 +73,20 @@ fn links(args: &[&str]) -> PathBuf {
     elf
 }
 
-/// Size of the ELF32 section `name` (`None` if absent or not an ELF32 file).
-fn section_size(elf: &[u8], name: &str) -> Option<u64> {
-    let u16_at = |o: usize| Some(u16::from_le_bytes(elf.get(o..o + 2)?.try_into().ok()?));
-    let u32_at = |o: usize| Some(u32::from_le_bytes(elf.get(o..o + 4)?.try_into().ok()?));
-    if elf.get(..5)? != b"\x7fELF\x01" {
-        return None;
-    }
-    let shoff = u32_at(0x20)? as usize;
-    let shentsize = usize::from(u16_at(0x2e)?);
-    let shnum = usize::from(u16_at(0x30)?);
-    let shstrndx = usize::from(u16_at(0x32)?);
-    let header = |i: usize| shoff + i * shentsize;
-    let strtab = u32_at(header(shstrndx) + 0x10)? as usize;
-    (0..shnum).find_map(|i| {
-        let at = strtab + u32_at(header(i))? as usize;
-        let end = at + elf.get(at..)?.iter().position(|&b| b == 0)?;
-        (elf.get(at..end)? == name.as_bytes()).then(|| u32_at(header(i) + 0x14).map(u64::from))?
-    })
-}
-
 #[test]
 fn control_cycle_cannot_panic() {
     let _one = BUILD.lock().unwrap_or_else(|e| e.into_inner());
 
     links(&["--features", "scoped"]);
-    // The same cycle with the f32 node (the M4F image's).
-    links(&["--features", "f32"]);
+    // The same cycle with the f32 node (the M4F image's), its parked node in .bss as the
+    // board's (8 KB).
+    let elf = links(&["--features", "f32"]);
+    walk_tests::assert_parked_node_in_bss(&elf, 8_000);
     let elf = links(&[]);
+    walk_tests::assert_parked_node_in_bss(&elf, 14_000);
     let bytes = std::fs::read(&elf).expect("cannot read the image");
-    let text = section_size(&bytes, ".text").expect("no .text section in the image");
+    let text =
+        walk_tests::elf32_section_size(&elf, ".text").expect("no .text section in the image");
     println!("firmware-nopanic (whole board cycle): links, .text {text} bytes");
     assert!(
         text >= MIN_TEXT,
