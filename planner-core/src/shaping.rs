@@ -185,8 +185,9 @@ pub const DEFAULT_MAX_ITERATIONS: u32 = 100_000;
 pub const DEFAULT_TOLERANCE: f64 = 1e-14;
 /// Default number of reference pieces a [`Compensator`] holds.
 pub const DEFAULT_PIECES: usize = 4;
-/// Overlaps of a piece with the preview window of at most this many ticks are summed directly
-/// (at most this many polynomial evaluations) instead of through the moment tables.
+/// Overlaps of at most this many ticks of a piece that starts inside the preview window are
+/// summed directly (by forward differences, four additions per tick) instead of through the
+/// moment tables, which would extrapolate the piece back to the window's start.
 pub const DIRECT_MAX: usize = 16;
 /// Number of moment tables (`σ^0 … σ^4`, one per polynomial coefficient).
 pub const MOMENTS: usize = N_COEFFS;
@@ -901,7 +902,7 @@ impl<T: Real, const P: usize> Compensator<T, P> {
     }
 
     /// `Σ_{j=1}^{NL} f_j r(k + j)` in closed form from the moment tables (`O(P)`, not `O(NL)`);
-    /// overlaps of at most [`DIRECT_MAX`] ticks are summed directly.
+    /// overlaps of at most [`DIRECT_MAX`] ticks at a piece's start are summed directly.
     pub fn preview_sum<const NL: usize>(&self, gains: &PreviewGains<T, NL>, k: u32) -> T {
         let mut sum = T::ZERO;
         let nl = u32::try_from(NL).unwrap_or(u32::MAX);
