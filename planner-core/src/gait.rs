@@ -1038,8 +1038,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
 
     /// Makes this gait, in place, the one [`Gait::with_gains`] would build for `params`,
     /// `left` and `right` with its own gains: standing, the queue empty, the buffers unused,
-    /// tick 0. Nothing is built on the stack (the gait is 12 KB; a `static` parked gait,
-    /// [`Gait::parked`], is configured this way). On error (the same checks and the same
+    /// tick 0. Nothing is built on the stack (the gait is 12 KB; a `static` parked gait, inside
+    /// a [`ParkedNode`](crate::node::ParkedNode), is configured this way). On error (the same checks and the same
     /// errors as [`Gait::with_gains`]) nothing changes.
     pub fn restart(
         &mut self,

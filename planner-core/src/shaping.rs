@@ -686,7 +686,7 @@ impl<T: Real, const NL: usize> PreviewGains<T, NL> {
         self.iterations = other.iterations;
     }
 
-    /// Gains from their parts, as [`source`](PreviewGains::source) writes them: for tables
+    /// Gains from their parts, as `PreviewGains::source` (feature `robot`) writes them: for tables
     /// computed before the program runs (the firmware's build script computes them from the
     /// robot file and compiles them into flash). Anything else should call
     /// [`compute`](Self::compute); [`Gait::with_gains`](crate::gait::Gait::with_gains) checks
