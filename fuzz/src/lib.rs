@@ -3,7 +3,9 @@
 //!
 //! * [`decode_one`]: bytes `[id lo, id hi, data…]` → [`RawFrame::new`] → [`Command::decode`];
 //!   an accepted command encodes to a frame that decodes to the same command, and a refusal
-//!   never panics.
+//!   never panics. The same frame goes through the decoders of what the node sends (`ACK`,
+//!   `STATUS`, `DIAG`, `LINK`, the stream), which a controller runs on whatever is on the bus:
+//!   no panic, and what they accept re-encodes (see `replies_checked`).
 //! * [`node_run`]: the bytes are a program of operations on a `Node<8>` (raw frames through
 //!   the bus or through [`Node::handle`], well-formed footsteps near a nominal gait so that
 //!   the fuzzer reaches the walking states, control commands, time steps). Checked: no panic,
@@ -37,9 +39,52 @@ pub fn decode_one(data: &[u8]) {
         return;
     };
     decode_checked(&frame);
+    replies_checked(&frame);
     // The same frame with its last byte made the right CRC-8: the field checks behind the
     // CRC are reached by every input, not by one in 256.
     decode_checked(&with_crc(frame));
+    replies_checked(&with_crc(frame));
+}
+
+/// The controller's side of the wire on any frame: the decoders of what the node sends
+/// (`ACK`, `STATUS`, `DIAG`, `LINK`, the five stream frames) never panic; `ACK`, `STATUS` and
+/// `DIAG` are canonical (what they accept re-encodes to the same frame); `LINK` re-encodes to
+/// the frame with its two unused bits cleared; a stream frame decodes to finite values that
+/// re-encode to a frame which decodes to the same values.
+fn replies_checked(frame: &RawFrame) {
+    if let Some(a) = Ack::decode(frame) {
+        assert_eq!(a.encode(), *frame, "{a:?}");
+    }
+    if let Some(s) = planner_core::wire::Status::decode(frame) {
+        assert_eq!(s.encode(), *frame, "{s:?}");
+    }
+    if let Some(d) = planner_core::wire::Diag::decode(frame) {
+        assert_eq!(d.encode(), *frame, "{d:?}");
+    }
+    if let Some(l) = planner_core::wire::LinkHealth::decode(frame) {
+        let mut cleared = *frame;
+        cleared.data[2] &= 0x3F;
+        assert_eq!(l.encode(), cleared, "{l:?}");
+        assert_eq!(planner_core::wire::LinkHealth::decode(&cleared), Some(l));
+    }
+    let mut s = Stream::default();
+    if s.decode_into(frame) {
+        let values = s
+            .cog
+            .iter()
+            .chain(&s.cog_vel)
+            .chain(&s.zmp)
+            .chain(s.feet.iter().flatten());
+        assert!(values.clone().all(|v| v.is_finite()), "{frame:?}: {s:?}");
+        let again = s.encode();
+        let same = again
+            .iter()
+            .find(|f| f.id == frame.id)
+            .expect("the stream encodes every identifier it decodes");
+        let mut t = Stream::default();
+        assert!(t.decode_into(same));
+        assert_eq!(t, s, "{frame:?} -> {same:?}");
+    }
 }
 
 /// `frame` with its last data byte replaced by the CRC-8 of its identifier and the bytes
@@ -437,6 +482,23 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         "seed-status".into(),
         frame(planner_core::wire::Status::default().encode()),
     ));
+    let diag = planner_core::wire::Diag {
+        foreign: 3,
+        bus_errors: 0,
+        tx_dropped: 1,
+        next_side: 2,
+        last_control: 5,
+    };
+    out.push(("decode", "seed-diag".into(), frame(diag.encode())));
+    let link = planner_core::wire::LinkHealth {
+        tec: 8,
+        rec: 3,
+        bus_state: 1,
+        reset: 5,
+        bus_offs: 1,
+        ..planner_core::wire::LinkHealth::ZERO
+    };
+    out.push(("decode", "seed-link".into(), frame(link.encode())));
     // `wlog`: a log of a heartbeat, a start and a stop; two logs in one file; an empty log.
     let heartbeat = frame(
         Command::Control {

@@ -99,6 +99,7 @@ impl<T: Real> Stream<T> {
 
 impl Stream<f64> {
     /// Updates the fields carried by one stream frame; `false` if it is not a stream frame.
+    /// Every value it gives encodes ([`Stream::encode`]) to a frame that decodes to it again.
     pub fn decode_into(&mut self, f: &RawFrame) -> bool {
         let d = &f.data;
         let i32at = |i: usize| i32::from_le_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]]);
@@ -116,10 +117,13 @@ impl Stream<f64> {
             (ids::FOOT_LEFT | ids::FOOT_RIGHT, 8) => {
                 let bits = u64::from_le_bytes(*d);
                 let sx = |v: u64, n: u32| -> i64 { (v << (64 - n)) as i64 >> (64 - n) };
+                // The one 20-bit code below the documented range (−2¹⁹; the encoder saturates
+                // at ±(2¹⁹ − 1), as the DBC's [−52.4287, 52.4287] m) reads as the range's end.
+                let x20 = |v: u64| sx(v, 20).max(-i64::from(I20_MAX)) as f64 * FOOT_UNIT;
                 let k = usize::from(f.id == ids::FOOT_RIGHT);
                 self.feet[k] = [
-                    sx(bits & 0xF_FFFF, 20) as f64 * FOOT_UNIT,
-                    sx((bits >> 20) & 0xF_FFFF, 20) as f64 * FOOT_UNIT,
+                    x20(bits & 0xF_FFFF),
+                    x20((bits >> 20) & 0xF_FFFF),
                     ((bits >> 40) & 0xFF) as f64 * 5e-4,
                     sx((bits >> 48) & 0xFFFF, 16) as f64 * 1e-4,
                 ];

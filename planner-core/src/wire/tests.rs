@@ -353,4 +353,19 @@ fn acks_status_and_stream_round_trip() {
         }
     }
     assert_eq!((back.phase, back.tick), (2, 77));
+    // The foot fields' range ends: ±(2¹⁹ − 1) units, as the DBC declares; the one code below
+    // it (−2¹⁹, never sent) reads as the end, so every decoded value encodes back to itself.
+    let far = Stream {
+        feet: [[-60.0, 60.0, 0.0, 0.0], [0.0; 4]],
+        ..Stream::default()
+    };
+    let f = far.encode()[3];
+    let mut back = Stream::default();
+    assert!(back.decode_into(&f));
+    assert_eq!(back.feet[0][..2], [-524_287.0 * 1e-4, 524_287.0 * 1e-4]);
+    let mut below = f;
+    below.data[..3].copy_from_slice(&[0x00, 0x00, 0x08 | (f.data[2] & 0xF0)]);
+    let mut edge = Stream::default();
+    assert!(edge.decode_into(&below));
+    assert_eq!(edge.feet[0], back.feet[0]);
 }
