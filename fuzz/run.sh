@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Bounded fuzzing of the CAN codec, the node and the QEMU image's log decoder (cargo-fuzz /
-# libFuzzer), on the stable toolchain.
+# Bounded fuzzing of the CAN codec, the node, the QEMU image's log decoder and the host's text
+# decoders (cargo-fuzz / libFuzzer), on the stable toolchain.
 #
 #   bash fuzz/run.sh                 # every target, FUZZ_SECONDS (30) each
 #   FUZZ_SECONDS=600 bash fuzz/run.sh node
@@ -24,7 +24,7 @@ SANITIZER="${FUZZ_SANITIZER:-none}"
 CARGO_FUZZ_VERSION="0.13.2"
 TARGETS=("$@")
 if [ "${#TARGETS[@]}" -eq 0 ]; then
-    TARGETS=(decode node wlog)
+    TARGETS=(decode node text wlog)
 fi
 
 if ! cargo fuzz --version >/dev/null 2>&1; then

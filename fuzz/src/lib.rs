@@ -14,6 +14,11 @@
 //!   one of the node's identifiers received is answered with one `ACK` and every other frame
 //!   with none (counted as foreign), and a refused frame changes nothing
 //!   ([`Node::same_state`] against a clone taken before it).
+//! * [`text_one`]: the bytes as text (lossy UTF-8) through the host's text decoders: every
+//!   line through host-sim's candump line reader (what it accepts, its own printer writes as a
+//!   line that reads back the same; and the MCAP writer's reader accepts it with the same time,
+//!   identifier and data, unless its time is beyond the nanoseconds MCAP counts) and through the MCAP writer's reader; the whole text as a candump
+//!   log to replay (cycles in order), as a TOML scenario and as a robot file. No panic.
 //! * [`wlog_one`]: the bytes as a file of binary CAN logs for the QEMU image
 //!   (`gait_loop::binlog`): the decoder never panics, and every header and frame it gives
 //!   satisfies the format's rules (name, period, feet; identifiers, lengths, times from
@@ -499,6 +504,35 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         ..planner_core::wire::LinkHealth::ZERO
     };
     out.push(("decode", "seed-link".into(), frame(link.encode())));
+    // `text`: host-sim's own log lines, a candump log of another interface in lower case, the
+    // TOML scenarios and a robot file.
+    let own: Vec<String> = commands
+        .iter()
+        .enumerate()
+        .map(|(i, (_, c))| host_sim::bus::log_line(5_000_000 * i as u64, &c.encode()))
+        .collect();
+    out.push(("text", "seed-canlog".into(), own.join("\n").into_bytes()));
+    out.push((
+        "text",
+        "seed-candump".into(),
+        b"(1767225600.002500) vcan0 010#0140\n(1767225600.007500) vcan0 1a0#0102\n".to_vec(),
+    ));
+    for (name, toml) in [
+        (
+            "seed-fig4",
+            include_str!("../../host-sim/scenarios/fig4.toml"),
+        ),
+        (
+            "seed-lateral",
+            include_str!("../../host-sim/scenarios/lateral.toml"),
+        ),
+        (
+            "seed-robot",
+            include_str!("../../host-sim/robots/hrp2.toml"),
+        ),
+    ] {
+        out.push(("text", name.into(), toml.as_bytes().to_vec()));
+    }
     // `wlog`: a log of a heartbeat, a start and a stop; two logs in one file; an empty log.
     let heartbeat = frame(
         Command::Control {
@@ -608,6 +642,48 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     raw.extend_from_slice(&[op::HANDLE, 0x10, 0x00, 1, 5, op::HANDLE, 0x23, 0x01, 0]);
     out.push(("node", "seed-raw".into(), raw));
     out
+}
+
+/// `text` target: see the module docs.
+pub fn text_one(data: &[u8]) {
+    use host_sim::bus::{log_line, parse_log_line, LOG_EPOCH_S};
+    let text = String::from_utf8_lossy(data);
+    for line in text.lines() {
+        let mcap = host_sim::mcap_log::parse_log_line(line);
+        let Some(e) = parse_log_line(line) else {
+            continue;
+        };
+        assert!(e.frame.id <= 0x7FF && e.frame.len <= 8, "{line:?}");
+        // (The printer takes bus time in nanoseconds: from the epoch on, to 584 years.)
+        let ns = e
+            .unix_us
+            .checked_sub(LOG_EPOCH_S * 1_000_000)
+            .and_then(|us| us.checked_mul(1000));
+        if let Some(ns) = ns {
+            // The printer's line reads back as the same entry (the line itself, but for
+            // leading zeros of the seconds beyond the printer's ten digits).
+            assert_eq!(parse_log_line(&log_line(ns, &e.frame)), Some(e), "{line:?}");
+        }
+        // The MCAP reader refuses only times beyond its nanoseconds.
+        if e.unix_us.checked_mul(1000).is_none() {
+            assert!(mcap.is_err(), "{line:?}");
+            continue;
+        }
+        let m = mcap.unwrap_or_else(|err| panic!("{line:?}: the MCAP reader refuses it: {err}"));
+        assert_eq!(
+            (m.unix_us, m.id, &m.data[..]),
+            (e.unix_us, e.frame.id, e.frame.bytes()),
+            "{line:?}"
+        );
+    }
+    if let Ok(frames) = host_sim::replay::parse(&text, 0.005) {
+        assert!(frames.windows(2).all(|w| w[0].tick <= w[1].tick));
+        assert!(frames
+            .iter()
+            .all(|f| f.frame.id <= 0x7FF && f.frame.len <= 8));
+    }
+    let _ = host_sim::toml_scenario::parse(&text);
+    let _ = planner_core::robot::Robot::from_toml(&text);
 }
 
 /// `wlog` target: see the module docs.

@@ -130,3 +130,15 @@ fn wlog_over_corpus_and_random_files() {
         walk_fuzz::wlog_one(&input);
     }
 }
+
+#[test]
+fn text_over_corpus_and_random_texts() {
+    let seeds = corpus("text");
+    assert!(seeds.len() >= 5);
+    for input in &seeds {
+        walk_fuzz::text_one(input);
+    }
+    for input in random_inputs(&seeds, cases(2_000), 200, 0x5EED_7E47) {
+        walk_fuzz::text_one(&input);
+    }
+}

@@ -289,6 +289,22 @@ impl LogEntry {
     }
 }
 
+/// One `candump -l` line as any interface writes it, `(time) IFACE ID#DATA` with any interface
+/// name and hexadecimal of either case, through the strict form of host-sim's own log
+/// ([`parse_log_line`]): the one reader of candump text (replays, the MCAP file).
+pub fn parse_candump_line(line: &str) -> Option<LogEntry> {
+    let mut parts = line.split_whitespace();
+    let (Some(time), Some(_iface), Some(frame), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return None;
+    };
+    parse_log_line(&format!(
+        "{time} {LOG_IFACE} {}",
+        frame.to_ascii_uppercase()
+    ))
+}
+
 /// Parses one line of the log, strictly in the format [`log_line`] writes:
 /// `(` ≥ 1 decimal digits `.` 6 decimal digits `) ` [`LOG_IFACE`] ` ` 3 hexadecimal digits
 /// (at most `7FF`) `#` 0 to 8 bytes as hexadecimal digit pairs. `None` for anything else.

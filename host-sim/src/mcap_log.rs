@@ -86,45 +86,20 @@ pub struct LogFrame {
 }
 
 /// Parses one `candump -l` line `(SSSSSSSSSS.UUUUUU) IFACE ID#DATA` (standard identifiers,
-/// classic frames); the error quotes the line.
+/// classic frames; [`crate::bus::parse_candump_line`]); the error quotes the line.
 pub fn parse_log_line(line: &str) -> Result<LogFrame, String> {
-    let bad = |why: &str| format!("can.log line {line:?}: {why}");
-    let rest = line.strip_prefix('(').ok_or_else(|| bad("no '(' time"))?;
-    let (time, rest) = rest
-        .split_once(')')
-        .ok_or_else(|| bad("no ')' after the time"))?;
-    let (sec, usec) = time
-        .split_once('.')
-        .ok_or_else(|| bad("time without '.'"))?;
-    let sec: u64 = sec.parse().map_err(|_| bad("seconds not a number"))?;
-    if usec.len() != 6 {
-        return Err(bad("microseconds not 6 digits"));
+    let e = crate::bus::parse_candump_line(line).ok_or_else(|| {
+        format!("can.log line {line:?}: not a candump -l line with a standard identifier")
+    })?;
+    // MCAP times are nanoseconds.
+    if e.unix_us.checked_mul(1000).is_none() {
+        return Err(format!("can.log line {line:?}: time out of range"));
     }
-    let usec: u64 = usec.parse().map_err(|_| bad("microseconds not a number"))?;
-    let mut fields = rest.split_whitespace();
-    let _iface = fields.next().ok_or_else(|| bad("no interface"))?;
-    let frame = fields.next().ok_or_else(|| bad("no frame"))?;
-    let (id, data) = frame
-        .split_once('#')
-        .ok_or_else(|| bad("no '#' in the frame"))?;
-    if id.len() != 3 {
-        return Err(bad("not a standard (3-digit) identifier"));
-    }
-    let id = u16::from_str_radix(id, 16).map_err(|_| bad("identifier not hexadecimal"))?;
-    if data.len() % 2 != 0 || data.len() > 16 {
-        return Err(bad("data not 0 to 8 bytes of 2 hex digits"));
-    }
-    let data = (0..data.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&data[i..i + 2], 16))
-        .collect::<Result<Vec<u8>, _>>()
-        .map_err(|_| bad("data not hexadecimal"))?;
-    let unix_us = sec
-        .checked_mul(1_000_000)
-        .and_then(|s| s.checked_add(usec))
-        .filter(|us| us.checked_mul(1000).is_some())
-        .ok_or_else(|| bad("time out of range"))?;
-    Ok(LogFrame { unix_us, id, data })
+    Ok(LogFrame {
+        unix_us: e.unix_us,
+        id: e.frame.id,
+        data: e.frame.bytes().to_vec(),
+    })
 }
 
 fn phase_name(p: Phase) -> &'static str {

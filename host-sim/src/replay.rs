@@ -36,7 +36,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::bus::{parse_log_line, Bus, Faults, LogEntry, Tap, LOG_IFACE};
+use crate::bus::{parse_candump_line, Bus, Faults, Tap};
 use embedded_can::nb::Can;
 
 /// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).
@@ -101,7 +101,7 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
         if line.is_empty() {
             continue;
         }
-        let entry = candump_line(line).ok_or_else(|| {
+        let entry = parse_candump_line(line).ok_or_else(|| {
             format!("line {n}: not a candump -l line with a standard identifier: {line:?}")
         })?;
         let us = entry.unix_us;
@@ -122,21 +122,6 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
         }
     }
     Ok(out)
-}
-
-/// One candump `-l` line, `(time) IFACE ID#DATA` with any interface name and hexadecimal of
-/// either case, through the strict form of host-sim's own log (`parse_log_line`).
-fn candump_line(line: &str) -> Option<LogEntry> {
-    let mut parts = line.split_whitespace();
-    let (Some(time), Some(_iface), Some(frame), None) =
-        (parts.next(), parts.next(), parts.next(), parts.next())
-    else {
-        return None;
-    };
-    parse_log_line(&format!(
-        "{time} {LOG_IFACE} {}",
-        frame.to_ascii_uppercase()
-    ))
 }
 
 /// The compact binary log the QEMU image replays (the format is `gait_loop::binlog`'s, in
@@ -164,7 +149,7 @@ pub fn binary_log(name: &str, log: &[String], cfg: &NodeConfig) -> Result<Vec<u8
         if line.is_empty() {
             continue;
         }
-        let entry = candump_line(line)
+        let entry = parse_candump_line(line)
             .ok_or_else(|| format!("line {}: not a candump -l line: {line:?}", i + 1))?;
         if entry.unix_us < last_us {
             return Err(format!("line {}: time goes backwards", i + 1));

@@ -449,3 +449,37 @@ fn python_can_reads_the_log() {
         got[6], want[0], want[1], want[2], want[3]
     );
 }
+
+/// The readers of candump text (`bus::parse_candump_line`, used by replays and by the MCAP
+/// writer's `mcap_log::parse_log_line`) refuse, without panicking, what is not a line with a
+/// standard identifier: non-ASCII text where hexadecimal is expected (the MCAP reader used to
+/// slice it at byte offsets and panicked: found by the fuzz target `text`), identifiers above
+/// 0x7FF, signs, odd data lengths; and accept any interface and either case.
+#[test]
+fn candump_readers_refuse_what_is_not_a_frame() {
+    use host_sim::bus::parse_candump_line;
+    use host_sim::mcap_log::parse_log_line as mcap_line;
+    for bad in [
+        "(1767225600.000000) can0 010#0000\u{fffd}E",
+        "(1767225600.000000) can0 01\u{e9}#00",
+        "(1767225600.000000) can0 800#00",
+        "(1767225600.000000) can0 +10#00",
+        "(1767225600.000000) can0 010#+1",
+        "(1767225600.000000) can0 010#012",
+        "(1767225600.00000) can0 010#01",
+        "(1767225600.000000)",
+    ] {
+        assert_eq!(parse_candump_line(bad), None, "{bad:?}");
+        assert!(mcap_line(bad).is_err(), "{bad:?}");
+    }
+    let e = parse_candump_line("(1767225600.002500) vcan1 1a0#0aFf").expect("a frame");
+    assert_eq!(
+        (e.unix_us, e.frame.id, e.frame.bytes()),
+        (1_767_225_600_002_500, 0x1A0, &[0x0A, 0xFF][..])
+    );
+    let m = mcap_line("(1767225600.002500) vcan1 1a0#0aFf").expect("a frame");
+    assert_eq!(
+        (m.unix_us, m.id, &m.data[..]),
+        (e.unix_us, e.frame.id, e.frame.bytes())
+    );
+}
