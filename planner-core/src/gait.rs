@@ -811,9 +811,8 @@ pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     landed: Option<Side>,
     /// The last re-plan failed (see [`Gait::replan_failed`]).
     failed: bool,
-    /// The queued ids are consecutive (each the successor of the one before it: `+1`, or
-    /// 255 → 0 as the node's 8-bit ids wrap), so they are distinct and a lookup by id is
-    /// arithmetic ([`Gait::index_of`]). A lookup hint (set by `push`), always `false` while
+    /// The queued ids are consecutive (each the successor of the one before it, `+1` modulo
+    /// 2¹⁶), so they are distinct and a lookup by id is arithmetic ([`Gait::index_of`]). A lookup hint (set by `push`), always `false` while
     /// the queue is empty, so that a gait emptied and a fresh one compare equal.
     consecutive: bool,
     mode: Mode,
@@ -1164,16 +1163,14 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     }
 
     /// The position of the first queued step `id`. With consecutive ids (every walk the node
-    /// drives) the position is `id − front` (in 16 or, across the 8-bit wrap, 8 bits),
-    /// checked; otherwise a search of the queue.
+    /// drives) the position is `id − front` (modulo 2¹⁶), checked; otherwise a search of the
+    /// queue.
     fn index_of(&self, id: u16) -> Option<usize> {
         let front = self.queue.front()?.id;
         if self.consecutive && Q <= 256 {
-            // At most 256 consecutive ids are distinct: the one match is at one of these.
-            let d = id.wrapping_sub(front);
-            return [usize::from(d), usize::from(d & 0xFF)]
-                .into_iter()
-                .find(|&i| self.queue.get(i).is_some_and(|q| q.id == id));
+            // At most 256 consecutive ids are distinct: the one match is there, if anywhere.
+            let i = usize::from(id.wrapping_sub(front));
+            return self.queue.get(i).is_some_and(|q| q.id == id).then_some(i);
         }
         self.queue.iter().position(|q| q.id == id)
     }
@@ -1307,7 +1304,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         }
         let consecutive = match self.queue.back() {
             None => true,
-            Some(b) => self.consecutive && (id == b.id.wrapping_add(1) || (b.id == 255 && id == 0)),
+            Some(b) => self.consecutive && id == b.id.wrapping_add(1),
         };
         self.queue
             .push_back(Queued {
@@ -1364,6 +1361,19 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     pub fn stop(&mut self) {
         self.stop_requested = true;
         self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// Drops every queued step while standing, and nothing else (no stop is requested: a
+    /// later `start` walks what is queued then exactly as if nothing had been dropped).
+    pub fn drop_queue(&mut self) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        self.queue.clear();
+        self.consecutive = false;
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
     }
 
     /// Drops every queued step (not the one being swung) and stops after the present swing.

@@ -497,7 +497,9 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         yaw_cost: {yc},
         max_stride: {ms},
         max_growth: {mg},
+        sole_gap: {sg},
     }},
+    entropy: 0,
 }}",
         omega = p.omega.literal(),
         dt = p.dt.literal(),
@@ -533,5 +535,6 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         yc = r.yaw_cost.literal(),
         ms = r.max_stride.literal(),
         mg = r.max_growth.literal(),
+        sg = r.sole_gap.literal(),
     )
 }

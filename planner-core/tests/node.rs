@@ -56,17 +56,30 @@ impl Bus {
 
 type N = Node<8>;
 
+/// A node of `cfg` with its session open (the handshake: the start-up's session published in
+/// the first cycle, then a `Reset` carrying it).
+fn opened(cfg: NodeConfig) -> N {
+    let mut n = N::new(cfg).unwrap();
+    let mut bus = Bus::default();
+    n.poll(5, &mut bus);
+    bus.send(stamped(&n, control(ControlOp::Reset)));
+    n.poll(10, &mut bus);
+    assert_eq!(bus.acks().first().map(|a| a.reason), Some(None));
+    assert_eq!(n.state(), planner_core::node::NodeState::Standing);
+    n
+}
+
 fn node() -> N {
-    N::new(NodeConfig::hrp2()).unwrap()
+    opened(NodeConfig::hrp2())
 }
 
 thread_local! {
     /// The controller's memory: appended step of each id and the last version made.
-    static BOOK: std::cell::RefCell<std::collections::HashMap<u8, (WireStep, u8)>> =
+    static BOOK: std::cell::RefCell<std::collections::HashMap<u16, (WireStep, u8)>> =
         Default::default();
 }
 
-fn step(id: u8, left: bool, x: f64) -> Command {
+fn step(id: u16, left: bool, x: f64) -> Command {
     let y = if left { 0.1 } else { -0.1 };
     let s = WireStep::from_si(id, left, x, y, 0.0).unwrap();
     BOOK.with(|b| {
@@ -80,38 +93,80 @@ fn step(id: u8, left: bool, x: f64) -> Command {
 
 /// The next version of a modification of step `id` (offsets from its append; a step never
 /// appended is taken as appended at the origin).
-fn modify(id: u8, left: bool, x: f64, y: f64) -> Command {
+fn modify(id: u16, left: bool, x: f64, y: f64) -> Command {
     BOOK.with(|b| {
         let mut b = b.borrow_mut();
         let e = b
             .entry(id)
             .or_insert((WireStep::from_si(id, left, 0.0, 0.0, 0.0).unwrap(), 0));
-        e.1 = (e.1 + 1) % wire::VERSIONS;
+        e.1 += 1;
         let mut m = WireModify::from_si(&e.0, e.1, x, y, 0.0).unwrap();
         m.left = left;
         Command::Modify(m)
     })
 }
 
-/// A heartbeat with a new sequence number (a repeated one proves nothing).
-fn heartbeat() -> Command {
-    thread_local! {
-        static SEQ: std::cell::Cell<u8> = const { std::cell::Cell::new(0) };
-    }
-    let seq = SEQ.with(|s| {
-        s.set(s.get().wrapping_add(1));
-        s.get()
-    });
-    control(seq, ControlOp::Heartbeat)
+thread_local! {
+    /// The controller's sequence counter (one for every control command).
+    static SEQ: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
 }
 
-fn control(seq: u8, op: ControlOp) -> Command {
-    Command::Control { seq, op }
+/// The next sequence number.
+fn next_seq() -> u32 {
+    SEQ.with(|s| {
+        s.set(s.get() + 1);
+        s.get()
+    })
+}
+
+/// A heartbeat with a new sequence number (a repeated one proves nothing).
+fn heartbeat() -> Command {
+    control(ControlOp::Heartbeat)
+}
+
+/// Control command `op` with the next sequence number (its session is stamped by `ask` and
+/// `run`, as the node publishes it).
+fn control(op: ControlOp) -> Command {
+    control_at(next_seq(), op)
+}
+
+/// The session of a control command not yet stamped with the node's.
+const UNSTAMPED: u16 = 0xFFFF;
+
+/// Control command `op` with sequence number `seq`.
+fn control_at(seq: u32, op: ControlOp) -> Command {
+    Command::Control {
+        session: UNSTAMPED,
+        seq,
+        op,
+    }
+}
+
+/// `c` in the session `n` publishes (a control command not stamped yet; others unchanged).
+fn stamped(n: &N, c: Command) -> Command {
+    match c {
+        Command::Control {
+            session: UNSTAMPED,
+            seq,
+            op,
+        } => Command::Control {
+            session: n.session().tag(),
+            seq,
+            op,
+        },
+        c => c,
+    }
 }
 
 /// Runs `n` cycles at 5 ms and returns the acks seen.
 fn run(n: &mut N, bus: &mut Bus, t: &mut u32, cycles: u32) -> Vec<Ack> {
     let mut acks = vec![];
+    // Control commands waiting in the device: in the node's session.
+    for f in bus.rx.iter_mut() {
+        if let Ok(c @ Command::Control { .. }) = Command::decode(f, n.next_step()) {
+            *f = stamped(n, c).encode();
+        }
+    }
     for _ in 0..cycles {
         *t += 5;
         n.poll(*t, bus);
@@ -123,6 +178,7 @@ fn run(n: &mut N, bus: &mut Bus, t: &mut u32, cycles: u32) -> Vec<Ack> {
 /// Sends one command, runs one cycle, returns its ack. A refusal must have changed nothing:
 /// the node is then in the state of a clone that ran the same cycle without the frame.
 fn ask(n: &mut N, bus: &mut Bus, t: &mut u32, c: Command) -> Ack {
+    let c = stamped(n, c);
     ask_raw(n, bus, t, c.encode())
 }
 
@@ -146,11 +202,11 @@ fn ask_raw(n: &mut N, bus: &mut Bus, t: &mut u32, f: RawFrame) -> Ack {
 fn walking_node() -> (N, Bus, u32) {
     let (mut n, mut bus, mut t) = (node(), Bus::default(), 0);
     for (i, x) in [0.2, 0.4, 0.6, 0.8, 1.0].iter().enumerate() {
-        let a = ask(&mut n, &mut bus, &mut t, step(i as u8, i % 2 == 1, *x));
+        let a = ask(&mut n, &mut bus, &mut t, step(i as u16, i % 2 == 1, *x));
         assert_eq!(a.reason, None, "{a:?}");
     }
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control(1, ControlOp::Start)).reason,
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Start)).reason,
         None
     );
     (n, bus, t)
@@ -171,9 +227,10 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     seen.borrow_mut().push(Reason::UnknownId); // (the decoder's; never sent)
     let f = RawFrame::new(ids::STEP_APPEND, &[1, 2, 3]).unwrap();
     check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::BadLength);
-    let body = [9, 77];
-    let crc = wire::crc8(ids::CONTROL, &body);
-    let f = RawFrame::new(ids::CONTROL, &[9, 77, crc]).unwrap();
+    let mut body = stamped(&n, control(ControlOp::Heartbeat)).encode().data;
+    body[6] = 77;
+    body[7] = wire::crc8(ids::CONTROL, &body[..7]);
+    let f = RawFrame::new(ids::CONTROL, &body).unwrap();
     check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::OutOfRange);
     // A corrupted footstep (one bit of x) and a corrupted start: refused, nothing queued.
     let mut f = step(0, false, 0.2).encode();
@@ -181,17 +238,36 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     let a = ask_raw(&mut n, &mut bus, &mut t, f);
     assert_eq!((a.seq, a.echo), (0, f.data[7]));
     check(a, Reason::BadCrc);
-    let mut f = control(1, ControlOp::Start).encode();
-    f.data[1] ^= 0x02; // start (1) would read as stop now (3)
+    let mut f = stamped(&n, control(ControlOp::Start)).encode();
+    f.data[6] ^= 0x02; // start (1) would read as stop now (3)
     check(ask_raw(&mut n, &mut bus, &mut t, f), Reason::BadCrc);
     assert_eq!(n.gait().queued(), 0);
+    // Another session: a control command of the session before the handshake's `Reset`.
+    let old = Command::Control {
+        session: n.session().tag().wrapping_sub(1),
+        seq: next_seq(),
+        op: ControlOp::Heartbeat,
+    };
+    check(ask_raw(&mut n, &mut bus, &mut t, old.encode()), Reason::WrongSession);
+    // No session yet: a node just started takes nothing but the handshake (and `ESTOP`).
+    let mut fresh = N::new(NodeConfig::hrp2()).unwrap();
+    let (mut bf, mut tf) = (Bus::default(), 0);
+    run(&mut fresh, &mut bf, &mut tf, 1);
+    check(
+        ask(&mut fresh, &mut bf, &mut tf, step(0, false, 0.2)),
+        Reason::NoSession,
+    );
+    check(
+        ask(&mut fresh, &mut bf, &mut tf, control(ControlOp::Heartbeat)),
+        Reason::NoSession,
+    );
     // State-level, standing.
     check(
         ask(&mut n, &mut bus, &mut t, modify(0, false, 0.2, -0.1)),
         Reason::WrongState,
     );
     check(
-        ask(&mut n, &mut bus, &mut t, control(1, ControlOp::Start)),
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Start)),
         Reason::WrongState,
     );
     check(
@@ -228,7 +304,7 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         ask(&mut n, &mut bus, &mut t, step(1, false, 0.4)),
         Reason::SideOrder,
     );
-    for i in 1..8u8 {
+    for i in 1..8u16 {
         assert_eq!(
             ask(
                 &mut n,
@@ -246,17 +322,19 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     );
     assert_eq!(n.gait().queued(), 8);
     // Walking.
+    let before = next_seq();
+    let start = next_seq();
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Start)).reason,
+        ask(&mut n, &mut bus, &mut t, control_at(start, ControlOp::Start)).reason,
         None
     );
     check(
-        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Start)),
+        ask(&mut n, &mut bus, &mut t, control_at(start, ControlOp::Start)),
         Reason::Duplicate,
     );
     // A late copy of an older `Start` (sequence behind the last accepted control command).
     check(
-        ask(&mut n, &mut bus, &mut t, control(1, ControlOp::Start)),
+        ask(&mut n, &mut bus, &mut t, control_at(before, ControlOp::Start)),
         Reason::Stale,
     );
     // A late copy of an older version of a modification.
@@ -291,16 +369,16 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     wide.reach.max_stride = 10.0;
     wide.reach.max_growth = 10.0;
     wide.reach.max_backward = 10.0;
-    let mut w = N::new(wide).unwrap();
+    let mut w = opened(wide);
     let (mut b3, mut t3) = (Bus::default(), 0);
     for (i, x) in [0.2, 0.4, 0.6].iter().enumerate() {
         assert_eq!(
-            ask(&mut w, &mut b3, &mut t3, step(i as u8, i % 2 == 1, *x)).reason,
+            ask(&mut w, &mut b3, &mut t3, step(i as u16, i % 2 == 1, *x)).reason,
             None
         );
     }
     assert_eq!(
-        ask(&mut w, &mut b3, &mut t3, control(1, ControlOp::Start)).reason,
+        ask(&mut w, &mut b3, &mut t3, control(ControlOp::Start)).reason,
         None
     );
     for k in 0..200 {
@@ -323,15 +401,32 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         Reason::EmergencyStopped,
     );
     check(
-        ask(&mut n, &mut bus, &mut t, control(3, ControlOp::Reset)),
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Reset)),
         Reason::WrongState,
     );
     run(&mut n, &mut bus, &mut t, 600);
     assert!(n.gait().is_standing());
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control(4, ControlOp::Reset)).reason,
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Reset)).reason,
         None
     );
+    // The planning budget: a `Start` and a modification of its first target in one cycle.
+    let mut b = node();
+    let (mut bb, mut tb) = (Bus::default(), 10);
+    for (i, x) in [0.2, 0.4, 0.6].iter().enumerate() {
+        assert_eq!(
+            ask(&mut b, &mut bb, &mut tb, step(i as u16, i % 2 == 1, *x)).reason,
+            None
+        );
+    }
+    bb.send(stamped(&b, control(ControlOp::Start)));
+    bb.send(modify(0, false, 0.2, -0.11));
+    let acks = run(&mut b, &mut bb, &mut tb, 1);
+    assert_eq!(acks.len(), 2, "{acks:?}");
+    assert_eq!(acks[0].reason, None);
+    check(acks[1], Reason::Busy);
+    // Step numbers run out: a start-up numbers 65,535 steps (see `exhaustion` below).
+    seen.borrow_mut().push(Reason::Exhausted);
     // The controller falls silent while walking: motion commands are refused until a reset.
     let (mut l, mut bl, mut tl) = walking_node();
     run(&mut l, &mut bl, &mut tl, 101);
@@ -365,7 +460,8 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     }
     // Every refusal of this node was counted (UnknownId is not a refusal, PlanFailed not
     // reached; Infeasible and ControllerLost were the other nodes').
-    assert_eq!(n.counters().refused as usize, seen.len() - 4);
+    // (NoSession twice on the fresh node, Busy on another, Exhausted below.)
+    assert_eq!(n.counters().refused as usize, seen.len() - 8);
 }
 
 /// A retransmitted footstep command (its answer was lost) is answered `Duplicate` and changes
@@ -415,17 +511,20 @@ fn repeats_are_duplicates_whatever_happened_since() {
     );
 }
 
-/// At most one planning command per cycle: five modifications of the next swing target sent
-/// at once are answered one per cycle, in order; cheap commands before the first (a heartbeat,
-/// modifications of later steps) are answered at once.
+/// Modifications of one step received in one cycle are coalesced: five of the next swing
+/// target sent at once are all answered in that cycle, the newest carried out (one plan), the
+/// four older answered `Stale`; cheap commands with them (a heartbeat, modifications of later
+/// steps) are carried out as well.
 #[test]
-fn one_planning_command_per_cycle() {
+fn modifications_of_a_step_in_one_cycle_are_coalesced() {
     let (mut n, mut bus, mut t) = walking_node();
     assert_eq!(n.gait().next_target(), Some(0));
     for k in 0..3 {
         bus.send(modify(3, true, 0.8 + 0.01 * f64::from(k), 0.1));
     }
-    assert_eq!(run(&mut n, &mut bus, &mut t, 1).len(), 3);
+    let acks = run(&mut n, &mut bus, &mut t, 1);
+    let reasons: Vec<_> = acks.iter().map(|a| a.reason).collect();
+    assert_eq!(reasons, [Some(Reason::Stale), Some(Reason::Stale), None]);
     bus.send(heartbeat());
     let mods: Vec<Command> = (0..5)
         .map(|k| modify(0, false, 0.2, -0.11 - 0.01 * f64::from(k)))
@@ -433,27 +532,15 @@ fn one_planning_command_per_cycle() {
     for m in &mods {
         bus.send(*m);
     }
-    let first = run(&mut n, &mut bus, &mut t, 1);
-    assert_eq!(first.len(), 2, "{first:?}"); // the heartbeat and one modification
-    assert_eq!((first[1].reason, first[1].echo), (None, mods[0].echo()));
-    for m in &mods[1..] {
-        let acks = run(&mut n, &mut bus, &mut t, 1);
-        assert_eq!(acks.len(), 1, "{acks:?}");
-        assert_eq!((acks[0].reason, acks[0].echo), (None, m.echo()));
+    let acks = run(&mut n, &mut bus, &mut t, 1);
+    assert_eq!(acks.len(), 6, "{acks:?}");
+    assert_eq!(acks[0].reason, None); // the heartbeat
+    for (a, m) in acks[1..5].iter().zip(&mods) {
+        assert_eq!((a.reason, a.echo), (Some(Reason::Stale), m.echo()));
     }
+    assert_eq!((acks[5].reason, acks[5].echo), (None, mods[4].echo()));
+    assert_eq!(n.gait().queued_step(0).map(|f| f.y), Some(-0.15));
     assert!(run(&mut n, &mut bus, &mut t, 1).is_empty());
-    // With the limit lifted, all in one cycle.
-    let mut cfg = NodeConfig::hrp2();
-    cfg.max_plans = usize::MAX;
-    let (mut m, mut b2, mut t2) = (N::new(cfg).unwrap(), Bus::default(), 0);
-    for (i, x) in [0.2, 0.4, 0.6, 0.8].iter().enumerate() {
-        ask(&mut m, &mut b2, &mut t2, step(i as u8, i % 2 == 1, *x));
-    }
-    ask(&mut m, &mut b2, &mut t2, control(1, ControlOp::Start));
-    for k in 0..3 {
-        b2.send(modify(0, false, 0.2, -0.11 - 0.01 * f64::from(k)));
-    }
-    assert_eq!(run(&mut m, &mut b2, &mut t2, 1).len(), 3);
 }
 
 #[test]
@@ -464,7 +551,7 @@ fn the_stream_carries_the_gaits_reference() {
     let mut status = None;
     for k in 0..400 {
         if k % 20 == 0 {
-            bus.send(heartbeat());
+            bus.send(stamped(&n, heartbeat()));
         }
         t += 5;
         let rep = n.poll(t, &mut bus);
@@ -508,11 +595,11 @@ fn a_silent_controller_stops_the_robot() {
     // The state is latched until a reset once standing.
     assert_eq!(n.status().state, 3);
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control(2, ControlOp::Start)).reason,
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Start)).reason,
         Some(Reason::ControllerLost)
     );
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control(3, ControlOp::Reset)).reason,
+        ask(&mut n, &mut bus, &mut t, control(ControlOp::Reset)).reason,
         None
     );
     assert_eq!(n.status().state, 0);
@@ -524,12 +611,16 @@ fn a_silent_controller_stops_the_robot() {
 #[test]
 fn reach_rules_one_by_one() {
     use planner_core::gait::{Footstep, Side};
-    use planner_core::node::Reach;
+    use planner_core::node::{Reach, Soles};
     let r = Reach::default();
+    let soles = Soles {
+        half_length: 0.12,
+        half_width: 0.07,
+    };
     let other = Footstep::new(Side::Right, 0.0, 0.0, 0.0);
     let check = |sx: f64, fx: f64, w: f64, yaw: f64| {
         let same = Footstep::new(Side::Left, sx, 0.2, 0.0);
-        r.check(&other, &same, &Footstep::new(Side::Left, fx, w, yaw))
+        r.check(&other, &same, &Footstep::new(Side::Left, fx, w, yaw), &soles)
     };
     let reach = Err(Reason::Reach);
     for (what, inside, outside) in [
@@ -552,11 +643,6 @@ fn reach_rules_one_by_one() {
             "width",
             check(0.0, 0.0, 0.28, 0.0),
             check(0.0, 0.0, 0.29, 0.0),
-        ),
-        (
-            "narrow",
-            check(0.0, 0.0, 0.15, 0.0),
-            check(0.0, 0.0, 0.14, 0.0),
         ),
         (
             "backward",
@@ -583,6 +669,23 @@ fn reach_rules_one_by_one() {
         assert_eq!(outside, reach, "{what} outside");
     }
     assert_eq!(check(0.0, 0.1, -0.01, 0.0), Err(Reason::Crossing));
+    // The soles: at least 10 mm apart as rectangles (0.24 × 0.14 m) at their headings. The
+    // narrowest width at a zero heading change leaves exactly that; 0.14 m leaves none.
+    assert_eq!(check(0.0, 0.0, 0.15, 0.0), Ok(()));
+    assert_eq!(check(0.0, 0.0, 0.14, 0.0), Err(Reason::Crossing));
+    // Turned by 0.299 rad at a width of 0.15 m, the soles would overlap by 22 mm: refused,
+    // whichever way it turns; the width that keeps 10 mm at that heading is taken.
+    for yaw in [0.299, -0.299, 0.15] {
+        assert_eq!(check(0.0, 0.0, 0.15, yaw), Err(Reason::Crossing), "{yaw}");
+    }
+    // The gap of a turned sole beside a straight one: its inner corner reaches
+    // `hw·cos + hl·|sin|` across, the straight sole `hw`; so the width that leaves 10 mm is
+    // `0.07 + 0.01 + 0.07·cos + 0.12·|sin|`.
+    for yaw in [0.299f64, -0.299, 0.15, -0.05] {
+        let w = 0.08 + 0.07 * yaw.cos() + 0.12 * yaw.abs().sin();
+        assert_eq!(check(0.0, 0.0, w + 1e-6, yaw), Ok(()), "{yaw} at {w}");
+        assert_eq!(check(0.0, 0.0, w - 1e-4, yaw), Err(Reason::Crossing), "{yaw} at {w}");
+    }
 }
 
 /// A modification is checked with its successors: moving step 2 back makes step 4's stride

@@ -16,7 +16,7 @@ use planner_core::wire::{ControlOp, LinkHealth, RawFrame};
 /// its link health: as far from a fresh node as a few seconds of walking get.
 fn walked(cycles_walking: u32) -> Rig {
     let mut r = Rig::hrp2();
-    for i in 0..6u8 {
+    for i in 0..6u16 {
         let left = i % 2 == 1;
         assert_eq!(r.append(i, left, 0.1 * f64::from(i + 1), y(left)), None);
     }
@@ -53,29 +53,32 @@ where
 {
     let mut book = planner_core::wire::StepBook::new();
     let side = a.gait().next_side() == Some(Side::Left);
-    let mut program: Vec<RawFrame> = (0..4u8)
-        .map(|i| {
-            let left = side ^ (i % 2 == 1);
-            book.append(i, left, 0.15 * f64::from(i + 1), y(left), 0.0)
-                .unwrap()
-                .encode()
-        })
-        .collect();
-    program.push(
-        planner_core::wire::Command::Control {
-            seq: 1,
-            op: ControlOp::Start,
-        }
-        .encode(),
-    );
+    let session = a.session().tag();
+    let control = |seq, op| planner_core::wire::Command::Control { session, seq, op }.encode();
+    // The handshake (the session as the node publishes it), four steps, the start (the
+    // session then is the next epoch).
+    let mut program = vec![control(1, ControlOp::Reset)];
+    let first = a.next_step();
+    program.extend((0..4u16).map(|i| {
+        let left = side ^ (i % 2 == 1);
+        book.append(first + i, left, 0.15 * f64::from(i + 1), y(left), 0.0)
+            .unwrap()
+            .encode()
+    }));
+    let opened = planner_core::wire::Command::Control {
+        session: session.wrapping_add(1),
+        seq: 2,
+        op: ControlOp::Start,
+    };
+    program.push(opened.encode());
     let (mut ba, mut bb) = (Bus::default(), Bus::default());
     for k in 0..600u32 {
         if let Some(f) = program.get(k as usize) {
             ba.rx.push_back(*f);
             bb.rx.push_back(*f);
         }
-        let ra = a.poll(5 * k, &mut ba);
-        let rb = b.poll(5 * k, &mut bb);
+        let ra = a.poll(5 * k + 5, &mut ba);
+        let rb = b.poll(5 * k + 5, &mut bb);
         assert_eq!(ra, rb, "cycle {k}");
     }
     assert!(ba.tx.len() > 3000, "the walk sent {} frames", ba.tx.len());

@@ -11,7 +11,8 @@ use common::{state_name, y, Rig};
 use planner_core::gait::Side;
 use planner_core::wire::{Command, ControlOp, Reason};
 
-const STATES: [&str; 7] = [
+const STATES: [&str; 8] = [
+    "no session",
     "standing",
     "walking",
     "stopping",
@@ -80,7 +81,7 @@ fn expect(state: &str, cell: &str) -> (Option<u8>, String) {
 /// A walking robot: five steps queued, started, in the start window's double support.
 fn walking() -> Rig {
     let mut r = Rig::hrp2();
-    for i in 0..5u8 {
+    for i in 0..5u16 {
         let left = i % 2 == 1;
         assert_eq!(r.append(i, left, 0.1 * f64::from(i + 1), y(left)), None);
     }
@@ -91,6 +92,11 @@ fn walking() -> Rig {
 
 fn setup(state: &str) -> Rig {
     let mut r = match state {
+        "no session" => {
+            let mut r = Rig::unopened(planner_core::node::NodeConfig::hrp2());
+            r.cycle(); // the session is published
+            r
+        }
         "standing" => {
             let mut r = Rig::hrp2();
             assert_eq!(r.append(0, false, 0.1, -0.1), None);
@@ -125,10 +131,11 @@ fn setup(state: &str) -> Rig {
     r
 }
 
-/// The last appended id, and the next.
-fn ids(r: &Rig) -> (Option<u8>, u8) {
-    let last = (0..=255u8).rev().find(|&i| r.book.appended(i).is_some());
-    (last, last.map_or(0, |l| l + 1))
+/// The last appended step number, and the next.
+fn ids(r: &Rig) -> (Option<u16>, u16) {
+    let next = r.n.next_step();
+    let last = next.wrapping_sub(1);
+    (r.book.appended(last).map(|_| last), next)
 }
 
 /// Sends `command` (valid) and returns its answer and the state after the cycle.
@@ -165,12 +172,16 @@ fn apply(r: &mut Rig, command: &str) -> (Option<u8>, String) {
         }
         "STEP_MODIFY" => {
             // The last queued step (or, with none queued, the last appended), 1 cm further.
-            let (last, _) = ids(r);
-            let id = (0..=255u8)
-                .rev()
-                .find(|&i| r.n.gait().is_queued(u16::from(i)))
+            let (last, next) = ids(r);
+            let id = (0..=255u16)
+                .map(|k| next.wrapping_sub(k))
+                .find(|&i| r.n.gait().is_queued(i))
                 .or(last)
-                .expect("a step was appended");
+                .unwrap_or_else(|| {
+                    // Nothing appended (no session): a step the controller's book knows.
+                    r.book.append(next, false, 0.1, -0.1, 0.0);
+                    next
+                });
             let f = r.book.appended(id).expect("appended").si();
             let c = r
                 .book

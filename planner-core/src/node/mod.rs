@@ -5,59 +5,72 @@
 //! the same code runs in the firmware (FDCAN), in host-sim (a virtual bus) and in tests.
 //!
 //! Per cycle, with bounded work:
-//! 1. receive at most [`NodeConfig::max_rx`] of the node's own frames ([`ids::COMMANDS`]);
-//!    each is validated once ([`Command::decode`]), checked against the state (sequence,
-//!    version, reach, side order, emergency stop, supervision) and applied to the [`Gait`],
-//!    and answered with an `ACK` frame that carries the reason code when refused. Frames that
-//!    are not the node's (other identifiers, extended or remote frames) are counted
-//!    ([`Counters::foreign`], published in `DIAG`) and never answered; at most
-//!    [`NodeConfig::max_foreign`] of them are drained per cycle, apart from the command budget,
-//!    so a busy shared bus does not delay the controller's commands. Commands that plan — a
+//! 1. **receive**: drain the device, at most [`NodeConfig::max_rx`] of the node's own frames
+//!    ([`ids::COMMANDS`]) and [`NodeConfig::max_foreign`] others (counted in
+//!    [`Counters::foreign`], published in `DIAG`, never answered), before acting on any;
+//! 2. **act in priority order**: every `ESTOP` of the cycle first, then every `StopNow`,
+//!    then the other commands in the order they arrived. Each is validated once
+//!    ([`Command::decode`]), checked against the state (session, freshness, reach, side
+//!    order, emergency stop, supervision) and applied to the [`Gait`], and answered with an
+//!    `ACK` that carries the reason code when refused. So **every `ESTOP` and `StopNow` that
+//!    reaches the node is carried out in the cycle in which it is received**, whatever arrives
+//!    before or with it, as long as the controller keeps to `max_rx` commands a cycle (16,
+//!    more than a third of what a 1 Mbit/s bus carries in 5 ms). Commands that plan — a
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
 //!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
-//!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them are
-//!    taken per cycle: after the last one the node stops receiving, and the frames behind it
-//!    wait in the device's queue for the next cycle. This bounds the worst cycle whatever
-//!    arrives;
-//! 2. supervision: if the robot moves and the controller has not been heard (an accepted
-//!    command) for more than [`NodeConfig::heartbeat_timeout_ms`], the node enters the
-//!    *controller lost* state: the queue is dropped, the swing in progress ends, the robot
-//!    settles, and motion commands are refused (`ControllerLost`) until a `Reset` once
-//!    standing. So **no foot lifts off more than `heartbeat_timeout_ms` after the controller
-//!    was last heard**, for the whole walk (a lift-off happens in step 3 of a cycle whose
-//!    step 2 found the controller heard within the timeout);
-//! 3. advance the gait by one tick;
-//! 4. publish the reference (5 frames) and, every 20 cycles, `STATUS` and `DIAG` (the node's
-//!    heartbeat); frames that cannot be sent now wait in a transmit backlog of [`TX_BACKLOG`]
-//!    frames; an unsent reference is replaced by the next one rather than sent late.
+//!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
+//!    are carried out a cycle; the rest are refused `Busy`. Modifications of one step that
+//!    arrive in one cycle are coalesced: only the newest version is carried out, the older
+//!    ones are answered `Stale`;
+//! 3. **supervision**: if the robot moves and the controller has not been heard (an accepted
+//!    command: new by construction, see below) for more than
+//!    [`NodeConfig::heartbeat_timeout_ms`], by the clock or by the count of cycles (one cycle
+//!    stands for `dt`), the node enters the *controller lost* state: the queue is dropped,
+//!    the swing in progress ends, the robot settles, and motion commands are refused
+//!    (`ControllerLost`) until a `Reset` once standing. The clock itself is checked: if
+//!    `now_ms` advances by less than half of the nominal time over [`CLOCK_WINDOW`] cycles
+//!    (50 ms over 100 ms), the node latches a clock fault (`STATUS` flag) and stops as for a
+//!    lost controller. So **no foot lifts off more than `heartbeat_timeout_ms` after the
+//!    controller was last heard**, for the whole walk, even with a stopped clock;
+//! 4. advance the gait by one tick;
+//! 5. publish the reference (5 frames; none before a session is open) and, in the first
+//!    cycle, every 20 cycles after it and in the cycle in which a session opens, `STATUS`,
+//!    `DIAG`, `SESSION` (and `LINK`); frames that cannot be sent now wait in a transmit
+//!    backlog of [`TX_BACKLOG`] frames; an unsent reference is replaced by the next one
+//!    rather than sent late.
+//!
+//! # Sessions and freshness (see [`crate::wire`] for the frames)
+//! * After start-up no session is open (state *no session*): the node streams nothing,
+//!   publishes its session epoch (`SESSION`), and takes only `ESTOP` and the `Reset` that
+//!   carries that epoch (the handshake); everything else is refused `NoSession`. So after a
+//!   reset of the board nothing moves until a controller has heard the new start-up.
+//! * A control command must carry the session's tag (else `WrongSession`) and a sequence
+//!   number greater than every one accepted since start-up (else `Stale`; equal to the last:
+//!   `Duplicate`). A footstep append must carry the next step number (else `SequenceGap`;
+//!   equal to an accepted one: `Duplicate`), a modification a version greater than the
+//!   step's version in force (else `Stale`). Numbers and versions never wrap (a start-up
+//!   numbers 65,535 steps, a step has 127 versions: beyond, `Exhausted`), and step numbers
+//!   run on across `Reset`s, so **no frame of an earlier session, no replayed and no wrapped
+//!   copy is ever taken**; only a command never seen before proves the controller alive.
+//! * `Reset` (only when standing) opens a new session (epoch + 1): the queue and the step
+//!   memory are dropped, the emergency stop, the controller-lost state and the clock fault are
+//!   left, and — except for the handshake after start-up — the node's world frame is
+//!   **re-based**: its origin moves to the midpoint of the feet and its x axis to their mean
+//!   heading; the stream and every later footstep are in the new frame.
+//! * `ESTOP` belongs to no session: any one stops the robot (a repeat while stopped is
+//!   `Duplicate`), and proves nothing.
+//! * `StopNow` while standing drops the queued steps, and nothing else; with none queued it
+//!   is refused `WrongState`. `Stop` while standing does nothing but count as heard.
 //!
 //! # Answers
 //! A refused command changes nothing but the refusal counters: [`Node::same_state`] holds
 //! between the node before and after it (tested for every reason code, and for random
-//! programs against a reference model in `planner-core/tests/protocol/`). Only an accepted
-//! command proves the controller alive. The state machine (standing, walking, stopping,
-//! controller lost, emergency-stopped; for each command what the node does and answers) is the
-//! table in the README's *Reliability* section, which `planner-core/tests/state_table.rs`
-//! checks against this code cell by cell.
-//!
-//! * Step ids count up from 0 after start-up and after a `Reset`: a gap is refused, so a lost
-//!   step cannot be skipped over. Steps alternate feet ([`Gait::next_side`], published in
-//!   `DIAG`): a step for the foot that will be supporting is refused (`SideOrder`).
-//! * Versions: a modification must be newer than the step's version in force
-//!   ([`WireModify::is_newer_than`]), or it is `Stale`; the step is walked at the newest
-//!   version accepted.
-//! * Repeats: a footstep frame equal to a step's append or to its version in force (for the
-//!   queued step, the one being swung and the last [`HISTORY`] done) is answered `Duplicate`;
-//!   so is a control command equal to the last accepted one, a heartbeat with the sequence
-//!   number of the previous heartbeat (it proves nothing: supervision needs new ones) and an
-//!   `ESTOP` repeating the one in force. `Start` and `Reset` must carry a sequence number ahead
-//!   of the last accepted control command (1 … 127, modulo 256), or they are `Stale` (a late
-//!   copy never starts the robot); `Stop` and `StopNow` are always carried out, and move the
-//!   last accepted sequence number only forward.
-//! * `Reset` (only when standing) starts afresh: the queue and the step memory are dropped, ids
-//!   count from 0, the emergency stop and the controller-lost state are left, and the node's
-//!   world frame is **re-based**: its origin moves to the midpoint of the feet and its x axis
-//!   to their mean heading; the stream and every later footstep are in the new frame.
+//! programs against a reference model in `planner-core/tests/protocol/`). The state machine
+//! (no session, standing, walking, stopping, controller lost, emergency-stopped; for each
+//! command what the node does and answers) is the table in the README's *Reliability*
+//! section, which `planner-core/tests/state_table.rs` checks against this code cell by cell.
+//! Steps alternate feet ([`Gait::next_side`], published in `STATUS`): a step for the foot
+//! that will be supporting is refused (`SideOrder`).
 //!
 //! Reach limits ([`Reach`]): what the HRP-2 legs (thigh and shank 0.3 m) can follow at the
 //! gait's COG height, with a margin, measured on host-sim's multi-body model
@@ -66,6 +79,9 @@
 //! its heading, `width` across, positive on the stepping foot's own side; a negative width is
 //! `Crossing`):
 //! * box: forward −0.20 … +0.30 m, width 0.15 … 0.28 m, heading change at most 0.30 rad;
+//! * soles: the landing sole keeps at least [`Reach::sole_gap`] (10 mm) from the support sole,
+//!   both taken as their rectangles at their headings (else `Crossing`): the width limit
+//!   alone is measured between sole centres, and a turned sole reaches across it;
 //! * distance between the feet `hypot(forward, width)` at most 0.361 m;
 //! * a turn costs reach: `forward + 0.3 m/rad · |Δyaw| ≤ 0.30 m`;
 //! * stride: the swinging foot travels at most 0.43 m along that heading (steady walking up
@@ -74,7 +90,9 @@
 //!
 //! The last two are why a box alone is not enough: a long step needs the speed built up by the
 //! steps before it, and the stop after long steps needs room. A modification is checked with
-//! its two successors (their rules involve the modified step).
+//! its two successors (their rules involve the modified step). The steps the node pads in
+//! (in place, at the nominal width) keep the sole gap by the configuration's check at
+//! start-up.
 
 mod reach;
 mod steps;
@@ -84,7 +102,7 @@ use core::borrow::Borrow;
 use heapless::Deque;
 
 use reach::Frame;
-pub use reach::Reach;
+pub use reach::{Reach, Soles};
 pub use steps::HISTORY;
 use steps::{Record, Steps};
 
@@ -92,12 +110,25 @@ use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side,
 use crate::real::Real;
 use crate::shaping::PreviewGains;
 use crate::wire::{
-    ids, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Status, Stream, WireModify,
-    WireStep,
+    ids, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Session, Status, Stream,
+    WireModify, WireStep,
 };
 
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
+
+/// The most command frames the node receives in one cycle (the bound of
+/// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
+/// among them is carried out first.
+pub const MAX_RX: usize = 32;
+
+/// Cycles over which the clock is checked: it must advance by at least half of their nominal
+/// time (see the module docs).
+pub const CLOCK_WINDOW: u32 = 20;
+
+/// Step numbers a start-up can give: 2¹⁶ − 1, so that no two steps of a start-up share the 16
+/// bits of their number (the frames carry the low byte, their CRC the high byte).
+pub const STEP_NUMBERS: u32 = 0xFFFF;
 
 /// Node configuration, in the node's scalar `T` ([`NodeConfig::cast`] converts the `f64`
 /// configuration that a robot file gives).
@@ -112,7 +143,8 @@ pub struct NodeConfig<T = f64> {
     /// Silence of the controller after which a moving robot stops \[ms\] (see the module
     /// docs: the supervision bound).
     pub heartbeat_timeout_ms: u32,
-    /// Command frames handled per cycle at most (the rest wait in the controller's mailbox).
+    /// Command frames received per cycle at most (the rest wait in the controller's
+    /// mailbox), at most [`MAX_RX`].
     pub max_rx: usize,
     /// Frames that are not the node's drained per cycle at most (apart from `max_rx`).
     pub max_foreign: usize,
@@ -121,6 +153,11 @@ pub struct NodeConfig<T = f64> {
     pub max_plans: usize,
     /// Reach limits.
     pub reach: Reach<T>,
+    /// A value that differs at every start-up (the firmware takes it from its hardware random
+    /// number generator): the start-up's session epoch, and (its high half) the number of its
+    /// first step. Frames of an earlier start-up are then refused except by chance (2⁻¹⁶ for
+    /// a control command); within a start-up, by construction.
+    pub entropy: u32,
 }
 
 impl NodeConfig {
@@ -146,6 +183,7 @@ impl NodeConfig {
             max_foreign: 128,
             max_plans: 1,
             reach,
+            entropy: 0,
         }
     }
 
@@ -184,6 +222,7 @@ impl NodeConfig {
             max_foreign: self.max_foreign,
             max_plans: self.max_plans,
             reach: self.reach.cast(),
+            entropy: self.entropy,
         }
     }
 }
@@ -207,7 +246,7 @@ pub struct Counters {
     /// Commands refused, total.
     pub refused: u16,
     /// Refusals per reason code (index = code; 0 unused).
-    pub by_reason: [u16; 19],
+    pub by_reason: [u16; Reason::CODES],
     /// Frames received that are not the node's (never answered).
     pub foreign: u16,
     /// Frames dropped because the transmit backlog was full.
@@ -222,7 +261,7 @@ impl Counters {
     /// Every counter zero.
     pub const ZERO: Self = Self {
         refused: 0,
-        by_reason: [0; 19],
+        by_reason: [0; Reason::CODES],
         foreign: 0,
         tx_dropped: 0,
         overruns: 0,
@@ -245,6 +284,9 @@ pub enum NodeState {
     ControllerLost = 3,
     /// Walking out the queue after `Stop` or `StopNow`, then settling.
     Stopping = 4,
+    /// After start-up, before the handshake (a `Reset` carrying the start-up's session):
+    /// standing, no reference streamed.
+    NoSession = 5,
 }
 
 /// The node. `G` holds the preview-control gains, as in [`Gait`]: by value (the default,
@@ -260,16 +302,32 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     gait: Gait<T, Q, G>,
     tx: Deque<RawFrame, TX_BACKLOG>,
     steps: Steps<Q>,
-    last_append: Option<u8>,
-    /// The last accepted control command other than a heartbeat (`Stop` and `StopNow` that
-    /// are not ahead of it are carried out without replacing it).
-    last_control: Option<(u8, ControlOp)>,
-    /// Sequence number of the last heartbeat (a repeat proves nothing).
-    last_heartbeat: Option<u8>,
-    last_estop: Option<u8>,
+    /// The session epoch (see the module docs).
+    epoch: u32,
+    /// A session is open (the handshake after start-up was taken).
+    open: bool,
+    /// Sequence number of the last accepted control command (0: none since start-up).
+    last_seq: u32,
+    /// The number of the start-up's first step.
+    first: u16,
+    /// Steps appended since start-up (the next one is `first + appended`; gait ids are
+    /// `appended` at the time).
+    appended: u32,
     estopped: bool,
     lost: bool,
+    /// The clock did not advance with the cycles (latched until a `Reset`).
+    clock_fault: bool,
     last_heard: Option<u32>,
+    /// The cycle in which the controller was last heard.
+    heard_cycle: u32,
+    /// The start of the clock check's window: cycle and `now_ms`.
+    window: (u32, u32),
+    /// Supervision's timeout in cycles (from the timeout and `dt`).
+    timeout_cycles: u32,
+    /// The nominal time of [`CLOCK_WINDOW`] cycles \[ms\].
+    window_ms: u32,
+    /// A session opened in this cycle: the reports go out now.
+    announce: bool,
     counters: Counters,
     cycle: u32,
     /// The firmware's CAN link health, published in `LINK` once set.
@@ -328,9 +386,22 @@ fn reason_of(e: GaitError) -> Reason {
     }
 }
 
-/// `true` if sequence number `seq` is ahead of `last` (1 … 127, modulo 256).
-fn ahead(seq: u8, last: u8) -> bool {
-    (1..=127).contains(&seq.wrapping_sub(last))
+/// `true` if the modification `batch[i]` is superseded by a later frame of the same cycle: a
+/// valid modification of the same step with a greater version (only the newest is carried
+/// out). `next` is the node's next step number (the frames' numbers are read against it).
+fn superseded(batch: &[RawFrame], i: usize, next: u16) -> bool {
+    let Some(f) = batch.get(i) else {
+        return false;
+    };
+    let Ok(Command::Modify(m)) = Command::decode(f, next) else {
+        return false;
+    };
+    batch.iter().skip(i + 1).any(|g| {
+        g.id == ids::STEP_MODIFY
+            && g.data[0] == f.data[0]
+            && matches!(Command::decode(g, next),
+                Ok(Command::Modify(n)) if n.id == m.id && n.version > m.version)
+    })
 }
 
 impl<const Q: usize, T: Real> Node<Q, PreviewGains<T, PREVIEW>, T> {
@@ -360,18 +431,25 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 max_foreign: 0,
                 max_plans: 0,
                 reach: Reach::PARKED,
+                entropy: 0,
             },
             gait: Gait::parked(gains),
             tx: Deque::new(),
             steps: Steps::PARKED,
-            last_append: None,
-            // `Some` of zeros, not `None`: the bytes are the zero ones (`None` is a niche).
-            last_control: Some((0, ControlOp::Heartbeat)),
-            last_heartbeat: None,
-            last_estop: None,
+            epoch: 0,
+            open: false,
+            last_seq: 0,
+            first: 0,
+            appended: 0,
             estopped: false,
             lost: false,
+            clock_fault: false,
             last_heard: None,
+            heard_cycle: 0,
+            window: (0, 0),
+            timeout_cycles: 0,
+            window_ms: 0,
+            announce: false,
             counters: Counters::ZERO,
             cycle: 0,
             link: Some(LinkHealth::ZERO),
@@ -396,17 +474,41 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// its `static` ([`ParkedNode::start`]) without building 14 KB on the stack, and how it
     /// starts afresh. On error (the checks of [`Gait::restart`]) nothing changes.
     pub fn restart(&mut self, cfg: NodeConfig<T>) -> Result<(), GaitError> {
+        // The steps the node pads in (in place, at the nominal width, the same heading) must
+        // keep the sole gap; and the receive bound is the node's buffer.
+        let p = &cfg.params;
+        let gap = p.step_width - (p.sole_half_width + p.sole_half_width);
+        if !(gap >= cfg.reach.sole_gap) || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
+            return Err(GaitError::BadParams);
+        }
+        // Supervision in cycles: the timeout in whole cycles of `dt` (rounded up).
+        let dt_us = (p.dt * T::of(1e6)).round().trunc_i32();
+        if dt_us <= 0 {
+            return Err(GaitError::BadParams);
+        }
+        let dt_us = dt_us as u32;
+        let timeout_cycles = cfg
+            .heartbeat_timeout_ms
+            .saturating_mul(1000)
+            .div_ceil(dt_us);
         self.gait.restart(cfg.params, cfg.left, cfg.right)?;
         self.cfg = cfg;
         self.tx.clear();
         self.steps.clear();
-        self.last_append = None;
-        self.last_control = None;
-        self.last_heartbeat = None;
-        self.last_estop = None;
+        self.epoch = cfg.entropy;
+        self.open = false;
+        self.last_seq = 0;
+        self.first = (cfg.entropy >> 16) as u16;
+        self.appended = 0;
         self.estopped = false;
         self.lost = false;
+        self.clock_fault = false;
         self.last_heard = None;
+        self.heard_cycle = 0;
+        self.window = (0, 0);
+        self.timeout_cycles = timeout_cycles;
+        self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
+        self.announce = false;
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
@@ -457,19 +559,49 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.cfg == other.cfg
             && self.tx.iter().eq(other.tx.iter())
             && self.steps == other.steps
-            && self.last_append == other.last_append
-            && self.last_control == other.last_control
-            && self.last_estop == other.last_estop
+            && self.epoch == other.epoch
+            && self.open == other.open
+            && self.last_seq == other.last_seq
+            && self.first == other.first
+            && self.appended == other.appended
             && self.estopped == other.estopped
             && self.lost == other.lost
+            && self.clock_fault == other.clock_fault
             && self.last_heard == other.last_heard
+            && self.heard_cycle == other.heard_cycle
+            && self.window == other.window
+            && self.announce == other.announce
             && self.cycle == other.cycle
-            && self.last_heartbeat == other.last_heartbeat
+    }
+
+    /// The session as published in `SESSION`.
+    pub fn session(&self) -> Session {
+        Session {
+            epoch: self.epoch,
+            last_seq: self.last_seq,
+        }
+    }
+
+    /// The number of the next step to append (published in `DIAG`).
+    pub fn next_step(&self) -> u16 {
+        self.first.wrapping_add(self.appended as u16)
+    }
+
+    /// `true` once the clock was found not to advance with the cycles (until a `Reset`).
+    pub fn clock_fault(&self) -> bool {
+        self.clock_fault
+    }
+
+    /// The gait's id of step number `number` (the steps since start-up before it).
+    fn gait_id(&self, number: u16) -> u16 {
+        number.wrapping_sub(self.first)
     }
 
     /// The state of the state machine (the README's table).
     pub fn state(&self) -> NodeState {
-        if self.estopped {
+        if !self.open && !self.estopped {
+            NodeState::NoSession
+        } else if self.estopped {
             NodeState::EmergencyStopped
         } else if self.lost {
             NodeState::ControllerLost
@@ -499,6 +631,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.counters.tx_dropped > 0 {
             flags |= 4;
         }
+        flags |= match self.gait.next_side() {
+            None => 0,
+            Some(Side::Left) => 1 << 3,
+            Some(Side::Right) => 2 << 3,
+        };
+        if self.clock_fault {
+            flags |= Status::CLOCK_FAULT;
+        }
         Status {
             state: self.state() as u8,
             queue: self.gait.queued().min(255) as u8,
@@ -515,12 +655,28 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             foreign: self.counters.foreign,
             bus_errors: self.counters.bus_errors,
             tx_dropped: self.counters.tx_dropped,
-            next_side: match self.gait.next_side() {
-                None => 0,
-                Some(Side::Left) => 1,
-                Some(Side::Right) => 2,
-            },
-            last_control: self.last_control.map_or(0, |(s, _)| s),
+            next_step: self.next_step(),
+        }
+    }
+
+    /// The answer refusing `frame` with `reason` without handling it (nothing changes).
+    fn refusal(
+        &self,
+        frame: &RawFrame,
+        decoded: &Result<Command, (Reason, u8)>,
+        reason: Reason,
+    ) -> Ack {
+        let (command, seq, version) = match decoded {
+            Ok(c) => (c.code(), c.key(), c.step_id().and_then(|id| self.steps.version(id))),
+            Err((_, seq)) => ((frame.id & 0xFF) as u8, *seq, None),
+        };
+        Ack {
+            command,
+            seq,
+            reason: Some(reason),
+            queue: self.gait.queued().min(255) as u8,
+            echo: crate::wire::echo_of(frame),
+            version,
         }
     }
 
@@ -545,15 +701,20 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             None => Some(self.gait.queued()),
         };
         let from_rest = position == Some(0) && self.gait.next_swing_from_rest();
-        r.check_frames(&other, &same, &f, step.side, from_rest)?;
+        let p = &self.cfg.params;
+        let soles = Soles {
+            half_length: p.sole_half_length,
+            half_width: p.sole_half_width,
+        };
+        r.check_frames(&other, &same, &f, step.side, from_rest, &soles)?;
         if let Some(id) = before {
-            let next = |k: u16| self.gait.queued_step(id.wrapping_add(k) & 0xFF);
+            let next = |k: u16| self.gait.queued_step(id.wrapping_add(k));
             if let Some(s1) = next(1) {
                 let f1 = Frame::like(&s1, &[&f, &other]);
-                r.check_frames(&f, &other, &f1, s1.side, false)?;
+                r.check_frames(&f, &other, &f1, s1.side, false, &soles)?;
                 if let Some(s2) = next(2) {
                     let f2 = Frame::like(&s2, &[&f1, &f]);
-                    r.check_frames(&f1, &f, &f2, s2.side, false)?;
+                    r.check_frames(&f1, &f, &f2, s2.side, false, &soles)?;
                 }
             }
         }
@@ -570,37 +731,29 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// Handles one frame from the bus (validation, state checks, application) and returns the
     /// answer to send: `None` for a frame that is not the node's (counted, not answered).
+    /// [`Node::poll`] receives a cycle's frames first and hands them here in priority order.
     pub fn handle(&mut self, frame: &RawFrame, now_ms: u32) -> Option<Ack> {
-        self.handle_planned(frame, now_ms).0
-    }
-
-    /// [`Node::handle`], and whether the command ran the planner.
-    fn handle_planned(&mut self, frame: &RawFrame, now_ms: u32) -> (Option<Ack>, bool) {
         if !ids::is_command(frame.id) {
             self.counters.foreign = self.counters.foreign.saturating_add(1);
-            return (None, false);
+            return None;
         }
-        // Known before handling: a `Start`, or a modification of the next swing target while
-        // walking (the only one that plans, see `Gait::modify`).
-        let decoded = Command::decode(frame);
-        let may_plan = match decoded {
+        let decoded = Command::decode(frame, self.next_step());
+        Some(self.handle_command(frame, decoded, now_ms))
+    }
+
+    /// `true` if `decoded` would run the planner: a `Start`, or a modification of the next
+    /// swing target while walking (the only one that plans, see `Gait::modify`).
+    fn may_plan(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+        match decoded {
             Ok(Command::Control {
                 op: ControlOp::Start,
                 ..
             }) => true,
             Ok(Command::Modify(m)) => {
-                !self.gait.is_standing() && self.gait.next_target() == Some(u16::from(m.id))
+                !self.gait.is_standing() && self.gait.next_target() == Some(self.gait_id(m.id))
             }
             _ => false,
-        };
-        let ack = self.handle_command(frame, decoded, now_ms);
-        // It did plan if the gait was reached: accepted, or refused by the planner itself.
-        let planned = may_plan
-            && matches!(
-                ack.reason,
-                None | Some(Reason::Infeasible | Reason::PlanFailed)
-            );
-        (Some(ack), planned)
+        }
     }
 
     fn handle_command(
@@ -613,8 +766,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let (command, seq, result) = match decoded {
             Ok(cmd) => {
                 let result = match cmd {
-                    Command::EmergencyStop { seq } => self.estop(seq),
-                    Command::Control { seq, op } => self.control(seq, op),
+                    Command::EmergencyStop { .. } => self.estop(),
+                    Command::Control { session, seq, op } => self.control(session, seq, op),
                     Command::Append(s) => self.append(frame, &s),
                     Command::Modify(m) => self.modify(frame, &m),
                 };
@@ -623,8 +776,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             Err((reason, seq)) => ((frame.id & 0xFF) as u8, seq, Err(reason)),
         };
         match result {
-            // Only an accepted command proves the controller alive.
-            Ok(()) => self.last_heard = Some(now_ms),
+            // Only an accepted command proves the controller alive, and every accepted one is
+            // new (a greater sequence number, the next step number, a greater version); an
+            // emergency stop proves nothing.
+            Ok(()) if frame.id != ids::ESTOP => {
+                self.last_heard = Some(now_ms);
+                self.heard_cycle = self.cycle;
+            }
+            Ok(()) => {}
             Err(reason) => self.refuse(reason),
         }
         // Steps the command dropped (emergency stop, stop now) leave the step records. A
@@ -640,10 +799,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     ..
                 })
         ) {
-            self.steps.sync(&self.gait);
+            self.steps.sync(&self.gait, self.first);
         }
         let version = match decoded {
-            Ok(Command::Append(_) | Command::Modify(_)) => self.steps.version(seq),
+            Ok(Command::Append(s)) => self.steps.version(s.id),
+            Ok(Command::Modify(m)) => self.steps.version(m.id),
             _ => None,
         };
         Ack {
@@ -656,86 +816,99 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
-    fn estop(&mut self, seq: u8) -> Result<(), Reason> {
-        if self.estopped && self.last_estop == Some(seq) {
+    fn estop(&mut self) -> Result<(), Reason> {
+        if self.estopped {
             return Err(Reason::Duplicate);
         }
-        self.last_estop = Some(seq);
         self.estopped = true;
         self.gait.clear_and_stop();
         Ok(())
     }
 
-    fn control(&mut self, seq: u8, op: ControlOp) -> Result<(), Reason> {
-        if op == ControlOp::Heartbeat {
-            // A heartbeat proves the controller alive only if it is a new one: a gateway that
-            // repeats one frame for ever must not keep supervision satisfied.
-            if self.last_heartbeat == Some(seq) {
-                return Err(Reason::Duplicate);
-            }
-            self.last_heartbeat = Some(seq);
-            return Ok(());
+    fn control(&mut self, session: u16, seq: u32, op: ControlOp) -> Result<(), Reason> {
+        if session != self.epoch as u16 {
+            return Err(Reason::WrongSession);
         }
-        if self.last_control == Some((seq, op)) {
+        if seq == self.last_seq && self.last_seq != 0 {
             return Err(Reason::Duplicate);
         }
+        if seq <= self.last_seq {
+            return Err(Reason::Stale);
+        }
+        if !self.open && op != ControlOp::Reset {
+            return Err(Reason::NoSession);
+        }
         let standing = self.gait.is_standing();
-        let is_ahead = self.last_control.is_none_or(|(last, _)| ahead(seq, last));
         match op {
             ControlOp::Heartbeat => {}
-            ControlOp::Start | ControlOp::Reset => {
-                if let Some((last, _)) = self.last_control {
-                    if !ahead(seq, last) {
-                        return Err(Reason::Stale);
-                    }
+            ControlOp::Start => {
+                if self.estopped {
+                    return Err(Reason::EmergencyStopped);
                 }
-                if op == ControlOp::Start {
-                    if self.estopped {
-                        return Err(Reason::EmergencyStopped);
-                    }
-                    if self.lost {
-                        return Err(Reason::ControllerLost);
-                    }
-                    self.gait.start().map_err(reason_of)?;
-                } else {
-                    if !standing {
-                        return Err(Reason::WrongState);
-                    }
-                    self.reset()?;
+                if self.lost {
+                    return Err(Reason::ControllerLost);
                 }
+                self.gait.start().map_err(reason_of)?;
+            }
+            ControlOp::Reset => {
+                if !standing {
+                    return Err(Reason::WrongState);
+                }
+                self.reset()?;
             }
             ControlOp::Stop => {
                 if !standing {
                     self.gait.stop();
                 }
             }
-            ControlOp::StopNow => self.gait.clear_and_stop(),
+            ControlOp::StopNow => {
+                if standing {
+                    // Standing: drop what is queued, and nothing else (no stop request for a
+                    // later `Start` to find); with nothing queued there is nothing to do.
+                    if self.gait.queued() == 0 {
+                        return Err(Reason::WrongState);
+                    }
+                    self.gait.drop_queue().map_err(reason_of)?;
+                } else {
+                    self.gait.clear_and_stop();
+                }
+            }
         }
-        // A late `Stop` is carried out (the safe side) but does not move the sequence back:
-        // a late `Start` behind it stays stale.
-        if is_ahead {
-            self.last_control = Some((seq, op));
-        }
+        self.last_seq = seq;
         Ok(())
     }
 
-    /// A fresh start while standing (see the module docs): the frame is re-based on the feet.
+    /// Opens a new session while standing (see the module docs): the frame is re-based on the
+    /// feet, except at the handshake after start-up.
     fn reset(&mut self) -> Result<(), Reason> {
-        let [l, r] = *self.gait.feet();
-        let half = T::of(0.5);
-        let (x, y) = (half * (l.x + r.x), half * (l.y + r.y));
-        let yaw = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
-        self.gait.rebase(x, y, yaw).map_err(reason_of)?;
+        let epoch = self.epoch.checked_add(1).ok_or(Reason::Exhausted)?;
+        if self.open {
+            let [l, r] = *self.gait.feet();
+            let half = T::of(0.5);
+            let (x, y) = (half * (l.x + r.x), half * (l.y + r.y));
+            let yaw = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
+            self.gait.rebase(x, y, yaw).map_err(reason_of)?;
+        } else {
+            // Nothing was accepted before the handshake but emergency stops: the queue is
+            // empty already.
+            let _ = self.gait.drop_queue();
+        }
+        self.epoch = epoch;
+        self.open = true;
+        self.announce = true;
         self.estopped = false;
         self.lost = false;
-        self.last_append = None;
+        self.clock_fault = false;
         self.steps.clear();
         Ok(())
     }
 
-    /// What refuses any footstep frame first: a repeat of what is in force, then the two
-    /// latched states.
+    /// What refuses any footstep frame first: no session, a repeat of what is in force, then
+    /// the two latched states.
     fn footstep_gate(&self, frame: &RawFrame) -> Result<(), Reason> {
+        if !self.open {
+            return Err(Reason::NoSession);
+        }
         if self.steps.is_repeat(frame) {
             return Err(Reason::Duplicate);
         }
@@ -756,10 +929,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.gait.is_stopping() {
             return Err(Reason::WrongState);
         }
-        // Step ids count from 0 after start-up and after a reset: a lost first step must not
-        // let the second one become the first (a stride from standing twice as long).
-        let expected = self.last_append.map_or(0, |l| l.wrapping_add(1));
-        if s.id != expected {
+        if self.appended >= STEP_NUMBERS {
+            return Err(Reason::Exhausted);
+        }
+        // Step numbers run on from the start-up's first: a lost step must not let the next
+        // one take its place (from standing, a stride twice as long).
+        if s.id != self.next_step() {
             return Err(Reason::SequenceGap);
         }
         let step = Self::footstep(s);
@@ -767,16 +942,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
         self.check_reach(&step, None)?;
-        self.gait
-            .push(u16::from(s.id), step)
-            .map_err(|(e, _)| reason_of(e))?;
+        let gid = self.appended as u16;
+        self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
         self.steps.push(Record {
             append: *s,
             append_frame: *frame,
             version: 0,
             in_force: None,
         });
-        self.last_append = Some(s.id);
+        self.appended += 1;
         Ok(())
     }
 
@@ -799,7 +973,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         let s = m.applied_to(&rec.append).ok_or(Reason::OutOfRange)?;
         let step = Self::footstep(&s);
-        let id = u16::from(m.id);
+        let id = self.gait_id(m.id);
         self.check_reach(&step, Some(id))?;
         self.gait.modify(id, step).map_err(reason_of)?;
         if let Some(r) = self.steps.queued_at_mut(at, m.id) {
@@ -809,15 +983,32 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(())
     }
 
-    /// The supervision rule (module docs, step 2): a moving robot whose controller has not
-    /// been heard for longer than the timeout stops, and stays "controller lost". Checked in
+    /// The clock check and the supervision rule (module docs, step 3): a moving robot whose
+    /// controller has not been heard for longer than the timeout (by the clock or by the
+    /// cycles), or whose clock has stopped, stops, and stays "controller lost". Checked in
     /// every cycle, so it holds for the whole walk.
     fn supervise(&mut self, now_ms: u32) {
+        if self.cycle == 1 {
+            self.window = (self.cycle, now_ms);
+        } else if self.cycle.wrapping_sub(self.window.0) >= CLOCK_WINDOW {
+            // At least half of the window's nominal time.
+            let elapsed = now_ms.wrapping_sub(self.window.1);
+            if elapsed < self.window_ms / 2 {
+                self.clock_fault = true;
+            }
+            self.window = (self.cycle, now_ms);
+        }
+        if self.clock_fault && self.open {
+            self.lost = true;
+        }
         if self.gait.is_standing() {
             return;
         }
         let silent = match self.last_heard {
-            Some(heard) => now_ms.wrapping_sub(heard) > self.cfg.heartbeat_timeout_ms,
+            Some(heard) => {
+                now_ms.wrapping_sub(heard) > self.cfg.heartbeat_timeout_ms
+                    || self.cycle.wrapping_sub(self.heard_cycle) > self.timeout_cycles
+            }
             None => true,
         };
         if silent && !self.lost {
@@ -825,7 +1016,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         if self.lost && (self.gait.queued() > 0 || !self.gait.is_stopping()) {
             self.gait.clear_and_stop();
-            self.steps.sync(&self.gait);
+            self.steps.sync(&self.gait, self.first);
         }
     }
 
@@ -859,32 +1050,31 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         C: embedded_can::nb::Can,
     {
         self.cycle = self.cycle.wrapping_add(1);
-        let (mut received, mut refused, mut plans) = (0u8, 0u8, 0usize);
-        let (mut commands, mut foreign) = (0usize, 0usize);
-        while commands < self.cfg.max_rx && foreign < self.cfg.max_foreign {
-            if plans >= self.cfg.max_plans {
-                break; // the rest waits for the next cycle
-            }
+        // 1. Receive: the node's frames of this cycle are held, the others counted.
+        let mut batch = [RawFrame {
+            id: 0,
+            len: 0,
+            data: [0; 8],
+        }; MAX_RX];
+        let (mut n, mut foreign, mut received) = (0usize, 0usize, 0u8);
+        let max_rx = self.cfg.max_rx.min(MAX_RX);
+        while n < max_rx && foreign < self.cfg.max_foreign {
             match can.receive() {
                 Ok(f) => {
                     received = received.saturating_add(1);
                     // Extended and remote frames are not ours either.
-                    let raw = RawFrame::from_frame(&f).unwrap_or(RawFrame {
-                        id: u16::MAX,
-                        len: 0,
-                        data: [0; 8],
-                    });
-                    let (ack, planned) = self.handle_planned(&raw, now_ms);
-                    let Some(ack) = ack else {
-                        foreign += 1;
-                        continue;
-                    };
-                    commands += 1;
-                    if ack.reason.is_some() {
-                        refused = refused.saturating_add(1);
+                    match RawFrame::from_frame(&f).filter(|r| ids::is_command(r.id)) {
+                        Some(raw) => {
+                            if let Some(slot) = batch.get_mut(n) {
+                                *slot = raw;
+                            }
+                            n += 1;
+                        }
+                        None => {
+                            self.counters.foreign = self.counters.foreign.saturating_add(1);
+                            foreign += 1;
+                        }
                     }
-                    plans += usize::from(planned);
-                    self.enqueue(ack.encode());
                 }
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(_)) => {
@@ -893,27 +1083,88 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 }
             }
         }
+        let batch = batch.get(..n).unwrap_or(&[]);
+        // 2. Act in priority order: emergency stops, stops now, then the rest as they came.
+        let rank = |f: &RawFrame| -> u8 {
+            match f.id {
+                ids::ESTOP => 0,
+                ids::CONTROL if f.len == 8 && f.data[6] == 3 => 1, // `StopNow` (validated below)
+                _ => 2,
+            }
+        };
+        let (mut refused, mut plans) = (0u8, 0usize);
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate() {
+                if rank(f) != pass {
+                    continue;
+                }
+                let decoded = Command::decode(f, self.next_step());
+                let ack = if matches!(decoded, Ok(Command::Modify(_)))
+                    && superseded(batch, i, self.next_step())
+                {
+                    // A newer version of this step came in the same cycle: that one is taken.
+                    let ack = self.refusal(f, &decoded, Reason::Stale);
+                    self.refuse(Reason::Stale);
+                    ack
+                } else if self.may_plan(&decoded) && plans >= self.cfg.max_plans {
+                    let ack = self.refusal(f, &decoded, Reason::Busy);
+                    self.refuse(Reason::Busy);
+                    ack
+                } else {
+                    let planning = self.may_plan(&decoded);
+                    let ack = self.handle_command(f, decoded, now_ms);
+                    // It did plan if the gait was reached: accepted, or refused by the planner.
+                    if planning
+                        && matches!(
+                            ack.reason,
+                            None | Some(Reason::Infeasible | Reason::PlanFailed)
+                        )
+                    {
+                        plans += 1;
+                    }
+                    ack
+                };
+                if ack.reason.is_some() {
+                    refused = refused.saturating_add(1);
+                }
+                self.enqueue(ack.encode());
+            }
+        }
+        // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
-        let reference = self.gait.tick();
-        self.steps.sync(&self.gait);
+        let reference = if self.open {
+            let r = self.gait.tick();
+            self.steps.sync(&self.gait, self.first);
+            Some(r)
+        } else {
+            None
+        };
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)
         for _ in 0..self.tx.len() {
             if let Some(f) = self.tx.pop_front() {
-                if matches!(f.id, ids::ACK | ids::STATUS | ids::DIAG | ids::LINK) {
+                if matches!(
+                    f.id,
+                    ids::ACK | ids::STATUS | ids::DIAG | ids::LINK | ids::SESSION
+                ) {
                     let _ = self.tx.push_back(f);
                 }
             }
         }
-        for f in self.stream(&reference).encode() {
-            self.enqueue(f);
+        if let Some(r) = &reference {
+            for f in self.stream(r).encode() {
+                self.enqueue(f);
+            }
         }
-        if self.cycle % 20 == 0 {
+        if self.cycle % 20 == 1 || self.announce {
+            self.announce = false;
             let s = self.status().encode();
             self.enqueue(s);
             let d = self.diag().encode();
             self.enqueue(d);
+            let e = self.session().encode();
+            self.enqueue(e);
             if let Some(l) = self.link {
                 self.enqueue(l.encode());
             }
@@ -943,7 +1194,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         PollReport {
-            reference,
+            reference: reference.unwrap_or(*self.gait.last()),
             received,
             refused,
             sent,

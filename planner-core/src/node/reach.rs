@@ -11,7 +11,10 @@ use crate::wire::Reason;
 #[cfg_attr(
     feature = "robot",
     derive(serde::Deserialize),
-    serde(deny_unknown_fields)
+    serde(
+        deny_unknown_fields,
+        bound(deserialize = "T: Real + serde::Deserialize<'de>")
+    )
 )]
 pub struct Reach<T = f64> {
     /// Largest forward step \[m\].
@@ -32,6 +35,24 @@ pub struct Reach<T = f64> {
     pub max_stride: T,
     /// Largest growth of the forward step over the step before it \[m\].
     pub max_growth: T,
+    /// Smallest distance between the landing sole and the support sole, both rectangles at
+    /// their headings \[m\] (10 mm if a robot file leaves it out).
+    #[cfg_attr(feature = "robot", serde(default = "default_sole_gap"))]
+    pub sole_gap: T,
+}
+
+#[cfg(feature = "robot")]
+fn default_sole_gap<T: Real>() -> T {
+    T::of(0.01)
+}
+
+/// The sole of a foot: a rectangle centred on the foot's pose, along its heading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Soles<T = f64> {
+    /// Half of the sole's length (along the heading) \[m\].
+    pub half_length: T,
+    /// Half of the sole's width \[m\].
+    pub half_width: T,
 }
 
 impl<T: Real> Default for Reach<T> {
@@ -46,6 +67,7 @@ impl<T: Real> Default for Reach<T> {
             yaw_cost: 0.3,
             max_stride: 0.43,
             max_growth: 0.22,
+            sole_gap: 0.01,
         }
         .cast()
     }
@@ -63,6 +85,7 @@ impl<T: Real> Reach<T> {
         yaw_cost: T::ZERO,
         max_stride: T::ZERO,
         max_growth: T::ZERO,
+        sole_gap: T::ZERO,
     };
 }
 
@@ -79,6 +102,7 @@ impl Reach<f64> {
             yaw_cost: T::of(self.yaw_cost),
             max_stride: T::of(self.max_stride),
             max_growth: T::of(self.max_growth),
+            sole_gap: T::of(self.sole_gap),
         }
     }
 }
@@ -115,6 +139,67 @@ impl<T: Real> Frame<T> {
         }
     }
 
+    /// The squared distance from the point `(px, py)` to the sole rectangle of this frame (0
+    /// inside).
+    fn sole_distance2(&self, px: T, py: T, soles: &Soles<T>) -> T {
+        let (dx, dy) = (px - self.x, py - self.y);
+        let along = (self.cos * dx + self.sin * dy).abs() - soles.half_length;
+        let across = (-self.sin * dx + self.cos * dy).abs() - soles.half_width;
+        square(along.max(T::ZERO)) + square(across.max(T::ZERO))
+    }
+
+    /// The four corners of this frame's sole.
+    fn corners(&self, soles: &Soles<T>) -> [(T, T); 4] {
+        let (l, w) = (soles.half_length, soles.half_width);
+        let at = |a: T, b: T| {
+            (
+                self.x + self.cos * a - self.sin * b,
+                self.y + self.sin * a + self.cos * b,
+            )
+        };
+        [at(l, w), at(l, -w), at(-l, -w), at(-l, w)]
+    }
+
+    /// Half the extent of this frame's sole along the unit axis `(ux, uy)`, and its centre's
+    /// projection.
+    fn project(&self, ux: T, uy: T, soles: &Soles<T>) -> (T, T) {
+        let c = self.x * ux + self.y * uy;
+        let r = soles.half_length * (self.cos * ux + self.sin * uy).abs()
+            + soles.half_width * (-self.sin * ux + self.cos * uy).abs();
+        (c, r)
+    }
+
+    /// `true` if the soles of `self` and `other` keep at least `gap` apart (less `eps`): they
+    /// are separated along one of the four edge normals (the separating axis theorem for two
+    /// rectangles), and then their distance, attained at a corner of one of them, is at least
+    /// `gap`.
+    fn soles_apart(&self, other: &Frame<T>, soles: &Soles<T>, gap: T, eps: T) -> bool {
+        let axes = [
+            (self.cos, self.sin),
+            (-self.sin, self.cos),
+            (other.cos, other.sin),
+            (-other.sin, other.cos),
+        ];
+        let separated = axes.iter().any(|&(ux, uy)| {
+            let (ca, ra) = self.project(ux, uy, soles);
+            let (cb, rb) = other.project(ux, uy, soles);
+            (ca - cb).abs() > ra + rb
+        });
+        if !separated {
+            return false;
+        }
+        let g = (gap - eps).max(T::ZERO);
+        let g2 = g * g;
+        other
+            .corners(soles)
+            .iter()
+            .all(|&(x, y)| self.sole_distance2(x, y, soles) >= g2)
+            && self
+                .corners(soles)
+                .iter()
+                .all(|&(x, y)| other.sole_distance2(x, y, soles) >= g2)
+    }
+
     /// `to` in this frame: forward and width (positive on `to_side`'s own side).
     fn forward_width(&self, to: &Frame<T>, to_side: Side) -> (T, T) {
         let (dx, dy) = (to.x - self.x, to.y - self.y);
@@ -145,14 +230,15 @@ fn eps<T: Real>() -> T {
 impl<T: Real> Reach<T> {
     /// Whether the legs can take `step`, where `other` is the previous foot of the other side
     /// (the support foot of this step) and `same` the previous foot of the same side (where
-    /// the swinging foot lifts off). `Crossing` or `Reach` if not.
+    /// the swinging foot lifts off), with feet of `soles`. `Crossing` or `Reach` if not.
     pub fn check(
         &self,
         other: &Footstep<T>,
         same: &Footstep<T>,
         step: &Footstep<T>,
+        soles: &Soles<T>,
     ) -> Result<(), Reason> {
-        self.check_with(other, same, step, false)
+        self.check_with(other, same, step, false, soles)
     }
 
     /// [`Reach::check`]; `from_rest`: the step is the first swing of a walk from standing, so
@@ -163,6 +249,7 @@ impl<T: Real> Reach<T> {
         same: &Footstep<T>,
         step: &Footstep<T>,
         from_rest: bool,
+        soles: &Soles<T>,
     ) -> Result<(), Reason> {
         self.check_frames(
             &Frame::of(other),
@@ -170,6 +257,7 @@ impl<T: Real> Reach<T> {
             &Frame::of(step),
             step.side,
             from_rest,
+            soles,
         )
     }
 
@@ -180,10 +268,11 @@ impl<T: Real> Reach<T> {
         step: &Frame<T>,
         side: Side,
         from_rest: bool,
+        soles: &Soles<T>,
     ) -> Result<(), Reason> {
         let eps = eps::<T>(); // values on the limits pass
         let (forward, width) = other.forward_width(step, side);
-        if width < T::ZERO {
+        if width < T::ZERO || !other.soles_apart(step, soles, self.sole_gap, eps) {
             return Err(Reason::Crossing);
         }
         // Heading change wrapped into [−π, π] (without a libm call when it is inside: the

@@ -33,8 +33,9 @@ pub(super) struct Record {
 }
 
 impl Record {
-    fn id(&self) -> u16 {
-        u16::from(self.append.id)
+    /// The gait's id of this step: its number less the start-up's first.
+    fn id(&self, first: u16) -> u16 {
+        self.append.id.wrapping_sub(first)
     }
     fn is_repeat(&self, f: &RawFrame) -> bool {
         self.append_frame == *f || self.in_force == Some(*f)
@@ -84,13 +85,14 @@ impl<const Q: usize> Steps<Q> {
     /// `true` if `f` equals an accepted append or a version in force. (The first data byte of
     /// a footstep frame is its step id: only that step's records are compared.)
     ///
-    /// Ids are appended in sequence from 0 (after start-up and every `Reset`, which clears the
-    /// records), so while the records hold at most 256 steps no id is held twice: the first
-    /// record of that id decides, and the search stops there.
+    /// Numbers are appended in sequence (a `Reset` clears the records), so while the records
+    /// hold at most 256 steps no low byte is held twice: the first record with that low byte
+    /// decides, and the search stops there.
     pub fn is_repeat(&self, f: &RawFrame) -> bool {
         let id = f.data[0];
+        let low = |r: &Record| r.append.id as u8;
         if Q + 1 + HISTORY <= 256 {
-            if let Some(r) = self.queued_guess(id).and_then(|i| self.queued.get(i)) {
+            if let Some(r) = self.queued_guess_low(id).and_then(|i| self.queued.get(i)) {
                 return r.is_repeat(f);
             }
             let first = self
@@ -98,10 +100,10 @@ impl<const Q: usize> Steps<Q> {
                 .iter()
                 .chain(self.swing.as_ref())
                 .chain(self.done.iter())
-                .find(|r| r.append.id == id);
+                .find(|r| low(r) == id);
             return first.is_some_and(|r| r.is_repeat(f));
         }
-        let same = |r: &Record| r.append.id == id && r.is_repeat(f);
+        let same = |r: &Record| low(r) == id && r.is_repeat(f);
         self.queued.iter().any(same)
             || self.swing.as_ref().is_some_and(same)
             || self.done.iter().any(same)
@@ -109,7 +111,7 @@ impl<const Q: usize> Steps<Q> {
 
     /// The record of queued step `id` and its position among the queued records (for
     /// [`Steps::queued_at_mut`]).
-    pub fn queued_find(&self, id: u8) -> Option<(usize, Record)> {
+    pub fn queued_find(&self, id: u16) -> Option<(usize, Record)> {
         if let Some(i) = self.queued_guess(id) {
             return self.queued.get(i).map(|r| (i, *r));
         }
@@ -122,7 +124,7 @@ impl<const Q: usize> Steps<Q> {
 
     /// The record of queued step `id`, looked for at `index` first (where
     /// [`Steps::queued_find`] found it), then among all.
-    pub fn queued_at_mut(&mut self, index: usize, id: u8) -> Option<&mut Record> {
+    pub fn queued_at_mut(&mut self, index: usize, id: u16) -> Option<&mut Record> {
         let i = if self.queued.get(index).is_some_and(|r| r.append.id == id) {
             Some(index)
         } else {
@@ -134,7 +136,7 @@ impl<const Q: usize> Steps<Q> {
     /// Where queued step `id` is if the queued ids run on from the front's (appends are in
     /// sequence: the common case), checked; `None` if it is not there (then search). Only
     /// while no id is held twice (see [`Steps::is_repeat`]), so the record found is the one.
-    fn queued_guess(&self, id: u8) -> Option<usize> {
+    fn queued_guess(&self, id: u16) -> Option<usize> {
         if Q + 1 + HISTORY > 256 {
             return None;
         }
@@ -143,6 +145,19 @@ impl<const Q: usize> Steps<Q> {
         self.queued
             .get(i)
             .is_some_and(|r| r.append.id == id)
+            .then_some(i)
+    }
+
+    /// [`Steps::queued_guess`] by the low byte of the number (what a frame carries).
+    fn queued_guess_low(&self, low: u8) -> Option<usize> {
+        if Q + 1 + HISTORY > 256 {
+            return None;
+        }
+        let front = self.queued.front()?.append.id;
+        let i = usize::from(low.wrapping_sub(front as u8));
+        self.queued
+            .get(i)
+            .is_some_and(|r| r.append.id as u8 == low)
             .then_some(i)
     }
 
@@ -160,20 +175,22 @@ impl<const Q: usize> Steps<Q> {
 
     /// Follows the gait after it changed: queued steps it no longer has were lifted off (the
     /// one it swings) or dropped; a swing it no longer has has landed.
+    /// `first` is the start-up's first step number (gait ids are numbers less it).
     pub fn sync<T: Real, const GQ: usize, G: Borrow<PreviewGains<T, PREVIEW>>>(
         &mut self,
         gait: &Gait<T, GQ, G>,
+        first: u16,
     ) {
         // Ids are compared in place; a record is copied only when it moves (no 40-byte copies
         // on the steady cycle, where nothing changes).
-        if let Some(id) = self.swing.as_ref().map(Record::id) {
+        if let Some(id) = self.swing.as_ref().map(|r| r.id(first)) {
             if gait.swinging() != Some(id) {
                 if let Some(s) = self.swing.take() {
                     self.retire(s);
                 }
             }
         }
-        while let Some(id) = self.queued.front().map(Record::id) {
+        while let Some(id) = self.queued.front().map(|r| r.id(first)) {
             // Still the gait's next target (every steady cycle): no search of its queue.
             if gait.next_target() == Some(id) || gait.is_queued(id) {
                 break;
@@ -181,7 +198,7 @@ impl<const Q: usize> Steps<Q> {
             let Some(r) = self.queued.pop_front() else {
                 break;
             };
-            if gait.swinging() == Some(r.id()) {
+            if gait.swinging() == Some(r.id(first)) {
                 if let Some(s) = self.swing.take() {
                     self.retire(s);
                 }
@@ -193,7 +210,7 @@ impl<const Q: usize> Steps<Q> {
     }
 
     /// The version in force of step `id` (queued, swinging or among the last done), if known.
-    pub fn version(&self, id: u8) -> Option<u8> {
+    pub fn version(&self, id: u16) -> Option<u8> {
         if let Some(r) = self.queued_guess(id).and_then(|i| self.queued.get(i)) {
             return Some(r.version);
         }
@@ -206,7 +223,7 @@ impl<const Q: usize> Steps<Q> {
     }
 
     /// The id of the step being swung, if the node accepted it (padded steps have none).
-    pub fn swinging(&self) -> Option<u8> {
+    pub fn swinging(&self) -> Option<u16> {
         self.swing.map(|r| r.append.id)
     }
 }

@@ -2,7 +2,16 @@
 //! `ACK` ([`Ack`]).
 
 use super::step::{WireModify, WireStep, VERSIONS};
-use super::{crc8, crc_ok, ids, RawFrame, Reason};
+use super::{crc8, crc_ok, crc_ok_over, ids, RawFrame, Reason};
+
+/// The step number a footstep frame's low byte `low` names when the node expects `next` for
+/// its next append: the number with that low byte nearest to `next`, from 128 below it to 127
+/// above (`next` itself for the expected append; exact for every queued and remembered step,
+/// at most 128 below it; a step skipped ahead reads as ahead).
+pub fn step_number(low: u8, next: u16) -> u16 {
+    let d = low.wrapping_sub(next as u8) as i8;
+    next.wrapping_add(d as u16)
+}
 
 /// Control operations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,10 +60,12 @@ pub enum Command {
         /// Sequence number.
         seq: u8,
     },
-    /// A control operation with its sequence number.
+    /// A control operation with its session and sequence number.
     Control {
-        /// Sequence number.
-        seq: u8,
+        /// The low 16 bits of the session epoch the command belongs to (`SESSION`).
+        session: u16,
+        /// Sequence number (greater than that of every control command before it).
+        seq: u32,
         /// Operation.
         op: ControlOp,
     },
@@ -65,42 +76,48 @@ pub enum Command {
 }
 
 impl Command {
-    /// Validates a frame. On error, the reason and the sequence number or step id to answer
-    /// with (0 when the frame is too short to carry one).
-    pub fn decode(f: &RawFrame) -> Result<Self, (Reason, u8)> {
+    /// Validates a frame, for a node whose next append is step number `next` (the footstep
+    /// frames' numbers are read by [`step_number`], and their CRC is keyed with the number's
+    /// [`super::step_key`]). On error, the reason and the low byte of the sequence or step number to
+    /// answer with (0 when the frame is too short to carry one).
+    pub fn decode(f: &RawFrame, next: u16) -> Result<Self, (Reason, u8)> {
         let b = f.bytes();
         let first = b.first().copied().unwrap_or(0);
-        let need = |n: usize| {
+        let need = |n: usize, key: u8| {
             if b.len() == n {
                 Ok(())
             } else {
-                Err((Reason::BadLength, first))
+                Err((Reason::BadLength, key))
             }
         };
         match f.id {
             ids::ESTOP => {
-                need(1)?;
+                need(1, first)?;
                 Ok(Command::EmergencyStop { seq: first })
             }
             ids::CONTROL => {
-                need(3)?;
+                let low = b.get(2).copied().unwrap_or(0);
+                need(8, low)?;
                 if !crc_ok(f.id, b) {
-                    return Err((Reason::BadCrc, first));
+                    return Err((Reason::BadCrc, low));
                 }
-                let op = ControlOp::from_code(b[1]).ok_or((Reason::OutOfRange, first))?;
-                Ok(Command::Control { seq: first, op })
+                let session = u16::from_le_bytes([b[0], b[1]]);
+                let seq = u32::from_le_bytes([b[2], b[3], b[4], b[5]]);
+                let op = ControlOp::from_code(b[6]).ok_or((Reason::OutOfRange, low))?;
+                Ok(Command::Control { session, seq, op })
             }
             ids::STEP_APPEND | ids::STEP_MODIFY => {
-                need(8)?;
-                if !crc_ok(f.id, b) {
+                need(8, first)?;
+                let number = step_number(first, next);
+                if !crc_ok_over(f.id, Some(super::step_key(number)), b) {
                     return Err((Reason::BadCrc, first));
                 }
                 let mut d = [0u8; 8];
                 d.copy_from_slice(b);
                 Ok(if f.id == ids::STEP_APPEND {
-                    Command::Append(WireStep::unpack(&d).map_err(|r| (r, first))?)
+                    Command::Append(WireStep::unpack(&d, number).map_err(|r| (r, first))?)
                 } else {
-                    Command::Modify(WireModify::unpack(&d))
+                    Command::Modify(WireModify::unpack(&d, number))
                 })
             }
             _ => Err((Reason::UnknownId, 0)),
@@ -111,9 +128,12 @@ impl Command {
     pub fn encode(&self) -> RawFrame {
         let (id, data, n) = match self {
             Command::EmergencyStop { seq } => (ids::ESTOP, [*seq, 0, 0, 0, 0, 0, 0, 0], 1),
-            Command::Control { seq, op } => {
-                let c = crc8(ids::CONTROL, &[*seq, op.code()]);
-                (ids::CONTROL, [*seq, op.code(), c, 0, 0, 0, 0, 0], 3)
+            Command::Control { session, seq, op } => {
+                let [s0, s1] = session.to_le_bytes();
+                let [q0, q1, q2, q3] = seq.to_le_bytes();
+                let body = [s0, s1, q0, q1, q2, q3, op.code()];
+                let c = crc8(ids::CONTROL, &body);
+                (ids::CONTROL, [s0, s1, q0, q1, q2, q3, op.code(), c], 8)
             }
             Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
             Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
@@ -129,8 +149,8 @@ impl Command {
         }
     }
 
-    /// The step id of a footstep command.
-    pub fn step_id(&self) -> Option<u8> {
+    /// The step number of a footstep command.
+    pub fn step_id(&self) -> Option<u16> {
         match self {
             Command::Append(s) => Some(s.id),
             Command::Modify(m) => Some(m.id),
@@ -138,12 +158,14 @@ impl Command {
         }
     }
 
-    /// What an `ACK` to this command carries as `seq`: the step id or the sequence number.
+    /// What an `ACK` to this command carries as `seq`: the low byte of the step number or of
+    /// the sequence number.
     pub fn key(&self) -> u8 {
         match self {
-            Command::Append(s) => s.id,
-            Command::Modify(m) => m.id,
-            Command::Control { seq, .. } | Command::EmergencyStop { seq } => *seq,
+            Command::Append(s) => s.id as u8,
+            Command::Modify(m) => m.id as u8,
+            Command::Control { seq, .. } => *seq as u8,
+            Command::EmergencyStop { seq } => *seq,
         }
     }
 
@@ -177,7 +199,7 @@ pub struct Ack {
     /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0x00 append,
     /// 0x01 modify).
     pub command: u8,
-    /// Sequence number or step id of the command.
+    /// The low byte of the command's sequence number or step number.
     pub seq: u8,
     /// `None` when accepted.
     pub reason: Option<Reason>,

@@ -25,16 +25,42 @@
 //! sequence of walks of at most that size. Every range is one definition shared by the
 //! encoder ([`WireStep::from_si`]) and the decoder: what one accepts, the other does.
 //!
-//! # Versions of a footstep
-//! A footstep is appended once (`STEP_APPEND`, version 0) and may be modified many times
-//! (`STEP_MODIFY`); each modification carries a 7-bit version, one more (modulo 128) than the
-//! one before it for that step. The node takes a modification only if its version is newer
-//! than the version in force (1 … 63 ahead, modulo 128): an older modification that arrives
-//! late (overtaken by a newer one for the same step) is refused with [`Reason::Stale`], so the
-//! step is always walked at the newest version the node accepted. A frame equal to the version
-//! in force (or to the step's append) is answered [`Reason::Duplicate`]. The modification
-//! carries its position as the offset from the appended position (that makes room for the
-//! version), its heading absolute; [`StepBook`] keeps what a controller needs for that.
+//! # Sessions and freshness
+//! Nothing old counts as new: every rule below holds by construction, with no window that a
+//! wrapped or replayed copy could fall into.
+//!
+//! * **Session.** The node draws a 32-bit session epoch at start-up (from
+//!   [`crate::node::NodeConfig::entropy`], which the firmware fills from its hardware random
+//!   number generator) and adds one at every accepted `Reset`; it publishes the epoch in
+//!   `SESSION` from its first cycle on. Every `CONTROL` frame carries the low 16 bits of the
+//!   epoch it was sent in: another session's frame is refused [`Reason::WrongSession`]. After
+//!   start-up no session is open: the node accepts only `ESTOP` and the `Reset` that opens
+//!   one (the handshake), and sends no reference until then.
+//! * **Control sequence.** `CONTROL` carries a 32-bit sequence number. A control command is
+//!   taken only if its number is greater than that of every control command accepted since
+//!   start-up (across sessions: the counter is never reset, and `SESSION` publishes the
+//!   last one, so that a controller that restarts continues above it); a repeat of the last
+//!   one is [`Reason::Duplicate`], an older one [`Reason::Stale`]. At one command a
+//!   millisecond the counter lasts 49 days.
+//! * **Step numbers.** Footsteps are numbered by the node's step counter, which runs on
+//!   across `Reset`s and restarts only with the node (at a number drawn from the entropy).
+//!   A footstep frame carries the low byte of its 16-bit number; the high byte is not sent but
+//!   enters the frame's CRC ([`crc8_keyed`], [`step_key`]). The node reads a footstep frame's
+//!   number as the one with that low byte nearest to the next number it expects (`DIAG`
+//!   publishes it; [`step_number`]): exact for every queued step. A copy of an older step whose low byte aliases
+//!   (256 · k numbers earlier, k = 1 … 255) differs in the high byte only, and a CRC-8 detects
+//!   every error confined to 8 consecutive bits: it is refused [`Reason::BadCrc`], always. A
+//!   start-up numbers at most 65,535 steps (beyond, appends are refused
+//!   [`Reason::Exhausted`]), so no two steps of a start-up share their 16 bits.
+//! * **Versions.** A footstep is appended once (`STEP_APPEND`, version 0) and may be modified
+//!   (`STEP_MODIFY`) up to 127 times: a modification is taken only if its 7-bit version is
+//!   greater than the step's version in force (no modulo: versions never wrap); an equal
+//!   frame is [`Reason::Duplicate`], an older version [`Reason::Stale`]. The modification
+//!   carries its position as the offset from the appended position, its heading absolute;
+//!   [`StepBook`] keeps what a controller needs for that.
+//! * **`ESTOP`** belongs to no session on purpose: any frame on its identifier with the right
+//!   length stops the robot, in the cycle it is received (a stop is always safe), and proves
+//!   nothing about the controller.
 //!
 //! # End-to-end protection (CRC-8)
 //! CAN's own CRC-15 catches errors on the wire, not a frame a faulty gateway or controller
@@ -42,12 +68,17 @@
 //! end with a CRC-8 (AUTOSAR profile: polynomial 0x2F, initial value and final XOR 0xFF; Hamming
 //! distance 4 up to 119 data bits, so every 1-, 2- and 3-bit error of these frames is caught)
 //! computed over the identifier (two bytes, little-endian: a frame moved to another identifier
-//! fails) followed by the data bytes before the CRC. A command with a wrong CRC is refused
+//! fails), for the footstep frames the key of the step number ([`step_key`]), then the data
+//! bytes before the CRC. The key is read from the frame's low byte, so an error in that byte
+//! that moves the number into the neighbouring block of 256 also changes one bit of the key:
+//! such an error of three bits weighs four, and is caught except by chance (the exhaustive
+//! test counts them; every error of one or two bits is caught). A command with a wrong CRC is
+//! refused
 //! with [`Reason::BadCrc`] and changes nothing; the controller sends it again. `ESTOP` has no
 //! CRC on purpose: any frame on its identifier with the right length stops the robot (a
 //! corrupted emergency stop errs on the safe side; the length is kept, so that no corrupted
-//! command of another identifier can become one: see the exhaustive 3-bit test). The stream and `STATUS` carry none: every
-//! value is superseded 5 ms (100 ms) later.
+//! command of another identifier can become one: see the exhaustive 3-bit test). The stream,
+//! `STATUS` and `SESSION` carry none: every value is superseded 5 ms (100 ms) later.
 //!
 //! The `ACK` echoes the last byte of the frame it answers (the CRC, for the protected
 //! commands), so the controller knows *which version* of a command was taken — a modification
@@ -60,20 +91,22 @@
 //! | id | name | dir | dlc | layout |
 //! |---|---|---|---|---|
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
-//! | 0x020 | `CONTROL` | in | 3 | seq u8, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
-//! | 0x100 | `STEP_APPEND` | in | 8 | step id u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
-//! | 0x101 | `STEP_MODIFY` | in | 8 | step id u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
-//! | 0x080 | `ACK` | out | 7 | command code u8, seq/step id u8, reason u8 (0 = accepted), queue length u8, echo u8, step version in force u8 (0xFF: none), crc u8 |
+//! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
+//! | 0x100 | `STEP_APPEND` | in | 8 | step number's low byte u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
+//! | 0x101 | `STEP_MODIFY` | in | 8 | step number's low byte u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
+//! | 0x080 | `ACK` | out | 7 | command code u8, seq's or step number's low byte u8, reason u8 (0 = accepted), queue length u8, echo u8, step version in force u8 (0xFF: none), crc u8 |
 //! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x202 | `COG_VEL` | out | 6 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u8 |
 //! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
 //! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
-//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 |
-//! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next side u8, last control seq u8 |
+//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 (shaping u1, re-plan failed u1, tx overflow u1, next side u2, clock fault u1, reserved u2) |
+//! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next step number u16 |
 //! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, reserved u2 (0), bus-offs u16, error-passive episodes u16, missed slots u8 |
+//! | 0x303 | `SESSION` | out | 8 | session epoch u32, last accepted control seq u32 (0: none) |
 //!
-//! `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
+//! `STATUS`, `DIAG`, `SESSION` (and `LINK`) go out in the node's first cycle, every 20 cycles
+//! after it, and in the cycle in which a session opens. `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
 //! firmware has told it the link's health ([`crate::node::Node::set_link_health`]); a node
 //! without a CAN controller of its own (host-sim) never sends it.
 //!
@@ -90,7 +123,8 @@
 //!   [`WireModify`] (`STEP_MODIFY`) and the controller's [`StepBook`];
 //! * `command.rs`: [`ControlOp`], the validated [`Command`] (decoded once, at the edge) and
 //!   its answer, [`Ack`];
-//! * `status.rs`: the node's periodic reports [`Status`], [`Diag`] and [`LinkHealth`];
+//! * `status.rs`: the node's periodic reports [`Status`], [`Diag`], [`LinkHealth`] and
+//!   [`Session`];
 //! * `stream.rs`: the 5 ms reference [`Stream`] and its fixed-point encoding;
 //! * `tests.rs`: the unit tests of the message set.
 
@@ -101,8 +135,8 @@ mod stream;
 #[cfg(test)]
 mod tests;
 
-pub use command::{echo_of, Ack, Command, ControlOp};
-pub use status::{Diag, LinkHealth, Status};
+pub use command::{echo_of, step_number, Ack, Command, ControlOp};
+pub use status::{Diag, LinkHealth, Session, Status};
 pub use step::{
     signed_range, StepBook, WireModify, WireStep, FOOT_UNIT, OFFSET_BITS, STEP_BITS, STEP_UNIT,
     VERSIONS, YAW_BITS, YAW_UNIT,
@@ -138,6 +172,9 @@ pub mod ids {
     /// Link health of the board (CAN error counters, bus state, reset reason), every 100 ms
     /// once the firmware reports it.
     pub const LINK: u16 = 0x302;
+    /// The session epoch and the last accepted control sequence number, every 100 ms and
+    /// when a session opens.
+    pub const SESSION: u16 = 0x303;
 
     /// The identifiers the node receives: everything else on the bus is not its business.
     pub const COMMANDS: [u16; 4] = [ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY];
@@ -273,18 +310,31 @@ pub enum Reason {
     PlanFailed = 15,
     /// The frame's CRC-8 does not match its identifier and data (see the module docs).
     BadCrc = 16,
-    /// Older than the command in force: a modification whose version is not newer than the
-    /// step's version in force, or a `Start`/`Reset` whose sequence number is behind the last
-    /// accepted control command (a late copy overtaken by newer commands).
+    /// Older than what is in force: a modification whose version is below the step's
+    /// version in force (or superseded by a newer modification of the same step received in
+    /// the same cycle), a control command whose sequence number is below the last accepted
+    /// one.
     Stale = 17,
-    /// The controller fell silent while the robot walked: motion commands are refused until
-    /// a `Reset` once standing.
+    /// The controller fell silent while the robot walked (or the node's clock stopped):
+    /// motion commands are refused until a `Reset` once standing.
     ControllerLost = 18,
+    /// The `CONTROL` frame belongs to another session (before the last `Reset`, or another
+    /// start-up of the node).
+    WrongSession = 19,
+    /// No session is open (after start-up): only a `Reset` (the handshake) and `ESTOP` are
+    /// taken.
+    NoSession = 20,
+    /// A counter would run out: the start-up's 65,535 step numbers, a step's 127 versions,
+    /// the 2³² sessions or sequence numbers.
+    Exhausted = 21,
+    /// The cycle's planning budget is spent (one `Start` or modification of the next swing
+    /// target a cycle): send it again.
+    Busy = 22,
 }
 
 impl Reason {
     /// Every reason, in code order.
-    pub const ALL: [Reason; 18] = [
+    pub const ALL: [Reason; 22] = [
         Reason::UnknownId,
         Reason::BadLength,
         Reason::OutOfRange,
@@ -303,7 +353,14 @@ impl Reason {
         Reason::BadCrc,
         Reason::Stale,
         Reason::ControllerLost,
+        Reason::WrongSession,
+        Reason::NoSession,
+        Reason::Exhausted,
+        Reason::Busy,
     ];
+
+    /// One more than the largest code (the size of a table indexed by code).
+    pub const CODES: usize = 23;
 
     /// The wire code.
     pub fn code(self) -> u8 {
@@ -319,6 +376,26 @@ impl Reason {
 /// CRC-8 of a frame's identifier and data (AUTOSAR profile: polynomial 0x2F, initial value
 /// 0xFF, no reflection, final XOR 0xFF). The identifier enters as two little-endian bytes.
 pub fn crc8(id: u16, data: &[u8]) -> u8 {
+    crc8_over(id, None, data)
+}
+
+/// CRC-8 of a footstep frame: [`crc8`] with `key` ([`step_key`] of the step number, not sent)
+/// between the identifier and the data. A copy that differs from the expected frame only in
+/// the key differs in 8 consecutive bits of the CRC's input, and a CRC with 8 check bits
+/// detects every such error: it never passes.
+pub fn crc8_keyed(id: u16, key: u8, data: &[u8]) -> u8 {
+    crc8_over(id, Some(key), data)
+}
+
+/// The CRC key of step number `number`: the Gray code of its high byte. Neighbouring blocks of
+/// 256 numbers differ in one bit of their key, so that a bit error in a frame's low byte that
+/// moves it into the neighbouring block costs the error one bit more, not up to eight.
+pub fn step_key(number: u16) -> u8 {
+    let h = (number >> 8) as u8;
+    h ^ (h >> 1)
+}
+
+fn crc8_over(id: u16, key: Option<u8>, data: &[u8]) -> u8 {
     let step = |mut c: u8, b: u8| {
         c ^= b;
         for _ in 0..8 {
@@ -331,17 +408,23 @@ pub fn crc8(id: u16, data: &[u8]) -> u8 {
         c
     };
     let [lo, hi] = id.to_le_bytes();
-    let c = data
-        .iter()
-        .fold(step(step(0xFF, lo), hi), |c, &b| step(c, b));
+    let mut c = step(step(0xFF, lo), hi);
+    if let Some(k) = key {
+        c = step(c, k);
+    }
+    let c = data.iter().fold(c, |c, &b| step(c, b));
     c ^ 0xFF
 }
 
 /// CRC-8 of the bytes of `data` without the last one, as it is sent: a frame whose last byte
 /// is this CRC is intact. `data` must not be empty.
 fn crc_ok(id: u16, data: &[u8]) -> bool {
+    crc_ok_over(id, None, data)
+}
+
+fn crc_ok_over(id: u16, key: Option<u8>, data: &[u8]) -> bool {
     match data.split_last() {
-        Some((&c, body)) => crc8(id, body) == c,
+        Some((&c, body)) => crc8_over(id, key, body) == c,
         None => false,
     }
 }

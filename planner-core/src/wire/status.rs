@@ -1,4 +1,4 @@
-//! The node's periodic reports (every 100 ms): `STATUS`, `DIAG` and `LINK`.
+//! The node's periodic reports (every 100 ms): `STATUS`, `DIAG`, `LINK` and `SESSION`.
 
 use super::{ids, RawFrame};
 
@@ -7,7 +7,8 @@ use super::{ids, RawFrame};
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status {
     /// 0 standing, 1 walking, 2 emergency-stopped, 3 controller lost, 4 stopping (a `Stop`
-    /// or `StopNow` is being carried out). See the state table in the node's docs.
+    /// or `StopNow` is being carried out), 5 no session (after start-up, before the
+    /// handshake). See the state table in the node's docs.
     pub state: u8,
     /// Queued steps.
     pub queue: u8,
@@ -17,8 +18,20 @@ pub struct Status {
     pub overruns: u16,
     /// Last single-support adjustment \[5 ms\].
     pub last_adjust: i8,
-    /// Bit 0: shaping active; bit 1: last re-plan failed; bit 2: transmit backlog overflowed.
+    /// Bit 0: shaping active; bit 1: last re-plan failed; bit 2: transmit backlog overflowed;
+    /// bits 3–4: the side the next appended step must have (0 either, 1 left, 2 right); bit
+    /// 5: the node's clock stopped ([`Status::CLOCK_FAULT`]).
     pub flags: u8,
+}
+
+impl Status {
+    /// The flag of a clock that did not advance with the cycles (latched until a `Reset`).
+    pub const CLOCK_FAULT: u8 = 1 << 5;
+
+    /// The side the next appended step must have: 0 either, 1 left, 2 right.
+    pub fn next_side(&self) -> u8 {
+        (self.flags >> 3) & 0x3
+    }
 }
 
 impl Status {
@@ -69,11 +82,9 @@ pub struct Diag {
     pub bus_errors: u16,
     /// Frames dropped because the transmit backlog was full, saturating.
     pub tx_dropped: u16,
-    /// The side the next appended step must have: 0 either, 1 left, 2 right.
-    pub next_side: u8,
-    /// Sequence number of the last accepted `Start`, `Stop`, `StopNow` or `Reset` (0 before
-    /// any): a controller that restarts continues from it.
-    pub last_control: u8,
+    /// The number of the next step to append (its low byte goes in the frame, its high
+    /// byte into the CRC: see the module docs).
+    pub next_step: u16,
 }
 
 impl Diag {
@@ -82,10 +93,11 @@ impl Diag {
         let [f0, f1] = self.foreign.to_le_bytes();
         let [b0, b1] = self.bus_errors.to_le_bytes();
         let [t0, t1] = self.tx_dropped.to_le_bytes();
+        let [n0, n1] = self.next_step.to_le_bytes();
         RawFrame {
             id: ids::DIAG,
             len: 8,
-            data: [f0, f1, b0, b1, t0, t1, self.next_side, self.last_control],
+            data: [f0, f1, b0, b1, t0, t1, n0, n1],
         }
     }
     /// Decodes a `DIAG` frame.
@@ -98,8 +110,7 @@ impl Diag {
             foreign: u16::from_le_bytes([d[0], d[1]]),
             bus_errors: u16::from_le_bytes([d[2], d[3]]),
             tx_dropped: u16::from_le_bytes([d[4], d[5]]),
-            next_side: d[6],
-            last_control: d[7],
+            next_step: u16::from_le_bytes([d[6], d[7]]),
         })
     }
 }
@@ -176,6 +187,49 @@ impl LinkHealth {
             bus_offs: u16::from_le_bytes([d[3], d[4]]),
             passive_episodes: u16::from_le_bytes([d[5], d[6]]),
             missed_slots: d[7],
+        })
+    }
+}
+
+/// The session the node is in (`SESSION`, every 100 ms with `STATUS` and in the cycle in which
+/// a session opens): what a controller needs to speak to it (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Session {
+    /// The session epoch: drawn at start-up, one more at every accepted `Reset`. Control
+    /// commands carry its low 16 bits ([`Session::tag`]).
+    pub epoch: u32,
+    /// The sequence number of the last accepted control command (0: none since start-up): the
+    /// next one must be greater.
+    pub last_seq: u32,
+}
+
+impl Session {
+    /// What a `CONTROL` frame of this session carries.
+    pub fn tag(&self) -> u16 {
+        self.epoch as u16
+    }
+
+    /// The frame.
+    pub fn encode(&self) -> RawFrame {
+        let [e0, e1, e2, e3] = self.epoch.to_le_bytes();
+        let [s0, s1, s2, s3] = self.last_seq.to_le_bytes();
+        RawFrame {
+            id: ids::SESSION,
+            len: 8,
+            data: [e0, e1, e2, e3, s0, s1, s2, s3],
+        }
+    }
+
+    /// Decodes a `SESSION` frame.
+    pub fn decode(f: &RawFrame) -> Option<Self> {
+        if f.id != ids::SESSION || f.len != 8 {
+            return None;
+        }
+        let d = &f.data;
+        Some(Self {
+            epoch: u32::from_le_bytes([d[0], d[1], d[2], d[3]]),
+            last_seq: u32::from_le_bytes([d[4], d[5], d[6], d[7]]),
         })
     }
 }

@@ -1,7 +1,7 @@
 //! The footstep frames: units and field widths, `STEP_APPEND` ([`WireStep`]), `STEP_MODIFY`
 //! ([`WireModify`]) and the controller's [`StepBook`].
 
-use super::{crc8, ids, Command, Reason};
+use super::{crc8_keyed, ids, Command, Reason};
 use crate::real::Real;
 
 /// Footstep yaw unit \[rad\].
@@ -16,7 +16,8 @@ pub const STEP_BITS: u32 = 17;
 pub const OFFSET_BITS: u32 = 14;
 /// Bits of a footstep heading.
 pub const YAW_BITS: u32 = 12;
-/// Modification versions are counted modulo this.
+/// Versions of a footstep: 0 (as appended) … `VERSIONS − 1` (its 127th modification).
+/// Versions never wrap: a step is modified at most 127 times.
 pub const VERSIONS: u8 = 128;
 
 /// The range of a signed `bits`-bit field: `(min, max)`, two's complement. The one definition
@@ -59,8 +60,8 @@ fn field(v: i32, n: u32) -> u64 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireStep {
-    /// Step id.
-    pub id: u8,
+    /// Step number (the frame carries its low byte, its CRC the high byte).
+    pub id: u16,
     /// `true` for the left foot.
     pub left: bool,
     /// x in 0.5 mm (17 bits).
@@ -75,7 +76,7 @@ impl WireStep {
     /// A footstep in SI units, rounded to the wire units; `None` if a coordinate is out of
     /// range or a value not finite. Any finite heading is representable (wrapped into
     /// [−π, π)).
-    pub fn from_si(id: u8, left: bool, x: f64, y: f64, yaw: f64) -> Option<Self> {
+    pub fn from_si(id: u16, left: bool, x: f64, y: f64, yaw: f64) -> Option<Self> {
         Some(Self {
             id,
             left,
@@ -115,24 +116,25 @@ impl WireStep {
 
     /// The 8 data bytes of a `STEP_APPEND` frame (CRC in the last byte).
     pub(super) fn pack(&self) -> [u8; 8] {
-        let mut bits: u64 = u64::from(self.id);
+        let mut bits: u64 = u64::from(self.id & 0xFF);
         bits |= u64::from(self.left as u8) << 8;
         bits |= field(self.x, STEP_BITS) << 10;
         bits |= field(self.y, STEP_BITS) << 27;
         bits |= field(i32::from(self.yaw), YAW_BITS) << 44;
         let mut d = bits.to_le_bytes();
-        d[7] = crc8(ids::STEP_APPEND, &d[..7]);
+        d[7] = crc8_keyed(ids::STEP_APPEND, super::step_key(self.id), &d[..7]);
         d
     }
 
-    /// Fields of a `STEP_APPEND` frame whose CRC was checked.
-    pub(super) fn unpack(data: &[u8; 8]) -> Result<Self, Reason> {
+    /// Fields of a `STEP_APPEND` frame whose CRC was checked, as step number `id` (whose low
+    /// byte the frame carries).
+    pub(super) fn unpack(data: &[u8; 8], id: u16) -> Result<Self, Reason> {
         let bits = u64::from_le_bytes(*data);
         if (bits >> 9) & 1 != 0 {
             return Err(Reason::OutOfRange);
         }
         Ok(Self {
-            id: (bits & 0xFF) as u8,
+            id,
             left: (bits >> 8) & 1 == 1,
             x: sign_extend(bits >> 10, STEP_BITS),
             y: sign_extend(bits >> 27, STEP_BITS),
@@ -146,10 +148,10 @@ impl WireStep {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireModify {
-    /// Step id.
-    pub id: u8,
-    /// Version, 0 … 127 (one more than the step's previous version, modulo 128; the append
-    /// is version 0).
+    /// Step number (the frame carries its low byte, its CRC the high byte).
+    pub id: u16,
+    /// Version, 1 … 127: greater than every version of the step before it (the append is
+    /// version 0).
     pub version: u8,
     /// `true` for the left foot (a modification cannot change the side).
     pub left: bool,
@@ -163,8 +165,12 @@ pub struct WireModify {
 
 impl WireModify {
     /// The modification of the step appended as `base` to the pose `(x, y, yaw)` \[m, rad\],
-    /// as version `version`; `None` if the offset is out of range or a value not finite.
+    /// as version `version`; `None` if the version is not 1 … 127, the offset out of range or
+    /// a value not finite.
     pub fn from_si(base: &WireStep, version: u8, x: f64, y: f64, yaw: f64) -> Option<Self> {
+        if version == 0 || version >= VERSIONS {
+            return None;
+        }
         // Offsets on the wire grid: the new position rounded, minus the appended one.
         let x = quantise(x, STEP_UNIT, STEP_BITS)?;
         let y = quantise(y, STEP_UNIT, STEP_BITS)?;
@@ -172,7 +178,7 @@ impl WireModify {
         let (dx, dy) = (x - base.x, y - base.y);
         ((min..=max).contains(&dx) && (min..=max).contains(&dy)).then_some(Self {
             id: base.id,
-            version: version % VERSIONS,
+            version,
             left: base.left,
             dx,
             dy,
@@ -193,28 +199,28 @@ impl WireModify {
         s.in_range().then_some(s)
     }
 
-    /// `true` if `self.version` is newer than `current` (1 … 63 ahead, modulo 128).
+    /// `true` if `self.version` is newer than `current` (greater: versions never wrap).
     pub fn is_newer_than(&self, current: u8) -> bool {
-        let d = self.version.wrapping_sub(current) % VERSIONS;
-        (1..VERSIONS / 2).contains(&d)
+        self.version > current
     }
 
     pub(super) fn pack(&self) -> [u8; 8] {
-        let mut bits: u64 = u64::from(self.id);
+        let mut bits: u64 = u64::from(self.id & 0xFF);
         bits |= u64::from(self.version % VERSIONS) << 8;
         bits |= u64::from(self.left as u8) << 15;
         bits |= field(self.dx, OFFSET_BITS) << 16;
         bits |= field(self.dy, OFFSET_BITS) << 30;
         bits |= field(i32::from(self.yaw), YAW_BITS) << 44;
         let mut d = bits.to_le_bytes();
-        d[7] = crc8(ids::STEP_MODIFY, &d[..7]);
+        d[7] = crc8_keyed(ids::STEP_MODIFY, super::step_key(self.id), &d[..7]);
         d
     }
 
-    pub(super) fn unpack(data: &[u8; 8]) -> Self {
+    /// Fields of a `STEP_MODIFY` frame whose CRC was checked, as step number `id`.
+    pub(super) fn unpack(data: &[u8; 8], id: u16) -> Self {
         let bits = u64::from_le_bytes(*data);
         Self {
-            id: (bits & 0xFF) as u8,
+            id,
             version: ((bits >> 8) & 0x7F) as u8,
             left: (bits >> 15) & 1 == 1,
             dx: sign_extend(bits >> 16, OFFSET_BITS),
@@ -224,8 +230,8 @@ impl WireModify {
     }
 }
 
-/// What a controller keeps to speak the footstep protocol: the appended position of every
-/// step id and the version of its last modification (no_std, 256 entries, about 3 KB).
+/// What a controller keeps to speak the footstep protocol: the appended position and the
+/// version of the last modification of the last 256 step numbers (no_std, about 4 KB).
 #[derive(Clone, Debug)]
 pub struct StepBook {
     steps: [Option<(WireStep, u8)>; 256],
@@ -243,30 +249,39 @@ impl StepBook {
         Self { steps: [None; 256] }
     }
 
-    /// The `STEP_APPEND` of step `id` at `(x, y, yaw)`; `None` if not representable.
-    pub fn append(&mut self, id: u8, left: bool, x: f64, y: f64, yaw: f64) -> Option<Command> {
+    fn slot(&self, id: u16) -> Option<(WireStep, u8)> {
+        self.steps[usize::from(id & 0xFF)].filter(|(s, _)| s.id == id)
+    }
+
+    /// The `STEP_APPEND` of step number `id` at `(x, y, yaw)`; `None` if not representable.
+    pub fn append(&mut self, id: u16, left: bool, x: f64, y: f64, yaw: f64) -> Option<Command> {
         let s = WireStep::from_si(id, left, x, y, yaw)?;
-        self.steps[usize::from(id)] = Some((s, 0));
+        self.steps[usize::from(id & 0xFF)] = Some((s, 0));
         Some(Command::Append(s))
     }
 
     /// The next `STEP_MODIFY` of step `id` to `(x, y, yaw)` (one version newer than the last
-    /// one made here); `None` if the step was never appended here or the offset from its
+    /// one made here); `None` if the step was not appended here (or has been overwritten by
+    /// a step 256 numbers later), if it has had its 127 versions, or if the offset from its
     /// appended position is out of range.
-    pub fn modify(&mut self, id: u8, x: f64, y: f64, yaw: f64) -> Option<Command> {
-        let (base, v) = self.steps[usize::from(id)]?;
-        let v = (v + 1) % VERSIONS;
-        let m = WireModify::from_si(&base, v, x, y, yaw)?;
-        self.steps[usize::from(id)] = Some((base, v));
+    pub fn modify(&mut self, id: u16, x: f64, y: f64, yaw: f64) -> Option<Command> {
+        let (base, v) = self.slot(id)?;
+        let m = WireModify::from_si(&base, v.checked_add(1)?, x, y, yaw)?;
+        self.steps[usize::from(id & 0xFF)] = Some((base, m.version));
         Some(Command::Modify(m))
     }
 
     /// The append of step `id` as recorded, if any.
-    pub fn appended(&self, id: u8) -> Option<WireStep> {
-        self.steps[usize::from(id)].map(|(s, _)| s)
+    pub fn appended(&self, id: u16) -> Option<WireStep> {
+        self.slot(id).map(|(s, _)| s)
     }
 
-    /// Forgets every step (after a `Reset`: ids count from 0 again).
+    /// The version of the last modification of step `id` made here (0: none), if known.
+    pub fn version(&self, id: u16) -> Option<u8> {
+        self.slot(id).map(|(_, v)| v)
+    }
+
+    /// Forgets every step.
     pub fn clear(&mut self) {
         self.steps = [None; 256];
     }

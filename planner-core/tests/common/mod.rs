@@ -1,14 +1,17 @@
 //! A controller rig for the node tests: an in-memory CAN device, the step book, the control
-//! sequence, the stream and `DIAG` as received, and every lift-off with the time the
-//! controller was last heard before it. A refused command is checked to change nothing: the
-//! node is then in the state of a clone that ran the same cycle without the frame.
+//! sequence, the session, the stream and `DIAG` as received, and every lift-off with the time
+//! the controller was last heard before it. A refused command is checked to change nothing:
+//! the node is then in the state of a clone that ran the same cycle without the frame. The
+//! rig opens a session (the handshake) before the test begins.
 
 #![allow(dead_code)] // (each test file uses a part)
 
 use std::collections::VecDeque;
 
 use planner_core::node::{Node, NodeConfig, NodeState};
-use planner_core::wire::{Ack, Command, ControlOp, Diag, RawFrame, Reason, StepBook, Stream};
+use planner_core::wire::{
+    Ack, Command, ControlOp, Diag, RawFrame, Reason, Session, StepBook, Stream,
+};
 
 /// The in-memory device.
 #[derive(Default)]
@@ -54,8 +57,10 @@ pub struct Rig {
     pub t: u32,
     #[allow(missing_docs)]
     pub book: StepBook,
-    #[allow(missing_docs)]
-    pub seq: u8,
+    /// The last sequence number sent (one counter for every control command).
+    pub seq: u32,
+    /// The session as last published.
+    pub session: Session,
     #[allow(missing_docs)]
     pub swinging: Option<u16>,
     #[allow(missing_docs)]
@@ -64,23 +69,46 @@ pub struct Rig {
     pub stream: Stream,
     #[allow(missing_docs)]
     pub diag: Option<Diag>,
-    /// Sequence number of the last heartbeat.
-    pub hb: u8,
 }
 
 impl Rig {
+    /// A node of `cfg`, after the handshake: the first cycle publishes the session, the
+    /// second takes the `Reset` that opens it.
     pub fn new(cfg: NodeConfig) -> Self {
+        let mut r = Self::unopened(cfg);
+        r.cycle();
+        let reset = r.command(ControlOp::Reset);
+        r.bus.rx.push_back(reset.encode());
+        let acks = r.cycle();
+        assert!(
+            acks.iter().any(|a| a.command == 0x20 && a.reason.is_none()),
+            "handshake refused: {acks:?}"
+        );
+        assert_eq!(r.n.state(), NodeState::Standing);
+        r
+    }
+    /// A node of `cfg` just started: no cycle run, no session open.
+    pub fn unopened(cfg: NodeConfig) -> Self {
         Self {
             n: N::new(cfg).unwrap(),
             bus: Bus::default(),
             t: 0,
             book: StepBook::new(),
             seq: 0,
+            session: Session::default(),
             swinging: None,
             liftoffs: vec![],
             stream: Stream::default(),
             diag: None,
-            hb: 0,
+        }
+    }
+    /// The next control command `op` (the next sequence number, the session as published).
+    pub fn command(&mut self, op: ControlOp) -> Command {
+        self.seq += 1;
+        Command::Control {
+            session: self.session.tag(),
+            seq: self.seq,
+            op,
         }
     }
     pub fn hrp2() -> Self {
@@ -102,6 +130,8 @@ impl Rig {
                 acks.push(a);
             } else if let Some(d) = Diag::decode(&f) {
                 self.diag = Some(d);
+            } else if let Some(s) = Session::decode(&f) {
+                self.session = s;
             } else {
                 self.stream.decode_into(&f);
             }
@@ -110,11 +140,7 @@ impl Rig {
     }
     /// The next heartbeat (each with a new sequence number).
     pub fn heartbeat(&mut self) -> Command {
-        self.hb = self.hb.wrapping_add(1);
-        Command::Control {
-            seq: self.hb,
-            op: ControlOp::Heartbeat,
-        }
+        self.command(ControlOp::Heartbeat)
     }
 
     /// `k` cycles, with a heartbeat every 100 ms if `alive`.
@@ -145,17 +171,17 @@ impl Rig {
         }
         a.reason
     }
-    pub fn append(&mut self, id: u8, left: bool, x: f64, y: f64) -> Option<Reason> {
+    pub fn append(&mut self, id: u16, left: bool, x: f64, y: f64) -> Option<Reason> {
         let c = self.book.append(id, left, x, y, 0.0).unwrap();
         self.ask(c)
     }
-    pub fn modify(&mut self, id: u8, x: f64, y: f64) -> Option<Reason> {
+    pub fn modify(&mut self, id: u16, x: f64, y: f64) -> Option<Reason> {
         let c = self.book.modify(id, x, y, 0.0).unwrap();
         self.ask(c)
     }
     pub fn control(&mut self, op: ControlOp) -> Option<Reason> {
-        self.seq = self.seq.wrapping_add(1);
-        self.ask(Command::Control { seq: self.seq, op })
+        let c = self.command(op);
+        self.ask(c)
     }
     /// Runs (alive) until `f` holds, at most `limit` cycles.
     pub fn until(&mut self, limit: u32, f: impl Fn(&N) -> bool) {
@@ -180,6 +206,7 @@ pub fn state_name(n: &N) -> &'static str {
         (NodeState::ControllerLost, true) => "lost (standing)",
         (NodeState::EmergencyStopped, false) => "e-stopped (moving)",
         (NodeState::EmergencyStopped, true) => "e-stopped (standing)",
+        (NodeState::NoSession, _) => "no session",
     }
 }
 
