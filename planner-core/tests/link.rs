@@ -1,5 +1,6 @@
 //! `LINK` (0x302): the firmware's CAN link health, published only once the firmware reports
-//! it (`Node::set_link_health`), with `STATUS` and `DIAG` every 20 cycles, the latest report.
+//! it (`Node::set_link_health`), with `STATUS`, `DIAG` and `SESSION` in the first cycle and
+//! every 20 cycles after it, the latest report.
 
 mod common;
 
@@ -11,7 +12,7 @@ use planner_core::wire::{ids, LinkHealth};
 fn link_is_sent_only_once_reported_with_status_and_the_latest_values() {
     let mut n = Node::<16>::new(NodeConfig::hrp2()).unwrap();
     let mut bus = Bus::default();
-    for k in 0..40 {
+    for k in 1..=40 {
         n.poll(5 * k, &mut bus);
     }
     assert!(bus.tx.iter().any(|f| f.id == ids::STATUS));
@@ -20,7 +21,7 @@ fn link_is_sent_only_once_reported_with_status_and_the_latest_values() {
         "LINK without a report"
     );
     bus.tx.clear();
-    for k in 40..100u32 {
+    for k in 41..=100u32 {
         n.set_link_health(LinkHealth {
             tec: k as u8,
             bus_offs: 2,
@@ -35,28 +36,33 @@ fn link_is_sent_only_once_reported_with_status_and_the_latest_values() {
     let links: Vec<LinkHealth> = bus.tx.iter().filter_map(LinkHealth::decode).collect();
     assert_eq!(status.len(), 3);
     assert_eq!(links.len(), status.len());
-    // Right behind STATUS and DIAG, with the report of that cycle (cycles 60, 80, 100).
+    // Right behind STATUS, DIAG and SESSION, with the report of that cycle (cycles 41, 61,
+    // 81).
     for (&i, l) in status.iter().zip(&links) {
         assert_eq!(bus.tx[i + 1].id, ids::DIAG);
-        assert_eq!(bus.tx[i + 2].id, ids::LINK);
+        assert_eq!(bus.tx[i + 2].id, ids::SESSION);
+        assert_eq!(bus.tx[i + 3].id, ids::LINK);
         assert_eq!((l.bus_offs, l.reset), (2, 5));
     }
     assert_eq!(
         links.iter().map(|l| l.tec).collect::<Vec<_>>(),
-        [59, 79, 99]
+        [41, 61, 81]
     );
 }
 
-/// The heartbeats firmware/README.md's bring-up checklist sends with `cansend`.
+/// The reports go out in the node's first cycle (after a reset of the board a controller sees
+/// the new start-up at once), then every 20 cycles: `STATUS`, `DIAG`, `SESSION`, `LINK`.
 #[test]
-fn the_bring_up_heartbeats_are_these_bytes() {
-    use planner_core::wire::{Command, ControlOp};
-    for (seq, bytes) in [(1, [1, 0, 0x17]), (2, [2, 0, 0x03]), (3, [3, 0, 0xEA])] {
-        let f = Command::Control {
-            seq,
-            op: ControlOp::Heartbeat,
-        }
-        .encode();
-        assert_eq!((f.id, f.bytes()), (ids::CONTROL, &bytes[..]));
-    }
+fn the_reports_go_out_in_the_first_cycle() {
+    let mut n = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut bus = Bus::default();
+    n.set_link_health(LinkHealth {
+        reset: 5,
+        ..LinkHealth::default()
+    });
+    n.poll(5, &mut bus);
+    let ids: Vec<u16> = bus.tx.iter().map(|f| f.id).collect();
+    // No reference before a session is open: nothing but the reports.
+    assert_eq!(ids, [ids::STATUS, ids::DIAG, ids::SESSION, ids::LINK]);
+    assert_eq!(LinkHealth::decode(&bus.tx[3]).map(|l| l.reset), Some(5));
 }

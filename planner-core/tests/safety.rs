@@ -1,5 +1,5 @@
-//! Regression tests of the robot-safe node (issue 10): one test per defect the outside review
-//! found, each failing on the node before the fix. Driven through the bus, as a controller
+//! Regression tests of the robot-safe node: one test per defect an outside review found, each
+//! failing on the node before the fix. Driven through the bus, as a controller
 //! would, with `wire::StepBook` for the footstep frames.
 
 mod common;
@@ -19,7 +19,7 @@ fn a_step_for_the_supporting_foot_is_refused() {
     assert_eq!(r.append(0, false, 0.1, -0.1), None);
     assert_eq!(r.control(ControlOp::Start), None);
     let mut tried = 0;
-    for id in 1..8u8 {
+    for id in 1..8u16 {
         // Wait until the previous step has landed and the queue is empty (double support).
         r.until(2000, |n| {
             n.gait().queued() == 0 && n.gait().swinging().is_none() && !n.gait().is_standing()
@@ -69,12 +69,12 @@ fn a_step_for_the_supporting_foot_is_refused() {
         r.ask(Command::Append(wrong.unwrap())),
         Some(Reason::SideOrder)
     );
-    // The DIAG frame publishes the side (1 left, 2 right).
-    r.until(40, |n| n.cycles() % 20 == 19);
+    // STATUS publishes the side (1 left, 2 right).
+    r.until(40, |n| n.cycles() % 20 == 0);
     r.run(1, false);
-    let d = r.diag.expect("a DIAG every 20 cycles");
+    let d = r.status.expect("a STATUS every 20 cycles");
     let now = r.n.gait().next_side().unwrap();
-    assert_eq!(d.next_side, if now == Side::Left { 1 } else { 2 });
+    assert_eq!(d.next_side(), if now == Side::Left { 1 } else { 2 });
 }
 
 /// Items 2 and 3: a refused `Start` records nothing: its retransmission is carried out (not
@@ -82,10 +82,7 @@ fn a_step_for_the_supporting_foot_is_refused() {
 #[test]
 fn a_refused_start_records_nothing() {
     let mut r = Rig::hrp2();
-    let start = Command::Control {
-        seq: 5,
-        op: ControlOp::Start,
-    };
+    let start = r.command_at(5, ControlOp::Start);
     assert_eq!(r.ask(start), Some(Reason::WrongState)); // nothing queued
     assert_eq!(r.append(0, false, 0.1, -0.1), None);
     assert_eq!(r.ask(start), None, "the retransmission is a new attempt");
@@ -96,16 +93,14 @@ fn a_refused_start_records_nothing() {
     r.run(101, false);
     assert_eq!(r.n.status().state, 3);
     let before = r.n.clone();
-    let again = Command::Control {
-        seq: 6,
-        op: ControlOp::Start,
-    };
+    let again = r.command_at(6, ControlOp::Start);
     assert_eq!(r.ask(again), Some(Reason::ControllerLost));
     assert_eq!(r.n.status().state, 3);
     let mut ghost = before;
     ghost.poll(r.t, &mut Bus::default());
     assert!(r.n.same_state(&ghost));
     r.until(2000, |n| n.gait().is_standing());
+    let again = r.command(ControlOp::Start);
     assert_eq!(r.ask(again), Some(Reason::ControllerLost));
     assert_eq!(r.n.status().state, 3);
 }
@@ -117,7 +112,7 @@ fn a_refused_start_records_nothing() {
 #[test]
 fn no_lift_off_beyond_the_supervision_bound() {
     let timeout = NodeConfig::hrp2().heartbeat_timeout_ms;
-    let burst = |r: &mut Rig, from: u8, n: u8| {
+    let burst = |r: &mut Rig, from: u16, n: u16| {
         let (x0, _) = (r.n.gait().feet()[0].x, 0);
         for k in 0..n {
             let id = from + k;
@@ -144,7 +139,7 @@ fn no_lift_off_beyond_the_supervision_bound() {
     r.run(300, false);
     assert_eq!(r.n.status().state, 3);
     r.run(40, true);
-    for id in 13..20u8 {
+    for id in 13..20u16 {
         let left = id % 2 == 1;
         let c = Command::Append(WireStep::from_si(id, left, 3.0, y(left), 0.0).unwrap());
         assert_eq!(r.ask(c), Some(Reason::ControllerLost));
@@ -162,9 +157,12 @@ fn no_lift_off_beyond_the_supervision_bound() {
     // steps in place.)
     let rf = r.n.gait().feet()[1];
     let lf = (rf.x - 0.2 * rf.yaw.sin(), rf.y + 0.2 * rf.yaw.cos());
-    for id in 0..6u8 {
-        let (x, y) = if id % 2 == 0 { lf } else { (rf.x, rf.y) };
-        let c = r.book.append(id, id % 2 == 0, x, y, rf.yaw).unwrap();
+    // (Step numbers run on across the reset.)
+    let first = r.n.next_step();
+    for k in 0..6u16 {
+        let id = first + k;
+        let (x, y) = if k % 2 == 0 { lf } else { (rf.x, rf.y) };
+        let c = r.book.append(id, k % 2 == 0, x, y, rf.yaw).unwrap();
         assert_eq!(
             r.ask(c),
             None,
@@ -188,20 +186,23 @@ fn no_lift_off_beyond_the_supervision_bound() {
     }
 }
 
-/// Item 5: `Reset` while standing drops the queue, so ids restart at 0 with no two steps
-/// sharing an id; `STEP_MODIFY 0` then moves the new step 0.
+/// `Reset` while standing drops the queue; step numbers run on (no two steps of a start-up
+/// share a number), so a modification of a dropped step is refused and the new step 2 is
+/// moved by its own.
 #[test]
 fn reset_while_standing_drops_the_queue() {
     let mut r = Rig::hrp2();
     assert_eq!(r.append(0, false, 0.1, -0.1), None);
     assert_eq!(r.append(1, true, 0.2, 0.1), None);
+    let old = r.book.modify(0, 0.12, -0.1, 0.0).unwrap();
     assert_eq!(r.control(ControlOp::Reset), None);
-    r.book.clear();
     assert_eq!(r.n.gait().queued(), 0);
-    assert_eq!(r.append(0, true, 0.05, 0.1), None);
+    assert_eq!(r.append(0, true, 0.05, 0.1), Some(Reason::SequenceGap));
+    assert_eq!(r.append(2, true, 0.05, 0.1), None);
     assert_eq!(r.n.gait().queued(), 1);
-    assert_eq!(r.modify(0, 0.08, 0.1), None);
-    let s = r.n.gait().queued_step(0).unwrap();
+    assert_eq!(r.ask(old), Some(Reason::UnknownStep));
+    assert_eq!(r.modify(2, 0.08, 0.1), None);
+    let s = r.n.gait().queued_step(2).unwrap();
     assert_eq!((s.side, s.x, s.y), (Side::Left, 0.08, 0.1));
 }
 
@@ -212,7 +213,7 @@ fn duplicate_means_equal_to_the_version_in_force() {
     let mut r = Rig::hrp2();
     for (i, x) in [0.1, 0.2, 0.3, 0.4].iter().enumerate() {
         let left = i % 2 == 1;
-        assert_eq!(r.append(i as u8, left, *x, y(left)), None);
+        assert_eq!(r.append(i as u16, left, *x, y(left)), None);
     }
     let a = r.book.modify(2, 0.32, -0.1, 0.0).unwrap();
     let b = r.book.modify(2, 0.28, -0.1, 0.0).unwrap();
@@ -243,7 +244,7 @@ fn a_turn_across_pi_turns_the_short_way() {
     let mut r = Rig::new(cfg);
     // Step in place while turning by +0.29 rad per step: across +π into −π.
     let mut heading = h;
-    for id in 0..3u8 {
+    for id in 0..3u16 {
         heading += 0.145;
         let left = id % 2 == 1;
         let off = if left { 0.1 } else { -0.1 };
@@ -284,7 +285,7 @@ fn reset_rebases_the_frame() {
     let xs = [0.2, 0.4, 0.6, 0.8, 1.0, 1.0];
     for (i, x) in xs.iter().enumerate() {
         let left = i % 2 == 1;
-        assert_eq!(r.append(i as u8, left, *x, y(left)), None, "step {i}");
+        assert_eq!(r.append(i as u16, left, *x, y(left)), None, "step {i}");
     }
     assert_eq!(r.control(ControlOp::Start), None);
     assert_eq!(r.control(ControlOp::Stop), None);
@@ -294,7 +295,6 @@ fn reset_rebases_the_frame() {
     let far = WireStep::from_si(6, false, 0.2, -0.1, 0.0).unwrap();
     assert_eq!(r.ask(Command::Append(far)), Some(Reason::Reach));
     assert_eq!(r.control(ControlOp::Reset), None);
-    r.book.clear();
     r.run(2, true);
     for k in 0..2 {
         assert!(r.stream.feet[k][0].abs() < 1e-4, "{:?}", r.stream.feet);
@@ -303,7 +303,7 @@ fn reset_rebases_the_frame() {
     }
     assert!(r.stream.cog[0].abs() < 1e-6 && r.stream.cog[1].abs() < 1e-6);
     assert_eq!(
-        r.append(0, true, 0.2, 0.1),
+        r.append(6, true, 0.2, 0.1),
         None,
         "in reach in the new frame"
     );
@@ -340,11 +340,7 @@ fn foreign_frames_are_ignored() {
     // Our identifiers with a bad length or CRC: refused with the reason.
     let short = RawFrame::new(ids::STEP_MODIFY, &[1, 2]).unwrap();
     r.bus.rx.push_back(short);
-    let mut bad = Command::Control {
-        seq: 9,
-        op: ControlOp::Stop,
-    }
-    .encode();
+    let mut bad = r.command(ControlOp::Stop).encode();
     bad.data[2] ^= 1;
     r.bus.rx.push_back(bad);
     let acks = r.cycle();
@@ -382,30 +378,35 @@ fn the_first_step_from_standing_grows_from_zero_whatever_the_stagger() {
     assert_eq!(r.ask(c), Some(Reason::Reach));
 }
 
-/// Review finding: a late copy of a `Stop` (carried out: the safe side) moved the last
-/// accepted sequence number back, so a late copy of a `Start` after it counted as new again
-/// and started the robot.
+/// Review finding: a late copy of a `Stop` moved the last accepted sequence number back, so a
+/// late copy of a `Start` after it counted as new again and started the robot. Now every
+/// control command is taken only with a sequence number greater than every one before it: a
+/// late `Stop` is `Stale` like any other, and so is the late `Start`.
 #[test]
 fn a_late_stop_does_not_make_a_late_start_new() {
     let mut r = Rig::hrp2();
     assert_eq!(r.append(0, false, 0.1, -0.1), None);
-    let c = |seq, op| Command::Control { seq, op };
-    assert_eq!(r.ask(c(1, ControlOp::Start)), None);
-    assert_eq!(r.ask(c(2, ControlOp::Stop)), None);
+    // Each command with the next number; `late` keeps a copy to send again later.
+    let next = |r: &mut Rig, op| r.command(op);
+    let start1 = next(&mut r, ControlOp::Start);
+    assert_eq!(r.ask(start1), None);
+    let stop = next(&mut r, ControlOp::Stop);
+    assert_eq!(r.ask(stop), None);
     r.until(4000, |n| n.gait().is_standing());
     assert_eq!(r.append(1, true, 0.2, 0.1), None);
-    assert_eq!(r.ask(c(3, ControlOp::Start)), None);
-    assert_eq!(
-        r.ask(c(2, ControlOp::Stop)),
-        None,
-        "a stop is always carried out"
-    );
+    let start2 = next(&mut r, ControlOp::Start);
+    assert_eq!(r.ask(start2), None);
+    assert_eq!(r.ask(stop), Some(Reason::Stale), "a late stop is old like any command");
+    let stop2 = next(&mut r, ControlOp::Stop);
+    assert_eq!(r.ask(stop2), None);
     r.until(4000, |n| n.gait().is_standing());
     assert_eq!(r.append(2, false, 0.3, -0.1), None);
-    assert_eq!(r.ask(c(3, ControlOp::Start)), Some(Reason::Duplicate));
-    assert_eq!(r.ask(c(1, ControlOp::Start)), Some(Reason::Stale));
+    assert_eq!(r.ask(start2), Some(Reason::Stale));
+    assert_eq!(r.ask(start1), Some(Reason::Stale));
     assert_eq!(r.n.state(), NodeState::Standing);
-    assert_eq!(r.ask(c(4, ControlOp::Start)), None);
+    let start3 = next(&mut r, ControlOp::Start);
+    assert_eq!(r.ask(start3), None);
+    assert_eq!(r.ask(start3), Some(Reason::Duplicate));
 }
 
 /// Review finding: a heartbeat repeated for ever (a stuck gateway) kept supervision satisfied.
@@ -414,7 +415,7 @@ fn a_late_stop_does_not_make_a_late_start_new() {
 #[test]
 fn a_repeated_heartbeat_proves_nothing() {
     let mut r = Rig::hrp2();
-    for i in 0..6u8 {
+    for i in 0..6u16 {
         let left = i % 2 == 1;
         assert_eq!(r.append(i, left, 0.15 * f64::from(i + 1), y(left)), None);
     }

@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 
 use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::wire::{
-    Ack, Command, ControlOp, Diag, RawFrame, Reason, Session, StepBook, Stream,
+    Ack, Command, ControlOp, Diag, RawFrame, Reason, Session, Status, StepBook, Stream,
 };
 
 /// The in-memory device.
@@ -69,6 +69,8 @@ pub struct Rig {
     pub stream: Stream,
     #[allow(missing_docs)]
     pub diag: Option<Diag>,
+    #[allow(missing_docs)]
+    pub status: Option<Status>,
 }
 
 impl Rig {
@@ -100,14 +102,19 @@ impl Rig {
             liftoffs: vec![],
             stream: Stream::default(),
             diag: None,
+            status: None,
         }
     }
     /// The next control command `op` (the next sequence number, the session as published).
     pub fn command(&mut self, op: ControlOp) -> Command {
         self.seq += 1;
+        self.command_at(self.seq, op)
+    }
+    /// Control command `op` with sequence number `seq`, in the session as published.
+    pub fn command_at(&self, seq: u32, op: ControlOp) -> Command {
         Command::Control {
             session: self.session.tag(),
-            seq: self.seq,
+            seq,
             op,
         }
     }
@@ -132,6 +139,8 @@ impl Rig {
                 self.diag = Some(d);
             } else if let Some(s) = Session::decode(&f) {
                 self.session = s;
+            } else if let Some(s) = Status::decode(&f) {
+                self.status = Some(s);
             } else {
                 self.stream.decode_into(&f);
             }

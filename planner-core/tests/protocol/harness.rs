@@ -11,9 +11,9 @@ pub(crate) struct Stats {
     pub(crate) foreign: u64,
     pub(crate) accepted: u64,
     /// Refusals by reason code.
-    pub(crate) refused: [u64; 19],
+    pub(crate) refused: [u64; Reason::CODES],
     /// Refusals the model demanded (rather than allowed).
-    pub(crate) demanded: [u64; 19],
+    pub(crate) demanded: [u64; Reason::CODES],
     pub(crate) appends: u64,
     pub(crate) modifications: u64,
     pub(crate) walked: u64,
@@ -55,10 +55,8 @@ pub(crate) struct Harness<'a> {
     pub(crate) sent: Vec<RawFrame>,
     pub(crate) modifies: Vec<RawFrame>,
     /// Sequence numbers sent in control commands.
-    pub(crate) seqs: Vec<u8>,
+    pub(crate) seqs: Vec<u32>,
     pub(crate) estop_seq: u8,
-    /// Sequence number of the last heartbeat sent.
-    pub(crate) hb: u8,
     /// The reference and the swing of the cycle before.
     pub(crate) prev: Reference<f64>,
     pub(crate) prev_swing: Option<u16>,
@@ -94,7 +92,6 @@ impl<'a> Harness<'a> {
             modifies: vec![],
             seqs: vec![],
             estop_seq: 0,
-            hb: 0,
             prev,
             prev_swing: None,
             padded: None,
@@ -150,11 +147,13 @@ impl<'a> Harness<'a> {
                 self.stats.foreign += 1;
             }
             (Some(f), Some(Answer::OneOf(allowed)), Some(without)) => {
-                let cmd = Command::decode(&f);
+                let cmd = Command::decode(&f, self.model.next);
                 ensure!(acks.len() == 1, "{f:?} ({cmd:?}): answers {acks:?}");
                 let a = acks[0];
                 let echo = f.bytes().last().copied().unwrap_or(0);
-                let key = f.bytes().first().copied().unwrap_or(0);
+                // The low byte of the sequence number (control) or step number (footsteps).
+                let at = usize::from(f.id == 0x020) * 2;
+                let key = f.bytes().get(at).copied().unwrap_or(0);
                 ensure!(
                     a.command == (f.id & 0xFF) as u8 && a.seq == key && a.echo == echo,
                     "{f:?}: the answer {a:?} is not about it"
@@ -179,7 +178,7 @@ impl<'a> Harness<'a> {
                     }
                     None => {
                         let c = cmd.expect("accepted: decodes");
-                        self.model.accept(&f, c, now, standing);
+                        self.model.accept(&f, c, now, self.cycles, standing);
                         self.stats.accepted += 1;
                         match c {
                             Command::Control { op, .. } => {
@@ -224,7 +223,7 @@ impl<'a> Harness<'a> {
         }
 
         // Supervision (after the commands, before the tick).
-        if self.model.supervise(now, !standing || started) {
+        if self.model.supervise(now, self.cycles, !standing || started) {
             self.stats.lost += 1;
         }
 
@@ -321,7 +320,7 @@ impl<'a> Harness<'a> {
                         .ok_or(format!("step {b} lifted off, the model has none queued"))?;
                     let st = &mut self.model.steps[i];
                     ensure!(
-                        u16::from(st.id()) == b && st.epoch == self.model.epoch,
+                        st.id() == b && st.epoch == self.model.epoch,
                         "step {b} lifted off, the model's next is {st:?}"
                     );
                     ensure!(
@@ -383,13 +382,22 @@ impl<'a> Harness<'a> {
             self.model.last_heard
         );
         if let Some(d) = diag {
-            let want = self.model.last_control.map_or(0, |(s, _)| s);
             ensure!(
-                d.last_control == want,
-                "DIAG last control {}, the model {want}",
-                d.last_control
+                d.next_step == self.model.next,
+                "DIAG next step {}, the model {}",
+                d.next_step,
+                self.model.next
             );
         }
+        ensure!(
+            self.n.session().epoch == self.model.session
+                && self.n.session().last_seq == self.model.last_seq,
+            "session {:?}, the model's epoch {} and last seq {}",
+            self.n.session(),
+            self.model.session,
+            self.model.last_seq
+        );
+        ensure!(!self.n.clock_fault(), "a clock fault with a clock that advances");
 
         // The support foot never moves; the swinging foot is the one the step names.
         let supports = |p: Phase, i: usize| match p {
@@ -457,15 +465,17 @@ impl<'a> Harness<'a> {
     pub(crate) fn describe(&self) -> String {
         let m = &self.model;
         format!(
-            "queue {:?}, swing {:?}, estopped {}, lost {}, stopping {}, last control {:?}, \
-             last estop {:?}, last heard {:?}, now {}",
+            "queue {:?}, swing {:?}, estopped {}, lost {}, stopping {}, open {}, session {}, \
+             last seq {}, next step {}, last heard {:?}, now {}",
             m.queue.iter().map(|&i| m.steps[i].id()).collect::<Vec<_>>(),
             m.swing.map(|i| m.steps[i].id()),
             m.estopped,
             m.lost,
             m.stopping,
-            m.last_control,
-            m.last_estop,
+            m.open,
+            m.session,
+            m.last_seq,
+            m.next,
             m.last_heard,
             self.now
         )
@@ -485,26 +495,30 @@ impl<'a> Harness<'a> {
 
     /// The next heartbeat (a new sequence number: a repeated one proves nothing).
     pub(crate) fn heartbeat(&mut self) -> Command {
-        self.hb = self.hb.wrapping_add(1);
+        self.control(self.fresh_seq(), ControlOp::Heartbeat)
+    }
+
+    /// Control command `op` with `seq`, in the session the node publishes.
+    pub(crate) fn control(&self, seq: u32, op: ControlOp) -> Command {
         Command::Control {
-            seq: self.hb,
-            op: ControlOp::Heartbeat,
+            session: self.n.session().tag(),
+            seq,
+            op,
         }
     }
 
-    pub(crate) fn fresh_seq(&self) -> u8 {
-        self.model
-            .last_control
-            .map_or(1, |(s, _)| s.wrapping_add(1))
+    /// One more than the last accepted control sequence number (`SESSION` publishes it).
+    pub(crate) fn fresh_seq(&self) -> u32 {
+        self.n.session().last_seq + 1
     }
 
-    pub(crate) fn seq(&mut self, s: Seq) -> u8 {
+    pub(crate) fn seq(&mut self, s: Seq) -> u32 {
         let v = match s {
             Seq::Fresh => self.fresh_seq(),
             Seq::Reuse(k) if !self.seqs.is_empty() => self.seqs[k % self.seqs.len()],
             Seq::Reuse(_) => self.fresh_seq(),
-            Seq::After(d) => self.fresh_seq().wrapping_sub(1).wrapping_add(d),
-            Seq::Any(v) => v,
+            Seq::After(d) => (self.fresh_seq() - 1).wrapping_add(u32::from(d)),
+            Seq::Any(v) => u32::from(v),
         };
         self.seqs.push(v);
         v
@@ -526,11 +540,11 @@ impl<'a> Harness<'a> {
             AppendKind::Next => (expected, want, forward),
             AppendKind::WrongSide => (expected, want.other(), forward),
             AppendKind::Far => (expected, want, forward + 0.5),
-            AppendKind::Skip(k) => (expected.wrapping_add(k), want, forward),
+            AppendKind::Skip(k) => (expected.wrapping_add(u16::from(k)), want, forward),
             AppendKind::Old(p) if expected > 0 => {
-                ((p % usize::from(expected)) as u8, want, forward)
+                ((p % usize::from(expected)) as u16, want, forward)
             }
-            AppendKind::Old(p) => (255 - (p % 8) as u8, want, forward),
+            AppendKind::Old(p) => (0xFFFF - (p % 8) as u16, want, forward),
         };
         // Beside the previous foot of the other side, `forward` along its heading.
         let other = g.previous_other(side, None);
@@ -556,7 +570,7 @@ impl<'a> Harness<'a> {
         dyaw: f64,
     ) -> Option<RawFrame> {
         let m = &self.model;
-        let queued: Vec<u8> = m.queue.iter().map(|&i| m.steps[i].id()).collect();
+        let queued: Vec<u16> = m.queue.iter().map(|&i| m.steps[i].id()).collect();
         let known: Vec<usize> = (0..m.steps.len())
             .filter(|&i| m.steps[i].epoch == m.epoch)
             .collect();
@@ -565,7 +579,7 @@ impl<'a> Harness<'a> {
         } else if !known.is_empty() {
             m.steps[known[(pick / 4) % known.len()]].id()
         } else {
-            (pick % 4) as u8
+            (pick % 4) as u16
         };
         let step = known.iter().rev().find(|&&i| m.steps[i].id() == id);
         let (px, py, pyaw) = match step {
@@ -590,7 +604,9 @@ impl<'a> Harness<'a> {
                 _ => return None,
             },
             ModifyKind::Jump(j) => {
-                WireModify::from_si(&base, version.wrapping_add(j) % 128, x, y, yaw)?
+                // Any version 1 … 127, older or newer than the one in force.
+                let v = (u16::from(version) + u16::from(j)) % 127 + 1;
+                WireModify::from_si(&base, v as u8, x, y, yaw)?
             }
         };
         Some(Command::Modify(m).encode())
@@ -631,25 +647,20 @@ impl<'a> Harness<'a> {
                 })
             }
             Op::RepeatLast => self.sent.last().copied(),
-            Op::Control(ControlOp::Heartbeat, s) => {
-                // Heartbeats count on their own: fresh is the next, reused the last.
-                let seq = match s {
-                    Seq::Fresh => self.heartbeat().key(),
-                    Seq::Reuse(_) | Seq::After(0) => self.hb,
-                    Seq::After(d) => self.hb.wrapping_add(d),
-                    Seq::Any(v) => v,
-                };
-                Some(
-                    Command::Control {
-                        seq,
-                        op: ControlOp::Heartbeat,
-                    }
-                    .encode(),
-                )
-            }
             Op::Control(op, s) => {
                 let seq = self.seq(s);
-                Some(Command::Control { seq, op }.encode())
+                Some(self.control(seq, op).encode())
+            }
+            Op::OldSession(op, back) => {
+                // A fresh sequence number, the session `back` + 1 epochs before (or after).
+                let seq = self.fresh_seq();
+                let tag = self.n.session().tag();
+                let session = if back % 2 == 0 {
+                    tag.wrapping_sub(1 + u16::from(back / 2))
+                } else {
+                    tag.wrapping_add(1 + u16::from(back / 2))
+                };
+                Some(Command::Control { session, seq, op }.encode())
             }
             Op::Estop(s) => {
                 let seq = match s {
@@ -669,7 +680,10 @@ impl<'a> Harness<'a> {
                     .sent
                     .iter()
                     .copied()
-                    .filter(|f| matches!(f.id, 0x020 | 0x100 | 0x101) && Command::decode(f).is_ok())
+                    .filter(|f| {
+                        matches!(f.id, 0x020 | 0x100 | 0x101)
+                            && Command::decode(f, self.model.next).is_ok()
+                    })
                     .collect();
                 let mut f = protected
                     .get(k % protected.len().max(1))
@@ -684,7 +698,9 @@ impl<'a> Harness<'a> {
                     .sent
                     .iter()
                     .copied()
-                    .filter(|f| COMMAND_IDS.contains(&f.id) && Command::decode(f).is_ok())
+                    .filter(|f| {
+                        COMMAND_IDS.contains(&f.id) && Command::decode(f, self.model.next).is_ok()
+                    })
                     .collect();
                 let f = ours
                     .get(k % ours.len().max(1))
@@ -716,17 +732,9 @@ impl<'a> Harness<'a> {
                 return Ok(());
             }
             Op::Recover => {
-                let seq = self.fresh_seq();
-                self.send(Command::Control {
-                    seq,
-                    op: ControlOp::Stop,
-                })?;
+                self.send(self.control(self.fresh_seq(), ControlOp::Stop))?;
                 self.until_standing(4000)?;
-                let seq = self.fresh_seq();
-                self.send(Command::Control {
-                    seq,
-                    op: ControlOp::Reset,
-                })?;
+                self.send(self.control(self.fresh_seq(), ControlOp::Reset))?;
                 return Ok(());
             }
         };
@@ -753,22 +761,19 @@ impl<'a> Harness<'a> {
     /// The controller stops the robot; every accepted step was walked exactly once or
     /// dropped by an event.
     pub(crate) fn drain(&mut self) -> Result<(), String> {
+        if !self.model.open {
+            // No session yet (and so nothing moved): the handshake.
+            let a = self.send(self.control(self.fresh_seq(), ControlOp::Reset))?;
+            ensure!(a.is_none(), "drain: the handshake refused with {a:?}");
+        }
         let hb = self.heartbeat();
         self.send(hb)?;
         for _ in 0..2 {
             if self.n.state() == NodeState::Standing && !self.model.queue.is_empty() {
-                let seq = self.fresh_seq();
-                let a = self.send(Command::Control {
-                    seq,
-                    op: ControlOp::Start,
-                })?;
+                let a = self.send(self.control(self.fresh_seq(), ControlOp::Start))?;
                 ensure!(a.is_none(), "drain: Start refused with {a:?}");
             }
-            let seq = self.fresh_seq();
-            let a = self.send(Command::Control {
-                seq,
-                op: ControlOp::Stop,
-            })?;
+            let a = self.send(self.control(self.fresh_seq(), ControlOp::Stop))?;
             ensure!(a.is_none(), "drain: Stop refused with {a:?}");
             self.until_standing(16 * 200 + 1000)?;
         }

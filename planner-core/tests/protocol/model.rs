@@ -22,7 +22,7 @@ pub(crate) enum Fate {
 /// An accepted footstep.
 #[derive(Clone, Debug)]
 pub(crate) struct Step {
-    /// Resets before its append (ids count from 0 in each epoch).
+    /// Sessions opened before its append (the handshake's is the first).
     pub(crate) epoch: u32,
     pub(crate) append: WireStep,
     pub(crate) append_frame: RawFrame,
@@ -44,7 +44,7 @@ impl Step {
             Side::Right
         }
     }
-    pub(crate) fn id(&self) -> u8 {
+    pub(crate) fn id(&self) -> u16 {
         self.append.id
     }
     pub(crate) fn is_repeat(&self, f: &RawFrame) -> bool {
@@ -69,11 +69,6 @@ pub(crate) fn accepted() -> Answer {
     Answer::OneOf(vec![None])
 }
 
-/// `true` if `seq` is 1 … 127 ahead of `last` modulo 256 (README: `Start` and `Reset`).
-pub(crate) fn ahead(seq: u8, last: u8) -> bool {
-    (1..=127).contains(&seq.wrapping_sub(last))
-}
-
 pub(crate) fn ix(s: Side) -> usize {
     match s {
         Side::Left => 0,
@@ -93,16 +88,24 @@ pub(crate) struct Model {
     pub(crate) swing: Option<usize>,
     /// The last `HISTORY` steps walked or dropped (the node recognises their frames).
     pub(crate) done: VecDeque<usize>,
+    /// Sessions opened.
     pub(crate) epoch: u32,
-    pub(crate) last_append: Option<u8>,
-    pub(crate) last_control: Option<(u8, ControlOp)>,
-    pub(crate) last_heartbeat: Option<u8>,
-    pub(crate) last_estop: Option<u8>,
+    /// The node's session epoch (the start-up's, one more at each `Reset`).
+    pub(crate) session: u32,
+    pub(crate) open: bool,
+    /// The next step number.
+    pub(crate) next: u16,
+    /// The last accepted control sequence number (0: none).
+    pub(crate) last_seq: u32,
     pub(crate) estopped: bool,
     pub(crate) lost: bool,
     /// A stop was requested (`Stop`, `StopNow`, `ESTOP`, controller lost) while moving.
     pub(crate) stopping: bool,
     pub(crate) last_heard: Option<u32>,
+    /// The cycle in which the controller was last heard.
+    pub(crate) heard_cycle: u64,
+    /// Supervision's timeout in cycles.
+    pub(crate) timeout_cycles: u64,
 }
 
 impl Model {
@@ -114,19 +117,21 @@ impl Model {
             swing: None,
             done: VecDeque::new(),
             epoch: 0,
-            last_append: None,
-            last_control: None,
-            last_heartbeat: None,
-            last_estop: None,
+            session: 0,
+            open: false,
+            next: 0,
+            last_seq: 0,
             estopped: false,
             lost: false,
             stopping: false,
             last_heard: None,
+            heard_cycle: 0,
+            timeout_cycles: u64::from(timeout).div_ceil(5),
         }
     }
 
-    pub(crate) fn expected_id(&self) -> u8 {
-        self.last_append.map_or(0, |l| l.wrapping_add(1))
+    pub(crate) fn expected_id(&self) -> u16 {
+        self.next
     }
 
     /// The steps whose frames the node remembers: queued, swinging, the last done.
@@ -144,7 +149,7 @@ impl Model {
 
     /// The version in force of step `id` as the node's `ACK` reports it: queued, swinging,
     /// else the latest done.
-    pub(crate) fn version(&self, id: u8) -> Option<u8> {
+    pub(crate) fn version(&self, id: u16) -> Option<u8> {
         let of = |&i: &usize| (self.steps[i].id() == id).then_some(self.steps[i].version);
         self.queue
             .iter()
@@ -153,7 +158,7 @@ impl Model {
             .or_else(|| self.done.iter().rev().find_map(of))
     }
 
-    pub(crate) fn queued(&self, id: u8) -> Option<usize> {
+    pub(crate) fn queued(&self, id: u16) -> Option<usize> {
         self.queue
             .iter()
             .copied()
@@ -181,46 +186,44 @@ impl Model {
         if !COMMAND_IDS.contains(&f.id) {
             return Answer::Ignored;
         }
-        let cmd = match Command::decode(f) {
+        let cmd = match Command::decode(f, self.next) {
             Ok(c) => c,
             Err((r, _)) => return must(r),
         };
+        let footstep = matches!(cmd, Command::Append(_) | Command::Modify(_));
+        if footstep && !self.open {
+            return must(NoSession);
+        }
         match cmd {
-            Command::EmergencyStop { seq } => {
-                if self.estopped && self.last_estop == Some(seq) {
+            Command::EmergencyStop { .. } => {
+                if self.estopped {
                     must(Duplicate)
                 } else {
                     accepted()
                 }
             }
-            Command::Control {
-                seq,
-                op: ControlOp::Heartbeat,
-            } => {
-                if self.last_heartbeat == Some(seq) {
-                    must(Duplicate)
-                } else {
-                    accepted()
+            Command::Control { session, seq, op } => {
+                if session != self.session as u16 {
+                    return must(WrongSession);
                 }
-            }
-            Command::Control { seq, op } => {
-                if self.last_control == Some((seq, op)) {
+                if seq == self.last_seq && seq != 0 {
                     return must(Duplicate);
                 }
+                if seq <= self.last_seq {
+                    return must(Stale);
+                }
+                if !self.open && op != ControlOp::Reset {
+                    return must(NoSession);
+                }
                 match op {
-                    ControlOp::Start | ControlOp::Reset => {
-                        if let Some((last, _)) = self.last_control {
-                            if !ahead(seq, last) {
-                                return must(Stale);
-                            }
+                    ControlOp::Reset => {
+                        if standing {
+                            accepted()
+                        } else {
+                            must(WrongState)
                         }
-                        if op == ControlOp::Reset {
-                            return if standing {
-                                accepted()
-                            } else {
-                                must(WrongState)
-                            };
-                        }
+                    }
+                    ControlOp::Start => {
                         if self.estopped {
                             must(EmergencyStopped)
                         } else if self.lost {
@@ -232,6 +235,7 @@ impl Model {
                             accepted()
                         }
                     }
+                    ControlOp::StopNow if standing && self.queue.is_empty() => must(WrongState),
                     _ => accepted(),
                 }
             }
@@ -285,26 +289,21 @@ impl Model {
         }
     }
 
-    /// The node accepted `cmd` (frame `f`) at `now`.
-    pub(crate) fn accept(&mut self, f: &RawFrame, cmd: Command, now: u32, standing: bool) {
-        self.last_heard = Some(now);
+    /// The node accepted `cmd` (frame `f`) at `now`, in cycle `cycle`.
+    pub(crate) fn accept(&mut self, f: &RawFrame, cmd: Command, now: u32, cycle: u64, standing: bool) {
+        // Every accepted command but an emergency stop proves the controller alive.
+        if !matches!(cmd, Command::EmergencyStop { .. }) {
+            self.last_heard = Some(now);
+            self.heard_cycle = cycle;
+        }
         match cmd {
-            Command::EmergencyStop { seq } => {
-                self.last_estop = Some(seq);
+            Command::EmergencyStop { .. } => {
                 self.estopped = true;
                 self.drop_queue(Dropped::Estop);
                 self.stopping |= !standing;
             }
-            Command::Control {
-                seq,
-                op: ControlOp::Heartbeat,
-            } => self.last_heartbeat = Some(seq),
-            Command::Control { seq, op } => {
-                // A late `Stop` or `StopNow` is carried out but does not move the sequence
-                // back (`Start` and `Reset` are accepted only ahead).
-                if self.last_control.is_none_or(|(last, _)| ahead(seq, last)) {
-                    self.last_control = Some((seq, op));
-                }
+            Command::Control { seq, op, .. } => {
+                self.last_seq = seq;
                 match op {
                     ControlOp::Heartbeat => {}
                     ControlOp::Start => self.stopping = false,
@@ -320,8 +319,9 @@ impl Model {
                         self.estopped = false;
                         self.lost = false;
                         self.stopping = false;
-                        self.last_append = None;
                         self.epoch += 1;
+                        self.session += 1;
+                        self.open = true;
                     }
                 }
             }
@@ -338,7 +338,7 @@ impl Model {
                     modified: 0,
                 });
                 self.queue.push_back(self.steps.len() - 1);
-                self.last_append = Some(s.id);
+                self.next = self.next.wrapping_add(1);
             }
             Command::Modify(m) => {
                 let i = self.queued(m.id).expect("the model allowed it: queued");
@@ -357,13 +357,13 @@ impl Model {
     /// The supervision rule at `now` (after the cycle's commands): a moving robot whose
     /// controller was not heard within the timeout is lost; once lost, the queue is dropped.
     /// Returns `true` if it became lost now.
-    pub(crate) fn supervise(&mut self, now: u32, moving: bool) -> bool {
+    pub(crate) fn supervise(&mut self, now: u32, cycle: u64, moving: bool) -> bool {
         if !moving {
             return false;
         }
-        let silent = self
-            .last_heard
-            .is_none_or(|h| now.wrapping_sub(h) > self.timeout);
+        let silent = self.last_heard.is_none_or(|h| {
+            now.wrapping_sub(h) > self.timeout || cycle - self.heard_cycle > self.timeout_cycles
+        });
         let became = silent && !self.lost;
         self.lost |= silent;
         if self.lost {
@@ -374,7 +374,9 @@ impl Model {
     }
 
     pub(crate) fn state(&self, standing: bool) -> NodeState {
-        if self.estopped {
+        if !self.open && !self.estopped {
+            NodeState::NoSession
+        } else if self.estopped {
             NodeState::EmergencyStopped
         } else if self.lost {
             NodeState::ControllerLost

@@ -66,6 +66,9 @@ pub(crate) enum Op {
     /// The last frame again.
     RepeatLast,
     Control(ControlOp, Seq),
+    /// A control command with a fresh sequence number in another session (before or after the
+    /// node's by this many epochs, halved; odd: after).
+    OldSession(ControlOp, u8),
     Estop(Seq),
     /// A frame on `FOREIGN_IDS[i]` with `len` bytes of `fill`.
     Foreign(usize, u8, u8),
@@ -87,7 +90,8 @@ pub(crate) fn seq() -> impl Strategy<Value = Seq> {
     prop_oneof![
         6 => Just(Seq::Fresh),
         2 => (0..64usize).prop_map(Seq::Reuse),
-        1 => prop_oneof![Just(0u8), Just(127), Just(128), Just(129), Just(255)].prop_map(Seq::After),
+        1 => prop_oneof![Just(0u8), Just(1), Just(127), Just(128), Just(129), Just(255)]
+            .prop_map(Seq::After),
         1 => any::<u8>().prop_map(Seq::Any),
     ]
 }
@@ -152,6 +156,10 @@ pub(crate) fn op() -> impl Strategy<Value = Op> {
         2 => Just(Op::RepeatLast),
         10 => control(),
         1 => seq().prop_map(Op::Estop),
+        1 => (control(), 0u8..6).prop_map(|(c, back)| match c {
+            Op::Control(op, _) => Op::OldSession(op, back),
+            other => other,
+        }),
         2 => (0..FOREIGN_IDS.len(), 0u8..9, any::<u8>()).prop_map(|(i, n, b)| Op::Foreign(i, n, b)),
         2 => (any::<usize>(), any::<u8>()).prop_map(|(p, b)| Op::Corrupt(p, b)),
         2 => (any::<usize>(), any::<u8>()).prop_map(|(p, n)| Op::Truncate(p, n)),
