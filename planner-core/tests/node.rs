@@ -248,7 +248,10 @@ fn every_reason_code_is_answered_and_changes_nothing() {
         seq: next_seq(),
         op: ControlOp::Heartbeat,
     };
-    check(ask_raw(&mut n, &mut bus, &mut t, old.encode()), Reason::WrongSession);
+    check(
+        ask_raw(&mut n, &mut bus, &mut t, old.encode()),
+        Reason::WrongSession,
+    );
     // No session yet: a node just started takes nothing but the handshake (and `ESTOP`).
     let mut fresh = N::new(NodeConfig::hrp2()).unwrap();
     let (mut bf, mut tf) = (Bus::default(), 0);
@@ -325,16 +328,32 @@ fn every_reason_code_is_answered_and_changes_nothing() {
     let before = next_seq();
     let start = next_seq();
     assert_eq!(
-        ask(&mut n, &mut bus, &mut t, control_at(start, ControlOp::Start)).reason,
+        ask(
+            &mut n,
+            &mut bus,
+            &mut t,
+            control_at(start, ControlOp::Start)
+        )
+        .reason,
         None
     );
     check(
-        ask(&mut n, &mut bus, &mut t, control_at(start, ControlOp::Start)),
+        ask(
+            &mut n,
+            &mut bus,
+            &mut t,
+            control_at(start, ControlOp::Start),
+        ),
         Reason::Duplicate,
     );
     // A late copy of an older `Start` (sequence behind the last accepted control command).
     check(
-        ask(&mut n, &mut bus, &mut t, control_at(before, ControlOp::Start)),
+        ask(
+            &mut n,
+            &mut bus,
+            &mut t,
+            control_at(before, ControlOp::Start),
+        ),
         Reason::Stale,
     );
     // A late copy of an older version of a modification.
@@ -620,7 +639,12 @@ fn reach_rules_one_by_one() {
     let other = Footstep::new(Side::Right, 0.0, 0.0, 0.0);
     let check = |sx: f64, fx: f64, w: f64, yaw: f64| {
         let same = Footstep::new(Side::Left, sx, 0.2, 0.0);
-        r.check(&other, &same, &Footstep::new(Side::Left, fx, w, yaw), &soles)
+        r.check(
+            &other,
+            &same,
+            &Footstep::new(Side::Left, fx, w, yaw),
+            &soles,
+        )
     };
     let reach = Err(Reason::Reach);
     for (what, inside, outside) in [
@@ -684,7 +708,11 @@ fn reach_rules_one_by_one() {
     for yaw in [0.299f64, -0.299, 0.15, -0.05] {
         let w = 0.08 + 0.07 * yaw.cos() + 0.12 * yaw.abs().sin();
         assert_eq!(check(0.0, 0.0, w + 1e-6, yaw), Ok(()), "{yaw} at {w}");
-        assert_eq!(check(0.0, 0.0, w - 1e-4, yaw), Err(Reason::Crossing), "{yaw} at {w}");
+        assert_eq!(
+            check(0.0, 0.0, w - 1e-4, yaw),
+            Err(Reason::Crossing),
+            "{yaw} at {w}"
+        );
     }
 }
 

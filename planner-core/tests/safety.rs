@@ -396,7 +396,11 @@ fn a_late_stop_does_not_make_a_late_start_new() {
     assert_eq!(r.append(1, true, 0.2, 0.1), None);
     let start2 = next(&mut r, ControlOp::Start);
     assert_eq!(r.ask(start2), None);
-    assert_eq!(r.ask(stop), Some(Reason::Stale), "a late stop is old like any command");
+    assert_eq!(
+        r.ask(stop),
+        Some(Reason::Stale),
+        "a late stop is old like any command"
+    );
     let stop2 = next(&mut r, ControlOp::Stop);
     assert_eq!(r.ask(stop2), None);
     r.until(4000, |n| n.gait().is_standing());

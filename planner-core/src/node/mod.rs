@@ -667,7 +667,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         reason: Reason,
     ) -> Ack {
         let (command, seq, version) = match decoded {
-            Ok(c) => (c.code(), c.key(), c.step_id().and_then(|id| self.steps.version(id))),
+            Ok(c) => (
+                c.code(),
+                c.key(),
+                c.step_id().and_then(|id| self.steps.version(id)),
+            ),
             Err((_, seq)) => ((frame.id & 0xFF) as u8, *seq, None),
         };
         Ack {

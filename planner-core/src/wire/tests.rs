@@ -276,8 +276,14 @@ fn step_numbers_alias_never_by_their_high_byte() {
         let id = next.wrapping_sub(back);
         let s = WireStep::from_si(id, back % 2 == 0, 1.0, 0.1, 0.2).unwrap();
         let m = WireModify::from_si(&s, 5, 1.1, 0.1, 0.2).unwrap();
-        assert_eq!(Command::decode(&Command::Append(s).encode(), next), Ok(Command::Append(s)));
-        assert_eq!(Command::decode(&Command::Modify(m).encode(), next), Ok(Command::Modify(m)));
+        assert_eq!(
+            Command::decode(&Command::Append(s).encode(), next),
+            Ok(Command::Append(s))
+        );
+        assert_eq!(
+            Command::decode(&Command::Modify(m).encode(), next),
+            Ok(Command::Modify(m))
+        );
         for k in 1..=255u16 {
             let old = WireStep {
                 id: id.wrapping_sub(256 * k),
@@ -305,7 +311,10 @@ fn sessions_round_trip() {
     };
     assert_eq!(Session::decode(&s.encode()), Some(s));
     assert_eq!(s.tag(), 0xBEEF);
-    assert_eq!(Session::decode(&RawFrame::new(ids::SESSION, &[0; 7]).unwrap()), None);
+    assert_eq!(
+        Session::decode(&RawFrame::new(ids::SESSION, &[0; 7]).unwrap()),
+        None
+    );
 }
 
 /// The catalogue check value of CRC-8/AUTOSAR ("123456789" → 0xDF) is an oracle

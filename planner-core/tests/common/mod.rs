@@ -89,6 +89,23 @@ impl Rig {
         assert_eq!(r.n.state(), NodeState::Standing);
         r
     }
+    /// A rig with a copy of this rig's node (its session, time and sequence), an empty bus and
+    /// book: cheaper than a new node, whose gains are computed afresh.
+    pub fn fork(&self) -> Self {
+        Self {
+            n: self.n.clone(),
+            bus: Bus::default(),
+            t: self.t,
+            book: StepBook::new(),
+            seq: self.seq,
+            session: self.session,
+            swinging: None,
+            liftoffs: vec![],
+            stream: self.stream,
+            diag: self.diag,
+            status: self.status,
+        }
+    }
     /// A node of `cfg` just started: no cycle run, no session open.
     pub fn unopened(cfg: NodeConfig) -> Self {
         Self {

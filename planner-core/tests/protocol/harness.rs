@@ -397,7 +397,10 @@ impl<'a> Harness<'a> {
             self.model.session,
             self.model.last_seq
         );
-        ensure!(!self.n.clock_fault(), "a clock fault with a clock that advances");
+        ensure!(
+            !self.n.clock_fault(),
+            "a clock fault with a clock that advances"
+        );
 
         // The support foot never moves; the swinging foot is the one the step names.
         let supports = |p: Phase, i: usize| match p {

@@ -115,7 +115,8 @@ fn run(t0: u32, ops: &[Op], stats: &mut Stats) -> Result<(), String> {
     // Most programs open the session first (one cycle to publish it, then the `Reset`); one
     // in eight starts without, and stays so until a `Reset` of its own.
     if ops.len() % 8 != 0 {
-        h.cycle(None, 5).map_err(|e| format!("before the handshake: {e}"))?;
+        h.cycle(None, 5)
+            .map_err(|e| format!("before the handshake: {e}"))?;
         let reset = h.control(h.fresh_seq(), ControlOp::Reset);
         let a = h.send(reset).map_err(|e| format!("handshake: {e}"))?;
         if a.is_some() {

@@ -290,7 +290,14 @@ impl Model {
     }
 
     /// The node accepted `cmd` (frame `f`) at `now`, in cycle `cycle`.
-    pub(crate) fn accept(&mut self, f: &RawFrame, cmd: Command, now: u32, cycle: u64, standing: bool) {
+    pub(crate) fn accept(
+        &mut self,
+        f: &RawFrame,
+        cmd: Command,
+        now: u32,
+        cycle: u64,
+        standing: bool,
+    ) {
         // Every accepted command but an emergency stop proves the controller alive.
         if !matches!(cmd, Command::EmergencyStop { .. }) {
             self.last_heard = Some(now);
