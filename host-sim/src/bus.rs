@@ -41,20 +41,22 @@
 //! second, all timestamps zero).
 //!
 //! **Against `trajectory.csv`** (host-sim's [`simulate`](crate::sim::simulate) and
-//! `host-sim run`): its `t` column is `j × 5 ms` for row `j`. Row 0 is the node's state before
-//! the first tick; row `j ≥ 1` is the reference of the node's poll in tick `j − 1`, which runs
-//! at bus time `t − 2.5 ms` (`t` = that row's CSV time). The frames that poll publishes (the
-//! five stream frames `200`, `201`, `202`, `210`, `211`, and `080` ACK, `300` STATUS, `301`
-//! DIAG when due) are delivered before the next tick starts (on a bus without faults), so
+//! `host-sim run`): its `t` column is `j × 5 ms` for row `j`. The bus's first 5 ms are the
+//! handshake's cycle (the node publishes its session, the controller opens it); row 0 is the
+//! node's state before the first tick; row `j ≥ 1` is the reference of the node's poll in tick
+//! `j − 1`, which runs at bus time `t + 2.5 ms` (`t` = that row's CSV time). The frames that
+//! poll publishes (the five stream frames `200`, `201`, `202`, `210`, `211`, and `080` ACK,
+//! `300` STATUS, `301` DIAG, `303` SESSION when due) are delivered before the next tick starts
+//! (on a bus without faults), so
 //!
 //! ```text
-//! log time − LOG_EPOCH_S = t_csv − 2.5 ms + d,    0 < d ≤ 2.5 ms
+//! log time − LOG_EPOCH_S = t_csv + 2.5 ms + d,    0 < d ≤ 2.5 ms
 //! ```
 //!
 //! `d` being the frame's wait in the node's mailbox plus its own transmission
 //! (`host-sim/tests/canlog.rs` checks this on every stream frame). The controller's commands of
-//! tick `k` leave at bus time `5k ms` (log time − `LOG_EPOCH_S` = `5k ms + d`, `d < 2.5 ms`),
-//! and the node reacts to them in the poll that produces CSV row `k + 1`.
+//! tick `k` leave at bus time `5(k + 1) ms` (log time − `LOG_EPOCH_S` = `5(k + 1) ms + d`,
+//! `d < 2.5 ms`), and the node reacts to them in the poll that produces CSV row `k + 1`.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;

@@ -403,10 +403,11 @@ pub fn modified_support_error(
 }
 
 /// Checks footsteps walked from the scenario's stance (feet at (0, ±0.1) m) against the leg
-/// reach limits `reach` as the node does (the first step from rest). Errors: the first step
-/// refused, and why.
+/// reach limits `reach` as the node does (the first step from rest), with feet of `soles`.
+/// Errors: the first step refused, and why.
 pub fn check_reach(
     reach: &planner_core::node::Reach,
+    soles: &planner_core::node::Soles,
     steps: &[Footstep<f64>],
 ) -> Result<(), String> {
     let mut feet = [
@@ -417,7 +418,7 @@ pub fn check_reach(
     for (i, step) in steps.iter().enumerate() {
         let (same, other) = (feet[index(step.side)], feet[index(step.side.other())]);
         reach
-            .check_with(&other, &same, step, i == 0)
+            .check_with(&other, &same, step, i == 0, soles)
             .map_err(|e| format!("step {i} at x = {:.3} m: {e:?}", step.x))?;
         feet[index(step.side)] = *step;
     }

@@ -1,7 +1,9 @@
 //! The simulation over the virtual CAN link: a controller (the scenario's timeline) on port 0,
 //! the node (the same `planner_core::node::Node` as the firmware) on port 1.
 //!
-//! Per 5 ms tick `k` (time `t_k = 5k ms`):
+//! First the handshake's cycle (bus time 0 … 5 ms): the node's first poll publishes its
+//! session (`SESSION`), the controller reads it and sends the `Reset` that opens it, with the
+//! commands of tick 0. Then per 5 ms tick `k` (bus time `t_k = 5(k + 1) ms`):
 //! 1. the controller sends the commands due at tick `k` (and a heartbeat every 100 ms);
 //! 2. the bus runs to `t_k + 2.5 ms` and the node polls (handles what arrived, advances the
 //!    gait by one tick, publishes the reference and its answers);
@@ -17,9 +19,9 @@
 //! by an accepted `stop_now` of the scenario counts as carried out: that is what the scenario
 //! asked for. These are the names that a scenario file's `expect` key takes ([`Failure`]).
 //!
-//! Step ids: the bus carries a footstep id in one byte ([`WireId`], 0 … 255); the TOML reader
-//! refuses an id that does not fit, naming the entry, and [`simulate`] refuses one too for
-//! scenarios built in code.
+//! Step ids: a scenario's footstep ids are the node's step numbers ([`WireId`], 0 …
+//! [`MAX_WIRE_ID`]); the TOML reader refuses an id that does not fit, naming the entry, and
+//! [`simulate`] refuses one too for scenarios built in code.
 
 use planner_core::gait::{Footstep, Reference, Side};
 use planner_core::node::{Counters, Node, NodeConfig};
@@ -60,14 +62,40 @@ impl Default for SimConfig {
     }
 }
 
-/// A footstep id as the bus carries it (byte 0 of `STEP_APPEND` and `STEP_MODIFY`, the
-/// `seq` of their `ACK`): the one definition of the id range, from a scenario file to the
-/// wire.
-pub type WireId = u8;
+/// A footstep id as the bus carries it: the node's 16-bit step number (the low byte is byte 0
+/// of `STEP_APPEND` and `STEP_MODIFY` and the `seq` of their `ACK`, the high byte is in their
+/// CRC): the one definition of the id range, from a scenario file to the wire. The node of a
+/// run numbers its steps from 0 (its entropy is 0), so a scenario's ids are the numbers.
+pub type WireId = u16;
+
+/// The largest id a scenario may give: a start-up numbers 65,535 steps (0 … 65,534).
+pub const MAX_WIRE_ID: WireId = 0xFFFE;
 
 /// The id of a scenario command as the bus carries it, `None` if it does not fit.
 pub fn wire_id(id: u16) -> Option<WireId> {
-    WireId::try_from(id).ok()
+    (id <= MAX_WIRE_ID).then_some(id)
+}
+
+/// The controller's side of the session: the epoch the node published and the sequence
+/// counter (one for every control command).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Controller {
+    /// The session epoch the controller speaks in.
+    pub(crate) epoch: u32,
+    /// The last sequence number it used.
+    pub(crate) seq: u32,
+}
+
+impl Controller {
+    /// The next control command `op` in the session.
+    pub(crate) fn control(&mut self, op: ControlOp) -> Command {
+        self.seq += 1;
+        Command::Control {
+            session: self.epoch as u16,
+            seq: self.seq,
+            op,
+        }
+    }
 }
 
 /// What became of a footstep id the controller appended, as the node's gait showed it.
@@ -150,7 +178,6 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut events = Vec::new();
     let mut adjustments = Vec::new();
     let mut footsteps: Vec<(u16, planner_core::gait::Footstep<f64>)> = Vec::new();
-    let mut seq: u8 = 0;
     let mut book = StepBook::new();
     let mut steps: Vec<(u16, Side, Fate)> = Vec::new();
     let mut cut = true;
@@ -158,12 +185,30 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut last_replan = None;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
     let ms = 1_000_000u64;
+    // The handshake: the node's first cycle (before the scenario's tick 0, 5 ms earlier)
+    // publishes its session; the controller opens it with a `Reset` sent with the commands of
+    // tick 0, which are in the session that opens (the epoch one more).
+    bus.advance(0);
+    bus.advance(5 * ms / 2);
+    node.poll(2, &mut nport);
+    bus.advance(5 * ms);
+    let mut ctl_state = Controller::default();
+    while let Ok(f) = ctl.receive() {
+        if let Some(session) = wire::Session::decode(&f) {
+            ctl_state = Controller {
+                epoch: session.epoch,
+                seq: session.last_seq,
+            };
+        }
+    }
+    send(&mut ctl, ctl_state.control(ControlOp::Reset).encode());
+    ctl_state.epoch = ctl_state.epoch.wrapping_add(1);
     for k in 0..s.max_ticks {
-        let t0 = k * 5 * ms;
+        let t0 = (k + 1) * 5 * ms;
         bus.advance(t0);
         while next < s.timeline.len() && s.timeline[next].0 <= k {
             let (_, command) = s.timeline[next];
-            let wire = encode(command, &mut seq, &mut book)?;
+            let wire = encode(command, &mut ctl_state, &mut book)?;
             if let scenario::Command::Push(id, f) = command {
                 if !steps.iter().any(|(i, _, _)| *i == id) {
                     steps.push((id, f.side, Fate::Unseen));
@@ -174,15 +219,8 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
             next += 1;
         }
         if cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0 {
-            send(
-                &mut ctl,
-                Command::Control {
-                    // A new sequence number for every heartbeat (a repeat proves nothing).
-                    seq: (k / cfg.heartbeat_ticks) as u8,
-                    op: ControlOp::Heartbeat,
-                }
-                .encode(),
-            );
+            // A new sequence number for every heartbeat (a repeat proves nothing).
+            send(&mut ctl, ctl_state.control(ControlOp::Heartbeat).encode());
         }
         bus.advance(t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
@@ -272,20 +310,16 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
 /// commands with the next sequence number.
 fn encode(
     command: scenario::Command,
-    seq: &mut u8,
+    ctl: &mut Controller,
     book: &mut StepBook,
 ) -> Result<Command, String> {
-    let control = |seq: &mut u8, op| {
-        *seq = seq.wrapping_add(1);
-        Ok(Command::Control { seq: *seq, op })
-    };
+    let control = |ctl: &mut Controller, op| Ok(ctl.control(op));
     match command {
         scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) => {
             let left = f.side == Side::Left;
             let Some(wid) = wire_id(id) else {
                 return Err(format!(
-                    "footstep id {id} does not fit the bus (0 … {})",
-                    WireId::MAX
+                    "footstep id {id} does not fit the bus (0 … {MAX_WIRE_ID})"
                 ));
             };
             // The limits as the codec has them.
@@ -328,18 +362,18 @@ fn encode(
                 })
             }
         }
-        scenario::Command::Start => control(seq, ControlOp::Start),
-        scenario::Command::Stop => control(seq, ControlOp::Stop),
-        scenario::Command::StopNow => control(seq, ControlOp::StopNow),
+        scenario::Command::Start => control(ctl, ControlOp::Start),
+        scenario::Command::Stop => control(ctl, ControlOp::Stop),
+        scenario::Command::StopNow => control(ctl, ControlOp::StopNow),
     }
 }
 
 /// Checks that every command of `s` can be sent on the bus, as [`simulate`] would send it;
 /// on failure, the index of the first command that cannot and why.
 pub fn wire_check(s: &Scenario) -> Result<(), (usize, String)> {
-    let (mut seq, mut book) = (0, StepBook::new());
+    let (mut ctl, mut book) = (Controller::default(), StepBook::new());
     for (i, &(_, command)) in s.timeline.iter().enumerate() {
-        encode(command, &mut seq, &mut book).map_err(|e| (i, e))?;
+        encode(command, &mut ctl, &mut book).map_err(|e| (i, e))?;
     }
     Ok(())
 }

@@ -139,17 +139,18 @@ fn the_log_is_candump_l_from_the_stated_epoch() {
                 );
                 continue;
             }
-            // The first frame leaves at simulated time 0 and is logged when its transmission
-            // ends (1 µs a bit at 1 Mbit/s); the last one within the simulated time.
+            // The first frame leaves at the handshake cycle's poll (simulated time 2.5 ms) and
+            // is logged when its transmission ends (1 µs a bit at 1 Mbit/s); the last one
+            // within the simulated time (the handshake's cycle and the ticks).
             let first = parse_log_line(&log[0]).unwrap();
             let bit_us = 1_000_000 / u64::from(cfg.bitrate);
             assert_eq!(
                 first.unix_us,
-                EPOCH_US + u64::from(first.frame.wire_bits()) * bit_us,
+                EPOCH_US + TICK_US / 2 + u64::from(first.frame.wire_bits()) * bit_us,
                 "{name}: {}",
                 log[0]
             );
-            let ticks = sim.run.trajectory.len() as u64 - 1;
+            let ticks = sim.run.trajectory.len() as u64;
             assert!(last - EPOCH_US <= ticks * TICK_US, "{name}");
             assert_eq!(
                 log.len() as u64,
@@ -170,8 +171,9 @@ fn the_log_is_candump_l_from_the_stated_epoch() {
 }
 
 /// The documented offset: CSV row `j` (t = 5j ms) is the poll that runs at bus time
-/// t − 2.5 ms; the frames it publishes are logged at EPOCH + t − 2.5 ms + d, 0 < d ≤ 2.5 ms,
-/// and the controller's commands of tick k at EPOCH + 5k ms + d, 0 < d < 2.5 ms.
+/// t + 2.5 ms (the first 5 ms are the handshake's cycle); the frames it publishes are logged
+/// at EPOCH + t + 2.5 ms + d, 0 < d ≤ 2.5 ms, and the controller's commands of tick k at
+/// EPOCH + 5(k + 1) ms + d, 0 < d < 2.5 ms (the handshake's `Reset` with those of tick 0).
 #[test]
 fn the_log_and_trajectory_csv_are_offset_as_documented() {
     for name in ["straight", SCENARIO] {
@@ -206,10 +208,13 @@ fn the_log_and_trajectory_csv_are_offset_as_documented() {
                 );
                 continue;
             }
-            // A node frame: published by the poll of CSV row j = ceil(t / 5 ms).
-            let j = t.div_ceil(TICK_US) as usize;
+            // A node frame: published by the poll of CSV row j = ceil(t / 5 ms) − 1 (the
+            // handshake cycle's frames before row 0's time: no row).
+            let Some(j) = (t.div_ceil(TICK_US) as usize).checked_sub(1) else {
+                continue;
+            };
             let t_csv = j as u64 * TICK_US;
-            let d = t + TICK_US / 2 - t_csv;
+            let d = t - TICK_US / 2 - t_csv;
             assert!(
                 d > 0 && d <= TICK_US / 2,
                 "{name}: node frame {id:03X} at {t} µs"

@@ -29,7 +29,7 @@
 use host_sim::multibody::{mean_yaw, Model, Pose};
 use host_sim::scenario::{self, Command, Run, Scenario};
 use planner_core::gait::{Footstep, GaitParams, Reference, Side};
-use planner_core::node::Reach;
+use planner_core::node::{Reach, Soles};
 
 /// The knee margin asked of [`strict`] \[m\].
 const MIN_MARGIN: f64 = 0.005;
@@ -120,7 +120,8 @@ fn followable(
     same: &Footstep<f64>,
     step: &Footstep<f64>,
 ) -> bool {
-    r.check(other, same, step).is_ok()
+    r.check(other, same, step, &Soles::of(&GaitParams::hrp2()))
+        .is_ok()
 }
 
 /// Limits under test: a box, with or without the combined rules.

@@ -134,9 +134,9 @@ fn the_command_line_replays_a_log_and_reports_refusals() {
     assert!(!summary["refused"].as_array().unwrap().is_empty());
 }
 
-/// A CONTROL frame, encoded with the codec.
-fn control(seq: u8, op: planner_core::wire::ControlOp) -> String {
-    let f = planner_core::wire::Command::Control { seq, op }.encode();
+/// A CONTROL frame of `session`, encoded with the codec.
+fn control(session: u16, seq: u32, op: planner_core::wire::ControlOp) -> String {
+    let f = planner_core::wire::Command::Control { session, seq, op }.encode();
     let data: String = f.bytes().iter().map(|b| format!("{b:02X}")).collect();
     format!("020#{data}")
 }
@@ -168,23 +168,29 @@ fn frames_are_played_in_log_order_and_for_the_poll_after_them() {
     // node reads it in the next cycle's poll. Heartbeats keep the controller alive. The log
     // is from a wall clock (December 2026), not host-sim's epoch: it replays from its first
     // frame.
+    // The handshake first: the node's start-up session (epoch 0: the replay's node has no
+    // entropy) opened by a `Reset`; then session 1.
     let start_s = 1_796_000_000;
-    let mut log = String::new();
+    let mut log = line(start_s, 50, &control(0, 1, ControlOp::Reset));
     for (i, f) in appends().iter().enumerate() {
         log += &line(start_s, 100 * (i as u64 + 1), f);
     }
-    log += &line(start_s, 4_000, &control(1, ControlOp::Start));
+    log += &line(start_s, 4_000, &control(1, 2, ControlOp::Start));
     for k in 0..60u64 {
         log += &line(
             start_s,
             100_000 * k + 4_900,
-            &control(10 + k as u8, ControlOp::Heartbeat),
+            &control(1, 10 + k as u32, ControlOp::Heartbeat),
         );
     }
     let cfg = SimConfig::default();
     let frames = replay::parse(&log, cfg.node.params.dt).unwrap();
     assert_eq!(frames[0].tick, 0);
-    let start = frames.iter().find(|f| f.frame.id == ids::CONTROL).unwrap();
+    let start = frames
+        .iter()
+        .filter(|f| f.frame.id == ids::CONTROL)
+        .nth(1)
+        .unwrap();
     assert_eq!(
         start.tick, 1,
         "logged after the poll of cycle 0: for the poll of cycle 1"
@@ -211,7 +217,7 @@ fn a_burst_in_the_last_cycle_is_read_and_answered_in_full() {
             log += &line(
                 host_sim::bus::LOG_EPOCH_S,
                 0,
-                &control(i + 1, ControlOp::Heartbeat),
+                &control(0, u32::from(i) + 1, ControlOp::Heartbeat),
             );
         }
         let cfg = SimConfig::default();

@@ -17,7 +17,7 @@ fn the_node_over_the_bus_equals_the_gait_driven_directly() {
         let mut on_wire = s.clone();
         for (_, c) in on_wire.timeline.iter_mut() {
             if let scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) = c {
-                let w = WireStep::from_si(*id as u8, f.side == Side::Left, f.x, f.y, f.yaw);
+                let w = WireStep::from_si(*id, f.side == Side::Left, f.x, f.y, f.yaw);
                 let (x, y, yaw) = w.expect("representable").si();
                 *f = Footstep::new(f.side, x, y, yaw);
             }

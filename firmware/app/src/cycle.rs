@@ -81,8 +81,8 @@ const RX_HEARTBEAT: u8 = 16;
 /// A reset, an invalid frame, or a frame of another node.
 const RX_OTHER: u8 = 32;
 
-fn class(f: &RawFrame) -> u8 {
-    match Command::decode(f) {
+fn class(f: &RawFrame, next: u16) -> u8 {
+    match Command::decode(f, next) {
         Ok(Command::Append(_)) => RX_PUSH,
         Ok(Command::Modify(_)) => RX_MODIFY,
         Ok(Command::Control {
@@ -131,8 +131,9 @@ impl Pending {
     ) -> Self {
         let mut seen = [0u8; SEEN];
         let (mut acc, mut i) = (0u8, 0usize);
+        let next = node.next_step();
         bus.each_pending(|f| {
-            acc |= class(f);
+            acc |= class(f, next);
             if let Some(s) = seen.get_mut(i) {
                 *s = acc;
             }

@@ -38,6 +38,12 @@ fn key(c: &Command) -> u8 {
     c.key()
 }
 
+/// The step number an `ACK`'s low byte names: the latest of the controller's steps with it.
+fn step_of(plan: &[(u16, Footstep<f64>)], low: u8) -> u16 {
+    let next = plan.iter().map(|(id, _)| id + 1).max().unwrap_or(0);
+    planner_core::wire::step_number(low, next)
+}
+
 /// The version a footstep command carries (0 for an append).
 fn version(c: &Command) -> u8 {
     match c {
@@ -53,7 +59,7 @@ fn wire_step(
     id: u16,
     f: &Footstep<f64>,
 ) -> Result<Command, String> {
-    let wid = u8::try_from(id).map_err(|_| format!("footstep id {id} does not fit the bus"))?;
+    let wid = crate::sim::wire_id(id).ok_or(format!("footstep id {id} does not fit the bus"))?;
     let c = if append {
         book.append(wid, f.side == Side::Left, f.x, f.y, f.yaw)
     } else {
@@ -152,7 +158,42 @@ pub(super) fn play(
                 None => accepted.push((id, f, u)),
             }
         };
-    let mut seq: u8 = 0;
+    // The handshake before the scenario's tick 0: the controller waits for the node's
+    // `SESSION` (its first cycle and every 100 ms after), sends the `Reset` that opens it and
+    // sends it again, with a new sequence number, until it is answered accepted. The node does
+    // not tick before (nothing moves), so the scenario's timing is unchanged.
+    let mut ctl_state = crate::sim::Controller::default();
+    let mut pre = 0u64;
+    let mut heard: Option<u32> = None;
+    let mut opened = false;
+    while !opened && pre < 2000 {
+        let t0 = pre * 5 * ms;
+        bus.advance(t0);
+        if let Some(epoch) = heard {
+            if pre % RETRY_TICKS == 0 {
+                ctl_state.epoch = epoch;
+                let _ = ctl.transmit(&ctl_state.control(ControlOp::Reset).encode());
+            }
+        }
+        bus.advance(t0 + 5 * ms / 2);
+        node.poll((t0 / ms) as u32 + 2, &mut nport);
+        bus.advance(t0 + 5 * ms);
+        while let Ok(f) = ctl.receive() {
+            if let Some(sn) = planner_core::wire::Session::decode(&f) {
+                if heard.is_none() {
+                    heard = Some(sn.epoch);
+                    ctl_state.seq = ctl_state.seq.max(sn.last_seq);
+                }
+            } else if let Some(a) = Ack::decode(&f) {
+                opened |= a.command == 0x20 && a.reason.is_none();
+            }
+        }
+        pre += 1;
+    }
+    if !opened {
+        return Err("the handshake did not complete in 10 s".into());
+    }
+    ctl_state.epoch = ctl_state.epoch.wrapping_add(1);
     let mut next = 0;
     // Commands not sent yet: a control command waits until every earlier command is answered
     // (a `Stop` overtaking a lost `Start` would leave the robot walking in place), and what
@@ -166,16 +207,18 @@ pub(super) fn play(
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
     let mut k = 0u64;
     while k < s.max_ticks {
-        let t0 = k * 5 * ms;
+        let t0 = (k + pre) * 5 * ms;
         bus.advance(t0);
         // 1. The scenario's commands due now.
         let mut issue: Vec<Outgoing> = Vec::new();
         while next < s.timeline.len() && s.timeline[next].0 <= k {
             let (_, command) = s.timeline[next];
             next += 1;
-            let mut control = |op| {
-                seq = seq.wrapping_add(1);
-                Command::Control { seq, op }
+            // (Numbered when sent: see below.)
+            let control = |op| Command::Control {
+                session: 0,
+                seq: 0,
+                op,
             };
             match command {
                 scenario::Command::Push(id, f) => {
@@ -238,6 +281,12 @@ pub(super) fn play(
                 break;
             }
             outbox.pop_front();
+            // A control command takes its sequence number as it is sent (greater than every
+            // one before it, heartbeats included).
+            let cmd = match cmd {
+                Command::Control { op, .. } => ctl_state.control(op),
+                c => c,
+            };
             if let (Command::Modify(_), Some((id, _))) = (&cmd, step) {
                 for p in pending.iter_mut() {
                     if matches!(p.cmd, Command::Modify(_)) && p.step.map(|s| s.0) == Some(id) {
@@ -246,7 +295,6 @@ pub(super) fn play(
                 }
             }
             if let (Some(id), Some((_, f))) = (cmd.step_id(), step) {
-                let id = u16::from(id);
                 let u = match cmd {
                     Command::Modify(_) => {
                         let e = made.entry(id).or_insert(0);
@@ -278,25 +326,27 @@ pub(super) fn play(
                 p.retries += 1;
                 p.last_sent = k;
                 retransmissions += 1;
+                // A control command is sent again as a new one (a new sequence number: the
+                // old one may be below a heartbeat's taken since).
+                if let Command::Control { op, .. } = p.cmd {
+                    p.cmd = ctl_state.control(op);
+                }
                 let _ = ctl.transmit(&p.cmd.encode());
             }
         }
         if k % 20 == 0 {
-            let hb = Command::Control {
-                seq: (k / 20) as u8,
-                op: ControlOp::Heartbeat,
-            };
+            let hb = ctl_state.control(ControlOp::Heartbeat);
             let _ = ctl.transmit(&hb.encode());
         }
         // 4. The node's cycle (the babbling port runs with the bus).
         flood.run(&bus, t0, t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
-        let mut tap = Tap::new(&mut nport, k);
+        let mut tap = Tap::new(&mut nport, k + pre);
         let report = node.poll(now_ms, &mut tap);
         // What the node accepted, from its own answers as it sent them (before the bus).
         for a in tap.frames().filter_map(Ack::decode) {
             if let (0x00 | 0x01, None, Some(v)) = (a.command, a.reason, a.version) {
-                let id = u16::from(a.seq);
+                let id = step_of(&plan, a.seq);
                 if let Some(&(f, u)) = versions.get(&(id, v)) {
                     take(&mut node_accepted, id, f, u);
                 }
@@ -327,7 +377,7 @@ pub(super) fn play(
                 // Every answer about a footstep tells its version in force, whatever the
                 // answer (a refused newer modification leaves an older one in force).
                 if let (0x00 | 0x01, Some(v)) = (a.command, a.version) {
-                    let id = u16::from(a.seq);
+                    let id = step_of(&plan, a.seq);
                     if let Some(&(f, u)) = versions.get(&(id, v)) {
                         take(&mut accepted, id, f, u);
                     }
@@ -354,6 +404,10 @@ pub(super) fn play(
                 let p = &mut pending[i];
                 match a.reason {
                     Some(Reason::SequenceGap | Reason::BadCrc) if p.retries < MAX_RETRIES => {} // retry later
+                    // A control command overtaken by a newer one (a delayed frame): sent again
+                    // as a new one.
+                    Some(Reason::Stale)
+                        if matches!(p.cmd, Command::Control { .. }) && p.retries < MAX_RETRIES => {}
                     None | Some(Reason::Duplicate) => confirm.push(i),
                     Some(r) => {
                         p.open = false;
@@ -363,7 +417,7 @@ pub(super) fn play(
                         // which makes every older one stale.
                         let (pin, cmd) = (p.pin, p.cmd);
                         if let (false, Command::Modify(m), Some(v)) = (pin, cmd, a.version) {
-                            let id = u16::from(m.id);
+                            let id = m.id;
                             let in_flight = pending
                                 .iter()
                                 .any(|q| q.superseded && q.cmd.step_id() == Some(m.id));

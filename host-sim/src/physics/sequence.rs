@@ -29,7 +29,7 @@ use super::{run, PhysicsConfig, PhysicsReport};
 use crate::paper::{self, plain_params, Sequence};
 use crate::robot::Robot;
 use planner_core::gait::GaitParams;
-use planner_core::node::Reach;
+use planner_core::node::{Reach, Soles};
 
 /// `--afters` by default: [`paper::SEQUENCE_AFTERS_M`] as text.
 pub const DEFAULT_AFTERS: &str = "0.3,-0.1,0.12,0.3,-0.1";
@@ -66,7 +66,7 @@ pub fn run_one(
     let params = if plain { plain_params(params) } else { params };
     let mut sequence = paper::consecutive(params, before, afters)?;
     for (k, plan) in sequence.plans.iter().enumerate() {
-        paper::check_reach(reach, plan).map_err(|e| {
+        paper::check_reach(reach, &Soles::of(&params), plan).map_err(|e| {
             format!("the footsteps after {k} modifications are out of the legs' reach: {e}")
         })?;
     }
@@ -256,7 +256,7 @@ mod tests {
                 assert!((w[i].x - w[i - 1].x - st.after).abs() < 1e-12);
             }
             for plan in &s.plans {
-                paper::check_reach(&Reach::default(), plan).unwrap();
+                paper::check_reach(&Reach::default(), &Soles::of(&params), plan).unwrap();
             }
             let adjusted = s.steps.iter().filter(|st| st.adjust_s != 0.0).count();
             if plain {
@@ -274,7 +274,7 @@ mod tests {
         for afters in [&[0.0, -0.3][..], &[-0.1, 0.3]] {
             let s = paper::consecutive(params, 0.1, afters).unwrap();
             assert!(
-                paper::check_reach(&Reach::default(), s.walked()).is_err(),
+                paper::check_reach(&Reach::default(), &Soles::of(&params), s.walked()).is_err(),
                 "{afters:?}"
             );
         }

@@ -24,8 +24,9 @@ use can_dbc::{MessageId, NumericValue, Signal, ValueDescription, ValueType};
 use planner_core::gait::{GaitParams, Phase, Side};
 use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
-    self, ids, signed_range, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Status,
-    Stream, WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
+    self, ids, signed_range, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Session,
+    Status, Stream, WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS,
+    YAW_UNIT,
 };
 
 mod ranges;
@@ -95,6 +96,7 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
         ids::STATUS,
         ids::DIAG,
         ids::LINK,
+        ids::SESSION,
     ]
     .iter()
     .map(|&i| u32::from(i))
@@ -107,47 +109,61 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
 fn commands_decode_the_same_with_the_dbc() {
     let d = dbc();
     for &(id, left, x, y, yaw) in &[
-        (7u8, true, 0.4, 0.1, 0.0),
+        (7u16, true, 0.4, 0.1, 0.0),
         (200, false, -12.3456, 28.0, -3.0),
         (0, true, 0.0005, -0.0005, 3.1),
+        (0x12A4, false, 1.0, -0.1, 0.2),
     ] {
         let w = WireStep::from_si(id, left, x, y, yaw).unwrap();
         let c = Command::Append(w);
         let s = decode(&d, &c.encode());
-        assert_eq!(s["step_id"], f64::from(id));
+        // The low byte of the number; the CRC keyed with the Gray code of the high byte.
+        let key = (id >> 8) as u8 ^ (id >> 9) as u8;
+        assert_eq!(s["step_id"], f64::from(id & 0xFF));
         assert_eq!(s["left"], f64::from(u8::from(left)));
         assert_eq!(s["reserved"], 0.0);
         close(s["x"], x, planner_core::wire::STEP_UNIT, "x");
         close(s["y"], y, planner_core::wire::STEP_UNIT, "y");
         close(s["yaw"], yaw, planner_core::wire::YAW_UNIT, "yaw");
         let f = c.encode();
-        assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
+        assert_eq!(
+            s["crc"],
+            f64::from(wire::crc8_keyed(f.id, key, &f.data[..7]))
+        );
         // A modification of it: version, offsets from the appended position, heading.
         let (mx, my, myaw) = (x - 1.2345, y + 4.0, -yaw);
         let m = WireModify::from_si(&w, 99, mx, my, myaw).unwrap();
         let c = Command::Modify(m);
         let s = decode(&d, &c.encode());
-        assert_eq!((s["step_id"], s["version"]), (f64::from(id), 99.0));
+        assert_eq!((s["step_id"], s["version"]), (f64::from(id & 0xFF), 99.0));
         assert_eq!(s["left"], f64::from(u8::from(left)));
         let (bx, by, _) = w.si();
         close(s["dx"], mx - bx, planner_core::wire::STEP_UNIT, "dx");
         close(s["dy"], my - by, planner_core::wire::STEP_UNIT, "dy");
         close(s["yaw"], myaw, planner_core::wire::YAW_UNIT, "yaw");
         let f = c.encode();
-        assert_eq!(s["crc"], f64::from(wire::crc8(f.id, &f.data[..7])));
+        assert_eq!(
+            s["crc"],
+            f64::from(wire::crc8_keyed(f.id, key, &f.data[..7]))
+        );
     }
     let s = decode(&d, &Command::EmergencyStop { seq: 9 }.encode());
     assert_eq!(s["seq"], 9.0);
     let s = decode(
         &d,
         &Command::Control {
-            seq: 3,
+            session: 0xBEEF,
+            seq: 0x0102_0304,
             op: ControlOp::StopNow,
         }
         .encode(),
     );
-    assert_eq!((s["seq"], s["op"]), (3.0, 3.0));
-    assert_eq!(s["crc"], f64::from(wire::crc8(ids::CONTROL, &[3, 3])));
+    assert_eq!(
+        (s["session"], s["seq"], s["op"]),
+        (f64::from(0xBEEFu16), f64::from(0x0102_0304u32), 3.0)
+    );
+    let body = [0xEF, 0xBE, 4, 3, 2, 1, 3];
+    assert_eq!(s["crc"], f64::from(wire::crc8(ids::CONTROL, &body)));
 }
 
 #[test]
@@ -188,30 +204,31 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
         rejected: 1234,
         overruns: 7,
         last_adjust: -40,
-        flags: 5,
+        flags: 5 | 1 << 3 | Status::CLOCK_FAULT,
     };
     let s = decode(&d, &st.encode());
     assert_eq!(
         (s["state"], s["queue"], s["rejected"], s["overruns"]),
         (1.0, 3.0, 1234.0, 7.0)
     );
-    // Flags 5: bit 0 (shaping) and bit 2 (transmit overflow).
+    // Bit 0 (shaping), bit 2 (transmit overflow), the next side left, the clock fault.
     assert_eq!(
         (
             s["shaping"],
             s["replan_failed"],
             s["tx_overflow"],
+            s["next_side"],
+            s["clock_fault"],
             s["flags_reserved"]
         ),
-        (1.0, 0.0, 1.0, 0.0)
+        (1.0, 0.0, 1.0, 1.0, 1.0, 0.0)
     );
     close(s["last_adjust"], -0.2, 0.005, "last_adjust");
     let dg = Diag {
         foreign: 40_000,
         bus_errors: 12,
         tx_dropped: 3,
-        next_side: 2,
-        last_control: 201,
+        next_step: 0x1234,
     };
     let s = decode(&d, &dg.encode());
     assert_eq!(
@@ -219,10 +236,18 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
             s["foreign"],
             s["bus_errors"],
             s["tx_dropped"],
-            s["next_side"],
-            s["last_control"]
+            s["next_step"]
         ),
-        (40_000.0, 12.0, 3.0, 2.0, 201.0)
+        (40_000.0, 12.0, 3.0, f64::from(0x1234u16))
+    );
+    let se = Session {
+        epoch: 0xDEAD_BEEF,
+        last_seq: 77,
+    };
+    let s = decode(&d, &se.encode());
+    assert_eq!(
+        (s["epoch"], s["last_seq"]),
+        (f64::from(0xDEAD_BEEFu32), 77.0)
     );
     let stream = Stream {
         cog: [12.345678, -0.123456],

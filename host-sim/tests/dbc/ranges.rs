@@ -50,11 +50,25 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         ops.iter().min()
     };
     let op = OPS[ops.iter().position(|c| Some(c) == op).unwrap()];
-    let f = Command::Control { seq: byte, op }.encode();
-    out.push((f, vec![("seq", b(byte)), ("op", b(op_code(op)))]));
+    let long = if high { u32::MAX } else { 0 };
+    let f = Command::Control {
+        session: word,
+        seq: long,
+        op,
+    }
+    .encode();
+    out.push((
+        f,
+        vec![
+            ("session", f64::from(word)),
+            ("seq", f64::from(long)),
+            ("op", b(op_code(op))),
+        ],
+    ));
 
+    // (The frames carry the low byte of the step number.)
     let s = WireStep {
-        id: byte,
+        id: word,
         left: high,
         x: pick(signed_range(STEP_BITS)),
         y: pick(signed_range(STEP_BITS)),
@@ -65,7 +79,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
     out.push((
         Command::Append(s).encode(),
         vec![
-            ("step_id", b(s.id)),
+            ("step_id", b(s.id as u8)),
             ("left", b(u8::from(s.left))),
             ("reserved", 0.0), // the encoder writes 0, the decoder refuses 1
             ("x", x),
@@ -74,7 +88,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         ],
     ));
     let m = WireModify {
-        id: byte,
+        id: word,
         version: if high { VERSIONS - 1 } else { 0 },
         left: high,
         dx: pick(signed_range(OFFSET_BITS)),
@@ -84,7 +98,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
     out.push((
         Command::Modify(m).encode(),
         vec![
-            ("step_id", b(m.id)),
+            ("step_id", b(m.id as u8)),
             ("version", b(m.version)),
             ("left", b(u8::from(m.left))),
             ("dx", f64::from(m.dx) * STEP_UNIT),
@@ -137,9 +151,11 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         rejected: word,
         overruns: word,
         last_adjust: if high { i8::MAX } else { i8::MIN },
-        flags: byte,
+        // Every flag set, the side at its highest (2: right), the reserved bits set.
+        flags: if high { 0b1110_0111 | 2 << 3 } else { 0 },
     };
-    // `Status::flags`: bit 0 shaping, bit 1 last re-plan failed, bit 2 transmit overflow.
+    // `Status::flags`: bit 0 shaping, bit 1 last re-plan failed, bit 2 transmit overflow,
+    // bits 3-4 the next side, bit 5 the clock fault.
     out.push((
         st.encode(),
         vec![
@@ -151,7 +167,9 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("shaping", b(st.flags & 1)),
             ("replan_failed", b(st.flags >> 1 & 1)),
             ("tx_overflow", b(st.flags >> 2 & 1)),
-            ("flags_reserved", b(st.flags >> 3)),
+            ("next_side", b(st.next_side())),
+            ("clock_fault", b(st.flags >> 5 & 1)),
+            ("flags_reserved", b(st.flags >> 6)),
         ],
     ));
     let lk = LinkHealth {
@@ -189,8 +207,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         foreign: word,
         bus_errors: word,
         tx_dropped: word,
-        next_side: if high { NEXT_SIDES.len() - 1 } else { 0 } as u8,
-        last_control: byte,
+        next_step: word,
     };
     out.push((
         dg.encode(),
@@ -198,8 +215,19 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("foreign", f64::from(dg.foreign)),
             ("bus_errors", f64::from(dg.bus_errors)),
             ("tx_dropped", f64::from(dg.tx_dropped)),
-            ("next_side", b(dg.next_side)),
-            ("last_control", b(dg.last_control)),
+            ("next_step", f64::from(dg.next_step)),
+        ],
+    ));
+    let long = if high { u32::MAX } else { 0 };
+    let se = Session {
+        epoch: long,
+        last_seq: long,
+    };
+    out.push((
+        se.encode(),
+        vec![
+            ("epoch", f64::from(se.epoch)),
+            ("last_seq", f64::from(se.last_seq)),
         ],
     ));
 
@@ -295,9 +323,9 @@ fn the_reserved_bit_of_step_append_is_refused_when_set() {
     let mut f = Command::Append(WireStep::from_si(1, false, 0.1, -0.1, 0.0).unwrap()).encode();
     let bits = u64::from_le_bytes(f.data) | 1 << r.start_bit;
     f.data = bits.to_le_bytes();
-    f.data[7] = wire::crc8(f.id, &f.data[..7]);
+    f.data[7] = wire::crc8_keyed(f.id, wire::step_key(1), &f.data[..7]);
     assert_eq!(decode(&d, &f)["reserved"], 1.0);
-    assert_eq!(Command::decode(&f), Err((Reason::OutOfRange, 1)));
+    assert_eq!(Command::decode(&f, 1), Err((Reason::OutOfRange, 1)));
     let comment = d
         .signal_comment(MessageId::Standard(ids::STEP_APPEND), "reserved")
         .expect("a comment");
@@ -307,14 +335,24 @@ fn the_reserved_bit_of_step_append_is_refused_when_set() {
 #[test]
 fn each_flag_of_status_is_its_own_bit() {
     let d = dbc();
-    let names = ["shaping", "replan_failed", "tx_overflow"];
+    let names = [
+        "shaping",
+        "replan_failed",
+        "tx_overflow",
+        "",
+        "",
+        "clock_fault",
+    ];
     for (k, name) in names.iter().enumerate() {
+        if name.is_empty() {
+            continue; // (bits 3-4: the next side, a field of two bits)
+        }
         let st = Status {
             flags: 1 << k,
             ..Status::default()
         };
         let s = decode(&d, &st.encode());
-        for (j, other) in names.iter().enumerate() {
+        for (j, other) in names.iter().enumerate().filter(|(_, n)| !n.is_empty()) {
             assert_eq!(
                 s[*other],
                 f64::from(u8::from(j == k)),

@@ -39,7 +39,7 @@ fn every_message_has_its_cycle_time() {
     ] {
         want.insert(id, cycle);
     }
-    for id in [ids::STATUS, ids::DIAG, ids::LINK] {
+    for id in [ids::STATUS, ids::DIAG, ids::LINK, ids::SESSION] {
         want.insert(id, 20 * cycle);
     }
     let got: BTreeMap<u16, u64> = d
@@ -95,7 +95,9 @@ pub(crate) struct Rig {
     pub(crate) dev: Device,
     pub(crate) now_ms: u32,
     pub(crate) cycle: u32,
-    pub(crate) seq: u8,
+    pub(crate) seq: u32,
+    /// The session epoch the controller speaks in (from `SESSION`; one more after a `Reset`).
+    pub(crate) epoch: u32,
     /// Where the last step was appended.
     pub(crate) last_step: Option<(f64, f64)>,
     /// The link health reported to the node before each cycle, as the board firmware does
@@ -118,6 +120,7 @@ impl Rig {
             now_ms: 0,
             cycle: 0,
             seq: 0,
+            epoch: 0,
             last_step: None,
             link: None,
             sent: BTreeMap::new(),
@@ -176,19 +179,27 @@ impl Rig {
                         ("shaping", g.params().shaping),
                         ("replan_failed", g.replan_failed()),
                         ("tx_overflow", self.node.counters().tx_dropped > 0),
+                        ("clock_fault", self.node.clock_fault()),
                     ];
                     for (flag, on) in flags {
                         assert_eq!(s[flag], f64::from(u8::from(on)), "{flag}");
                         note(flag, on.to_string());
                     }
                     assert_eq!(s["flags_reserved"], 0.0);
-                }
-                ids::DIAG => {
                     let name = self.name(f.id, "next_side", s["next_side"]);
                     let side = self.node.gait().next_side();
                     assert_eq!(name, next_side_name(side), "cycle {}", self.cycle);
                     assert_eq!(s["next_side"] as usize, next_side_position(side));
                     note("next_side", name);
+                }
+                ids::DIAG => {
+                    assert_eq!(s["next_step"], f64::from(self.node.next_step()));
+                }
+                ids::SESSION => {
+                    let e = Session::decode(&f).unwrap();
+                    assert_eq!(e, self.node.session());
+                    assert_eq!(s["epoch"], f64::from(e.epoch));
+                    self.epoch = e.epoch;
                 }
                 ids::LINK => {
                     let l = self.link.expect("LINK from a node without a report");
@@ -239,13 +250,21 @@ impl Rig {
     }
 
     pub(crate) fn control(&mut self, op: ControlOp) -> String {
-        self.seq = self.seq.wrapping_add(1);
-        self.ask(Command::Control { seq: self.seq, op })
+        self.seq += 1;
+        let answer = self.ask(Command::Control {
+            session: self.epoch as u16,
+            seq: self.seq,
+            op,
+        });
+        if op == ControlOp::Reset && answer == "accepted" {
+            self.epoch += 1; // a new session: one more
+        }
+        answer
     }
 
-    /// Appends step `id` (right foot first), 0.15 m ahead of the step before it (for step 0,
-    /// of the left foot where it stands).
-    pub(crate) fn step(&mut self, id: u8) -> String {
+    /// Appends the `id`-th step of a walk (right foot first) as the node's next step number,
+    /// 0.15 m ahead of the step before it (for step 0, of the left foot where it stands).
+    pub(crate) fn step(&mut self, id: u16) -> String {
         let left = id % 2 == 1;
         let (x, y) = match self.last_step {
             Some(p) if id > 0 => p,
@@ -256,7 +275,7 @@ impl Rig {
         };
         let (x, y) = (x + 0.15, y + if left { 0.2 } else { -0.2 });
         self.last_step = Some((x, y));
-        let s = WireStep::from_si(id, left, x, y, 0.0).unwrap();
+        let s = WireStep::from_si(self.node.next_step(), left, x, y, 0.0).unwrap();
         self.ask(Command::Append(s))
     }
 
@@ -283,6 +302,11 @@ fn a_running_node_speaks_the_dbc() {
         bus_offs: 3,
         ..LinkHealth::default()
     });
+    // No session first (the state is published), then the handshake.
+    r.cycles(40, false);
+    assert_eq!(r.step(0), "no_session");
+    assert_eq!(r.control(ControlOp::Reset), "accepted");
+    let opened = r.cycle;
     r.cycles(40, false);
     assert_eq!(r.step(0), "accepted"); // a right step: the left foot is next
     r.cycles(20, false);
@@ -319,7 +343,7 @@ fn a_running_node_speaks_the_dbc() {
         |id: u16, sig: &str| -> BTreeSet<String> { table(&r.dbc, id, sig).into_values().collect() };
     assert_eq!(r.seen["phase"], all(ids::COG_VEL, "phase"));
     assert_eq!(r.seen["state"], all(ids::STATUS, "state"));
-    assert_eq!(r.seen["next_side"], all(ids::DIAG, "next_side"));
+    assert_eq!(r.seen["next_side"], all(ids::STATUS, "next_side"));
     assert_eq!(r.seen["bus_state"], all(ids::LINK, "bus_state"));
     assert_eq!(r.seen["reset"], all(ids::LINK, "reset"));
     assert!(r.seen["command"].contains("control") && r.seen["command"].contains("estop"));
@@ -349,7 +373,16 @@ fn a_running_node_speaks_the_dbc() {
             "{}: sent every {period} ms",
             m.name
         );
-        assert!(cycles[0] <= period / cycle_ms, "{}: late start", m.name);
+        // The stream from the cycle that opened the session; the reports from the first.
+        if (ids::COG..ids::STATUS).contains(&id) {
+            assert_eq!(
+                cycles[0], opened,
+                "{}: not from the session's first cycle",
+                m.name
+            );
+        } else {
+            assert_eq!(cycles[0], 1, "{}: not from the first cycle", m.name);
+        }
     }
 }
 
@@ -362,15 +395,17 @@ fn status_flags_are_the_nodes() {
         cfg.params.shaping = shaping;
         let mut r = Rig::new(cfg);
         r.cycles(20, false);
+        assert_eq!(r.control(ControlOp::Reset), "accepted");
         assert!(r.seen["shaping"].contains(&shaping.to_string()));
         assert!(r.seen["tx_overflow"].contains("false"));
         // A blocked mailbox and a burst of commands: the backlog overflows.
         r.dev.blocked = true;
         let burst = TX_BACKLOG + 8;
         for _ in 0..burst {
-            r.seq = r.seq.wrapping_add(1);
+            r.seq += 1;
             r.dev.rx.push_back(
                 Command::Control {
+                    session: r.epoch as u16,
                     seq: r.seq,
                     op: ControlOp::Heartbeat,
                 }

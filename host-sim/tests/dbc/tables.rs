@@ -22,15 +22,22 @@ pub(crate) fn op_position(op: ControlOp) -> usize {
 
 /// The code of a control operation on the wire: the `op` byte of its `CONTROL` frame.
 pub(crate) fn op_code(op: ControlOp) -> u8 {
-    Command::Control { seq: 0, op }.encode().data[1]
+    Command::Control {
+        session: 0,
+        seq: 0,
+        op,
+    }
+    .encode()
+    .data[6]
 }
 
-pub(crate) const STATES: [NodeState; 5] = [
+pub(crate) const STATES: [NodeState; 6] = [
     NodeState::Standing,
     NodeState::Walking,
     NodeState::EmergencyStopped,
     NodeState::ControllerLost,
     NodeState::Stopping,
+    NodeState::NoSession,
 ];
 
 pub(crate) fn state_position(s: NodeState) -> usize {
@@ -40,6 +47,7 @@ pub(crate) fn state_position(s: NodeState) -> usize {
         NodeState::EmergencyStopped => 2,
         NodeState::ControllerLost => 3,
         NodeState::Stopping => 4,
+        NodeState::NoSession => 5,
     }
 }
 
@@ -61,7 +69,7 @@ pub(crate) fn phase_position(p: Phase) -> usize {
     }
 }
 
-/// The sides the next step may have, in the order of their codes in `DIAG` (checked by the
+/// The sides the next step may have, in the order of their codes in `STATUS` (checked by the
 /// node's run too).
 pub(crate) const NEXT_SIDES: [Option<Side>; 3] = [None, Some(Side::Left), Some(Side::Right)];
 
@@ -84,6 +92,7 @@ pub(crate) fn commands() -> [(Command, &'static str); 4] {
     [
         Command::EmergencyStop { seq: 1 },
         Command::Control {
+            session: 0,
             seq: 1,
             op: ControlOp::Heartbeat,
         },
@@ -132,7 +141,7 @@ pub(crate) const TABLES: [(u16, &str); 9] = [
     (ids::ACK, "version"),
     (ids::COG_VEL, "phase"),
     (ids::STATUS, "state"),
-    (ids::DIAG, "next_side"),
+    (ids::STATUS, "next_side"),
     (ids::LINK, "bus_state"),
     (ids::LINK, "reset"),
 ];
@@ -190,8 +199,13 @@ fn control_op_table_is_every_code_the_codec_takes() {
     let want: BTreeMap<i64, String> = OPS
         .iter()
         .map(|&op| {
-            let f = Command::Control { seq: 0, op }.encode();
-            assert_eq!(decode(&d, &f)["op"], f64::from(f.data[1]));
+            let f = Command::Control {
+                session: 0,
+                seq: 0,
+                op,
+            }
+            .encode();
+            assert_eq!(decode(&d, &f)["op"], f64::from(f.data[6]));
             (i64::from(op_code(op)), name_of(&op))
         })
         .collect();
@@ -199,9 +213,12 @@ fn control_op_table_is_every_code_the_codec_takes() {
     assert_eq!(table(&d, ids::CONTROL, "op"), want);
     // Every other code is refused by the decoder: the table is all the codec accepts.
     for c in 0..=u8::MAX {
-        let body = [7, c];
-        let f = RawFrame::new(ids::CONTROL, &[7, c, wire::crc8(ids::CONTROL, &body)]).unwrap();
-        match Command::decode(&f) {
+        let body = [1, 0, 7, 0, 0, 0, c];
+        let mut d8 = [0u8; 8];
+        d8[..7].copy_from_slice(&body);
+        d8[7] = wire::crc8(ids::CONTROL, &body);
+        let f = RawFrame::new(ids::CONTROL, &d8).unwrap();
+        match Command::decode(&f, 0) {
             Ok(Command::Control { op, .. }) => assert_eq!(want[&i64::from(c)], name_of(&op)),
             Ok(other) => panic!("{other:?}"),
             Err((reason, _)) => {
@@ -283,7 +300,7 @@ fn phase_and_next_side_tables_have_every_variant() {
         .enumerate()
         .map(|(i, &s)| (i as i64, next_side_name(s)))
         .collect();
-    assert_eq!(table(&d, ids::DIAG, "next_side"), sides);
+    assert_eq!(table(&d, ids::STATUS, "next_side"), sides);
 }
 
 #[test]

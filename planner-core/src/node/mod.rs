@@ -34,8 +34,7 @@
 //!    controller was last heard**, for the whole walk, even with a stopped clock;
 //! 4. advance the gait by one tick;
 //! 5. publish the reference (5 frames; none before a session is open) and, in the first
-//!    cycle, every 20 cycles after it and in the cycle in which a session opens, `STATUS`,
-//!    `DIAG`, `SESSION` (and `LINK`); frames that cannot be sent now wait in a transmit
+//!    cycle and every 20 cycles after it, `STATUS`, `DIAG`, `SESSION` (and `LINK`); frames that cannot be sent now wait in a transmit
 //!    backlog of [`TX_BACKLOG`] frames; an unsent reference is replaced by the next one
 //!    rather than sent late.
 //!
@@ -326,8 +325,6 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     timeout_cycles: u32,
     /// The nominal time of [`CLOCK_WINDOW`] cycles \[ms\].
     window_ms: u32,
-    /// A session opened in this cycle: the reports go out now.
-    announce: bool,
     counters: Counters,
     cycle: u32,
     /// The firmware's CAN link health, published in `LINK` once set.
@@ -449,7 +446,6 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             window: (0, 0),
             timeout_cycles: 0,
             window_ms: 0,
-            announce: false,
             counters: Counters::ZERO,
             cycle: 0,
             link: Some(LinkHealth::ZERO),
@@ -508,7 +504,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.window = (0, 0);
         self.timeout_cycles = timeout_cycles;
         self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
-        self.announce = false;
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
@@ -570,7 +565,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.last_heard == other.last_heard
             && self.heard_cycle == other.heard_cycle
             && self.window == other.window
-            && self.announce == other.announce
             && self.cycle == other.cycle
     }
 
@@ -705,11 +699,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             None => Some(self.gait.queued()),
         };
         let from_rest = position == Some(0) && self.gait.next_swing_from_rest();
-        let p = &self.cfg.params;
-        let soles = Soles {
-            half_length: p.sole_half_length,
-            half_width: p.sole_half_width,
-        };
+        let soles = Soles::of(&self.cfg.params);
         r.check_frames(&other, &same, &f, step.side, from_rest, &soles)?;
         if let Some(id) = before {
             let next = |k: u16| self.gait.queued_step(id.wrapping_add(k));
@@ -899,7 +889,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         self.epoch = epoch;
         self.open = true;
-        self.announce = true;
         self.estopped = false;
         self.lost = false;
         self.clock_fault = false;
@@ -1161,8 +1150,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.enqueue(f);
             }
         }
-        if self.cycle % 20 == 1 || self.announce {
-            self.announce = false;
+        if self.cycle % 20 == 1 {
             let s = self.status().encode();
             self.enqueue(s);
             let d = self.diag().encode();

@@ -55,6 +55,16 @@ pub struct Soles<T = f64> {
     pub half_width: T,
 }
 
+impl<T: Real> Soles<T> {
+    /// The soles of a gait's parameters.
+    pub fn of(p: &crate::gait::GaitParams<T>) -> Self {
+        Self {
+            half_length: p.sole_half_length,
+            half_width: p.sole_half_width,
+        }
+    }
+}
+
 impl<T: Real> Default for Reach<T> {
     fn default() -> Self {
         Reach {

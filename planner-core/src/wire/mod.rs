@@ -105,8 +105,8 @@
 //! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, reserved u2 (0), bus-offs u16, error-passive episodes u16, missed slots u8 |
 //! | 0x303 | `SESSION` | out | 8 | session epoch u32, last accepted control seq u32 (0: none) |
 //!
-//! `STATUS`, `DIAG`, `SESSION` (and `LINK`) go out in the node's first cycle, every 20 cycles
-//! after it, and in the cycle in which a session opens. `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
+//! `STATUS`, `DIAG`, `SESSION` (and `LINK`) go out in the node's first cycle and every 20
+//! cycles after it. `LINK` is the firmware's: the node sends it (with `STATUS` and `DIAG`) only once the
 //! firmware has told it the link's health ([`crate::node::Node::set_link_health`]); a node
 //! without a CAN controller of its own (host-sim) never sends it.
 //!
@@ -172,8 +172,7 @@ pub mod ids {
     /// Link health of the board (CAN error counters, bus state, reset reason), every 100 ms
     /// once the firmware reports it.
     pub const LINK: u16 = 0x302;
-    /// The session epoch and the last accepted control sequence number, every 100 ms and
-    /// when a session opens.
+    /// The session epoch and the last accepted control sequence number, every 100 ms.
     pub const SESSION: u16 = 0x303;
 
     /// The identifiers the node receives: everything else on the bus is not its business.

@@ -191,8 +191,8 @@ impl LinkHealth {
     }
 }
 
-/// The session the node is in (`SESSION`, every 100 ms with `STATUS` and in the cycle in which
-/// a session opens): what a controller needs to speak to it (see the module docs).
+/// The session the node is in (`SESSION`, every 100 ms with `STATUS`): what a controller needs
+/// to speak to it (see the module docs). After an accepted `Reset` the epoch is one more.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Session {
