@@ -1,26 +1,32 @@
 #!/usr/bin/env python3
 """An example controller for the walking node, written from the DBC alone.
 
-It walks the robot straight ahead: it appends footsteps (right foot first, then alternating,
-and a closing step beside the last one), starts the walk, asks for a stop after the queue,
-and sends a heartbeat every 100 ms throughout (the node stops a moving robot after 500 ms
-without one). Every frame is encoded by cantools from ``host-sim/can/walking.dbc``; the
-CRC-8 the commands end with is the one the DBC's comment on CONTROL describes (AUTOSAR:
-polynomial 0x2F, initial value and final XOR 0xFF, over the identifier as two little-endian
-bytes and the data before the CRC). All CONTROL frames (heartbeats, start, stop) take their
-sequence numbers from one counter, so that every heartbeat is new and the start is ahead of
-the control commands before it. cantools rounds exact half units to even where the node's
+It walks the robot straight ahead: it opens the node's session (a ``reset`` carrying the
+session the node publishes in SESSION: after it the session is one more), appends footsteps
+(right foot first, then alternating, and a closing step beside the last one; numbered from
+the node's next step number, DIAG's next_step), starts the walk, asks for a stop after the
+queue, and sends a heartbeat every 100 ms throughout (the node stops a moving robot after
+500 ms without one). Every frame is encoded by cantools from ``host-sim/can/walking.dbc``; the
+CRC-8 the commands end with is the one the DBC's comments describe (AUTOSAR: polynomial
+0x2F, initial value and final XOR 0xFF, over the identifier as two little-endian bytes, for
+the footstep frames the Gray code of the step number's high byte, and the data before the
+CRC). All CONTROL frames (the reset, heartbeats, start, stop) take their sequence numbers
+from one counter, above the node's SESSION last_seq, so that every one is new. cantools rounds exact half units to even where the node's
 own encoder rounds them away from zero: a coordinate exactly between two 0.5 mm steps may go
 out one step apart (0.5 mm), which the node takes as given.
 
-Three ways to run it:
+Four ways to run it:
 
   controller.py live --channel can0 [--interface socketcan]
-      the plan sent in real time on a CAN bus through python-can, printing the node's
-      answers (needs a CAN interface: not available on the test machine, so not tested here);
-  controller.py plan --out ctl.log
+      waits for the node's SESSION and DIAG, then sends the plan in real time on a CAN bus
+      through python-can, printing the node's answers (needs a CAN interface: not available
+      on the test machine, so not tested here);
+  controller.py plan --out ctl.log [--session E --first-step N --last-seq S]
       the plan written as a candump -l log (times from host-sim's epoch), for
-      ``host-sim replay ctl.log`` (host-sim/tests/controller.rs does this);
+      ``host-sim replay ctl.log`` (host-sim/tests/controller.rs does this); the defaults are
+      host-sim's node (session 0, steps from 0, no control command before);
+  controller.py frame OP --session E --seq S
+      prints one CONTROL frame for ``cansend`` (OP: reset, heartbeat, start, stop, stop_now);
   controller.py check can.log
       checks a log of the bus (host-sim's output; give the same options as to ``plan``):
       every command answered and accepted, the robot standing at the end with its feet where
@@ -46,37 +52,51 @@ EPOCH_S = 1767225600
 HEARTBEAT_S = 0.1
 
 
-def crc8(frame_id, data):
-    """CRC-8/AUTOSAR over the identifier (2 bytes, little-endian) and `data`."""
+def crc8(frame_id, data, key=None):
+    """CRC-8/AUTOSAR over the identifier (2 bytes, little-endian), `key` (a footstep frame's:
+    see `step_key`) if given, and `data`."""
     crc = 0xFF
-    for byte in bytes([frame_id & 0xFF, frame_id >> 8]) + bytes(data):
+    head = bytes([frame_id & 0xFF, frame_id >> 8]) + (bytes([key]) if key is not None else b"")
+    for byte in head + bytes(data):
         crc ^= byte
         for _ in range(8):
             crc = ((crc << 1) ^ 0x2F) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
     return crc ^ 0xFF
 
 
-def encode(db, name, signals):
-    """The frame `name` with `signals`, its CRC (if it has one) computed and set."""
+def step_key(number):
+    """The CRC key of step number `number`: the Gray code of its high byte."""
+    high = (number >> 8) & 0xFF
+    return high ^ (high >> 1)
+
+
+def encode(db, name, signals, number=None):
+    """The frame `name` with `signals`, its CRC (if it has one) computed and set; a footstep
+    frame's `number` gives its step_id (the low byte) and its CRC key."""
     msg = db.get_message_by_name(name)
+    key = None
+    if number is not None:
+        signals = dict(signals, step_id=number & 0xFF)
+        key = step_key(number)
     if any(s.name == "crc" for s in msg.signals):
         data = msg.encode(dict(signals, crc=0))
-        signals = dict(signals, crc=crc8(msg.frame_id, data[:-1]))
+        signals = dict(signals, crc=crc8(msg.frame_id, data[:-1], key))
     return can.Message(
         arbitration_id=msg.frame_id, data=msg.encode(signals), is_extended_id=False
     )
 
 
-def plan(db, steps, length, width, seconds):
-    """The controller's frames as (time [s], message), in time order."""
+def plan(db, steps, length, width, seconds, session=0, first_step=0, last_seq=0):
+    """The controller's frames as (time [s], message), in time order: the handshake in the
+    node's session `session`, then the walk in the next one."""
     half = width / 2.0
     out = []
-    seq = 0
+    controls = []  # (time, op): numbered in time order below, so that each is new
 
     def control(t, op):
-        nonlocal seq
-        seq = (seq + 1) % 256
-        out.append((t, encode(db, "CONTROL", {"seq": seq, "op": op})))
+        controls.append((t, op))
+
+    control(0.0, "reset")
 
     # t = 0: the footsteps, right first, x growing by `length`; then the closing step.
     poses = []
@@ -88,8 +108,8 @@ def plan(db, steps, length, width, seconds):
     for i, (left, x, y) in enumerate(poses):
         out.append(
             (0.0, encode(db, "STEP_APPEND", {
-                "step_id": i, "left": int(left), "reserved": 0, "x": x, "y": y, "yaw": 0.0,
-            }))
+                "left": int(left), "reserved": 0, "x": x, "y": y, "yaw": 0.0,
+            }, number=first_step + i))
         )
     # 100 ms: start, then stop once the queue is walked.
     control(0.1, "start")
@@ -98,7 +118,15 @@ def plan(db, steps, length, width, seconds):
     while k * HEARTBEAT_S <= seconds:
         control(k * HEARTBEAT_S, "heartbeat")
         k += 1
-    out.sort(key=lambda e: e[0])
+    # In time order (the sort is stable: the reset first, the start before the stop): each
+    # with the next sequence number; after the reset, in the next session.
+    controls.sort(key=lambda e: e[0])
+    for i, (t, op) in enumerate(controls):
+        epoch = session if op == "reset" else session + 1
+        signals = {"session": epoch & 0xFFFF, "seq": last_seq + 1 + i, "op": op}
+        out.append((t, encode(db, "CONTROL", signals)))
+    # The reset before the footsteps of t = 0.
+    out.sort(key=lambda e: (e[0], e[1].arbitration_id != 0x020 or e[1].data[6] != 4))
     return out, poses
 
 
@@ -149,8 +177,29 @@ def check(db, path, poses):
     return problems
 
 
-def live(db, frames, channel, interface):
-    bus = can.Bus(channel=channel, interface=interface)
+def session_of(db, bus, timeout=2.0):
+    """The node's session, next step number and last sequence number, from its SESSION and
+    DIAG frames (sent every 100 ms)."""
+    session = diag = None
+    end = time.monotonic() + timeout
+    while (session is None or diag is None) and time.monotonic() < end:
+        r = bus.recv(timeout=0.1)
+        if r is None:
+            continue
+        if r.arbitration_id == 0x303:
+            session = db.decode_message(r.arbitration_id, r.data)
+        elif r.arbitration_id == 0x301:
+            diag = db.decode_message(r.arbitration_id, r.data)
+    if session is None or diag is None:
+        raise SystemExit("no SESSION and DIAG from the node: is it on the bus?")
+    return int(session["epoch"]), int(diag["next_step"]), int(session["last_seq"])
+
+
+def live(db, args):
+    bus = can.Bus(channel=args.channel, interface=args.interface)
+    epoch, first, last = session_of(db, bus)
+    print(f"session {epoch}, next step {first}, last sequence number {last}")
+    frames, _ = plan(db, args.steps, args.length, args.width, args.seconds, epoch, first, last)
     start = time.monotonic()
     ack = db.get_message_by_name("ACK")
     for t, m in frames:
@@ -164,8 +213,8 @@ def live(db, frames, channel, interface):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("mode", choices=["plan", "check", "live"])
-    p.add_argument("log", nargs="?", help="check: the bus log to check")
+    p.add_argument("mode", choices=["plan", "check", "live", "frame"])
+    p.add_argument("log", nargs="?", help="check: the bus log to check; frame: the operation")
     p.add_argument("--out", help="plan: the log to write")
     p.add_argument("--channel", default="can0")
     p.add_argument("--interface", default="socketcan")
@@ -173,11 +222,29 @@ def main():
     p.add_argument("--length", type=float, default=0.2)
     p.add_argument("--width", type=float, default=0.2)
     p.add_argument("--seconds", type=float, default=9.0)
+    p.add_argument("--session", type=lambda v: int(v, 0), default=0,
+                   help="plan, frame: the node's session epoch (SESSION)")
+    p.add_argument("--first-step", type=int, default=0,
+                   help="plan: the node's next step number (DIAG next_step)")
+    p.add_argument("--last-seq", type=int, default=0,
+                   help="plan: the node's last sequence number (SESSION last_seq)")
+    p.add_argument("--seq", type=int, default=1, help="frame: its sequence number")
     a = p.parse_args()
     if a.steps < 1:
         p.error("--steps must be at least 1")
     db = cantools.database.load_file(DBC, strict=True)
-    frames, poses = plan(db, a.steps, a.length, a.width, a.seconds)
+    if a.mode == "frame":
+        ops = ["heartbeat", "start", "stop", "stop_now", "reset"]
+        if a.log not in ops:
+            p.error(f"frame needs an operation: one of {', '.join(ops)}")
+        m = encode(db, "CONTROL", {"session": a.session & 0xFFFF, "seq": a.seq, "op": a.log})
+        print(f"{m.arbitration_id:03X}#{m.data.hex().upper()}")
+        return
+    if a.mode == "live":
+        live(db, a)
+        return
+    frames, poses = plan(db, a.steps, a.length, a.width, a.seconds, a.session, a.first_step,
+                         a.last_seq)
     if a.mode == "plan":
         if not a.out:
             p.error("plan needs --out")
@@ -192,8 +259,6 @@ def main():
         if problems:
             sys.exit(1)
         print(f"{a.log}: every command accepted, standing with the feet on the last steps")
-    else:
-        live(db, frames, a.channel, a.interface)
 
 
 if __name__ == "__main__":

@@ -64,7 +64,7 @@
 //!
 //! Rejected, with a message naming the entry (and its line): TOML syntax errors, unknown keys, missing
 //! required keys, wrong types, unknown sides or command kinds, negative, non-finite or huge
-//! times, non-finite coordinates, step ids outside 0 … 255 (the bus carries one byte:
+//! times, non-finite coordinates, step ids outside 0 … 65,534 (the node's step numbers:
 //! [`crate::sim::WireId`]), duplicate step ids, a `[[modify]]` of an id that no `[[step]]`
 //! defines and without a `side`, unknown `expect` names and `not_walked` on a `[[command]]`,
 //! an empty name and a non-positive `max_time_s`. ([`load_file`] also refuses an entry that
@@ -80,7 +80,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::scenario::{Command, Scenario};
-use crate::sim::{Failure, WireId};
+use crate::sim::{Failure, WireId, MAX_WIRE_ID};
 
 /// The scenario tick \[s\] (the HRP-2 control period).
 pub const TICK_S: f64 = 0.005;
@@ -216,15 +216,17 @@ fn line_of(text: &str, offset: usize) -> usize {
         .count()
 }
 
-/// A step id as the bus carries it ([`WireId`]).
+/// A step id as the bus carries it ([`WireId`]: the node's step numbers).
 fn step_id(what: &str, id: i64) -> Result<u16, String> {
-    WireId::try_from(id).map(u16::from).map_err(|_| {
-        format!(
-            "{what}: step id {id} does not fit the bus (STEP_APPEND and STEP_MODIFY carry it \
-             in one byte: 0 … {})",
-            WireId::MAX
-        )
-    })
+    WireId::try_from(id)
+        .ok()
+        .filter(|&i| i <= MAX_WIRE_ID)
+        .ok_or_else(|| {
+            format!(
+                "{what}: step id {id} does not fit the bus (the node numbers a start-up's \
+                 steps 0 … {MAX_WIRE_ID})"
+            )
+        })
 }
 
 /// The `expect` key of an entry.

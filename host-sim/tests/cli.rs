@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use host_sim::sim::Failure;
+use planner_core::wire::Reason;
 
 /// A fresh directory of this test process.
 fn temp_dir(name: &str) -> PathBuf {
@@ -201,31 +202,31 @@ fn a_walk_cut_by_max_time_is_reported() {
 }
 
 #[test]
-fn step_id_256_is_refused_when_the_file_is_read() {
-    let text = format!("name = \"big\"\n{}", step(256, "right", 0.2, -0.1, ""));
-    let (o, t, out) = run_toml("id256", &text);
+fn a_step_id_beyond_the_step_numbers_is_refused_when_the_file_is_read() {
+    let text = format!("name = \"big\"\n{}", step(65535, "right", 0.2, -0.1, ""));
+    let (o, t, out) = run_toml("id65535", &text);
     assert_eq!(o.status.code(), Some(2), "{t}");
     assert_has(
         &t,
         &[
-            "id256.toml",
-            "[[step]] #1 (id 256) at line 2",
-            "step id 256 does not fit the bus",
-            "0 … 255",
+            "id65535.toml",
+            "[[step]] #1 (id 65535) at line 2",
+            "step id 65535 does not fit the bus",
+            "0 … 65534",
         ],
     );
     assert!(!out.exists(), "nothing is run");
-    // The same for a modification, and 255 is fine.
+    // The same for a modification, and 65534 is read (the node refuses it as a first step).
     let e = host_sim::toml_scenario::parse(
-        "name = \"m\"\n[[modify]]\nat_s = 0.0\nid = 300\nside = \"left\"\nx = 0.0\ny = 0.0\n",
+        "name = \"m\"\n[[modify]]\nat_s = 0.0\nid = 70000\nside = \"left\"\nx = 0.0\ny = 0.0\n",
     )
     .unwrap_err();
-    assert!(e.contains("[[modify]] #1 (id 300) at line 2"), "{e}");
+    assert!(e.contains("[[modify]] #1 (id 70000) at line 2"), "{e}");
     let s = host_sim::toml_scenario::parse(&format!(
         "name = \"ok\"\n{}",
-        step(255, "right", 0.2, -0.1, "")
+        step(65534, "right", 0.2, -0.1, "")
     ))
-    .expect("id 255 fits");
+    .expect("id 65534 fits");
     assert_eq!(s.timeline.len(), 1);
 }
 
@@ -258,7 +259,7 @@ fn every_dbc_reason_name_is_an_expectation() {
         .find(|l| l.starts_with("VAL_ 128 reason "))
         .expect("the reason value table");
     let names: Vec<&str> = table.split('"').skip(1).step_by(2).collect();
-    assert_eq!(names.len(), 19, "{table}");
+    assert_eq!(names.len(), Reason::CODES, "{table}");
     for name in names.iter().filter(|&&n| n != "accepted") {
         let f = Failure::from_name(name).unwrap_or_else(|| panic!("{name}"));
         assert_eq!(f.name(), *name);

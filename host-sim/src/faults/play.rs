@@ -160,11 +160,16 @@ pub(super) fn play(
         };
     // The handshake before the scenario's tick 0: the controller waits for the node's
     // `SESSION` (its first cycle and every 100 ms after), sends the `Reset` that opens it and
-    // sends it again, with a new sequence number, until it is answered accepted. The node does
-    // not tick before (nothing moves), so the scenario's timing is unchanged.
+    // sends it again, with a new sequence number, until it is answered accepted or a `SESSION`
+    // names one of its resets as the last accepted command (the answer lost). `SESSION` has no
+    // CRC: the latest one read counts. The node does not tick before (nothing moves), so the
+    // scenario's timing is unchanged.
     let mut ctl_state = crate::sim::Controller::default();
     let mut pre = 0u64;
     let mut heard: Option<u32> = None;
+    // (sequence number, echo, session) of each reset sent: the session opened is one more than
+    // the accepted one's (a corrupted `SESSION` may have given a wrong one to another).
+    let mut resets: Vec<(u32, u8, u32)> = Vec::new();
     let mut opened = false;
     while !opened && pre < 2000 {
         let t0 = pre * 5 * ms;
@@ -172,7 +177,9 @@ pub(super) fn play(
         if let Some(epoch) = heard {
             if pre % RETRY_TICKS == 0 {
                 ctl_state.epoch = epoch;
-                let _ = ctl.transmit(&ctl_state.control(ControlOp::Reset).encode());
+                let c = ctl_state.control(ControlOp::Reset);
+                resets.push((ctl_state.seq, c.echo(), epoch));
+                let _ = ctl.transmit(&c.encode());
             }
         }
         bus.advance(t0 + 5 * ms / 2);
@@ -180,12 +187,21 @@ pub(super) fn play(
         bus.advance(t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
             if let Some(sn) = planner_core::wire::Session::decode(&f) {
-                if heard.is_none() {
+                if let Some(&(_, _, e)) = resets.iter().find(|&&(q, _, _)| q == sn.last_seq) {
+                    opened = true;
+                    ctl_state.epoch = e;
+                } else if !opened {
                     heard = Some(sn.epoch);
-                    ctl_state.seq = ctl_state.seq.max(sn.last_seq);
                 }
+                ctl_state.seq = ctl_state.seq.max(sn.last_seq);
             } else if let Some(a) = Ack::decode(&f) {
-                opened |= a.command == 0x20 && a.reason.is_none();
+                let ours = resets
+                    .iter()
+                    .find(|&&(q, e, _)| q as u8 == a.seq && e == a.echo);
+                if let (0x20, None, Some(&(_, _, e))) = (a.command, a.reason, ours) {
+                    opened = true;
+                    ctl_state.epoch = e;
+                }
             }
         }
         pre += 1;
