@@ -30,7 +30,7 @@ use std::sync::OnceLock;
 use planner_core::gait::Side;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{
-    ids, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream, WireModify, WireStep,
+    ids, Ack, Command, ControlOp, RawFrame, StepBook, Stream, WireModify, WireStep,
 };
 
 /// `decode` target: see the module docs.
@@ -43,12 +43,14 @@ pub fn decode_one(data: &[u8]) {
         assert!(id > 0x7FF || data.len() > 10, "a valid frame was refused");
         return;
     };
-    decode_checked(&frame);
     replies_checked(&frame);
-    // The same frame with its last byte made the right CRC-8: the field checks behind the
-    // CRC are reached by every input, not by one in 256.
-    decode_checked(&with_crc(frame));
-    replies_checked(&with_crc(frame));
+    for next in NEXTS {
+        decode_checked(&frame, next);
+        // The same frame with its last byte made the right CRC-8: the field checks behind
+        // the CRC are reached by every input, not by one in 256.
+        decode_checked(&with_crc(frame, next), next);
+        replies_checked(&with_crc(frame, next));
+    }
 }
 
 /// The controller's side of the wire on any frame: the decoders of what the node sends
@@ -92,23 +94,34 @@ fn replies_checked(frame: &RawFrame) {
     }
 }
 
+/// The next step numbers the decoder is tried with: the start of a block of 256, its end,
+/// and one in the middle (a footstep frame's number is read against it).
+const NEXTS: [u16; 3] = [0, 0x01FF, 0x5A80];
+
 /// `frame` with its last data byte replaced by the CRC-8 of its identifier and the bytes
-/// before it (unchanged if it has no data).
-pub fn with_crc(mut frame: RawFrame) -> RawFrame {
+/// before it (unchanged if it has no data); for a footstep frame, keyed as a node whose next
+/// step number is `next` reads it.
+pub fn with_crc(mut frame: RawFrame, next: u16) -> RawFrame {
+    use planner_core::wire::{crc8, crc8_keyed, step_key, step_number};
     let n = usize::from(frame.len.min(8));
     if n > 0 {
-        frame.data[n - 1] = planner_core::wire::crc8(frame.id, &frame.data[..n - 1]);
+        let body = &frame.data[..n - 1];
+        frame.data[n - 1] = if matches!(frame.id, ids::STEP_APPEND | ids::STEP_MODIFY) {
+            crc8_keyed(frame.id, step_key(step_number(frame.data[0], next)), body)
+        } else {
+            crc8(frame.id, body)
+        };
     }
     frame
 }
 
-fn decode_checked(frame: &RawFrame) {
+fn decode_checked(frame: &RawFrame, next: u16) {
     let frame = *frame;
-    match Command::decode(&frame) {
+    match Command::decode(&frame, next) {
         Ok(cmd) => {
             let again = cmd.encode();
             assert_eq!(again.id, frame.id, "{cmd:?}");
-            assert_eq!(Command::decode(&again), Ok(cmd), "{frame:?}");
+            assert_eq!(Command::decode(&again, next), Ok(cmd), "{frame:?}");
             // The codec is canonical: what it accepts, it re-encodes bit for bit.
             assert_eq!(again, frame, "{cmd:?}");
             assert_eq!(u16::from(cmd.code()), frame.id & 0xFF);
@@ -192,7 +205,8 @@ pub mod op {
     pub const APPEND: u8 = 2;
     /// `[back, dx, dy, dyaw]`: modify a recent footstep, perturbed.
     pub const MODIFY: u8 = 3;
-    /// `[seq, op]`: a control command (op modulo 5).
+    /// `[seq, op]`: a control command (op modulo 8: 0 … 4 in the node's session; 5 … 7 as
+    /// `op − 5` in another session); `seq` is the next number plus `seq − 8` (below: old).
     pub const CONTROL: u8 = 4;
     /// `[seq]`: an emergency stop.
     pub const ESTOP: u8 = 5;
@@ -207,7 +221,8 @@ struct Driver {
     can: MemCan,
     now_ms: u32,
     cycles: u32,
-    next_id: u8,
+    /// The controller's last sequence number.
+    seq: u32,
     side: Side,
     x: f64,
     sent: Vec<WireStep>,
@@ -215,18 +230,35 @@ struct Driver {
 }
 
 impl Driver {
+    /// A node after the handshake (the `Reset` in the start-up's session, epoch 0).
     fn new() -> Self {
-        Self {
+        let mut d = Self {
             node: fresh_node(),
             can: MemCan::default(),
             now_ms: 0,
             cycles: 0,
-            next_id: 0,
+            seq: 0,
             side: Side::Right,
             x: 0.0,
             sent: Vec::new(),
             book: StepBook::new(),
-        }
+        };
+        d.control(ControlOp::Reset, 0, 0);
+        d.poll(5);
+        assert_eq!(d.node.state(), planner_core::node::NodeState::Standing);
+        d
+    }
+
+    /// Queues control command `op`, `back` numbers below the next (0: the next), `other`
+    /// sessions away from the node's.
+    fn control(&mut self, op: ControlOp, back: u32, other: u16) {
+        self.seq += 1;
+        let c = Command::Control {
+            session: (self.node.session().tag()).wrapping_add(other),
+            seq: self.seq.saturating_sub(back),
+            op,
+        };
+        self.queue(c.encode());
     }
 
     fn queue(&mut self, f: RawFrame) {
@@ -245,6 +277,10 @@ impl Driver {
         self.cycles = self.cycles.wrapping_add(1);
         assert!(report.reference.is_finite(), "{:?}", report.reference);
         assert_eq!(self.node.cycles(), self.cycles);
+        // The first poll publishes no reference (no session yet: the handshake is in it).
+        if self.cycles == 1 {
+            return;
+        }
         // Exactly one reference: one frame of each stream identifier, this cycle's tick.
         let mut stream = Stream::default();
         for id in [
@@ -260,31 +296,27 @@ impl Driver {
         }
         assert_eq!(stream.tick, (self.cycles & 0xFF) as u8);
         // Every command frame handled is answered once, no other frame is: at most 16
-        // commands and 128 others per cycle; the node stops early only after a planning
-        // command (one per cycle).
+        // commands and 128 others per cycle, and the node receives until one of the bounds
+        // or an empty queue (a planning command beyond the cycle's budget is answered
+        // `Busy`).
         let handled = usize::from(report.received) - foreign;
         let cfg = self.node.config();
         assert!(handled <= cfg.max_rx && foreign <= cfg.max_foreign);
         let acks: Vec<Ack> = self.can.tx.iter().filter_map(Ack::decode).collect();
         assert_eq!(acks.len(), handled, "{:?}", self.can.tx);
-        if handled < cfg.max_rx && foreign < cfg.max_foreign && !self.can.rx.is_empty() {
-            let last = acks.last().expect("a planning command was answered");
-            assert!(
-                last.command == 0x01
-                    || (last.command == 0x20
-                        && matches!(last.reason, None | Some(Reason::PlanFailed))),
-                "stopped receiving after {last:?}"
-            );
+        if handled < cfg.max_rx && foreign < cfg.max_foreign {
+            assert!(self.can.rx.is_empty(), "stopped receiving: {acks:?}");
         }
+
         assert!(self
             .can
             .tx
             .iter()
             .filter(|f| f.id == ids::ACK)
             .all(|f| Ack::decode(f).is_some()));
-        for id in [ids::STATUS, ids::DIAG] {
+        for id in [ids::STATUS, ids::DIAG, ids::SESSION] {
             let n = self.can.tx.iter().filter(|f| f.id == id).count();
-            assert_eq!(n, usize::from(self.cycles % 20 == 0), "id {id:#x}");
+            assert_eq!(n, usize::from(self.cycles % 20 == 1), "id {id:#x}");
         }
     }
 
@@ -297,10 +329,11 @@ impl Driver {
                 let data: Vec<u8> = (0..usize::from(l % 9)).map(|_| b.u8()).collect();
                 let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
                 // Length byte ≥ 0x80: the frame gets a right CRC-8 (see `with_crc`).
-                self.queue(if l >= 0x80 { with_crc(f) } else { f });
+                let next = self.node.next_step();
+                self.queue(if l >= 0x80 { with_crc(f, next) } else { f });
             }
             op::APPEND => {
-                let id = self.next_id.wrapping_add(b.u8() % 4);
+                let id = self.node.next_step().wrapping_add(u16::from(b.u8() % 4));
                 let (dx, dy, dyaw) = (b.i8(), b.i8(), b.i8());
                 self.x += 0.2;
                 let y = if self.side == Side::Left { 0.1 } else { -0.1 };
@@ -313,7 +346,6 @@ impl Driver {
                         self.sent.push(w);
                     }
                 }
-                self.next_id = id.wrapping_add(1);
                 self.side = self.side.other();
             }
             op::MODIFY => {
@@ -332,15 +364,16 @@ impl Driver {
                 }
             }
             op::CONTROL => {
-                let seq = b.u8();
+                let back = u32::from(b.u8()).saturating_sub(8);
+                let k = b.u8() % 8;
                 let op = [
                     ControlOp::Heartbeat,
                     ControlOp::Start,
                     ControlOp::Stop,
                     ControlOp::StopNow,
                     ControlOp::Reset,
-                ][usize::from(b.u8() % 5)];
-                self.queue(Command::Control { seq, op }.encode());
+                ][usize::from(k % 5)];
+                self.control(op, back, u16::from(k >= 5));
             }
             op::ESTOP => {
                 let seq = b.u8();
@@ -373,7 +406,8 @@ pub fn node_run(data: &[u8]) {
             let l = b.u8();
             let data: Vec<u8> = (0..usize::from(l % 9)).map(|_| b.u8()).collect();
             let f = RawFrame::new(id, &data).expect("11-bit id, at most 8 bytes");
-            let f = if l >= 0x80 { with_crc(f) } else { f };
+            let next = d.node.next_step();
+            let f = if l >= 0x80 { with_crc(f, next) } else { f };
             let before = d.node.clone();
             let Some(ack) = d.node.handle(&f, d.now_ms) else {
                 assert!(!ids::is_command(f.id), "a command was not answered: {f:?}");
@@ -390,7 +424,7 @@ pub fn node_run(data: &[u8]) {
                 );
             }
             assert_eq!(Ack::decode(&ack.encode()), Some(ack));
-            if let Ok(cmd) = Command::decode(&f) {
+            if let Ok(cmd) = Command::decode(&f, next) {
                 assert_eq!(ack.command, cmd.code());
             } else {
                 assert!(
@@ -423,35 +457,40 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         (
             "heartbeat",
             Command::Control {
-                seq: 0,
+                session: 0,
+                seq: 1,
                 op: ControlOp::Heartbeat,
             },
         ),
         (
             "start",
             Command::Control {
-                seq: 1,
+                session: 0,
+                seq: 2,
                 op: ControlOp::Start,
             },
         ),
         (
             "stop",
             Command::Control {
-                seq: 2,
+                session: 0,
+                seq: 3,
                 op: ControlOp::Stop,
             },
         ),
         (
             "stopnow",
             Command::Control {
-                seq: 3,
+                session: 0,
+                seq: 4,
                 op: ControlOp::StopNow,
             },
         ),
         (
             "reset",
             Command::Control {
-                seq: 4,
+                session: 0,
+                seq: 5,
                 op: ControlOp::Reset,
             },
         ),
@@ -491,8 +530,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         foreign: 3,
         bus_errors: 0,
         tx_dropped: 1,
-        next_side: 2,
-        last_control: 5,
+        next_step: 5,
     };
     out.push(("decode", "seed-diag".into(), frame(diag.encode())));
     let link = planner_core::wire::LinkHealth {
@@ -536,6 +574,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     // `wlog`: a log of a heartbeat, a start and a stop; two logs in one file; an empty log.
     let heartbeat = frame(
         Command::Control {
+            session: 0,
             seq: 1,
             op: ControlOp::Heartbeat,
         }
@@ -543,6 +582,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     );
     let start = frame(
         Command::Control {
+            session: 0,
             seq: 2,
             op: ControlOp::Start,
         }

@@ -17,7 +17,7 @@
 //! host-sim log (its controller sends at the start of each cycle, and the log is in
 //! arbitration order) replays onto the same cycles at the same times, and the node answers
 //! it bit for bit as in the run that wrote it (`host-sim/tests/replay.rs`). Frames the node
-//! itself sends (`ACK`, the stream, `STATUS`, `DIAG`) are not replayed: the node sends its
+//! itself sends (`ACK`, the stream, `STATUS`, `DIAG`, `SESSION`) are not replayed: the node sends its
 //! own. Every other frame is, the node's commands and foreign traffic alike.
 //!
 //! Accepted lines: any interface name, upper- or lower-case hexadecimal, standard (3-digit)
@@ -54,7 +54,8 @@ pub struct Timed {
 /// What a replay produced.
 #[derive(Clone, Debug)]
 pub struct Replayed {
-    /// The node's reference, one per cycle, from the standing state at cycle 0.
+    /// The node's reference, one per cycle from the cycle that opened the session (the node
+    /// does not tick before), after the standing state it started in.
     pub trajectory: Vec<Reference<f64>>,
     /// Every frame delivered on the bus, as a candump log (the replayed ones and the node's).
     pub can_log: Vec<String>,
@@ -68,6 +69,8 @@ pub struct Replayed {
     pub lost: u64,
     /// Whether the replay ended at [`MAX_AFTER_S`] rather than standing and idle.
     pub cut: bool,
+    /// Cycles polled before the session was open (not in the trajectory).
+    pub before_session: u64,
 }
 
 /// Whether the node sends frames of this identifier (they are not replayed).
@@ -82,6 +85,7 @@ pub fn node_sends(id: u16) -> bool {
             | ids::FOOT_RIGHT
             | ids::STATUS
             | ids::DIAG
+            | ids::SESSION
     )
 }
 
@@ -219,6 +223,7 @@ pub fn replay_into<const Q: usize>(
     let last = frames.last().map_or(0, |f| f.tick);
     let max_ticks = playback::max_cycles(last, period_us);
     let mut trajectory = vec![*node.gait().last()];
+    let mut before_session = 0;
     let mut acks = Vec::new();
     let mut node_frames = Vec::new();
     let mut next = 0;
@@ -245,7 +250,14 @@ pub fn replay_into<const Q: usize>(
         bus.advance(poll);
         let now_ms = playback::poll_ms(k, period_us);
         let mut tap = Tap::new(&mut nport, k);
-        trajectory.push(node.poll(now_ms, &mut tap).reference);
+        let reference = node.poll(now_ms, &mut tap).reference;
+        // The trajectory from the cycle that opened the session (the node does not tick
+        // before: a cycle with nothing to say), as `host_sim::sim` records it.
+        if node.session_open() {
+            trajectory.push(reference);
+        } else {
+            before_session += 1;
+        }
         node_frames.append(&mut tap.sent);
         bus.advance(t0 + period_ns);
         while let Ok(f) = ctl.receive() {
@@ -267,5 +279,6 @@ pub fn replay_into<const Q: usize>(
         replayed: next,
         lost: bus.stats().rx_overflow,
         cut,
+        before_session,
     })
 }

@@ -581,6 +581,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.first.wrapping_add(self.appended as u16)
     }
 
+    /// `true` once a session is open (the handshake after start-up was taken): the node ticks
+    /// and streams its reference.
+    pub fn session_open(&self) -> bool {
+        self.open
+    }
+
     /// `true` once the clock was found not to advance with the cycles (until a `Reset`).
     pub fn clock_fault(&self) -> bool {
         self.clock_fault
