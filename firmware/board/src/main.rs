@@ -67,6 +67,7 @@ use stm32h7xx_hal::gpio::{Output, Pin, PushPull, Speed};
 use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
 use stm32h7xx_hal::rcc::rec::ResetEnable as _;
 use stm32h7xx_hal::rcc::{rec, PllConfigStrategy};
+use stm32h7xx_hal::rng::RngExt as _;
 use stm32h7xx_hal::{pac, prelude::*};
 
 use planner_core::gait::GaitError;
@@ -285,11 +286,22 @@ fn main() -> ! {
         guarded,
     );
 
+    // The node's entropy: 32 bits of the true random number generator (its kernel clock from
+    // PLL1Q, 80 MHz), so that every start-up draws another session epoch and first step
+    // number (frames of an earlier start-up are then refused). Should the generator report a
+    // clock or seed error, the cycle counter stands in (it differs with the start-up's timing).
+    let mut rng = dp.RNG.constrain(
+        ccdr.peripheral.RNG.kernel_clk_mux(rec::RngClkSel::Pll1Q),
+        &ccdr.clocks,
+    );
+    let entropy = rng.value().unwrap_or_else(|_| DWT::cycle_count());
     let t0 = DWT::cycle_count();
+    // (The constant configuration as it is, the entropy after: the compiler folds the one.)
     let node = match place_node(walk_robot::NODE_CONFIG) {
         Ok(n) => n,
         Err(e) => defmt::panic!("Node::new failed: {}", e),
     };
+    let _ = node.set_entropy(entropy);
     watchdog.feed();
     defmt::info!(
         "node ready ({=usize} bytes) in {=u32} cycles; start-up stack {=u32} bytes",

@@ -491,10 +491,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.cfg = cfg;
         self.tx.clear();
         self.steps.clear();
-        self.epoch = cfg.entropy;
         self.open = false;
         self.last_seq = 0;
-        self.first = (cfg.entropy >> 16) as u16;
+        self.cycle = 0;
+        let _ = self.set_entropy(cfg.entropy);
         self.appended = 0;
         self.estopped = false;
         self.lost = false;
@@ -579,6 +579,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The number of the next step to append (published in `DIAG`).
     pub fn next_step(&self) -> u16 {
         self.first.wrapping_add(self.appended as u16)
+    }
+
+    /// Draws the start-up's session from `entropy` (as [`NodeConfig::entropy`] does at
+    /// [`Node::restart`]): for a firmware whose configuration is a constant, which it keeps
+    /// as it is (so that the compiler folds it) and reads its random number generator for this
+    /// after start-up. Taken only before the first poll; later (a session may be open) it
+    /// changes nothing and returns `false`.
+    pub fn set_entropy(&mut self, entropy: u32) -> bool {
+        if self.cycle != 0 || self.open {
+            return false;
+        }
+        self.cfg.entropy = entropy;
+        self.epoch = entropy;
+        self.first = (entropy >> 16) as u16;
+        true
     }
 
     /// `true` once a session is open (the handshake after start-up was taken): the node ticks
