@@ -166,7 +166,7 @@ pub struct Played<T> {
     pub feet: [Footstep<f64>; 2],
     /// The frames the node sent, with their cycles.
     pub sent: Vec<(u64, RawFrame)>,
-    /// Every reference, the start-up one first.
+    /// Every reference, the start-up one first, then one per cycle from the session's first.
     pub trajectory: Vec<Reference<T>>,
 }
 
@@ -204,7 +204,11 @@ where
                 },
             )
             .unwrap_or_else(|_| panic!("{name}: log truncated: {:?}", frames.error()));
-        trajectory.push(report.reference);
+        // The trajectory from the session's first cycle, as the host's replay records it; the
+        // digest of every poll's reference, as the image computes it.
+        if node.session_open() {
+            trajectory.push(report.reference);
+        }
         refs.add_reference(&report.reference);
         refusing_cycles += u64::from(report.refused > 0);
         let tick = node.gait().ticks();

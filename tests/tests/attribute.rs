@@ -12,7 +12,8 @@
 
 use std::process::Command;
 
-/// Polls traced: fig4's first re-plan is the poll of tick 320.
+/// Polls traced: fig4's first re-plan is the poll of tick 320 (the 322nd poll: the first is the
+/// handshake's, which does not tick).
 const POLLS: usize = 330;
 /// The image's timer resolution (40 instructions per tick) twice, and the timer reads.
 const SLACK: i64 = 100;
@@ -56,11 +57,12 @@ fn attribution_agrees_with_the_image_timer() {
                 .find_map(|w| w.strip_prefix(k)?.strip_prefix('=')?.parse().ok())
                 .unwrap_or_else(|| panic!("no {k} in {line}"))
         };
+        // The gait's tick count after the poll; the first poll (the handshake's) ticks not.
         let tick = field("tick") as usize;
-        if tick == 0 || tick > POLLS {
+        if tick == 0 || tick >= POLLS {
             continue;
         }
-        let (timer, traced) = (field("instructions"), counts[tick - 1]);
+        let (timer, traced) = (field("instructions"), counts[tick]);
         assert!(
             (timer - traced).abs() <= SLACK,
             "tick {tick}: the image's timer says {timer} instructions, the trace {traced}"

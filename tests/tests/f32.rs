@@ -88,7 +88,10 @@ fn walk<T: Real>(frames: &[replay::Timed], cfg: NodeConfig<T>, period_us: u64) -
             next += 1;
         }
         let report = node.poll(playback::poll_ms(k, period_us), &mut bus);
-        w.trajectory.push(widen(&report.reference));
+        // From the session's first cycle (the node does not tick before), as host-sim's run.
+        if node.session_open() {
+            w.trajectory.push(widen(&report.reference));
+        }
         let tick = node.gait().ticks();
         if let Some(i) = node.gait().last_replan().filter(|i| i.tick == tick) {
             w.replans.push((tick, i.adjust_ticks));

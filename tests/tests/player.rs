@@ -61,7 +61,10 @@ fn compare(name: &str, log: &[String]) {
                 |k, f| sent.push((k, *f)),
             )
             .unwrap();
-        trajectory.push(report.reference);
+        // From the session's first cycle, as the host's replay records it.
+        if node.session_open() {
+            trajectory.push(report.reference);
+        }
     }
     assert!(!player.cut(), "{name}: cut");
     assert_eq!(player.fed() as usize, frames.len(), "{name}: frames fed");

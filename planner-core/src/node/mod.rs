@@ -383,6 +383,16 @@ fn reason_of(e: GaitError) -> Reason {
     }
 }
 
+/// The priority class of a command frame: 0 an emergency stop, 1 a stop now (by its op byte;
+/// validated when it is handled), 2 the rest.
+fn rank(f: &RawFrame) -> u8 {
+    match f.id {
+        ids::ESTOP => 0,
+        ids::CONTROL if f.len == 8 && f.data[6] == 3 => 1,
+        _ => 2,
+    }
+}
+
 /// `true` if the modification `batch[i]` is superseded by a later frame of the same cycle: a
 /// valid modification of the same step with a greater version (only the newest is carried
 /// out). `next` is the node's next step number (the frames' numbers are read against it).
@@ -1065,24 +1075,24 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     {
         self.cycle = self.cycle.wrapping_add(1);
         // 1. Receive: the node's frames of this cycle are held, the others counted.
-        let mut batch = [RawFrame {
-            id: 0,
-            len: 0,
-            data: [0; 8],
-        }; MAX_RX];
-        let (mut n, mut foreign, mut received) = (0usize, 0usize, 0u8);
+        let mut batch: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
+        let (mut foreign, mut received) = (0usize, 0u8);
         let max_rx = self.cfg.max_rx.min(MAX_RX);
-        while n < max_rx && foreign < self.cfg.max_foreign {
+        // The priority classes present (bit 0: an emergency stop; bit 1: a stop now).
+        let mut urgent = 0u8;
+        while batch.len() < max_rx && foreign < self.cfg.max_foreign {
             match can.receive() {
                 Ok(f) => {
                     received = received.saturating_add(1);
                     // Extended and remote frames are not ours either.
                     match RawFrame::from_frame(&f).filter(|r| ids::is_command(r.id)) {
                         Some(raw) => {
-                            if let Some(slot) = batch.get_mut(n) {
-                                *slot = raw;
-                            }
-                            n += 1;
+                            urgent |= match rank(&raw) {
+                                0 => 1,
+                                1 => 2,
+                                _ => 0,
+                            };
+                            let _ = batch.push(raw);
                         }
                         None => {
                             self.counters.foreign = self.counters.foreign.saturating_add(1);
@@ -1097,24 +1107,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 }
             }
         }
-        let batch = batch.get(..n).unwrap_or(&[]);
-        // 2. Act in priority order: emergency stops, stops now, then the rest as they came.
-        let rank = |f: &RawFrame| -> u8 {
-            match f.id {
-                ids::ESTOP => 0,
-                ids::CONTROL if f.len == 8 && f.data[6] == 3 => 1, // `StopNow` (validated below)
-                _ => 2,
-            }
-        };
+        // 2. Act in priority order: emergency stops, stops now, then the rest as they came
+        // (the passes of the classes not present are skipped).
         let (mut refused, mut plans) = (0u8, 0usize);
-        for pass in 0..3u8 {
+        let passes = if batch.is_empty() { 0 } else { 3u8 };
+        for pass in 0..passes {
+            if pass < 2 && urgent & (1 << pass) == 0 {
+                continue;
+            }
             for (i, f) in batch.iter().enumerate() {
                 if rank(f) != pass {
                     continue;
                 }
                 let decoded = Command::decode(f, self.next_step());
                 let ack = if matches!(decoded, Ok(Command::Modify(_)))
-                    && superseded(batch, i, self.next_step())
+                    && superseded(&batch, i, self.next_step())
                 {
                     // A newer version of this step came in the same cycle: that one is taken.
                     let ack = self.refusal(f, &decoded, Reason::Stale);
@@ -1146,12 +1153,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
-        let reference = if self.open {
+        let streaming = self.open;
+        let reference = if streaming {
             let r = self.gait.tick();
             self.steps.sync(&self.gait, self.first);
-            Some(r)
+            r
         } else {
-            None
+            *self.gait.last()
         };
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
@@ -1166,8 +1174,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 }
             }
         }
-        if let Some(r) = &reference {
-            for f in self.stream(r).encode() {
+        if streaming {
+            for f in self.stream(&reference).encode() {
                 self.enqueue(f);
             }
         }
@@ -1207,7 +1215,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         PollReport {
-            reference: reference.unwrap_or(*self.gait.last()),
+            reference,
             received,
             refused,
             sent,

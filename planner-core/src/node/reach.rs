@@ -149,65 +149,53 @@ impl<T: Real> Frame<T> {
         }
     }
 
-    /// The squared distance from the point `(px, py)` to the sole rectangle of this frame (0
-    /// inside).
-    fn sole_distance2(&self, px: T, py: T, soles: &Soles<T>) -> T {
-        let (dx, dy) = (px - self.x, py - self.y);
-        let along = (self.cos * dx + self.sin * dy).abs() - soles.half_length;
-        let across = (-self.sin * dx + self.cos * dy).abs() - soles.half_width;
-        square(along.max(T::ZERO)) + square(across.max(T::ZERO))
-    }
-
-    /// The four corners of this frame's sole.
-    fn corners(&self, soles: &Soles<T>) -> [(T, T); 4] {
-        let (l, w) = (soles.half_length, soles.half_width);
-        let at = |a: T, b: T| {
-            (
-                self.x + self.cos * a - self.sin * b,
-                self.y + self.sin * a + self.cos * b,
-            )
-        };
-        [at(l, w), at(l, -w), at(-l, -w), at(-l, w)]
-    }
-
-    /// Half the extent of this frame's sole along the unit axis `(ux, uy)`, and its centre's
-    /// projection.
-    fn project(&self, ux: T, uy: T, soles: &Soles<T>) -> (T, T) {
-        let c = self.x * ux + self.y * uy;
-        let r = soles.half_length * (self.cos * ux + self.sin * uy).abs()
-            + soles.half_width * (-self.sin * ux + self.cos * uy).abs();
-        (c, r)
-    }
-
-    /// `true` if the soles of `self` and `other` keep at least `gap` apart (less `eps`): they
-    /// are separated along one of the four edge normals (the separating axis theorem for two
-    /// rectangles), and then their distance, attained at a corner of one of them, is at least
-    /// `gap`.
+    /// `true` if the soles of `self` and `other` (rectangles of the same size at their poses)
+    /// keep at least `gap` apart (less `eps`). In `self`'s frame, with `other` at `(dx, dy)`
+    /// turned by `Δ` (`c = cos Δ`, `s = sin Δ`, from the frames' sines and cosines): `other`
+    /// reaches `ex = l|c| + w|s|` along and `ey = l|s| + w|c|` across, and so does `self` in
+    /// `other`'s frame. If the separation along one of `self`'s axes is at least `gap` the soles
+    /// are that far apart (the distance of two convex sets is at least their separation along
+    /// any axis): the common case, side by side. If they overlap along all four edge normals
+    /// they intersect (the separating axis theorem). Otherwise their distance is attained at a
+    /// corner of one of them: the smallest distance of the four corners of each to the other.
     fn soles_apart(&self, other: &Frame<T>, soles: &Soles<T>, gap: T, eps: T) -> bool {
-        let axes = [
-            (self.cos, self.sin),
-            (-self.sin, self.cos),
-            (other.cos, other.sin),
-            (-other.sin, other.cos),
-        ];
-        let separated = axes.iter().any(|&(ux, uy)| {
-            let (ca, ra) = self.project(ux, uy, soles);
-            let (cb, rb) = other.project(ux, uy, soles);
-            (ca - cb).abs() > ra + rb
-        });
-        if !separated {
+        let (l, w) = (soles.half_length, soles.half_width);
+        let g = (gap - eps).max(T::ZERO);
+        let (x, y) = (other.x - self.x, other.y - self.y);
+        let (dx, dy) = (self.cos * x + self.sin * y, -self.sin * x + self.cos * y);
+        let c = self.cos * other.cos + self.sin * other.sin;
+        let s = self.cos * other.sin - self.sin * other.cos;
+        let (ex, ey) = (l * c.abs() + w * s.abs(), l * s.abs() + w * c.abs());
+        let (sx, sy) = (dx.abs() - l - ex, dy.abs() - w - ey);
+        if sx.max(sy) >= g {
+            return true;
+        }
+        // `self`'s centre in `other`'s frame.
+        let (bx, by) = (-(c * dx + s * dy), s * dx - c * dy);
+        let (tx, ty) = (bx.abs() - l - ex, by.abs() - w - ey);
+        if sx.max(sy).max(tx).max(ty) < T::ZERO {
             return false;
         }
-        let g = (gap - eps).max(T::ZERO);
+        // The corners of a rectangle centred at `(px, py)` turned by (`c`, `s`), against the
+        // rectangle of the frame it is expressed in: the smallest squared distance.
+        let nearest = |px: T, py: T, c: T, s: T| {
+            // Half the sole along and across its heading.
+            let (ax, ay) = (l * c, l * s);
+            let (bx, by) = (-w * s, w * c);
+            let corner = |u: T, v: T| {
+                let (cx, cy) = (px + u * ax + v * bx, py + u * ay + v * by);
+                let ox = (cx.abs() - l).max(T::ZERO);
+                let oy = (cy.abs() - w).max(T::ZERO);
+                square(ox) + square(oy)
+            };
+            let (p, m) = (T::ONE, -T::ONE);
+            corner(p, p)
+                .min(corner(p, m))
+                .min(corner(m, p))
+                .min(corner(m, m))
+        };
         let g2 = g * g;
-        other
-            .corners(soles)
-            .iter()
-            .all(|&(x, y)| self.sole_distance2(x, y, soles) >= g2)
-            && self
-                .corners(soles)
-                .iter()
-                .all(|&(x, y)| other.sole_distance2(x, y, soles) >= g2)
+        nearest(dx, dy, c, s) >= g2 && nearest(bx, by, c, -s) >= g2
     }
 
     /// `to` in this frame: forward and width (positive on `to_side`'s own side).

@@ -86,6 +86,7 @@ impl Rig {
             acks.iter().any(|a| a.command == 0x20 && a.reason.is_none()),
             "handshake refused: {acks:?}"
         );
+        r.session.epoch += 1; // an accepted reset opens the next session
         assert_eq!(r.n.state(), NodeState::Standing);
         r
     }
@@ -194,6 +195,16 @@ impl Rig {
                 self.n.same_state(&without),
                 "refused {a:?} changed the node"
             );
+        }
+        if let (
+            Command::Control {
+                op: ControlOp::Reset,
+                ..
+            },
+            None,
+        ) = (c, a.reason)
+        {
+            self.session.epoch += 1; // an accepted reset opens the next session
         }
         a.reason
     }
