@@ -48,7 +48,7 @@ fn a_step_for_the_supporting_foot_is_refused() {
             None
         );
         // It is swung by the foot it names.
-        r.until(400, |n| n.gait().swinging() == Some(u16::from(id)));
+        r.until(400, |n| n.gait().swinging() == Some(id));
         assert_eq!(
             r.n.gait().last().phase,
             Phase::Single(expected.other()),

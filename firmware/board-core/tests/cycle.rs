@@ -3,10 +3,11 @@
 
 use board_core::cycle::{Stats, Summary, SUMMARY_EVERY};
 use planner_core::node::{Node, NodeConfig, PollReport};
-use planner_core::wire::{ids, RawFrame, Status};
+use planner_core::wire::{ids, Command, ControlOp, RawFrame, Status};
 
+/// What the node sends; and what it receives: the handshake (the start-up's session, epoch 0).
 #[derive(Default)]
-struct Sink(Vec<RawFrame>);
+struct Sink(Vec<RawFrame>, Vec<RawFrame>);
 
 impl embedded_can::nb::Can for Sink {
     type Frame = RawFrame;
@@ -16,14 +17,19 @@ impl embedded_can::nb::Can for Sink {
         Ok(None)
     }
     fn receive(&mut self) -> nb::Result<RawFrame, Self::Error> {
-        Err(nb::Error::WouldBlock)
+        self.1.pop().ok_or(nb::Error::WouldBlock)
     }
 }
 
 #[test]
 fn late_cycles_reach_status_and_the_window_closes_each_second() {
     let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
-    let mut bus = Sink::default();
+    let open = Command::Control {
+        session: 0,
+        seq: 1,
+        op: ControlOp::Reset,
+    };
+    let mut bus = Sink(vec![], vec![open.encode()]);
     let mut stats = Stats::default();
     let mut summaries = vec![];
     for k in 0..(2 * SUMMARY_EVERY) {
@@ -43,7 +49,7 @@ fn late_cycles_reach_status_and_the_window_closes_each_second() {
         .iter()
         .rev()
         .find_map(|f| (f.id == ids::STATUS).then(|| Status::decode(f).unwrap()));
-    // The last STATUS (cycle 400) carries the 8 overruns counted before it.
+    // The last STATUS (cycle 381) carries the 8 overruns counted before it.
     assert_eq!(last.unwrap().overruns, 8);
     assert_eq!(summaries.len(), 2);
     let (k, s) = summaries[1];

@@ -12,10 +12,24 @@ use mock::{frame, MockFdcan};
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame};
 
+/// A heartbeat of the start-up's session (epoch 0: the node has no entropy); before the
+/// handshake the node answers it `NoSession`, which is an answer all the same.
 fn heartbeat(seq: u8) -> [u32; 4] {
     let raw = Command::Control {
-        seq,
+        session: 0,
+        seq: u32::from(seq),
         op: ControlOp::Heartbeat,
+    }
+    .encode();
+    frame(raw.id, raw.bytes()).to_element()
+}
+
+/// The handshake: the `Reset` that opens the start-up's session.
+fn open() -> [u32; 4] {
+    let raw = Command::Control {
+        session: 0,
+        seq: 1000,
+        op: ControlOp::Reset,
     }
     .encode();
     frame(raw.id, raw.bytes()).to_element()
@@ -223,7 +237,7 @@ fn foreign_elements_are_dropped_and_counted() {
     link.peripheral_mut().arrive(heartbeat(2));
     let got = link.receive().unwrap();
     assert_eq!(got.raw_id(), ids::CONTROL);
-    assert_eq!(got.data()[0], 2);
+    assert_eq!(got.data()[2], 2); // (the sequence number's low byte)
     assert_eq!(link.health().rx_foreign, 1);
     assert_eq!(link.receive(), Err(nb::Error::WouldBlock));
 }
@@ -232,6 +246,7 @@ fn foreign_elements_are_dropped_and_counted() {
 fn a_node_keeps_publishing_through_a_bus_off() {
     let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
     let mut link = Link::new(MockFdcan::new(64));
+    link.peripheral_mut().arrive(open());
     run(&mut node, &mut link, 0, 20);
     let before = link.peripheral().wire.len();
     assert!(before >= 20 * 5, "{before}");

@@ -484,7 +484,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // keep the sole gap; and the receive bound is the node's buffer.
         let p = &cfg.params;
         let gap = p.step_width - (p.sole_half_width + p.sole_half_width);
-        if !(gap >= cfg.reach.sole_gap) || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
+        // (`NaN` fails too.)
+        let gap_ok = gap
+            .partial_cmp(&cfg.reach.sole_gap)
+            .is_some_and(|o| o.is_ge());
+        if !gap_ok || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
             return Err(GaitError::BadParams);
         }
         // Supervision in cycles: the timeout in whole cycles of `dt` (rounded up).

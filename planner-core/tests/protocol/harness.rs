@@ -265,7 +265,7 @@ impl<'a> Harness<'a> {
                         .ok_or(format!("step {a} landed, the model swings none"))?;
                     let st = &mut self.model.steps[i];
                     ensure!(
-                        u16::from(st.id()) == a && st.fate == Fate::Swinging,
+                        st.id() == a && st.fate == Fate::Swinging,
                         "step {a} landed, the model swings {st:?}"
                     );
                     let f = feet[ix(st.side())];
