@@ -110,3 +110,38 @@ fn the_check_catches_a_walk_that_went_wrong() {
     assert_eq!(check, Some(1), "{text}");
     assert!(text.contains("foot at"), "{text}");
 }
+
+/// `controller.py frame` prints a `CONTROL` frame for `cansend` (the bring-up checklist's hand
+/// commands) that the node's own decoder reads as that command of that session.
+#[test]
+fn the_frame_mode_prints_what_the_node_decodes() {
+    use planner_core::wire::{Command, ControlOp, RawFrame};
+    if !tools_present() {
+        return;
+    }
+    for (op, name, session, seq) in [
+        (ControlOp::Reset, "reset", 0xBEEFu16, 1u32),
+        (ControlOp::Heartbeat, "heartbeat", 0xBEF0, 70_000),
+    ] {
+        let o = controller(&[
+            "frame",
+            name,
+            "--session",
+            &format!("{session:#x}"),
+            "--seq",
+            &seq.to_string(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let line = String::from_utf8_lossy(&o.stdout).trim().to_string();
+        let (id, data) = line.split_once('#').expect("ID#DATA");
+        let bytes: Vec<u8> = (0..data.len() / 2)
+            .map(|i| u8::from_str_radix(&data[2 * i..2 * i + 2], 16).unwrap())
+            .collect();
+        let f = RawFrame::new(u16::from_str_radix(id, 16).unwrap(), &bytes).unwrap();
+        assert_eq!(
+            Command::decode(&f, 0),
+            Ok(Command::Control { session, seq, op }),
+            "{line}"
+        );
+    }
+}
