@@ -1326,6 +1326,9 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         let Some(first) = self.queue.front() else {
             return Err(GaitError::WrongState);
         };
+        // A stop requested while standing (an emergency stop before the walk) is not this
+        // walk's: the start window is planned as for a node that never had it.
+        self.stop_requested = false;
         let support = self.feet[first.step.side.other().index()];
         let other = self.feet[first.step.side.index()];
         let (land, n) = self.landings(&support, 0);

@@ -495,3 +495,17 @@ fn after_a_restart_nothing_moves_before_the_handshake() {
     );
     assert!(matches!(n.gait().last().phase, Phase::Standing));
 }
+
+/// A `Reset` that arrives before an `ESTOP` in the same cycle (carried out after it, in the
+/// priority order) does not leave the emergency stop: the node ends the cycle stopped.
+#[test]
+fn a_reset_with_an_estop_in_one_cycle_leaves_it_stopped() {
+    let mut r = Rig::hrp2();
+    let reset = r.command(ControlOp::Reset);
+    r.bus.rx.push_back(reset.encode());
+    r.bus
+        .rx
+        .push_back(Command::EmergencyStop { seq: 1 }.encode());
+    r.cycle();
+    assert_eq!(r.n.state(), NodeState::EmergencyStopped);
+}

@@ -1155,6 +1155,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.enqueue(ack.encode());
             }
         }
+        // An emergency stop of this cycle stands whatever came with it (a `Reset` that arrived
+        // before it and was carried out after it does not leave it).
+        if urgent & 1 != 0 && !self.estopped {
+            self.estopped = true;
+            self.gait.clear_and_stop();
+            self.steps.sync(&self.gait, self.first);
+        }
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
         let streaming = self.open;
