@@ -158,32 +158,69 @@ fn a_start_delayed_past_129_commands_is_old() {
 }
 
 /// Item 3: frames from before a `Reset` change nothing after it: a modification and an append
-/// of the old session (the step numbers run on), a control command (another session).
+/// of the old session — the append never accepted, carrying the number that was next at the
+/// `Reset` — and a control command (another session). The new session numbers its steps
+/// from 256 past the old session's next number, so the old frames are read as numbers of
+/// another block.
 #[test]
 fn frames_from_before_a_reset_change_nothing() {
     let mut r = Rig::hrp2();
     queue_walk(&mut r, 2);
-    let old_modify = r.book.modify(0, 0.17, y(false), 0.0).unwrap();
-    let old_append = r
-        .book
-        .append(2, false, 1.15, y(false), 0.0)
-        .expect("representable");
+    let next = r.n.next_step();
+    let old_modify = r.book.modify(next - 2, 0.17, y(false), 0.0).unwrap();
+    let old_appends: Vec<Command> = (0..3)
+        .map(|k| {
+            let left = k % 2 == 1;
+            r.book
+                .append(next + k, left, 0.3 + 0.15 * f64::from(k), y(left), 0.0)
+                .expect("representable")
+        })
+        .collect();
     let old_start = r.command(ControlOp::Start);
     assert_eq!(r.control(ControlOp::Reset), None);
-    // The new walk: two steps, whose numbers follow the dropped ones.
-    queue_walk(&mut r, 2);
-    let queued = [r.n.gait().queued_step(2), r.n.gait().queued_step(3)];
-    for (c, want) in [
-        (old_modify, Reason::UnknownStep),
-        (old_append, Reason::SequenceGap),
-        (old_start, Reason::WrongSession),
-    ] {
-        assert_eq!(r.ask(c), Some(want), "{c:?}");
-    }
     assert_eq!(
-        [r.n.gait().queued_step(2), r.n.gait().queued_step(3)],
-        queued
+        r.n.next_step(),
+        next + 256,
+        "the new session's first number"
     );
+    // The new walk: three steps.
+    queue_walk(&mut r, 3);
+    let ids = |r: &Rig| {
+        let first = r.n.next_step() - 3;
+        [0, 1, 2].map(|k| r.n.gait().queued_step(first + k))
+    };
+    let queued = ids(&r);
+    for c in old_appends.iter().chain([&old_modify]) {
+        assert_eq!(r.ask(*c), Some(Reason::BadCrc), "{c:?}");
+    }
+    assert_eq!(r.ask(old_start), Some(Reason::WrongSession));
+    assert_eq!(ids(&r), queued);
+    assert_eq!(r.n.gait().queued(), 3);
+    assert_eq!(r.n.state(), NodeState::Standing);
+}
+
+/// The same, with the old session's appends delivered before the new session's own: the
+/// next number is 256 past them, so none of them takes its place.
+#[test]
+fn an_append_never_accepted_before_a_reset_is_not_taken_after_it() {
+    let mut r = Rig::hrp2();
+    queue_walk(&mut r, 1);
+    let next = r.n.next_step();
+    let lost = r.book.append(next, false, 0.3, y(false), 0.0).unwrap();
+    assert_eq!(r.control(ControlOp::Reset), None);
+    assert_eq!(r.ask(lost), Some(Reason::BadCrc));
+    assert_eq!(r.n.gait().queued(), 0);
+}
+
+/// A start-up opens at most 255 sessions after its handshake (each `Reset` skips 256 step
+/// numbers of 65,535): the next `Reset` is refused `Exhausted` and changes nothing.
+#[test]
+fn resets_exhaust_the_step_numbers() {
+    let mut r = Rig::hrp2();
+    for k in 0..255 {
+        assert_eq!(r.control(ControlOp::Reset), None, "reset {k}");
+    }
+    assert_eq!(r.control(ControlOp::Reset), Some(Reason::Exhausted));
     assert_eq!(r.n.state(), NodeState::Standing);
 }
 
@@ -508,4 +545,85 @@ fn a_reset_with_an_estop_in_one_cycle_leaves_it_stopped() {
         .push_back(Command::EmergencyStop { seq: 1 }.encode());
     r.cycle();
     assert_eq!(r.n.state(), NodeState::EmergencyStopped);
+}
+
+/// The answer to `c` among `acks` (exactly one).
+fn answer(acks: &[planner_core::wire::Ack], c: &Command) -> Option<Reason> {
+    let mut a = acks
+        .iter()
+        .filter(|a| a.command == c.code() && a.echo == c.echo());
+    let first = a
+        .next()
+        .unwrap_or_else(|| panic!("{c:?} not answered: {acks:?}"));
+    assert!(a.next().is_none(), "{c:?} answered twice");
+    first.reason
+}
+
+/// Priority keeps what arrival order means: an append that arrived before a `StopNow` of the
+/// same cycle is dropped by it (answered `Stale`), standing or walking, and one that arrived
+/// after it is taken as it would be alone.
+#[test]
+fn footsteps_before_a_stop_now_of_the_cycle_are_dropped_by_it() {
+    // Standing, one step queued: [append, StopNow] leaves the queue empty.
+    let mut r = Rig::hrp2();
+    queue_walk(&mut r, 1);
+    let next = r.n.next_step();
+    let early = r.book.append(next, true, 0.3, y(true), 0.0).unwrap();
+    let stop = r.command(ControlOp::StopNow);
+    r.bus.rx.extend([early.encode(), stop.encode()]);
+    let acks = r.cycle();
+    assert_eq!(answer(&acks, &stop), None);
+    assert_eq!(answer(&acks, &early), Some(Reason::Stale));
+    assert_eq!(r.n.gait().queued(), 0);
+    assert_eq!(r.n.next_step(), next, "the dropped append took no number");
+    // [StopNow, append] with one step queued: the append is the only step left.
+    queue_walk(&mut r, 1);
+    let next = r.n.next_step();
+    let stop = r.command(ControlOp::StopNow);
+    let late = r.book.append(next, true, 0.15, y(true), 0.0).unwrap();
+    r.bus.rx.extend([stop.encode(), late.encode()]);
+    let acks = r.cycle();
+    assert_eq!((answer(&acks, &stop), answer(&acks, &late)), (None, None));
+    assert_eq!(r.n.gait().queued(), 1);
+    // Walking: an append before the StopNow is not taken.
+    let mut w = Rig::hrp2();
+    queue_walk(&mut w, 4);
+    assert_eq!(w.control(ControlOp::Start), None);
+    w.run(3, true);
+    let next = w.n.next_step();
+    let left = w.n.gait().queued_step(next - 1).map(|s| s.side) == Some(Side::Right);
+    let early = w.book.append(next, left, 0.75, y(left), 0.0).unwrap();
+    let stop = w.command(ControlOp::StopNow);
+    w.bus.rx.extend([early.encode(), stop.encode()]);
+    let acks = w.cycle();
+    assert_eq!(answer(&acks, &stop), None);
+    assert_eq!(answer(&acks, &early), Some(Reason::Stale));
+    assert_eq!(w.n.gait().queued(), 0);
+}
+
+/// Coalescing keeps what arrival order means: of two modifications of one step in a cycle,
+/// a newer one that is refused (out of reach) leaves the older, valid one in force.
+#[test]
+fn a_refused_newer_modification_leaves_the_older_one_its_turn() {
+    let mut r = Rig::hrp2();
+    queue_walk(&mut r, 2);
+    let id = r.n.next_step() - 1;
+    let good = r.book.modify(id, 0.32, y(true), 0.0).unwrap();
+    let far = r.book.modify(id, 0.95, y(true), 0.0).unwrap();
+    r.bus.rx.extend([good.encode(), far.encode()]);
+    let acks = r.cycle();
+    assert_eq!(answer(&acks, &far), Some(Reason::Reach));
+    assert_eq!(answer(&acks, &good), None);
+    let s = r.n.gait().queued_step(id).unwrap();
+    assert_eq!((s.x, s.y), (0.32, y(true)));
+    // And the other way round: the newer valid one is in force, the older one `Stale`.
+    let a = r.book.modify(id, 0.31, y(true), 0.0).unwrap();
+    let b = r.book.modify(id, 0.33, y(true), 0.0).unwrap();
+    r.bus.rx.extend([a.encode(), b.encode()]);
+    let acks = r.cycle();
+    assert_eq!(
+        (answer(&acks, &a), answer(&acks, &b)),
+        (Some(Reason::Stale), None)
+    );
+    assert_eq!(r.n.gait().queued_step(id).map(|s| s.x), Some(0.33));
 }

@@ -186,9 +186,10 @@ fn no_lift_off_beyond_the_supervision_bound() {
     }
 }
 
-/// `Reset` while standing drops the queue; step numbers run on (no two steps of a start-up
-/// share a number), so a modification of a dropped step is refused and the new step 2 is
-/// moved by its own.
+/// `Reset` while standing drops the queue; step numbers run on, 256 past the old session's
+/// (no two steps of a start-up share a number), so a modification of a dropped step and an
+/// append of the number that was next are refused, and the new session's first step 258 is
+/// moved by its own modification.
 #[test]
 fn reset_while_standing_drops_the_queue() {
     let mut r = Rig::hrp2();
@@ -197,12 +198,15 @@ fn reset_while_standing_drops_the_queue() {
     let old = r.book.modify(0, 0.12, -0.1, 0.0).unwrap();
     assert_eq!(r.control(ControlOp::Reset), None);
     assert_eq!(r.n.gait().queued(), 0);
-    assert_eq!(r.append(0, true, 0.05, 0.1), Some(Reason::SequenceGap));
-    assert_eq!(r.append(2, true, 0.05, 0.1), None);
+    assert_eq!(r.append(0, true, 0.05, 0.1), Some(Reason::BadCrc));
+    assert_eq!(r.append(2, true, 0.05, 0.1), Some(Reason::BadCrc));
+    r.run(20, true);
+    assert_eq!(r.diag.map(|d| d.next_step), Some(258), "published");
+    assert_eq!(r.append(258, true, 0.05, 0.1), None);
     assert_eq!(r.n.gait().queued(), 1);
-    assert_eq!(r.ask(old), Some(Reason::UnknownStep));
-    assert_eq!(r.modify(2, 0.08, 0.1), None);
-    let s = r.n.gait().queued_step(2).unwrap();
+    assert_eq!(r.ask(old), Some(Reason::BadCrc));
+    assert_eq!(r.modify(258, 0.08, 0.1), None);
+    let s = r.n.gait().queued_step(258).unwrap();
     assert_eq!((s.side, s.x, s.y), (Side::Left, 0.08, 0.1));
 }
 
@@ -303,7 +307,7 @@ fn reset_rebases_the_frame() {
     }
     assert!(r.stream.cog[0].abs() < 1e-6 && r.stream.cog[1].abs() < 1e-6);
     assert_eq!(
-        r.append(6, true, 0.2, 0.1),
+        r.append(6 + 256, true, 0.2, 0.1),
         None,
         "in reach in the new frame"
     );

@@ -19,9 +19,11 @@
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
 //!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
 //!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
-//!    are carried out a cycle; the rest are refused `Busy`. Modifications of one step that
-//!    arrive in one cycle are coalesced: only the newest version is carried out, the older
-//!    ones are answered `Stale`;
+//!    are carried out a cycle; the rest are refused `Busy`. Priority keeps what arrival order
+//!    means: a footstep frame that arrived before a `StopNow` carried out in the cycle was
+//!    dropped by it (refused `Stale`). Modifications of one step that arrive in one cycle are
+//!    coalesced, newest version first: the first one accepted is in force and the older ones
+//!    are then `Stale` (a newer one that is refused leaves an older one its turn);
 //! 3. **supervision**: if the robot moves and the controller has not been heard (an accepted
 //!    command: new by construction, see below) for more than
 //!    [`NodeConfig::heartbeat_timeout_ms`], by the clock or by the count of cycles (one cycle
@@ -49,10 +51,10 @@
 //!   equal to an accepted one: `Duplicate`), a modification a version greater than the
 //!   step's version in force (else `Stale`). Numbers and versions never wrap (a start-up
 //!   numbers 65,535 steps, a step has 127 versions: beyond, `Exhausted`), and step numbers
-//!   run on across `Reset`s, so **no frame of an earlier session, no replayed and no wrapped
+//!   run on across `Reset`s, [`SESSION_SKIP`] past the old session's, so **no frame of an earlier session, no replayed and no wrapped
 //!   copy is ever taken**; only a command never seen before proves the controller alive.
 //! * `Reset` (only when standing) opens a new session (epoch + 1): the queue and the step
-//!   memory are dropped, the emergency stop, the controller-lost state and the clock fault are
+//!   memory are dropped, the step numbers skip 256, the emergency stop, the controller-lost state and the clock fault are
 //!   left, and — except for the handshake after start-up — the node's world frame is
 //!   **re-based**: its origin moves to the midpoint of the feet and its x axis to their mean
 //!   heading; the stream and every later footstep are in the new frame.
@@ -128,6 +130,15 @@ pub const CLOCK_WINDOW: u32 = 20;
 /// Step numbers a start-up can give: 2¹⁶ − 1, so that no two steps of a start-up share the 16
 /// bits of their number (the frames carry the low byte, their CRC the high byte).
 pub const STEP_NUMBERS: u32 = 0xFFFF;
+
+/// Step numbers a `Reset` (after the handshake) skips: the new session's first number is the
+/// old session's next number + 256. A controller never sends a number 128 or more beyond the
+/// node's next one (the frame would be read as a number 256 lower: `BadCrc`), so every
+/// footstep frame of the old session, accepted or not, carries a number below the new
+/// session's first: read against the new numbers it is one already past, or one of another
+/// block (`BadCrc`). So a start-up opens at most 255 sessions (beyond, `Reset` is refused
+/// `Exhausted`), fewer as steps use numbers.
+pub const SESSION_SKIP: u32 = 256;
 
 /// Node configuration, in the node's scalar `T` ([`NodeConfig::cast`] converts the `f64`
 /// configuration that a robot file gives).
@@ -309,8 +320,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     last_seq: u32,
     /// The number of the start-up's first step.
     first: u16,
-    /// Steps appended since start-up (the next one is `first + appended`; gait ids are
-    /// `appended` at the time).
+    /// Step numbers used since start-up: every step appended, and [`SESSION_SKIP`] per
+    /// `Reset` (the next number is `first + appended`; gait ids are `appended` at the time).
     appended: u32,
     estopped: bool,
     lost: bool,
@@ -393,22 +404,16 @@ fn rank(f: &RawFrame) -> u8 {
     }
 }
 
-/// `true` if the modification `batch[i]` is superseded by a later frame of the same cycle: a
-/// valid modification of the same step with a greater version (only the newest is carried
-/// out). `next` is the node's next step number (the frames' numbers are read against it).
-fn superseded(batch: &[RawFrame], i: usize, next: u16) -> bool {
-    let Some(f) = batch.get(i) else {
-        return false;
-    };
-    let Ok(Command::Modify(m)) = Command::decode(f, next) else {
-        return false;
-    };
-    batch.iter().skip(i + 1).any(|g| {
-        g.id == ids::STEP_MODIFY
-            && g.data[0] == f.data[0]
-            && matches!(Command::decode(g, next),
-                Ok(Command::Modify(n)) if n.id == m.id && n.version > m.version)
-    })
+/// What the acting of a cycle keeps (see [`Node::poll`]).
+struct Acting {
+    /// Commands refused.
+    refused: u8,
+    /// Commands that planned.
+    plans: usize,
+    /// The frames of the batch carried out or refused (bit `i`).
+    done: u32,
+    /// The last `StopNow` of the batch carried out.
+    stop_at: Option<usize>,
 }
 
 impl<const Q: usize, T: Real> Node<Q, PreviewGains<T, PREVIEW>, T> {
@@ -771,7 +776,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// `true` if `decoded` would run the planner: a `Start`, or a modification of the next
-    /// swing target while walking (the only one that plans, see `Gait::modify`).
+    /// swing target while walking (the only one that plans, see `Gait::modify`) newer than
+    /// its version in force (an older one is refused before).
     fn may_plan(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
         match decoded {
             Ok(Command::Control {
@@ -779,7 +785,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 ..
             }) => true,
             Ok(Command::Modify(m)) => {
-                !self.gait.is_standing() && self.gait.next_target() == Some(self.gait_id(m.id))
+                !self.gait.is_standing()
+                    && self.gait.next_target() == Some(self.gait_id(m.id))
+                    && self.steps.version(m.id).is_none_or(|v| m.is_newer_than(v))
             }
             _ => false,
         }
@@ -911,6 +919,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// feet, except at the handshake after start-up.
     fn reset(&mut self) -> Result<(), Reason> {
         let epoch = self.epoch.checked_add(1).ok_or(Reason::Exhausted)?;
+        // The new session numbers its steps past every number the old one could have sent.
+        let skip = if self.open { SESSION_SKIP } else { 0 };
+        let numbers = self
+            .appended
+            .checked_add(skip)
+            .filter(|&n| n <= STEP_NUMBERS)
+            .ok_or(Reason::Exhausted)?;
         if self.open {
             let [l, r] = *self.gait.feet();
             let half = T::of(0.5);
@@ -923,6 +938,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             let _ = self.gait.drop_queue();
         }
         self.epoch = epoch;
+        self.appended = numbers;
         self.open = true;
         self.estopped = false;
         self.lost = false;
@@ -1066,6 +1082,91 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
+    /// Carries out (or refuses) the `i`-th command frame of the cycle, `decoded`, and queues
+    /// its answer: a footstep command that arrived before a `StopNow` carried out in this
+    /// cycle is refused `Stale` (the stop dropped it), a planning command beyond
+    /// [`NodeConfig::max_plans`] `Busy`.
+    fn act(
+        &mut self,
+        i: usize,
+        f: &RawFrame,
+        decoded: Result<Command, (Reason, u8)>,
+        act: &mut Acting,
+        now_ms: u32,
+    ) -> Ack {
+        act.done |= 1 << i;
+        let footstep = matches!(decoded, Ok(Command::Append(_) | Command::Modify(_)));
+        let planning = self.may_plan(&decoded);
+        let ack = if footstep && act.stop_at.is_some_and(|s| i < s) {
+            self.refuse(Reason::Stale);
+            self.refusal(f, &decoded, Reason::Stale)
+        } else if planning && act.plans >= self.cfg.max_plans {
+            self.refuse(Reason::Busy);
+            self.refusal(f, &decoded, Reason::Busy)
+        } else {
+            let ack = self.handle_command(f, decoded, now_ms);
+            // It did plan if the gait was reached: accepted, or refused by the planner.
+            if planning
+                && matches!(
+                    ack.reason,
+                    None | Some(Reason::Infeasible | Reason::PlanFailed)
+                )
+            {
+                act.plans += 1;
+            }
+            ack
+        };
+        if ack.reason.is_some() {
+            act.refused = act.refused.saturating_add(1);
+        }
+        self.enqueue(ack.encode());
+        ack
+    }
+
+    /// Carries out the modification `batch[i]` together with the later modifications of the
+    /// same step in this cycle, newest version first: the first one accepted is in force and
+    /// the older ones are then `Stale` by the version rule (a newer one that is refused leaves
+    /// an older one its turn, as in arrival order). Each frame is read once.
+    fn act_modifications(&mut self, batch: &[RawFrame], i: usize, act: &mut Acting, now: u32) {
+        let next = self.next_step();
+        let Some(f) = batch.get(i) else {
+            return;
+        };
+        let first = Command::decode(f, next);
+        let Ok(Command::Modify(m)) = first else {
+            let _ = self.act(i, f, first, act, now);
+            return;
+        };
+        // The group: (index, version) of this step's modifications, decoded.
+        let mut group: heapless::Vec<(usize, u8), MAX_RX> = heapless::Vec::new();
+        let _ = group.push((i, m.version));
+        for (j, g) in batch.iter().enumerate().skip(i + 1) {
+            if g.id != ids::STEP_MODIFY || g.data[0] != f.data[0] || act.done & (1 << j) != 0 {
+                continue;
+            }
+            if let Ok(Command::Modify(n)) = Command::decode(g, next) {
+                if n.id == m.id {
+                    let _ = group.push((j, n.version));
+                }
+            }
+        }
+        // Newest first; equal versions in arrival order.
+        while let Some(k) = (0..group.len()).reduce(|a, b| {
+            let (va, vb) = (group[a].1, group[b].1);
+            if vb > va {
+                b
+            } else {
+                a
+            }
+        }) {
+            let (j, _) = group.remove(k);
+            if let Some(g) = batch.get(j) {
+                let decoded = Command::decode(g, next);
+                let _ = self.act(j, g, decoded, act, now);
+            }
+        }
+    }
+
     fn enqueue(&mut self, f: RawFrame) {
         if self.tx.push_back(f).is_err() {
             self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
@@ -1113,48 +1214,33 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         // 2. Act in priority order: emergency stops, stops now, then the rest as they came
         // (the passes of the classes not present are skipped).
-        let (mut refused, mut plans) = (0u8, 0usize);
+        let mut act = Acting {
+            refused: 0,
+            plans: 0,
+            done: 0,
+            stop_at: None,
+        };
         let passes = if batch.is_empty() { 0 } else { 3u8 };
         for pass in 0..passes {
             if pass < 2 && urgent & (1 << pass) == 0 {
                 continue;
             }
             for (i, f) in batch.iter().enumerate() {
-                if rank(f) != pass {
+                if rank(f) != pass || act.done & (1 << i) != 0 {
                     continue;
                 }
-                let decoded = Command::decode(f, self.next_step());
-                let ack = if matches!(decoded, Ok(Command::Modify(_)))
-                    && superseded(&batch, i, self.next_step())
-                {
-                    // A newer version of this step came in the same cycle: that one is taken.
-                    let ack = self.refusal(f, &decoded, Reason::Stale);
-                    self.refuse(Reason::Stale);
-                    ack
-                } else if self.may_plan(&decoded) && plans >= self.cfg.max_plans {
-                    let ack = self.refusal(f, &decoded, Reason::Busy);
-                    self.refuse(Reason::Busy);
-                    ack
+                if f.id == ids::STEP_MODIFY {
+                    self.act_modifications(&batch, i, &mut act, now_ms);
                 } else {
-                    let planning = self.may_plan(&decoded);
-                    let ack = self.handle_command(f, decoded, now_ms);
-                    // It did plan if the gait was reached: accepted, or refused by the planner.
-                    if planning
-                        && matches!(
-                            ack.reason,
-                            None | Some(Reason::Infeasible | Reason::PlanFailed)
-                        )
-                    {
-                        plans += 1;
+                    let decoded = Command::decode(f, self.next_step());
+                    let ack = self.act(i, f, decoded, &mut act, now_ms);
+                    if pass == 1 && ack.reason.is_none() {
+                        act.stop_at = Some(i);
                     }
-                    ack
-                };
-                if ack.reason.is_some() {
-                    refused = refused.saturating_add(1);
                 }
-                self.enqueue(ack.encode());
             }
         }
+        let refused = act.refused;
         // An emergency stop of this cycle stands whatever came with it (a `Reset` that arrived
         // before it and was carried out after it does not leave it).
         if urgent & 1 != 0 && !self.estopped {

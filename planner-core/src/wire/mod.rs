@@ -43,7 +43,9 @@
 //!   one is [`Reason::Duplicate`], an older one [`Reason::Stale`]. At one command a
 //!   millisecond the counter lasts 49 days.
 //! * **Step numbers.** Footsteps are numbered by the node's step counter, which runs on
-//!   across `Reset`s and restarts only with the node (at a number drawn from the entropy).
+//!   across `Reset`s (each skips 256 numbers, `node::SESSION_SKIP`) and restarts only with
+//!   the node (at a number drawn from the entropy). A controller never sends a number 128 or
+//!   more past the node's next one.
 //!   A footstep frame carries the low byte of its 16-bit number; the high byte is not sent but
 //!   enters the frame's CRC ([`crc8_keyed`], [`step_key`]). The node reads a footstep frame's
 //!   number as the one with that low byte nearest to the next number it expects (`DIAG`
@@ -310,9 +312,9 @@ pub enum Reason {
     /// The frame's CRC-8 does not match its identifier and data (see the module docs).
     BadCrc = 16,
     /// Older than what is in force: a modification whose version is below the step's
-    /// version in force (or superseded by a newer modification of the same step received in
-    /// the same cycle), a control command whose sequence number is below the last accepted
-    /// one.
+    /// version in force (or a newer modification of the same step received in the same cycle
+    /// was accepted), a footstep frame that arrived before a `StopNow` carried out in the same
+    /// cycle, a control command whose sequence number is below the last accepted one.
     Stale = 17,
     /// The controller fell silent while the robot walked (or the node's clock stopped):
     /// motion commands are refused until a `Reset` once standing.

@@ -182,6 +182,7 @@ impl Rig {
     }
     pub fn ask(&mut self, c: Command) -> Option<Reason> {
         assert!(self.bus.rx.is_empty());
+        let epoch = self.session.epoch;
         let mut without = self.n.clone();
         without.poll(self.t + 5, &mut Bus::default());
         self.bus.rx.push_back(c.encode());
@@ -204,7 +205,9 @@ impl Rig {
             None,
         ) = (c, a.reason)
         {
-            self.session.epoch += 1; // an accepted reset opens the next session
+            // An accepted reset opens the next session (whatever `SESSION` of this cycle
+            // said).
+            self.session.epoch = epoch + 1;
         }
         a.reason
     }

@@ -328,6 +328,10 @@ impl Model {
                         self.stopping = false;
                         self.epoch += 1;
                         self.session += 1;
+                        if self.open {
+                            // A new session numbers its steps 256 past the old one's.
+                            self.next = self.next.wrapping_add(256);
+                        }
                         self.open = true;
                     }
                 }
