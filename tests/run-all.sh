@@ -147,6 +147,9 @@ cargo test --workspace --doc 2>&1 | tee -a "$LOG"
 section "host workspace: cargo test --workspace --all-targets"
 cargo test --workspace --all-targets 2>&1 | tee -a "$LOG"
 
+section "protocol model check (stateright, release; WALK_LONG=1: the larger bound)"
+cargo test --release -p planner-core --test model_check -- --nocapture 2>&1 | tee -a "$LOG"
+
 section "host-sim with the SocketCAN backend (compile test: no CAN interface here)"
 cargo build -p host-sim --features socketcan
 

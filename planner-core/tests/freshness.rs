@@ -538,13 +538,35 @@ fn after_a_restart_nothing_moves_before_the_handshake() {
 #[test]
 fn a_reset_with_an_estop_in_one_cycle_leaves_it_stopped() {
     let mut r = Rig::hrp2();
+    let estop = Command::EmergencyStop { seq: 1 };
     let reset = r.command(ControlOp::Reset);
-    r.bus.rx.push_back(reset.encode());
-    r.bus
-        .rx
-        .push_back(Command::EmergencyStop { seq: 1 }.encode());
-    r.cycle();
+    r.bus.rx.extend([reset.encode(), estop.encode()]);
+    let acks = r.cycle();
     assert_eq!(r.n.state(), NodeState::EmergencyStopped);
+    assert_eq!(answer(&acks, &estop), None);
+    assert_eq!(answer(&acks, &reset), Some(Reason::EmergencyStopped));
+    // Already stopped: a repeated ESTOP (`Duplicate`, a refusal: it changes nothing) with a
+    // Reset in one cycle, either order: the Reset is refused too, and the node is as before.
+    for first_estop in [true, false] {
+        let before = r.n.clone();
+        let reset = r.command(ControlOp::Reset);
+        let frames = if first_estop {
+            [estop.encode(), reset.encode()]
+        } else {
+            [reset.encode(), estop.encode()]
+        };
+        r.bus.rx.extend(frames);
+        let acks = r.cycle();
+        assert_eq!(answer(&acks, &estop), Some(Reason::Duplicate));
+        assert_eq!(answer(&acks, &reset), Some(Reason::EmergencyStopped));
+        assert_eq!(r.n.state(), NodeState::EmergencyStopped);
+        let mut idle = before;
+        idle.poll(r.t, &mut Bus::default());
+        assert!(idle.same_state(&r.n), "the two refusals changed the node");
+    }
+    // Alone, the Reset leaves the emergency stop.
+    assert_eq!(r.control(ControlOp::Reset), None);
+    assert_eq!(r.n.state(), NodeState::Standing);
 }
 
 /// The answer to `c` among `acks` (exactly one).

@@ -21,7 +21,8 @@
 //!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
 //!    are carried out a cycle; the rest are refused `Busy`. Priority keeps what arrival order
 //!    means: a footstep frame that arrived before a `StopNow` carried out in the cycle was
-//!    dropped by it (refused `Stale`). Modifications of one step that arrive in one cycle are
+//!    dropped by it (refused `Stale`), and a `Reset` received with an `ESTOP` in one cycle is
+//!    refused `EmergencyStopped` (the stop stands, whatever the order). Modifications of one step that arrive in one cycle are
 //!    coalesced, newest version first: the first one accepted is in force and the older ones
 //!    are then `Stale` (a newer one that is refused leaves an older one its turn);
 //! 3. **supervision**: if the robot moves and the controller has not been heard (an accepted
@@ -327,6 +328,9 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     lost: bool,
     /// The clock did not advance with the cycles (latched until a `Reset`).
     clock_fault: bool,
+    /// An emergency stop was received in the cycle being acted on: no `Reset` leaves it (set
+    /// and cleared within [`Node::poll`]).
+    estop_now: bool,
     last_heard: Option<u32>,
     /// The cycle in which the controller was last heard.
     heard_cycle: u32,
@@ -456,6 +460,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             estopped: false,
             lost: false,
             clock_fault: false,
+            estop_now: false,
             last_heard: None,
             heard_cycle: 0,
             window: (0, 0),
@@ -891,6 +896,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 if !standing {
                     return Err(Reason::WrongState);
                 }
+                // An emergency stop received in the same cycle stands, whatever the order.
+                if self.estop_now {
+                    return Err(Reason::EmergencyStopped);
+                }
                 self.reset()?;
             }
             ControlOp::Stop => {
@@ -1233,6 +1242,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     self.act_modifications(&batch, i, &mut act, now_ms);
                 } else {
                     let decoded = Command::decode(f, self.next_step());
+                    if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
+                        self.estop_now = true;
+                    }
                     let ack = self.act(i, f, decoded, &mut act, now_ms);
                     if pass == 1 && ack.reason.is_none() {
                         act.stop_at = Some(i);
@@ -1241,13 +1253,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         let refused = act.refused;
-        // An emergency stop of this cycle stands whatever came with it (a `Reset` that arrived
-        // before it and was carried out after it does not leave it).
-        if urgent & 1 != 0 && !self.estopped {
-            self.estopped = true;
-            self.gait.clear_and_stop();
-            self.steps.sync(&self.gait, self.first);
-        }
+        self.estop_now = false;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
         let streaming = self.open;

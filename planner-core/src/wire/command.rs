@@ -14,7 +14,7 @@ pub fn step_number(low: u8, next: u16) -> u16 {
 }
 
 /// Control operations.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ControlOp {
     /// Keep-alive: the controller is there.
