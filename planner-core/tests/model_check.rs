@@ -38,7 +38,7 @@
 //! identifies states by that history (with the controller's and the bus's state), which is
 //! what makes the search finite.
 //!
-//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 4 frames, 9 cycles).
+//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 4 frames, 7 cycles).
 
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
@@ -288,7 +288,7 @@ impl Protocol {
             cfg,
             gains,
             per_cycle: if long { 4 } else { 3 },
-            max_cycles: if long { 9 } else { 6 },
+            max_cycles: if long { 7 } else { 6 },
         }
     }
 

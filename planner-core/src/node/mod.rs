@@ -123,6 +123,7 @@ pub const TX_BACKLOG: usize = 32;
 /// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
 /// among them is carried out first.
 pub const MAX_RX: usize = 32;
+const _: () = assert!(MAX_RX < 64, "a cycle's frames are a 64-bit mask");
 
 /// Cycles over which the clock is checked: it must advance by at least half of their nominal
 /// time (see the module docs).
@@ -408,6 +409,11 @@ fn rank(f: &RawFrame) -> u8 {
     }
 }
 
+/// Bit `i` of a mask over a cycle's frames (at most [`MAX_RX`] ≤ 64 of them).
+const fn bit(i: usize) -> u64 {
+    1u64 << (i & 63)
+}
+
 /// What the acting of a cycle keeps (see [`Node::poll`]).
 struct Acting {
     /// Commands refused.
@@ -415,7 +421,7 @@ struct Acting {
     /// Commands that planned.
     plans: usize,
     /// The frames of the batch carried out or refused (bit `i`).
-    done: u32,
+    done: u64,
     /// The last `StopNow` of the batch carried out.
     stop_at: Option<usize>,
 }
@@ -781,8 +787,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// `true` if `decoded` would run the planner: a `Start`, or a modification of the next
-    /// swing target while walking (the only one that plans, see `Gait::modify`) newer than
-    /// its version in force (an older one is refused before).
+    /// swing target while walking (the only one that plans, see `Gait::modify`).
     fn may_plan(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
         match decoded {
             Ok(Command::Control {
@@ -790,9 +795,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 ..
             }) => true,
             Ok(Command::Modify(m)) => {
-                !self.gait.is_standing()
-                    && self.gait.next_target() == Some(self.gait_id(m.id))
-                    && self.steps.version(m.id).is_none_or(|v| m.is_newer_than(v))
+                !self.gait.is_standing() && self.gait.next_target() == Some(self.gait_id(m.id))
             }
             _ => false,
         }
@@ -1103,13 +1106,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         act: &mut Acting,
         now_ms: u32,
     ) -> Ack {
-        act.done |= 1 << i;
+        act.done |= bit(i);
         let footstep = matches!(decoded, Ok(Command::Append(_) | Command::Modify(_)));
         let planning = self.may_plan(&decoded);
         let ack = if footstep && act.stop_at.is_some_and(|s| i < s) {
             self.refuse(Reason::Stale);
             self.refusal(f, &decoded, Reason::Stale)
-        } else if planning && act.plans >= self.cfg.max_plans {
+        } else if planning && act.plans >= self.cfg.max_plans && !self.is_old_version(&decoded) {
             self.refuse(Reason::Busy);
             self.refusal(f, &decoded, Reason::Busy)
         } else {
@@ -1132,6 +1135,18 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         ack
     }
 
+    /// `true` for a modification not newer than its step's version in force: refused `Stale`
+    /// before it could plan, so it never waits as `Busy`.
+    fn is_old_version(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+        match decoded {
+            Ok(Command::Modify(m)) => self
+                .steps
+                .version(m.id)
+                .is_some_and(|v| !m.is_newer_than(v)),
+            _ => false,
+        }
+    }
+
     /// Carries out the modification `batch[i]` together with the later modifications of the
     /// same step in this cycle, newest version first: the first one accepted is in force and
     /// the older ones are then `Stale` by the version rule (a newer one that is refused leaves
@@ -1146,32 +1161,42 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             let _ = self.act(i, f, first, act, now);
             return;
         };
-        // The group: (index, version) of this step's modifications, decoded.
-        let mut group: heapless::Vec<(usize, u8), MAX_RX> = heapless::Vec::new();
-        let _ = group.push((i, m.version));
+        // The group: (index, version) of this step's modifications (small: it is on the
+        // control loop's stack).
+        let mut group: heapless::Vec<(u8, u8), MAX_RX> = heapless::Vec::new();
+        let _ = group.push((i as u8, m.version));
         for (j, g) in batch.iter().enumerate().skip(i + 1) {
-            if g.id != ids::STEP_MODIFY || g.data[0] != f.data[0] || act.done & (1 << j) != 0 {
+            if g.id != ids::STEP_MODIFY || g.data[0] != f.data[0] || act.done & bit(j) != 0 {
                 continue;
             }
             if let Ok(Command::Modify(n)) = Command::decode(g, next) {
                 if n.id == m.id {
-                    let _ = group.push((j, n.version));
+                    let _ = group.push((j as u8, n.version));
                 }
             }
         }
         // Newest first; equal versions in arrival order.
-        while let Some(k) = (0..group.len()).reduce(|a, b| {
-            let (va, vb) = (group[a].1, group[b].1);
-            if vb > va {
-                b
-            } else {
-                a
+        let mut left: u64 = bit(group.len()).wrapping_sub(1);
+        while left != 0 {
+            let mut best: Option<(usize, u8, u8)> = None;
+            for (g, &(j, v)) in group.iter().enumerate() {
+                if left & bit(g) != 0 && best.is_none_or(|(_, _, b)| v > b) {
+                    best = Some((g, j, v));
+                }
             }
-        }) {
-            let (j, _) = group.remove(k);
-            if let Some(g) = batch.get(j) {
-                let decoded = Command::decode(g, next);
-                let _ = self.act(j, g, decoded, act, now);
+            let Some((g, j, _)) = best else {
+                break;
+            };
+            left &= !bit(g);
+            let j = usize::from(j);
+            if let Some(f) = batch.get(j) {
+                // (The frame read above, or read again.)
+                let decoded = if j == i {
+                    Ok(Command::Modify(m))
+                } else {
+                    Command::decode(f, next)
+                };
+                let _ = self.act(j, f, decoded, act, now);
             }
         }
     }
@@ -1235,7 +1260,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 continue;
             }
             for (i, f) in batch.iter().enumerate() {
-                if rank(f) != pass || act.done & (1 << i) != 0 {
+                if rank(f) != pass || act.done & bit(i) != 0 {
                     continue;
                 }
                 if f.id == ids::STEP_MODIFY {
