@@ -329,6 +329,9 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     lost: bool,
     /// The clock did not advance with the cycles (latched until a `Reset`).
     clock_fault: bool,
+    /// Planning commands that may still plan in this cycle ([`NodeConfig::max_plans`] at
+    /// the start of each cycle's acting).
+    plans_left: usize,
     /// An emergency stop was received in the cycle being acted on: no `Reset` leaves it (set
     /// and cleared within [`Node::poll`]).
     estop_now: bool,
@@ -418,10 +421,6 @@ const fn bit(i: usize) -> u64 {
 struct Acting {
     /// Commands refused.
     refused: u8,
-    /// Commands that planned.
-    plans: usize,
-    /// The frames of the batch carried out or refused (bit `i`).
-    done: u64,
     /// The last `StopNow` of the batch carried out.
     stop_at: Option<usize>,
 }
@@ -467,6 +466,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             lost: false,
             clock_fault: false,
             estop_now: false,
+            plans_left: 0,
             last_heard: None,
             heard_cycle: 0,
             window: (0, 0),
@@ -533,6 +533,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.heard_cycle = 0;
         self.window = (0, 0);
         self.timeout_cycles = timeout_cycles;
+        self.plans_left = cfg.max_plans;
         self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
         self.counters = Counters::ZERO;
         self.cycle = 0;
@@ -786,21 +787,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Some(self.handle_command(frame, decoded, now_ms))
     }
 
-    /// `true` if `decoded` would run the planner: a `Start`, or a modification of the next
-    /// swing target while walking (the only one that plans, see `Gait::modify`).
-    fn may_plan(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
-        match decoded {
-            Ok(Command::Control {
-                op: ControlOp::Start,
-                ..
-            }) => true,
-            Ok(Command::Modify(m)) => {
-                !self.gait.is_standing() && self.gait.next_target() == Some(self.gait_id(m.id))
-            }
-            _ => false,
-        }
-    }
-
     fn handle_command(
         &mut self,
         frame: &RawFrame,
@@ -861,6 +847,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
+    /// `Busy` if this cycle has planned [`NodeConfig::max_plans`] times already.
+    fn plan(&self) -> Result<(), Reason> {
+        if self.plans_left == 0 {
+            return Err(Reason::Busy);
+        }
+        Ok(())
+    }
+
     fn estop(&mut self) -> Result<(), Reason> {
         if self.estopped {
             return Err(Reason::Duplicate);
@@ -893,7 +887,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 if self.lost {
                     return Err(Reason::ControllerLost);
                 }
-                self.gait.start().map_err(reason_of)?;
+                if !standing || self.gait.queued() == 0 {
+                    return Err(Reason::WrongState);
+                }
+                self.plan()?;
+                let started = self.gait.start().map_err(reason_of);
+                self.plans_left = self.plans_left.saturating_sub(1);
+                started?;
             }
             ControlOp::Reset => {
                 if !standing {
@@ -1031,7 +1031,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let step = Self::footstep(&s);
         let id = self.gait_id(m.id);
         self.check_reach(&step, Some(id))?;
-        self.gait.modify(id, step).map_err(reason_of)?;
+        // A modification of the next swing target while walking plans (eq. 17).
+        let plans = !self.gait.is_standing() && self.gait.next_target() == Some(id);
+        if plans {
+            self.plan()?;
+        }
+        let modified = self.gait.modify(id, step).map_err(reason_of);
+        if plans {
+            self.plans_left = self.plans_left.saturating_sub(1);
+        }
+        modified?;
         if let Some(r) = self.steps.queued_at_mut(at, m.id) {
             r.version = m.version;
             r.in_force = Some(*frame);
@@ -1095,9 +1104,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// Carries out (or refuses) the `i`-th command frame of the cycle, `decoded`, and queues
-    /// its answer: a footstep command that arrived before a `StopNow` carried out in this
-    /// cycle is refused `Stale` (the stop dropped it), a planning command beyond
-    /// [`NodeConfig::max_plans`] `Busy`.
+    /// its answer (`true`: accepted): a footstep command that arrived before a `StopNow`
+    /// carried out in this cycle is refused `Stale` (the stop dropped it).
     fn act(
         &mut self,
         i: usize,
@@ -1105,100 +1113,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         decoded: Result<Command, (Reason, u8)>,
         act: &mut Acting,
         now_ms: u32,
-    ) -> Ack {
-        act.done |= bit(i);
+    ) -> bool {
         let footstep = matches!(decoded, Ok(Command::Append(_) | Command::Modify(_)));
-        let planning = self.may_plan(&decoded);
         let ack = if footstep && act.stop_at.is_some_and(|s| i < s) {
             self.refuse(Reason::Stale);
             self.refusal(f, &decoded, Reason::Stale)
-        } else if planning && act.plans >= self.cfg.max_plans && !self.is_old_version(&decoded) {
-            self.refuse(Reason::Busy);
-            self.refusal(f, &decoded, Reason::Busy)
         } else {
-            let ack = self.handle_command(f, decoded, now_ms);
-            // It did plan if the gait was reached: accepted, or refused by the planner.
-            if planning
-                && matches!(
-                    ack.reason,
-                    None | Some(Reason::Infeasible | Reason::PlanFailed)
-                )
-            {
-                act.plans += 1;
-            }
-            ack
+            self.handle_command(f, decoded, now_ms)
         };
         if ack.reason.is_some() {
             act.refused = act.refused.saturating_add(1);
         }
         self.enqueue(ack.encode());
-        ack
-    }
-
-    /// `true` for a modification not newer than its step's version in force: refused `Stale`
-    /// before it could plan, so it never waits as `Busy`.
-    fn is_old_version(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
-        match decoded {
-            Ok(Command::Modify(m)) => self
-                .steps
-                .version(m.id)
-                .is_some_and(|v| !m.is_newer_than(v)),
-            _ => false,
-        }
-    }
-
-    /// Carries out the modification `batch[i]` together with the later modifications of the
-    /// same step in this cycle, newest version first: the first one accepted is in force and
-    /// the older ones are then `Stale` by the version rule (a newer one that is refused leaves
-    /// an older one its turn, as in arrival order). Each frame is read once.
-    fn act_modifications(&mut self, batch: &[RawFrame], i: usize, act: &mut Acting, now: u32) {
-        let next = self.next_step();
-        let Some(f) = batch.get(i) else {
-            return;
-        };
-        let first = Command::decode(f, next);
-        let Ok(Command::Modify(m)) = first else {
-            let _ = self.act(i, f, first, act, now);
-            return;
-        };
-        // The group: (index, version) of this step's modifications (small: it is on the
-        // control loop's stack).
-        let mut group: heapless::Vec<(u8, u8), MAX_RX> = heapless::Vec::new();
-        let _ = group.push((i as u8, m.version));
-        for (j, g) in batch.iter().enumerate().skip(i + 1) {
-            if g.id != ids::STEP_MODIFY || g.data[0] != f.data[0] || act.done & bit(j) != 0 {
-                continue;
-            }
-            if let Ok(Command::Modify(n)) = Command::decode(g, next) {
-                if n.id == m.id {
-                    let _ = group.push((j as u8, n.version));
-                }
-            }
-        }
-        // Newest first; equal versions in arrival order.
-        let mut left: u64 = bit(group.len()).wrapping_sub(1);
-        while left != 0 {
-            let mut best: Option<(usize, u8, u8)> = None;
-            for (g, &(j, v)) in group.iter().enumerate() {
-                if left & bit(g) != 0 && best.is_none_or(|(_, _, b)| v > b) {
-                    best = Some((g, j, v));
-                }
-            }
-            let Some((g, j, _)) = best else {
-                break;
-            };
-            left &= !bit(g);
-            let j = usize::from(j);
-            if let Some(f) = batch.get(j) {
-                // (The frame read above, or read again.)
-                let decoded = if j == i {
-                    Ok(Command::Modify(m))
-                } else {
-                    Command::decode(f, next)
-                };
-                let _ = self.act(j, f, decoded, act, now);
-            }
-        }
+        ack.reason.is_none()
     }
 
     fn enqueue(&mut self, f: RawFrame) {
@@ -1217,8 +1144,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let mut batch: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
         let (mut foreign, mut received) = (0usize, 0u8);
         let max_rx = self.cfg.max_rx.min(MAX_RX);
-        // The priority classes present (bit 0: an emergency stop; bit 1: a stop now).
-        let mut urgent = 0u8;
         while batch.len() < max_rx && foreign < self.cfg.max_foreign {
             match can.receive() {
                 Ok(f) => {
@@ -1226,11 +1151,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     // Extended and remote frames are not ours either.
                     match RawFrame::from_frame(&f).filter(|r| ids::is_command(r.id)) {
                         Some(raw) => {
-                            urgent |= match rank(&raw) {
-                                0 => 1,
-                                1 => 2,
-                                _ => 0,
-                            };
                             let _ = batch.push(raw);
                         }
                         None => {
@@ -1246,39 +1166,67 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 }
             }
         }
-        // 2. Act in priority order: emergency stops, stops now, then the rest as they came
-        // (the passes of the classes not present are skipped).
-        let mut act = Acting {
-            refused: 0,
-            plans: 0,
-            done: 0,
-            stop_at: None,
-        };
-        let passes = if batch.is_empty() { 0 } else { 3u8 };
-        for pass in 0..passes {
-            if pass < 2 && urgent & (1 << pass) == 0 {
-                continue;
-            }
+        // 2. Act in priority order: emergency stops, stops now, then the rest as they came,
+        // with the modifications of one step together, newest version first (the first one
+        // accepted is in force, the older ones are then `Stale` by the version rule; a newer
+        // one refused leaves an older one its turn). The order is read from the frames' bytes
+        // (class, step number's low byte, version), each frame is read when it is acted on.
+        let mut order: heapless::Vec<u8, MAX_RX> = heapless::Vec::new();
+        let mut placed: u64 = 0;
+        for pass in 0..3u8 {
             for (i, f) in batch.iter().enumerate() {
-                if rank(f) != pass || act.done & bit(i) != 0 {
+                if rank(f) != pass || placed & bit(i) != 0 {
                     continue;
                 }
-                if f.id == ids::STEP_MODIFY {
-                    self.act_modifications(&batch, i, &mut act, now_ms);
-                } else {
-                    let decoded = Command::decode(f, self.next_step());
-                    if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
-                        self.estop_now = true;
-                    }
-                    let ack = self.act(i, f, decoded, &mut act, now_ms);
-                    if pass == 1 && ack.reason.is_none() {
-                        act.stop_at = Some(i);
-                    }
+                let same_step = |g: &RawFrame| g.id == ids::STEP_MODIFY && g.data[0] == f.data[0];
+                if f.id != ids::STEP_MODIFY || !batch.iter().skip(i + 1).any(same_step) {
+                    placed |= bit(i);
+                    let _ = order.push(i as u8);
+                    continue;
                 }
+                loop {
+                    let mut newest: Option<(usize, u8)> = None;
+                    for (j, g) in batch.iter().enumerate().skip(i) {
+                        let version = g.data[1] & 0x7F;
+                        if placed & bit(j) == 0
+                            && same_step(g)
+                            && newest.is_none_or(|(_, v)| version > v)
+                        {
+                            newest = Some((j, version));
+                        }
+                    }
+                    let Some((j, _)) = newest else {
+                        break;
+                    };
+                    placed |= bit(j);
+                    let _ = order.push(j as u8);
+                }
+            }
+        }
+        self.plans_left = self.cfg.max_plans;
+        let mut act = Acting {
+            refused: 0,
+            stop_at: None,
+        };
+        for &i in &order {
+            let i = usize::from(i);
+            let Some(f) = batch.get(i) else {
+                continue;
+            };
+            let decoded = Command::decode(f, self.next_step());
+            if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
+                self.estop_now = true;
+            }
+            let stop_now = rank(f) == 1;
+            let accepted = self.act(i, f, decoded, &mut act, now_ms);
+            if stop_now && accepted {
+                act.stop_at = Some(i);
             }
         }
         let refused = act.refused;
         self.estop_now = false;
+        // (`Node::handle` outside a cycle: the budget of one.)
+        self.plans_left = self.cfg.max_plans;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
         let streaming = self.open;

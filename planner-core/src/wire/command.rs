@@ -80,6 +80,7 @@ impl Command {
     /// frames' numbers are read by [`step_number`], and their CRC is keyed with the number's
     /// [`super::step_key`]). On error, the reason and the low byte of the sequence or step number to
     /// answer with (0 when the frame is too short to carry one).
+    #[inline(never)] // (one copy for its callers)
     pub fn decode(f: &RawFrame, next: u16) -> Result<Self, (Reason, u8)> {
         let b = f.bytes();
         let first = b.first().copied().unwrap_or(0);
