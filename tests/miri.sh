@@ -159,7 +159,7 @@ SKIP=(
     a_refused_modification_changes_nothing
     the_modification_rule
     random_walks_stay_continuous
-    a_reused_prediction_is_the_plan_itself   # added to gait.rs during the measurement: > 9 min
+    a_reused_prediction_is_the_plan_itself   # added to tests/gait.rs during the measurement: > 9 min
     # six walks of 24 steps with lookups checked along (not measured under Miri; a walk of a few
     # steps takes ~40 s there): run by `cargo test`
     lookups_by_id_match_a_search_of_the_queue

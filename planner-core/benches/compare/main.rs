@@ -2,7 +2,7 @@
 //! timing, factorise it, solve the x and the y plane) three ways, side by side in one run:
 //!
 //! * **planner-core**: [`Factorized::refactor`] then [`Factorized::solve`], the two calls of
-//!   the gait's re-plan (`Active::plan_into` in `planner-core/src/gait.rs`);
+//!   the gait's re-plan (`Active::plan_into` in `planner-core/src/gait/active.rs`);
 //! * **LAPACK**: [`build_z`], `dgetrf`, then `dgetrs` with the two planes' right-hand sides;
 //! * **jrl-walkgen's method** (the public C++ implementation, `AnalyticalMorisawaCompact`):
 //!   [`build_z`], `dgetrf` once, then the expert driver `dgesvx` with `FACT = 'F'` once per

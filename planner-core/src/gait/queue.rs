@@ -1,0 +1,245 @@
+//! The footstep queue's commands: re-basing the frame, appending, starting, stopping, dropping
+//! and modifying a queued step (a modification of the next swing target checked by eq. 17 and
+//! put back if refused).
+
+use super::*;
+
+impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G> {
+    /// Moves the world frame while standing: the new origin is `(x, y)` of the old frame and
+    /// the new x axis has the old heading `yaw`. Every pose the gait holds (feet, the resting
+    /// reference) is expressed in the new frame; the queue is dropped, and the side of the
+    /// next step is free again. `WrongState` unless standing.
+    pub fn rebase(&mut self, x: T, y: T, yaw: T) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        if !(x.is_finite() && y.is_finite() && yaw.is_finite()) {
+            return Err(GaitError::NonFinite);
+        }
+        let (s, c) = sin_cos(yaw);
+        let to = |px: T, py: T| {
+            let (dx, dy) = (px - x, py - y);
+            (c * dx + s * dy, -s * dx + c * dy)
+        };
+        for f in self.feet.iter_mut() {
+            let (nx, ny) = to(f.x, f.y);
+            f.x = nx;
+            f.y = ny;
+            f.yaw = wrap_angle(f.yaw - yaw);
+        }
+        let (cx, cy) = to(self.last.x.cog, self.last.y.cog);
+        let (zx, zy) = to(self.last.x.zmp, self.last.y.zmp);
+        let rot = |a: T, b: T| (c * a + s * b, -s * a + c * b);
+        let (vx, vy) = rot(self.last.x.cog_vel, self.last.y.cog_vel);
+        let (ax, ay) = rot(self.last.x.cog_acc, self.last.y.cog_acc);
+        let (wx, wy) = rot(self.last.x.zmp_vel, self.last.y.zmp_vel);
+        self.last.x = Sample {
+            cog: cx,
+            cog_vel: vx,
+            cog_acc: ax,
+            zmp: zx,
+            zmp_vel: wx,
+        };
+        self.last.y = Sample {
+            cog: cy,
+            cog_vel: vy,
+            cog_acc: ay,
+            zmp: zy,
+            zmp_vel: wy,
+        };
+        self.last.feet = self.ground_poses();
+        self.queue.clear();
+        self.consecutive = false;
+        self.landed = None;
+        self.stop_requested = false;
+        self.target = None;
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Where each foot stands (left, right); the swinging foot where it lifted off.
+    pub fn feet(&self) -> &[Footstep<T>; 2] {
+        &self.feet
+    }
+
+    /// Appends a footstep. A full queue hands the step back.
+    pub fn push(&mut self, id: u16, step: Footstep<T>) -> Result<(), (GaitError, Footstep<T>)> {
+        if !step.is_finite() {
+            return Err((GaitError::NonFinite, step));
+        }
+        if let Some(side) = self.next_side() {
+            if side != step.side {
+                return Err((GaitError::SideOrder, step));
+            }
+        }
+        let consecutive = match self.queue.back() {
+            None => true,
+            Some(b) => self.consecutive && id == b.id.wrapping_add(1),
+        };
+        self.queue
+            .push_back(Queued {
+                id,
+                step,
+                modified: false,
+            })
+            .map_err(|q| (GaitError::QueueFull, q.step))?;
+        self.consecutive = consecutive;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Starts walking (from standing) with the queued steps.
+    pub fn start(&mut self) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        let Some(first) = self.queue.front() else {
+            return Err(GaitError::WrongState);
+        };
+        // A stop requested while standing (an emergency stop before the walk) is not this
+        // walk's: the start window is planned as for a node that never had it.
+        self.stop_requested = false;
+        let support = self.feet[first.step.side.other().index()];
+        let other = self.feet[first.step.side.index()];
+        let (land, n) = self.landings(&support, 0);
+        let inputs = Inputs {
+            kind: WindowKind::Start,
+            support,
+            other,
+            land,
+            n_land: n,
+            first_ticks: self.params.start_ticks,
+        };
+        let (cog, zmp) = self.state();
+        self.wins[0].plan_into(&self.params, &inputs, cog, zmp)?;
+        self.cur = Some(0);
+        self.serial = self.serial.wrapping_add(1);
+        self.start_shaping();
+        // The reference of this instant becomes the window's tick 0 (the same position, with
+        // the velocities the pattern starts with), and the compensators take their tick 0.
+        let (sx, sy) = self.shaped(0);
+        self.last.x = sx;
+        self.last.y = sy;
+        self.mode = Mode::Walking;
+        self.stop_requested = false;
+        self.failed = false;
+        for q in self.queue.iter_mut() {
+            q.modified = false;
+        }
+        Ok(())
+    }
+
+    /// Requests a stop: the queued steps are walked, then the robot settles between its feet.
+    /// Steps that are not given are no longer padded with steps in place.
+    pub fn stop(&mut self) {
+        self.stop_requested = true;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// Drops every queued step while standing, and nothing else (no stop is requested: a
+    /// later `start` walks what is queued then exactly as if nothing had been dropped).
+    pub fn drop_queue(&mut self) -> Result<(), GaitError> {
+        if self.mode != Mode::Standing {
+            return Err(GaitError::WrongState);
+        }
+        self.queue.clear();
+        self.consecutive = false;
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Drops every queued step (not the one being swung) and stops after the present swing.
+    pub fn clear_and_stop(&mut self) {
+        self.queue.clear();
+        self.consecutive = false;
+        self.stop_requested = true;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// Modifies the queued step `id`. Refused when its foot has lifted off, when it is unknown,
+    /// or when the re-plan it would cause is infeasible (eq. 17); the queue is unchanged then.
+    pub fn modify(&mut self, id: u16, step: Footstep<T>) -> Result<(), GaitError> {
+        if !step.is_finite() {
+            return Err(GaitError::NonFinite);
+        }
+        if self.swing.map(|s| s.id) == Some(id) {
+            return Err(GaitError::LiftedOff);
+        }
+        let Some(pos) = self.index_of(id) else {
+            return Err(GaitError::UnknownStep);
+        };
+        if self.queue.get(pos).map(|q| q.step.side) != Some(step.side) {
+            return Err(GaitError::SideOrder);
+        }
+        let old = self.queue.get(pos).copied();
+        if let Some(q) = self.queue.get_mut(pos) {
+            q.step = step;
+            q.modified = true;
+        }
+        self.gen = self.gen.wrapping_add(1);
+        if pos == 0 && self.mode == Mode::Walking {
+            // This is the next swing target: check the re-plan it will cause.
+            match self.predict_replan() {
+                Ok(Some(worst)) if !self.inside_sole(worst) => {
+                    self.undo_modify(pos, old);
+                    return Err(GaitError::Infeasible);
+                }
+                Err(e) => {
+                    self.undo_modify(pos, old);
+                    return Err(e);
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Puts back the step a refused modification replaced. The spare buffer now holds the
+    /// refused plan: the prediction is dropped (a cache: the re-plan computes it again, bit
+    /// for bit the same), and `gen` moves on so that no cache keyed on it is taken.
+    pub(super) fn undo_modify(&mut self, pos: usize, old: Option<Queued<T>>) {
+        if let (Some(q), Some(o)) = (self.queue.get_mut(pos), old) {
+            *q = o;
+        }
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// `true` if `other` walks on exactly as `self` does: every field that decides a future
+    /// reference is equal (queue, feet, swing, phase, the window being executed and its
+    /// compensators, the last reference). Not compared: the caches (the spare window buffer,
+    /// the eq. 18 target, the prediction of a modification's re-plan, the generation counter
+    /// that keys them), which only save work, and the preview gains, which never change.
+    pub fn same_state<H: Borrow<PreviewGains<T, PREVIEW>>>(&self, other: &Gait<T, Q, H>) -> bool {
+        let mine = self.cur_buf().map(|c| {
+            let w = &self.wins[c];
+            (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
+        });
+        let theirs = other.cur_buf().map(|c| {
+            let w = &other.wins[c];
+            (w.inputs, w.spec, w.bounds, w.plan, w.tick, w.starts)
+        });
+        self.params == other.params
+            && self.queue.iter().eq(other.queue.iter())
+            && self.feet == other.feet
+            && self.swing == other.swing
+            && self.landed == other.landed
+            && self.failed == other.failed
+            && self.mode == other.mode
+            && self.stop_requested == other.stop_requested
+            && self.serial == other.serial
+            && self.tick == other.tick
+            && self.last == other.last
+            && self.info == other.info
+            && self.comp == other.comp
+            && mine == theirs
+    }
+
+    /// `true` while a requested stop is being carried out (the queue is walked without
+    /// padding, then the robot settles).
+    pub fn is_stopping(&self) -> bool {
+        self.mode == Mode::Walking && self.stop_requested
+    }
+}
