@@ -1,0 +1,237 @@
+//! One control cycle ([`Node::poll`]): receive a bounded batch, act on it in priority order
+//! (`ESTOP`, `StopNow`, the rest; one step's modifications newest version first), supervise
+//! (the controller's silence by clock and by cycles, the clock itself), tick the gait, publish.
+
+use super::*;
+
+/// The priority class of a command frame: 0 an emergency stop, 1 a stop now (by its op byte;
+/// validated when it is handled), 2 the rest.
+pub(super) fn rank(f: &RawFrame) -> u8 {
+    match f.id {
+        ids::ESTOP => 0,
+        ids::CONTROL if f.len == 8 && f.data[6] == 3 => 1,
+        _ => 2,
+    }
+}
+
+/// Bit `i` of a mask over a cycle's frames (at most [`MAX_RX`] ≤ 64 of them).
+pub(super) const fn bit(i: usize) -> u64 {
+    1u64 << (i & 63)
+}
+
+/// What the acting of a cycle keeps (see [`Node::poll`]).
+pub(super) struct Acting {
+    /// Commands refused.
+    pub(super) refused: u8,
+    /// The last `StopNow` of the batch carried out.
+    pub(super) stop_at: Option<usize>,
+}
+
+impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
+    /// The clock check and the supervision rule (module docs, step 3): a moving robot whose
+    /// controller has not been heard for longer than the timeout (by the clock or by the
+    /// cycles), or whose clock has stopped, stops, and stays "controller lost". Checked in
+    /// every cycle, so it holds for the whole walk.
+    pub(super) fn supervise(&mut self, now_ms: u32) {
+        if self.cycle == 1 {
+            self.window = (self.cycle, now_ms);
+        } else if self.cycle.wrapping_sub(self.window.0) >= CLOCK_WINDOW {
+            // At least half of the window's nominal time.
+            let elapsed = now_ms.wrapping_sub(self.window.1);
+            if elapsed < self.window_ms / 2 {
+                self.clock_fault = true;
+            }
+            self.window = (self.cycle, now_ms);
+        }
+        if self.clock_fault && self.open {
+            self.lost = true;
+        }
+        if self.gait.is_standing() {
+            return;
+        }
+        let silent = match self.last_heard {
+            Some(heard) => {
+                now_ms.wrapping_sub(heard) > self.cfg.heartbeat_timeout_ms
+                    || self.cycle.wrapping_sub(self.heard_cycle) > self.timeout_cycles
+            }
+            None => true,
+        };
+        if silent && !self.lost {
+            self.lost = true;
+        }
+        if self.lost && (self.gait.queued() > 0 || !self.gait.is_stopping()) {
+            self.gait.clear_and_stop();
+            self.steps.sync(&self.gait, self.first);
+        }
+    }
+
+    pub(super) fn enqueue(&mut self, f: RawFrame) {
+        if self.tx.push_back(f).is_err() {
+            self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
+        }
+    }
+
+    /// One control cycle (see the module docs).
+    pub fn poll<C>(&mut self, now_ms: u32, can: &mut C) -> PollReport<T>
+    where
+        C: embedded_can::nb::Can,
+    {
+        self.cycle = self.cycle.wrapping_add(1);
+        // 1. Receive: the node's frames of this cycle are held, the others counted.
+        let mut batch: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
+        let (mut foreign, mut received) = (0usize, 0u8);
+        let max_rx = self.cfg.max_rx.min(MAX_RX);
+        while batch.len() < max_rx && foreign < self.cfg.max_foreign {
+            match can.receive() {
+                Ok(f) => {
+                    received = received.saturating_add(1);
+                    // Extended and remote frames are not ours either.
+                    match RawFrame::from_frame(&f).filter(|r| ids::is_command(r.id)) {
+                        Some(raw) => {
+                            let _ = batch.push(raw);
+                        }
+                        None => {
+                            self.counters.foreign = self.counters.foreign.saturating_add(1);
+                            foreign += 1;
+                        }
+                    }
+                }
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    break;
+                }
+            }
+        }
+        // 2. Act in priority order: emergency stops, stops now, then the rest as they came,
+        // with the modifications of one step together, newest version first (the first one
+        // accepted is in force, the older ones are then `Stale` by the version rule; a newer
+        // one refused leaves an older one its turn). The order is read from the frames' bytes
+        // (class, step number's low byte, version), each frame is read when it is acted on.
+        let mut order: heapless::Vec<u8, MAX_RX> = heapless::Vec::new();
+        let mut placed: u64 = 0;
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate() {
+                if rank(f) != pass || placed & bit(i) != 0 {
+                    continue;
+                }
+                let same_step = |g: &RawFrame| g.id == ids::STEP_MODIFY && g.data[0] == f.data[0];
+                if f.id != ids::STEP_MODIFY || !batch.iter().skip(i + 1).any(same_step) {
+                    placed |= bit(i);
+                    let _ = order.push(i as u8);
+                    continue;
+                }
+                loop {
+                    let mut newest: Option<(usize, u8)> = None;
+                    for (j, g) in batch.iter().enumerate().skip(i) {
+                        let version = g.data[1] & 0x7F;
+                        if placed & bit(j) == 0
+                            && same_step(g)
+                            && newest.is_none_or(|(_, v)| version > v)
+                        {
+                            newest = Some((j, version));
+                        }
+                    }
+                    let Some((j, _)) = newest else {
+                        break;
+                    };
+                    placed |= bit(j);
+                    let _ = order.push(j as u8);
+                }
+            }
+        }
+        self.plans_left = self.cfg.max_plans;
+        let mut act = Acting {
+            refused: 0,
+            stop_at: None,
+        };
+        for &i in &order {
+            let i = usize::from(i);
+            let Some(f) = batch.get(i) else {
+                continue;
+            };
+            let decoded = Command::decode(f, self.next_step());
+            if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
+                self.estop_now = true;
+            }
+            let stop_now = rank(f) == 1;
+            let accepted = self.act(i, f, decoded, &mut act, now_ms);
+            if stop_now && accepted {
+                act.stop_at = Some(i);
+            }
+        }
+        let refused = act.refused;
+        self.estop_now = false;
+        // (`Node::handle` outside a cycle: the budget of one.)
+        self.plans_left = self.cfg.max_plans;
+        // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
+        self.supervise(now_ms);
+        let streaming = self.open;
+        let reference = if streaming {
+            let r = self.gait.tick();
+            self.steps.sync(&self.gait, self.first);
+            r
+        } else {
+            *self.gait.last()
+        };
+        // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
+        // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
+        // panicking branches the optimiser cannot remove: see firmware/nopanic.)
+        for _ in 0..self.tx.len() {
+            if let Some(f) = self.tx.pop_front() {
+                if matches!(
+                    f.id,
+                    ids::ACK | ids::STATUS | ids::DIAG | ids::LINK | ids::SESSION
+                ) {
+                    let _ = self.tx.push_back(f);
+                }
+            }
+        }
+        if streaming {
+            for f in self.stream(&reference).encode() {
+                self.enqueue(f);
+            }
+        }
+        if self.cycle % 20 == 1 {
+            let s = self.status().encode();
+            self.enqueue(s);
+            let d = self.diag().encode();
+            self.enqueue(d);
+            let e = self.session().encode();
+            self.enqueue(e);
+            if let Some(l) = self.link {
+                self.enqueue(l.encode());
+            }
+        }
+        let mut sent = 0u8;
+        while let Some(raw) = self.tx.pop_front() {
+            let Some(frame) = raw.to_frame::<C::Frame>() else {
+                continue;
+            };
+            match can.transmit(&frame) {
+                Ok(displaced) => {
+                    sent = sent.saturating_add(1);
+                    if let Some(d) = displaced.as_ref().and_then(RawFrame::from_frame) {
+                        let _ = self.tx.push_front(d);
+                        break;
+                    }
+                }
+                Err(nb::Error::WouldBlock) => {
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+                Err(nb::Error::Other(_)) => {
+                    self.counters.bus_errors = self.counters.bus_errors.saturating_add(1);
+                    let _ = self.tx.push_front(raw);
+                    break;
+                }
+            }
+        }
+        PollReport {
+            reference,
+            received,
+            refused,
+            sent,
+        }
+    }
+}
