@@ -545,7 +545,7 @@ fn host_sim_json(args: &[&str], dir: &std::path::Path, file: &str) -> serde_json
 /// stabilizer that walks the built-in scenarios, with servo damping 150 N m s/rad; see
 /// `host_sim::physics::probe`), against `tables.json`: every cell the legs reach in
 /// `tables.json` is simulated, with `tables.json`'s kinematic error, and no cell falls in
-/// either (the README's result).
+/// either (the book's result).
 #[test]
 fn physics_tables_full_grid_long() {
     if !long_runs("physics_tables_full_grid_long") {

@@ -1,4 +1,4 @@
-//! The README's state table (section *Reliability*, between the `state-table` markers) checked
+//! The book's state table (`book/src/reliability.md`, between the `state-table` markers) checked
 //! against the node, cell by cell: every state is set up as described here, every command is
 //! sent valid (fresh sequence number, the next id, the right foot, in reach, a queued step when
 //! there is one), and the answer and the state after it must be what the cell says. A refused
@@ -35,8 +35,11 @@ const COMMANDS: [&str; 9] = [
 
 /// The table: (state, command, cell).
 fn table() -> Vec<(String, String, String)> {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
-        .expect("README.md");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../book/src/reliability.md"
+    ))
+    .expect("book/src/reliability.md");
     let start = text.find("<!-- state-table -->").expect("start marker");
     let end = text.find("<!-- /state-table -->").expect("end marker");
     let rows: Vec<Vec<String>> = text[start..end]
@@ -209,7 +212,7 @@ fn the_readme_state_table_is_what_the_node_does() {
         let got = apply(&mut r, command);
         if got != want {
             wrong.push(format!(
-                "{state} × {command}: README says {cell:?}, the node {got:?}"
+                "{state} × {command}: the book says {cell:?}, the node {got:?}"
             ));
         }
     }

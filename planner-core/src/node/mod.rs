@@ -69,7 +69,7 @@
 //! between the node before and after it (tested for every reason code, and for random
 //! programs against a reference model in `planner-core/tests/protocol/`). The state machine
 //! (no session, standing, walking, stopping, controller lost, emergency-stopped; for each
-//! command what the node does and answers) is the table in the README's *Reliability*
+//! command what the node does and answers) is the table in the book's *Reliability*
 //! section, which `planner-core/tests/state_table.rs` checks against this code cell by cell.
 //! Steps alternate feet ([`Gait::next_side`], published in `STATUS`): a step for the foot
 //! that will be supporting is refused (`SideOrder`).
@@ -285,7 +285,7 @@ impl Counters {
     };
 }
 
-/// The published state (the `state` field of `STATUS`; the README's state table).
+/// The published state (the `state` field of `STATUS`; the book's state table).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum NodeState {
@@ -624,7 +624,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         number.wrapping_sub(self.first)
     }
 
-    /// The state of the state machine (the README's table).
+    /// The state of the state machine (the book's table, `book/src/reliability.md`).
     pub fn state(&self) -> NodeState {
         if !self.open && !self.estopped {
             NodeState::NoSession

@@ -235,7 +235,7 @@ impl Rig {
     }
 }
 
-/// The name of the node's state in the README's table.
+/// The name of the node's state in the book's table.
 pub fn state_name(n: &N) -> &'static str {
     let standing = n.gait().is_standing();
     match (n.state(), standing) {

@@ -1,5 +1,5 @@
 //! Random programs of frames run against the node and against a small reference model of what
-//! the protocol promises (the `node` module docs, the README's *Reliability* section): the
+//! the protocol promises (the `node` module docs, the book's *Reliability* chapter): the
 //! queue, the step ids, the versions, the memory of repeats and the states.
 //!
 //! A program is a list of operations: footstep appends (usually the next id, the side
@@ -14,7 +14,7 @@
 //!
 //! For every frame the model says what the answer must be. Where it cannot decide (reach,
 //! crossing, eq. 17's verdict on a modification, a full queue that might also be out of
-//! reach) it allows each possible answer (never `PlanFailed`: the README says a validated
+//! reach) it allows each possible answer (never `PlanFailed`: the book says a validated
 //! configuration leaves none, and no re-plan may fail); otherwise it demands one: `Duplicate`, `Stale`,
 //! `SequenceGap`, `SideOrder`, `WrongState`, `LiftedOff`, `UnknownStep`, `ControllerLost`,
 //! `EmergencyStopped`, the decoder's `BadCrc` / `BadLength`, acceptance, and no answer at all
@@ -22,7 +22,7 @@
 //! queue length and version in force must be the model's.
 //!
 //! After every poll:
-//! * the state (`Node::state`) is the model's (the README's state table), `Node::last_heard`
+//! * the state (`Node::state`) is the model's (the book's state table), `Node::last_heard`
 //!   is when the model last saw a command accepted, and the gait's queue is the model's;
 //! * a refused frame (and a foreign one) changed nothing: `Node::same_state` with the clone;
 //! * a foot that supports in this cycle and the one before keeps exactly its pose (and stays
