@@ -253,6 +253,8 @@ def main():
     elif a.mode == "check":
         if not a.log:
             p.error("check needs the log")
+        if not os.path.isfile(a.log):
+            p.error(f"{a.log}: no such file (`host-sim replay LOG --out DIR` writes DIR/can.log)")
         problems = check(db, a.log, poses)
         for line in problems:
             print(line)

@@ -35,10 +35,11 @@ use host_sim::paper;
 use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
-use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
+use host_sim::sim::{outcomes, simulate, Failure, Outcome, SimConfig};
 use host_sim::toml_scenario::{Entry, ScenarioFile};
 use host_sim::{plot, replay, toml_scenario};
 use planner_core::gait::{Phase, Side};
+use planner_core::wire::Reason;
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -468,6 +469,25 @@ fn outcome_line(o: &Outcome, entry: &Entry, dt: f64) -> (bool, String) {
     )
 }
 
+/// The step whose refused append `o` follows from, if it does: an append refused
+/// `sequence_gap` after it, or a modification of it or a later step refused `unknown_step`.
+fn consequence_of(o: &Outcome, first_refused: Option<u64>) -> Option<u64> {
+    let k = first_refused?;
+    match (o.command, o.failure) {
+        (Command::Push(id, _), Some(Failure::Refused(Reason::SequenceGap)))
+            if u64::from(id) > k =>
+        {
+            Some(k)
+        }
+        (Command::Modify(id, _), Some(Failure::Refused(Reason::UnknownStep)))
+            if u64::from(id) >= k =>
+        {
+            Some(k)
+        }
+        _ => None,
+    }
+}
+
 fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box<dyn Error>> {
     let ScenarioFile {
         scenario: s,
@@ -523,8 +543,29 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     let mut notes: Vec<(String, Vec<String>)> = Vec::new();
     let mut unexpected = 0;
     let mut failed = Vec::new();
+    // The first append the node refused: later appends refused `sequence_gap` and
+    // modifications of its step or later ones refused `unknown_step` follow from it.
+    let mut first_refused: Option<u64> = None;
     for (o, entry) in results.iter().zip(&entries) {
-        let (expected, line) = outcome_line(o, entry, dt);
+        let follows = consequence_of(o, first_refused).filter(|_| entry.expect.is_none());
+        if let (Command::Push(id, _), Some(Failure::Refused(_)), None) =
+            (o.command, o.failure, first_refused)
+        {
+            first_refused = Some(u64::from(id));
+        }
+        let (expected, line) = match follows {
+            Some(k) => (
+                true,
+                format!(
+                    "  {:.3} s, {}: {}: {} (follows from the refusal of step {k})",
+                    o.tick as f64 * dt,
+                    entry.label,
+                    describe(&o.command),
+                    o.detail
+                ),
+            ),
+            None => outcome_line(o, entry, dt),
+        };
         unexpected += usize::from(!expected);
         if o.failure.is_some() || !expected {
             lines.push(line);
@@ -551,6 +592,7 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
                 "error": o.detail,
                 "expected": entry.expect.map(|f| f.name()),
                 "as_expected": expected,
+                "follows_from_step": follows,
                 "entry": entry.label,
             }));
         }
@@ -642,8 +684,8 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     }
     if unexpected > 0 {
         return Err(Unexpected(format!(
-            "{name}: {unexpected} command{} failed, or did not fail, against the scenario's \
-             expectations (listed above; a TOML entry that should fail says so with `expect`)",
+            "{name}: {unexpected} command{} did not go as the scenario expected (marked \
+             UNEXPECTED above; a TOML entry that should fail says so with `expect`)",
             if unexpected == 1 { "" } else { "s" }
         ))
         .into());
@@ -678,7 +720,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         .map(|(k, a, reason)| {
             json!({
                 "t_s": *k as f64 * dt,
-                "command": format!("0x{:02x}", a.command),
+                "command": host_sim::sim::command_name(a.command),
                 "seq": a.seq,
                 "reason": host_sim::sim::reason_name(reason),
             })

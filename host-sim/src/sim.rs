@@ -414,6 +414,18 @@ pub enum Failure {
     NotWalked,
 }
 
+/// The DBC name of the command an `ACK` answers (its `command` byte): `ESTOP`, `CONTROL`,
+/// `STEP_APPEND`, `STEP_MODIFY`, or the byte in hex for another.
+pub fn command_name(code: u8) -> String {
+    match code {
+        0x10 => "ESTOP".into(),
+        0x20 => "CONTROL".into(),
+        0x00 => "STEP_APPEND".into(),
+        0x01 => "STEP_MODIFY".into(),
+        other => format!("0x{other:02x}"),
+    }
+}
+
 /// The name of a refusal reason: the snake case of the variant, as in the DBC's value table
 /// (`Reason::SequenceGap` is `sequence_gap`).
 pub fn reason_name(r: Reason) -> String {

@@ -369,3 +369,63 @@ fn the_built_in_scenarios_pass() {
         assert_eq!(o.status.code(), Some(0), "{f}: {}", text(&o));
     }
 }
+
+/// `replay` names a refused command by its DBC name (here the out-of-reach `STEP_APPEND` of a
+/// recorded run), on the terminal and in its `summary.json`.
+#[test]
+fn replay_names_refused_commands_by_their_dbc_name() {
+    let (_, _, out) = run_toml("replay-names", &out_of_reach(""));
+    let log = out.join("can.log");
+    let replayed = out.join("replay");
+    let o = host_sim(&[
+        "replay",
+        log.to_str().expect("UTF-8 path"),
+        "--out",
+        replayed.to_str().expect("UTF-8 path"),
+    ]);
+    let t = text(&o);
+    assert_has(&t, &["command STEP_APPEND seq/id 2: reach"]);
+    assert!(!t.contains("command 0x"), "{t}");
+    let s = summary(&replayed);
+    let refused = s["refused"].as_array().expect("list");
+    assert!(refused.iter().any(|r| r["command"] == "STEP_APPEND"), "{s}");
+}
+
+/// One out-of-reach append and what follows from it: the later append (`sequence_gap`) and a
+/// modification of the refused step (`unknown_step`) are printed as following from it, not as
+/// unexpected, and the run counts one unexpected outcome.
+#[test]
+fn the_consequences_of_a_refusal_are_grouped_under_it() {
+    let toml = format!(
+        "{}{}[[modify]]\nat_s = 0.05\nid = 2\nx = 1.0\ny = -0.1\n\n",
+        out_of_reach(""),
+        step(3, "left", 1.3, 0.1, "")
+    );
+    let (o, t, out) = run_toml("consequences", &toml);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let marked = t
+        .lines()
+        .filter(|l| l.trim_start().starts_with("UNEXPECTED"))
+        .count();
+    assert_eq!(marked, 1, "{t}");
+    assert_has(
+        &t,
+        &[
+            "refused: sequence_gap (code 10) (follows from the refusal of step 2)",
+            "refused: unknown_step (code 6) (follows from the refusal of step 2)",
+            "1 command did not go as the scenario expected",
+        ],
+    );
+    let s = summary(&out);
+    assert_eq!(s["unexpected_outcomes"], 1, "{s}");
+    let refused = s["refused_commands"].as_array().expect("list");
+    let follows: Vec<_> = refused
+        .iter()
+        .map(|r| r["follows_from_step"].clone())
+        .collect();
+    assert_eq!(
+        follows,
+        [serde_json::Value::Null, 2.into(), 2.into()],
+        "{s}"
+    );
+}

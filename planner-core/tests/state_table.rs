@@ -1,4 +1,4 @@
-//! The book's state table (`book/src/reliability.md`, between the `state-table` markers) checked
+//! The book's state table (`docs/src/reliability.md`, between the `state-table` markers) checked
 //! against the node, cell by cell: every state is set up as described here, every command is
 //! sent valid (fresh sequence number, the next id, the right foot, in reach, a queued step when
 //! there is one), and the answer and the state after it must be what the cell says. A refused
@@ -37,9 +37,9 @@ const COMMANDS: [&str; 9] = [
 fn table() -> Vec<(String, String, String)> {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../book/src/reliability.md"
+        "/../docs/src/reliability.md"
     ))
-    .expect("book/src/reliability.md");
+    .expect("docs/src/reliability.md");
     let start = text.find("<!-- state-table -->").expect("start marker");
     let end = text.find("<!-- /state-table -->").expect("end marker");
     let rows: Vec<Vec<String>> = text[start..end]

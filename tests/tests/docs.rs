@@ -26,8 +26,8 @@ fn relative_links(text: &str) -> Vec<String> {
 }
 
 fn chapters() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("book/src"))
-        .expect("book/src")
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("docs/src"))
+        .expect("docs/src")
         .map(|e| e.expect("entry").path())
         .filter(|p| p.extension().is_some_and(|e| e == "md"))
         .filter(|p| p.file_name().is_some_and(|n| n != "SUMMARY.md"))
@@ -61,7 +61,7 @@ fn every_relative_link_resolves() {
 
 #[test]
 fn the_summary_lists_every_chapter() {
-    let summary = std::fs::read_to_string(root().join("book/src/SUMMARY.md")).expect("SUMMARY");
+    let summary = std::fs::read_to_string(root().join("docs/src/SUMMARY.md")).expect("SUMMARY");
     let listed: Vec<String> = relative_links(&summary);
     for c in chapters() {
         let name = c.file_name().and_then(|n| n.to_str()).expect("name");
@@ -72,7 +72,7 @@ fn the_summary_lists_every_chapter() {
     }
     for l in &listed {
         assert!(
-            root().join("book/src").join(l).exists(),
+            root().join("docs/src").join(l).exists(),
             "SUMMARY.md lists {l}, which does not exist"
         );
     }

@@ -624,7 +624,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         number.wrapping_sub(self.first)
     }
 
-    /// The state of the state machine (the book's table, `book/src/reliability.md`).
+    /// The state of the state machine (the book's table, `docs/src/reliability.md`).
     pub fn state(&self) -> NodeState {
         if !self.open && !self.estopped {
             NodeState::NoSession
