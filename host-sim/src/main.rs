@@ -5,7 +5,7 @@
 //! host-sim list                    the built-in scenarios
 //! host-sim run <scenario|file.toml> [--out DIR] [--robot FILE]
 //! host-sim replay LOG [--out DIR] [--robot FILE]   a controller's candump log into the node
-//! host-sim tables [--out DIR]      the paper's Table II (and Fig. 4) recomputed
+//! host-sim tables [--out DIR]      the paper's Tables I and II recomputed
 //! host-sim physics <scenario|file.toml> [--out DIR] [--push T,FX,FY] [PROBE] [--robot FILE]   MuJoCo run
 //! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [PROBE] [--robot FILE]   Tables I/II in MuJoCo
 //! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [PROBE] [--robot FILE]   faults in MuJoCo
@@ -49,9 +49,11 @@ use serde_json::json;
 #[command(
     name = "host-sim",
     version,
-    after_help = "Exit status: 0 done; 1 `run`: a command failed (refused, never answered, \
-                  accepted and never carried out) that the scenario did not expect; 2 a usage \
-                  error, an invalid scenario, or a file that cannot be read or written."
+    after_help = "Exit status: 0 done; 1 `run` (and the demo): a command failed (refused, never \
+                  answered, accepted and never carried out) that the scenario did not expect, \
+                  or the multi-body model cannot follow the walk; 1 `replay`: a command was \
+                  refused, frames were lost, or the log ends before the robot stands; 2 a \
+                  usage error, an invalid scenario, or a file that cannot be read or written."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -89,7 +91,7 @@ enum Cmd {
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
     },
-    /// Recompute the paper's Tables I and II (and the Fig. 4 adjustment).
+    /// Recompute the paper's Tables I and II.
     Tables {
         /// The output directory.
         #[arg(long, value_name = "DIR", default_value = "out/tables")]

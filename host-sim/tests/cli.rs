@@ -285,12 +285,27 @@ fn help_lists_every_subcommand() {
     let o = host_sim(&["--help"]);
     assert!(o.status.success());
     let t = text(&o);
-    for sub in ["list", "run", "tables", "node"] {
+    for sub in [
+        "list",
+        "run",
+        "replay",
+        "tables",
+        "physics",
+        "physics-tables",
+        "physics-faults",
+        "physics-sequence",
+        "node",
+    ] {
         assert!(
             t.lines().any(|l| l.trim_start().starts_with(sub)),
             "--help does not list {sub}:\n{t}"
         );
     }
+    // The exit status of every command that can fail its run.
+    assert_has(&t, &["1 `run`", "1 `replay`"]);
+    // `tables` promises what it prints.
+    let tables = text(&host_sim(&["tables", "--help"]));
+    assert!(!tables.contains("Fig. 4"), "{tables}");
     let o = host_sim(&["--version"]);
     assert!(o.status.success());
     assert_eq!(
