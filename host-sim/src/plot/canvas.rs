@@ -9,6 +9,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -160,6 +161,22 @@ pub(super) fn tick_label(v: f64, digits: usize) -> String {
     }
 }
 
+/// The fewest decimals, at least `min` (at most 6), with which the tick values plotters
+/// places on `range` (its key points for 10 labels, as the mesh draws them) have pairwise
+/// different labels.
+pub(super) fn distinct_digits(range: Range<f64>, min: usize) -> usize {
+    let ticks = RangedCoordf64::from(range).key_points(10);
+    (min..=6)
+        .find(|&d| {
+            let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v, d)).collect();
+            labels
+                .iter()
+                .enumerate()
+                .all(|(i, a)| labels[i + 1..].iter().all(|b| b != a))
+        })
+        .unwrap_or(6)
+}
+
 /// How a legend entry is marked.
 #[derive(Clone, Copy)]
 pub(super) enum Key {
@@ -306,6 +323,9 @@ where
     Y: plotters::coord::ranged1d::Ranged<ValueType = f64>
         + plotters::coord::ranged1d::ValueFormatter<f64>,
 {
+    // Enough decimals that the ticks plotters draws (10 a side) are told apart.
+    let x_digits = distinct_digits(chart.x_range(), x_digits);
+    let y_digits = distinct_digits(chart.y_range(), y_digits);
     let xf = move |v: &f64| tick_label(*v, x_digits);
     let yf = move |v: &f64| tick_label(*v, y_digits);
     chart
@@ -322,4 +342,35 @@ where
         .set_all_tick_mark_size(px.u(5))
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every axis the plots can have gets tick labels that differ from one another: a
+    /// footprint plot's 0.05 m grid is labelled with two decimals, not "-0.1 -0.1 0.0 0.0".
+    #[test]
+    fn tick_labels_are_distinct_on_every_axis() {
+        let ranges = [
+            (-0.12, 0.13),
+            (-0.3, 1.9),
+            (0.0, 12.5),
+            (-0.004, 0.006),
+            (0.1, 0.1004),
+        ];
+        for (lo, hi) in ranges {
+            for min in [0, 1, 2] {
+                let d = distinct_digits(lo..hi, min);
+                let ticks = RangedCoordf64::from(lo..hi).key_points(10);
+                let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v, d)).collect();
+                let mut sorted = labels.clone();
+                sorted.sort();
+                sorted.dedup();
+                assert_eq!(sorted.len(), labels.len(), "{lo}..{hi}: {labels:?}");
+                assert!(d >= min);
+            }
+        }
+        assert_eq!(distinct_digits(-0.12..0.13, 1), 2, "the 0.05 m grid");
+    }
 }
