@@ -446,10 +446,16 @@ fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
     })
 }
 
-/// One outcome as printed: whether it was as the scenario expected, and the line.
-fn outcome_line(o: &Outcome, entry: &Entry, dt: f64) -> (bool, String) {
-    let expected = o.failure == entry.expect;
+/// One outcome as printed: whether it was as the scenario expected (a refusal that `follows`
+/// from the refused append of that step counts as expected), and the line.
+fn outcome_line(o: &Outcome, entry: &Entry, follows: Option<u64>, dt: f64) -> (bool, String) {
+    let expected = o.failure == entry.expect || follows.is_some();
     let what = match (o.failure, entry.expect) {
+        _ if follows.is_some() => format!(
+            "{} (follows from the refusal of step {})",
+            o.detail,
+            follows.map_or(String::new(), |k| k.to_string())
+        ),
         (Some(f), _) if expected => format!("{} (expected {})", o.detail, f.name()),
         (Some(_), None) => o.detail.clone(),
         (Some(_), Some(x)) => format!("{} (but expected {})", o.detail, x.name()),
@@ -555,19 +561,7 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         {
             first_refused = Some(u64::from(id));
         }
-        let (expected, line) = match follows {
-            Some(k) => (
-                true,
-                format!(
-                    "  {:.3} s, {}: {}: {} (follows from the refusal of step {k})",
-                    o.tick as f64 * dt,
-                    entry.label,
-                    describe(&o.command),
-                    o.detail
-                ),
-            ),
-            None => outcome_line(o, entry, dt),
-        };
+        let (expected, line) = outcome_line(o, entry, follows, dt);
         unexpected += usize::from(!expected);
         if o.failure.is_some() || !expected {
             lines.push(line);

@@ -40,8 +40,12 @@
 //!
 //! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 4 frames, 7 cycles).
 
+mod common;
+
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
+
+use common::Bus;
 
 use planner_core::gait::PREVIEW;
 use planner_core::node::{Node, NodeConfig, NodeState};
@@ -241,37 +245,11 @@ fn gains(cfg: &NodeConfig) -> &'static Gains {
     })
 }
 
-/// The in-memory device of one cycle.
-#[derive(Default)]
-struct Bus {
-    rx: std::collections::VecDeque<RawFrame>,
-    tx: Vec<RawFrame>,
-}
-
-#[derive(Debug)]
-struct Never;
-impl embedded_can::Error for Never {
-    fn kind(&self) -> embedded_can::ErrorKind {
-        embedded_can::ErrorKind::Other
-    }
-}
-impl embedded_can::nb::Can for Bus {
-    type Frame = RawFrame;
-    type Error = Never;
-    fn transmit(&mut self, f: &RawFrame) -> nb::Result<Option<RawFrame>, Never> {
-        self.tx.push(*f);
-        Ok(None)
-    }
-    fn receive(&mut self) -> nb::Result<RawFrame, Never> {
-        self.rx.pop_front().ok_or(nb::Error::WouldBlock)
-    }
-}
-
 fn cycle(node: &mut M, cycles: u32, frames: &[RawFrame]) -> Vec<Ack> {
     let mut bus = Bus {
         rx: frames.iter().copied().collect(),
         tx: vec![],
-    };
+    }; // (the rigs' in-memory device)
     node.poll(5 * cycles, &mut bus);
     bus.tx.iter().filter_map(Ack::decode).collect()
 }
