@@ -38,7 +38,7 @@
 //! identifies states by that history (with the controller's and the bus's state), which is
 //! what makes the search finite.
 //!
-//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 4 frames, 7 cycles).
+//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 7 cycles).
 
 mod common;
 
@@ -265,7 +265,7 @@ impl Protocol {
             goals,
             cfg,
             gains,
-            per_cycle: if long { 4 } else { 3 },
+            per_cycle: 3,
             max_cycles: if long { 7 } else { 6 },
         }
     }
