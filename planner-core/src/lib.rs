@@ -24,6 +24,8 @@ extern crate std;
 
 pub mod gait;
 pub mod lipm;
+#[cfg(feature = "robot")]
+pub mod literal;
 pub mod node;
 pub mod playback;
 pub mod real;

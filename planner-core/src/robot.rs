@@ -37,6 +37,7 @@ use serde::Deserialize;
 use std::boxed::Box;
 
 use crate::gait::{GaitParams, Tail, PREVIEW};
+pub use crate::literal::Literal;
 use crate::node::{NodeConfig, Reach};
 use crate::shaping::{Law, PreviewGains};
 
@@ -415,25 +416,6 @@ fn check_reach(r: &Reach, step_width: f64, sole_width: f64) -> Result<Reach, Rob
 /// A float as a constant expression with exactly its bits.
 fn bits(v: f64) -> String {
     format!("f64::from_bits({:#018x})", v.to_bits())
-}
-
-/// A scalar that the build-time writers ([`node_config_source`],
-/// [`PreviewGains::source`]) can write as a Rust constant expression with exactly its bits.
-pub trait Literal: crate::real::Real {
-    /// `self` as `f64::from_bits(…)` or `f32::from_bits(…)`.
-    fn literal(self) -> String;
-}
-
-impl Literal for f64 {
-    fn literal(self) -> String {
-        bits(self)
-    }
-}
-
-impl Literal for f32 {
-    fn literal(self) -> String {
-        format!("f32::from_bits({:#010x})", self.to_bits())
-    }
 }
 
 /// `cfg` as a Rust constant expression of type `planner_core::node::NodeConfig` (every float by

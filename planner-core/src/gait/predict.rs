@@ -58,7 +58,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         // The state the re-plan will start from: the plan at `at`, shaped. If the re-plan is
         // the next tick's, that is exactly what the tick will compute (the compensators'
         // next step, on a copy); further ahead the compensation is left out (it is small: a
-        // few millimetres, see shaping.rs).
+        // few millimetres, see the `shaping` module).
         let (sx, sy) = if at == win.tick.wrapping_add(1) {
             shaped_peek(win, &self.params, self.gains.borrow(), &self.comp, at)
         } else {
