@@ -1,5 +1,12 @@
 //! The board's control cycle, without hardware: one slot of the loop around `Node::poll`.
 //!
+//! Owns the loop ([`ControlLoop`], [`Io`], [`poll`], what a slot did: [`SlotRun`]) and the
+//! small traits of the hardware it runs over ([`MicrosClock`], [`CycleCounter`],
+//! [`Watchdog`], [`BusyPin`], [`Port`], [`LogSink`] with its [`SummaryLine`]). It uses
+//! [`crate::cycle`] for the bookkeeping (overruns, the statistics window) and
+//! [`crate::node`] for the node's contract, [`ControlNode`], re-exported here because it is
+//! part of this module's interface (`board_core::control::ControlNode`).
+//!
 //! [`ControlLoop`] is the body of the board image's loop (`firmware/board/src/main.rs`), and
 //! the QEMU image runs the same code around its replayed polls (`firmware/qemu`), as does the
 //! link-time no-panic check (`firmware/nopanic`). Per slot ([`ControlLoop::step`]):
@@ -25,19 +32,16 @@
 //! and the node behind [`ControlNode`] (planner-core's `Node`; host tests use a stand-in
 //! that can be slow or hang). Host-tested in `tests/control.rs`.
 
-use core::borrow::Borrow;
-
 use embedded_can::nb::Can;
-use planner_core::gait::PREVIEW;
-use planner_core::node::{Node, PollReport};
-use planner_core::shaping::PreviewGains;
-use planner_core::wire::LinkHealth;
-use planner_core::Real;
+use planner_core::node::PollReport;
 
 use crate::cycle::{Stats, Summary};
 use crate::link::{Fdcan, Health, Link};
 use crate::pace::{Pacer, Slot};
 use crate::reset::ResetReason;
+
+/// The node's contract with the cycle (defined in [`crate::node`]; this path is public API).
+pub use crate::node::ControlNode;
 
 /// The free-running microsecond counter the slots are cut from (wrapping `u32`).
 pub trait MicrosClock {
@@ -83,40 +87,6 @@ impl<P: Fdcan> Port for Link<P> {
     }
     fn health(&self) -> Health {
         Link::health(self)
-    }
-}
-
-/// What the control cycle needs of the node (planner-core's `Node`).
-pub trait ControlNode {
-    /// The node's scalar.
-    type Scalar: Real;
-    /// The link health to publish in `LINK`.
-    fn set_link_health(&mut self, link: LinkHealth);
-    /// One control cycle of the node at `now_ms` over `can`.
-    fn poll<C: Can>(&mut self, now_ms: u32, can: &mut C) -> PollReport<Self::Scalar>;
-    /// The last cycle was late.
-    fn note_overrun(&mut self);
-    /// Polls since start-up.
-    fn cycles(&self) -> u32;
-}
-
-impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> ControlNode for Node<Q, G, T> {
-    type Scalar = T;
-    #[inline(always)]
-    fn set_link_health(&mut self, link: LinkHealth) {
-        Node::set_link_health(self, link);
-    }
-    #[inline(always)]
-    fn poll<C: Can>(&mut self, now_ms: u32, can: &mut C) -> PollReport<T> {
-        Node::poll(self, now_ms, can)
-    }
-    #[inline(always)]
-    fn note_overrun(&mut self) {
-        Node::note_overrun(self);
-    }
-    #[inline(always)]
-    fn cycles(&self) -> u32 {
-        Node::cycles(self)
     }
 }
 

@@ -1,13 +1,16 @@
 //! The bookkeeping of one control cycle: overruns (counted and reported to the node, which
 //! publishes them in its status) and the statistics window summarised once per second.
 //!
-//! Part of the board's control cycle ([`crate::control`]), which the board image, the
-//! link-time no-panic check (`firmware/nopanic`) and the QEMU image all run; host-tested
-//! (`tests/cycle.rs`).
+//! Owns [`Stats`] (with [`Stats::record`] and its [`Outcome`]), the window's [`Summary`] and
+//! its length [`SUMMARY_EVERY`]. It tells the node of a late cycle through the node's
+//! contract ([`ControlNode`], in [`crate::node`]) and depends on nothing else of the crate:
+//! the board's control cycle (`crate::control`), which the board image, the link-time
+//! no-panic check (`firmware/nopanic`) and the QEMU image all run, uses it, not the other way
+//! round. Host-tested (`tests/cycle.rs`).
 
 use planner_core::node::PollReport;
 
-use crate::control::ControlNode;
+use crate::node::ControlNode;
 
 /// Cycles per summary (1 s at 5 ms).
 pub const SUMMARY_EVERY: u32 = 200;

@@ -11,6 +11,8 @@
 //! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
 //! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
 //!   before any Rust code runs, and the MPU guard below the stack ([`StackGuard`]);
+//! * [`node`]: the node's contract with the control cycle ([`ControlNode`], implemented for
+//!   planner-core's `Node`), which [`cycle`] and [`control`] both use;
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
 //!   statistics window summarised once per second);
 //! * [`control`]: the board's whole control cycle over small traits of its hardware (the
@@ -31,13 +33,15 @@ pub mod cycle;
 pub mod fault_entry;
 pub mod frame;
 pub mod link;
+pub mod node;
 pub mod pace;
 pub mod reset;
 pub mod rtt;
 
-pub use control::{ControlLoop, ControlNode, Io, LogSink, Port, SlotRun};
+pub use control::{ControlLoop, Io, LogSink, Port, SlotRun};
 pub use fault_entry::StackGuard;
 pub use frame::ClassicFrame;
 pub use link::{BusState, Fdcan, Health, Link, RxLost};
+pub use node::ControlNode;
 pub use pace::{Pacer, Slot};
 pub use reset::ResetReason;
