@@ -7,8 +7,9 @@
 //! on this module's `extern` block only, so `-llapack` is passed to this bench's binary and to no
 //! other target of the package.
 
-// Calling Fortran through raw pointers cannot be checked by the compiler: this module is the
-// bench's only unsafe code (the crate root denies `unsafe_code`), each call documented below.
+// Calling Fortran through raw pointers cannot be checked by the compiler: this module and the
+// two libc calls of `sys` in main.rs are the bench's only unsafe code (the crate root denies
+// `unsafe_code`), each call documented below.
 #![allow(unsafe_code)]
 
 use std::os::raw::{c_char, c_int};

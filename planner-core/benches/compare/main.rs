@@ -1,5 +1,5 @@
-//! The host comparison of issue 12: one re-plan of the window (build the 20×20 `Z` for a
-//! timing, factorise it, solve the x and the y plane) three ways, side by side in one run:
+//! The host comparison: one re-plan of the window (build the 20×20 `Z` for a timing,
+//! factorise it, solve the x and the y plane) three ways, side by side in one run:
 //!
 //! * **planner-core**: [`Factorized::refactor`] then [`Factorized::solve`], the two calls of
 //!   the gait's re-plan (`Active::plan_into` in `planner-core/src/gait/active.rs`);
@@ -23,10 +23,15 @@
 //! Before timing, [`check`] solves the same `Z` and right-hand sides three ways for several
 //! timings (single support 0.6–1.0 s, double support 0.1–0.2 s, a re-plan in the middle of a
 //! single support, a long final interval) and fails unless the solutions agree to 1e-12
-//! relative (to the largest unknown). Then criterion times each method (`replan/…`), and a
-//! closing summary times them again interleaved (rounds of a batch of re-plans per method,
-//! the order rotated each round, the median per method) and prints the per-re-plan times and
-//! the ratios. Run it with
+//! relative (to the largest unknown). Then criterion times each method (`replan/…`, wall
+//! clock), and a closing summary times them again interleaved: rounds of a batch of re-plans
+//! per method, the order rotated each round, every batch timed in the calling thread's CPU
+//! time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`) and in wall-clock time. It prints the
+//! median per re-plan of each method and the ratios on both clocks, the share of the wall
+//! clock the thread ran, and the machine: CPU model (`/proc/cpuinfo`), online CPUs and the
+//! 1-minute load average (`/proc/loadavg`) at the start and at the end of the run. Thread CPU
+//! time leaves out the time the thread waits for a CPU on a loaded machine, so its ratios are
+//! the ones to quote; the wall-clock ones show what the load did. Run it with
 //!
 //! ```text
 //! cargo bench -p planner-core --bench compare
@@ -36,11 +41,48 @@
 //! benchmark runs once and the summary takes 3 short rounds, so CI stays quick. It needs
 //! Debian's `liblapack-dev` (`tests/run-all.sh` installs it).
 
-// The FFI module `lapack` is the only place with unsafe code (it allows it, with a SAFETY note
-// per call); everything else, the timed methods included, is safe Rust.
+// The FFI modules `lapack` (LAPACK) and `sys` (libc's clocks) are the only places with unsafe
+// code (they allow it, with a SAFETY note per call); everything else, the timed methods
+// included, is safe Rust.
 #![deny(unsafe_code)]
 
 mod lapack;
+
+/// The calling thread's CPU clock and the number of online CPUs, from libc.
+mod sys {
+    // Two libc calls, each with a SAFETY note: the bench's only unsafe code besides `lapack`.
+    #![allow(unsafe_code)]
+
+    use std::time::Duration;
+
+    /// The CPU time the calling thread has consumed (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`):
+    /// it stops while the thread waits for a CPU, so other jobs on the machine do not count.
+    pub fn thread_cpu_time() -> Duration {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid, writable `timespec` that lives across the call;
+        // clock_gettime writes only it and keeps no pointer.
+        let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        assert_eq!(
+            rc,
+            0,
+            "clock_gettime(CLOCK_THREAD_CPUTIME_ID): {}",
+            std::io::Error::last_os_error()
+        );
+        let secs = u64::try_from(ts.tv_sec).expect("a thread's CPU time is not negative");
+        let nanos = u32::try_from(ts.tv_nsec).expect("tv_nsec is below 10⁹");
+        Duration::new(secs, nanos)
+    }
+
+    /// The number of CPUs online (`sysconf(_SC_NPROCESSORS_ONLN)`), `None` if unknown.
+    pub fn online_cpus() -> Option<u64> {
+        // SAFETY: sysconf takes an integer and touches no memory of the caller.
+        let n = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
+        u64::try_from(n).ok().filter(|&n| n > 0)
+    }
+}
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -398,70 +440,172 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
+/// The CPU model, from the first `model name` line of `/proc/cpuinfo` (or, on machines that
+/// have none, `Hardware`, `cpu model` or `cpu`); "unknown" without the file or the line.
+fn cpu_model() -> String {
+    let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") else {
+        return "unknown".into();
+    };
+    let field = |key: &str| {
+        info.lines().find_map(|line| {
+            let (k, v) = line.split_once(':')?;
+            (k.trim() == key && !v.trim().is_empty()).then(|| v.trim().to_string())
+        })
+    };
+    ["model name", "Hardware", "cpu model", "cpu"]
+        .into_iter()
+        .find_map(field)
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The 1-minute load average, the first field of `/proc/loadavg`; "unknown" without it.
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().map(str::to_string))
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The machine in one line: CPU model and online CPUs.
+fn machine() -> String {
+    let cpus = sys::online_cpus().map_or_else(|| "unknown".into(), |n| n.to_string());
+    format!("{}, {cpus} online CPUs", cpu_model())
+}
+
+/// One batch's time on both clocks.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sample {
+    /// The calling thread's CPU time.
+    cpu: Duration,
+    /// Wall-clock time.
+    wall: Duration,
+}
+
+/// Runs `work` once and times it on both clocks (wall clock outside, thread CPU inside).
+fn timed(work: impl FnOnce()) -> Sample {
+    let wall = Instant::now();
+    let cpu = sys::thread_cpu_time();
+    work();
+    let cpu = sys::thread_cpu_time() - cpu;
+    Sample {
+        cpu,
+        wall: wall.elapsed(),
+    }
+}
+
+/// The median of `t` (sorts it).
+fn median(t: &mut [Duration]) -> Duration {
+    t.sort();
+    t[t.len() / 2]
+}
+
 /// Times the methods interleaved: `rounds` rounds, each timing a batch of `batch` re-plans of
-/// every method (the order rotated by one each round); prints the median time per re-plan and
-/// the ratios to planner-core.
-fn summary(rounds: usize, batch: usize, note: &str) {
+/// every method (the order rotated by one each round), every batch in thread CPU time and in
+/// wall-clock time; prints the median time per re-plan of each method and the ratios to
+/// planner-core on both clocks, and the machine (`load_at_start`: the 1-minute load average
+/// when the run began).
+fn summary(rounds: usize, batch: usize, note: &str, load_at_start: &str) {
     let mut methods = methods();
-    let mut times: Vec<Vec<Duration>> = vec![Vec::with_capacity(rounds); methods.len()];
+    let mut samples: Vec<Vec<Sample>> = vec![Vec::with_capacity(rounds); methods.len()];
     // Warm-up: caches, branch predictors, the CPU's clock.
     for m in methods.iter_mut() {
         for i in 0..batch {
             m.replan(i & 1);
         }
     }
+    let per = u32::try_from(batch).expect("batch fits in u32");
     for round in 0..rounds {
         for step in 0..methods.len() {
             let index = (round + step) % methods.len();
             let m = &mut methods[index];
-            let start = Instant::now();
-            for i in 0..batch {
-                m.replan(i & 1);
-            }
-            times[index].push(start.elapsed() / batch as u32);
+            let s = timed(|| {
+                for i in 0..batch {
+                    m.replan(i & 1);
+                }
+            });
+            samples[index].push(Sample {
+                cpu: s.cpu / per,
+                wall: s.wall / per,
+            });
         }
     }
-    let medians: Vec<Duration> = times
-        .iter_mut()
-        .map(|t| {
-            t.sort();
-            t[t.len() / 2]
-        })
+    // What reading the two clocks costs (an empty batch), included in every batch above.
+    let empty: Vec<Sample> = (0..rounds).map(|_| timed(|| ())).collect();
+    let clock_cpu = median(&mut empty.iter().map(|s| s.cpu).collect::<Vec<_>>());
+    let clock_wall = median(&mut empty.iter().map(|s| s.wall).collect::<Vec<_>>());
+    let (total_cpu, total_wall) = samples
+        .iter()
+        .flatten()
+        .fold((Duration::ZERO, Duration::ZERO), |(c, w), s| {
+            (c + s.cpu, w + s.wall)
+        });
+    let cpu: Vec<f64> = samples
+        .iter()
+        .map(|t| median(&mut t.iter().map(|s| s.cpu).collect::<Vec<_>>()).as_secs_f64())
         .collect();
-    let base = medians[0].as_secs_f64();
+    let wall: Vec<f64> = samples
+        .iter()
+        .map(|t| median(&mut t.iter().map(|s| s.wall).collect::<Vec<_>>()).as_secs_f64())
+        .collect();
+    let load_at_end = load_average();
+
     println!(
-        "\nper re-plan (build Z, factorise, solve x and y): median of {rounds} interleaved rounds of {batch} re-plans per method{note}"
+        "\nper re-plan (build Z, factorise, solve x and y): median of {rounds} interleaved rounds of {batch} re-plans per method, each batch timed in the thread's CPU time and in wall-clock time{note}"
     );
-    for (m, t) in methods.iter().zip(&medians) {
-        let us = t.as_secs_f64() * 1e6;
-        let ratio = t.as_secs_f64() / base;
+    println!(
+        "  {:<44} {:>10} {:>16}   {:>10} {:>16}",
+        "", "thread CPU", "× planner-core", "wall clock", "× planner-core"
+    );
+    for (i, m) in methods.iter().enumerate() {
         println!(
-            "  {:<44} {us:>8.2} µs  {ratio:>6.2} × planner-core",
-            m.name()
+            "  {:<44} {:>7.2} µs {:>16.2}   {:>7.2} µs {:>16.2}",
+            m.name(),
+            cpu[i] * 1e6,
+            cpu[i] / cpu[0],
+            wall[i] * 1e6,
+            wall[i] / wall[0],
+        );
+    }
+    for (clock, t) in [("thread CPU", &cpu), ("wall clock", &wall)] {
+        println!(
+            "  ratios, {clock}: LAPACK/planner-core {:.2}, jrl/planner-core {:.2} (planner-core linear algebra only: {:.2}, {:.2})",
+            t[2] / t[0],
+            t[3] / t[0],
+            t[2] / t[1],
+            t[3] / t[1],
         );
     }
     println!(
-        "  ratios: LAPACK/planner-core {:.2}, jrl/planner-core {:.2} (planner-core linear algebra only: {:.2}, {:.2})",
-        medians[2].as_secs_f64() / base,
-        medians[3].as_secs_f64() / base,
-        medians[2].as_secs_f64() / medians[1].as_secs_f64(),
-        medians[3].as_secs_f64() / medians[1].as_secs_f64(),
+        "  thread CPU / wall clock over all timed batches: {:.1} %; reading both clocks: {:.2} µs thread CPU, {:.2} µs wall per batch (included, not subtracted)",
+        100.0 * total_cpu.as_secs_f64() / total_wall.as_secs_f64(),
+        clock_cpu.as_secs_f64() * 1e6,
+        clock_wall.as_secs_f64() * 1e6,
+    );
+    println!(
+        "  machine: {}; 1-minute load average {load_at_start} at the start of the run, {load_at_end} at the end",
+        machine()
     );
 }
 
 fn main() {
+    let load_at_start = load_average();
+    println!(
+        "machine: {}; 1-minute load average {load_at_start}",
+        machine()
+    );
     check();
     let bench_mode = std::env::args().any(|a| a == "--bench");
     let mut criterion = Criterion::default().configure_from_args();
     bench(&mut criterion);
     criterion.final_summary();
     if bench_mode {
-        summary(101, 200, "");
+        summary(101, 200, "", &load_at_start);
     } else {
         summary(
             3,
             10,
             " (test mode: a quick run of the code, not a measurement)",
+            &load_at_start,
         );
     }
 }
