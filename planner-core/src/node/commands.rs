@@ -44,6 +44,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         step: &Footstep<T>,
         before: Option<u16>,
     ) -> Result<(), Reason> {
+        match self.reach_broken(step, before) {
+            None => Ok(()),
+            Some(b) if b.limit == Limit::Crossing => Err(Reason::Crossing),
+            Some(_) => Err(Reason::Reach),
+        }
+    }
+
+    /// The limit that the node's reach check finds broken for a footstep command now
+    /// (`Crossing` and `Reach` refusals): appended (`before` = `None`), or replacing the queued
+    /// step `before` (then its two successors are checked against it too); `None` if the
+    /// footstep passes. The answer on the bus carries only the reason: a host that wants to
+    /// say which limit a refused step broke asks here, in the state the command met.
+    pub fn reach_broken(&self, step: &Footstep<T>, before: Option<u16>) -> Option<Broken<T>> {
         let r = &self.cfg.reach;
         let feet = self.gait.previous_feet(before);
         let other = Frame::of(&feet[step.side.other().index()]);
@@ -56,19 +69,23 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         let from_rest = position == Some(0) && self.gait.next_swing_from_rest();
         let soles = Soles::of(&self.cfg.params);
-        r.check_frames(&other, &same, &f, step.side, from_rest, &soles)?;
+        if let Some(b) = r.broken_frames(&other, &same, &f, step.side, from_rest, &soles) {
+            return Some(b);
+        }
         if let Some(id) = before {
             let next = |k: u16| self.gait.queued_step(id.wrapping_add(k));
             if let Some(s1) = next(1) {
                 let f1 = Frame::like(&s1, &[&f, &other]);
-                r.check_frames(&f, &other, &f1, s1.side, false, &soles)?;
+                if let Some(b) = r.broken_frames(&f, &other, &f1, s1.side, false, &soles) {
+                    return Some(b);
+                }
                 if let Some(s2) = next(2) {
                     let f2 = Frame::like(&s2, &[&f1, &f]);
-                    r.check_frames(&f1, &f, &f2, s2.side, false, &soles)?;
+                    return r.broken_frames(&f1, &f, &f2, s2.side, false, &soles);
                 }
             }
         }
-        Ok(())
+        None
     }
 
     /// The footstep of a validated frame in `T`: the wire's integers in SI units (`f64`, as

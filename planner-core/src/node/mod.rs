@@ -108,7 +108,7 @@ use heapless::Deque;
 
 use cycle::*;
 use reach::Frame;
-pub use reach::{Reach, Soles};
+pub use reach::{Broken, Limit, Reach, Soles};
 pub use steps::HISTORY;
 use steps::{Record, Steps};
 

@@ -259,6 +259,27 @@ impl<T: Real> Reach<T> {
         )
     }
 
+    /// The first limit that [`Reach::check_with`] finds broken ([`Limit`] order), with the
+    /// measured value and the bound; `None` when it accepts the step. `check_with` is this,
+    /// by reason (`Crossing` for [`Limit::Crossing`], `Reach` for the others).
+    pub fn broken(
+        &self,
+        other: &Footstep<T>,
+        same: &Footstep<T>,
+        step: &Footstep<T>,
+        from_rest: bool,
+        soles: &Soles<T>,
+    ) -> Option<Broken<T>> {
+        self.broken_frames(
+            &Frame::of(other),
+            &Frame::of(same),
+            &Frame::of(step),
+            step.side,
+            from_rest,
+            soles,
+        )
+    }
+
     pub(super) fn check_frames(
         &self,
         other: &Frame<T>,
@@ -268,10 +289,29 @@ impl<T: Real> Reach<T> {
         from_rest: bool,
         soles: &Soles<T>,
     ) -> Result<(), Reason> {
+        match self.broken_frames(other, same, step, side, from_rest, soles) {
+            None => Ok(()),
+            Some(b) if b.limit == Limit::Crossing => Err(Reason::Crossing),
+            Some(_) => Err(Reason::Reach),
+        }
+    }
+
+    /// The first limit `step` breaks ([`Limit`] order), with the measured value and the
+    /// bound; `None` if the legs can take it. [`Reach::check_frames`] is this, by reason.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must break a limit
+    pub(super) fn broken_frames(
+        &self,
+        other: &Frame<T>,
+        same: &Frame<T>,
+        step: &Frame<T>,
+        side: Side,
+        from_rest: bool,
+        soles: &Soles<T>,
+    ) -> Option<Broken<T>> {
         let eps = eps::<T>(); // values on the limits pass
         let (forward, width) = other.forward_width(step, side);
         if width < T::ZERO || !other.soles_apart(step, soles, self.sole_gap, eps) {
-            return Err(Reason::Crossing);
+            return Some(Broken::new(Limit::Crossing, width, self.sole_gap));
         }
         // Heading change wrapped into [−π, π] (without a libm call when it is inside: the
         // wrap of an angle within ±π is itself, so both branches agree to the bit).
@@ -290,19 +330,108 @@ impl<T: Real> Reach<T> {
             same.forward_width(other, side.other()).0
         };
         let lift = other.forward_width(same, side).0;
-        let ok = forward <= self.max_forward + eps
-            && forward >= -self.max_backward - eps
-            && width >= self.min_width - eps
-            && width <= self.max_width + eps
-            && dyaw <= self.max_yaw + eps
-            && forward * forward + width * width <= square(self.max_feet_distance + eps)
-            && forward + self.yaw_cost * dyaw <= self.max_forward + eps
-            && (forward - lift).abs() <= self.max_stride + eps
-            && forward - before <= self.max_growth + eps;
-        if ok {
-            Ok(())
-        } else {
-            Err(Reason::Reach)
+        // In the order of [`Limit`], the first broken limit returns. Each test is written as
+        // "not within", so that a value that is not a number breaks the limit.
+        let broken = |limit, value, bound| Some(Broken::new(limit, value, bound));
+        if !(forward <= self.max_forward + eps) {
+            return broken(Limit::Forward, forward, self.max_forward);
+        }
+        if !(forward >= -self.max_backward - eps) {
+            return broken(Limit::Backward, -forward, self.max_backward);
+        }
+        if !(width >= self.min_width - eps) {
+            return broken(Limit::MinWidth, width, self.min_width);
+        }
+        if !(width <= self.max_width + eps) {
+            return broken(Limit::MaxWidth, width, self.max_width);
+        }
+        if !(dyaw <= self.max_yaw + eps) {
+            return broken(Limit::Yaw, dyaw, self.max_yaw);
+        }
+        let distance2 = forward * forward + width * width;
+        if !(distance2 <= square(self.max_feet_distance + eps)) {
+            let d = distance2.sqrt();
+            return broken(Limit::FeetDistance, d, self.max_feet_distance);
+        }
+        let turned = forward + self.yaw_cost * dyaw;
+        if !(turned <= self.max_forward + eps) {
+            return broken(Limit::TurnCost, turned, self.max_forward);
+        }
+        let stride = (forward - lift).abs();
+        if !(stride <= self.max_stride + eps) {
+            return broken(Limit::Stride, stride, self.max_stride);
+        }
+        if !(forward - before <= self.max_growth + eps) {
+            return broken(Limit::Growth, forward - before, self.max_growth);
+        }
+        None
+    }
+}
+
+/// A reach limit of [`Reach`], in the order the node checks them (the first broken one is
+/// the one reported).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Limit {
+    /// The landing sole crosses the support foot's midline or comes nearer to the support
+    /// sole than `sole_gap` (refused with `Crossing`; the value is the width across).
+    Crossing,
+    /// `max_forward`: the step forward in the support foot's frame.
+    Forward,
+    /// `max_backward`: the step backward.
+    Backward,
+    /// `min_width`: the distance across the heading between the feet.
+    MinWidth,
+    /// `max_width`: the same, its largest value.
+    MaxWidth,
+    /// `max_yaw`: the heading change.
+    Yaw,
+    /// `max_feet_distance`: the distance between the sole centres.
+    FeetDistance,
+    /// `max_forward` less `yaw_cost · |Δyaw|`: the forward step a turn leaves (the value is
+    /// `forward + yaw_cost · |Δyaw|`).
+    TurnCost,
+    /// `max_stride`: the swinging foot's travel along the support foot's heading.
+    Stride,
+    /// `max_growth`: the growth of the forward step over the step before it.
+    Growth,
+}
+
+impl Limit {
+    /// The robot file's key of the bound (`[reach]` section).
+    pub fn key(self) -> &'static str {
+        match self {
+            Limit::Crossing => "sole_gap",
+            Limit::Forward | Limit::TurnCost => "max_forward",
+            Limit::Backward => "max_backward",
+            Limit::MinWidth => "min_width",
+            Limit::MaxWidth => "max_width",
+            Limit::Yaw => "max_yaw",
+            Limit::FeetDistance => "max_feet_distance",
+            Limit::Stride => "max_stride",
+            Limit::Growth => "max_growth",
+        }
+    }
+}
+
+/// A broken reach limit: which, the measured value and the bound (metres, or radians for
+/// [`Limit::Yaw`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Broken<T = f64> {
+    /// The limit.
+    pub limit: Limit,
+    /// What the step measures.
+    pub value: T,
+    /// The robot's bound.
+    pub bound: T,
+}
+
+impl<T> Broken<T> {
+    fn new(limit: Limit, value: T, bound: T) -> Self {
+        Self {
+            limit,
+            value,
+            bound,
         }
     }
 }
