@@ -6,9 +6,10 @@
 #   FUZZ_SECONDS=600 bash fuzz/run.sh node
 #   FUZZ_SANITIZER=address bash fuzz/run.sh   # ASan: needs -Zsanitizer, so RUSTC_BOOTSTRAP=1
 #
-# First the deterministic replay of the committed corpus plus pseudo-random inputs
-# (`cargo test`, no libFuzzer), then libFuzzer per target, starting from corpus/<target>/ and
-# writing what it finds to a scratch directory (the committed seeds stay as they are). A crash
+# libFuzzer per target, starting from corpus/<target>/ and writing what it finds to a scratch
+# directory (the committed seeds stay as they are). The deterministic replay of the committed
+# corpus plus pseudo-random inputs is a test of the root workspace (`cargo test -p walk-fuzz`,
+# no libFuzzer; the crate is a workspace member, linted and formatted with the others). A crash
 # fails the script; its input is in fuzz/artifacts/<target>/ (replay: cargo fuzz run <target>
 # --features libfuzzer -s none <file>).
 #
@@ -34,13 +35,6 @@ fi
 if [ "$SANITIZER" != "none" ]; then
     export RUSTC_BOOTSTRAP=1 # -Zsanitizer on the stable toolchain
 fi
-
-echo "== fmt and clippy of the fuzz crate (not a member of the root workspace)"
-cargo fmt --check
-cargo clippy --all-targets --quiet -- -D warnings
-
-echo "== replay of the corpus and random inputs (cargo test)"
-cargo test --release --quiet
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT

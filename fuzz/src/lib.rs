@@ -547,7 +547,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     let own: Vec<String> = commands
         .iter()
         .enumerate()
-        .map(|(i, (_, c))| host_sim::bus::log_line(5_000_000 * i as u64, &c.encode()))
+        .map(|(i, (_, c))| host_sim::sim::bus::log_line(5_000_000 * i as u64, &c.encode()))
         .collect();
     out.push(("text", "seed-canlog".into(), own.join("\n").into_bytes()));
     out.push((
@@ -686,10 +686,10 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
 
 /// `text` target: see the module docs.
 pub fn text_one(data: &[u8]) {
-    use host_sim::bus::{log_line, parse_log_line, LOG_EPOCH_S};
+    use host_sim::sim::bus::{log_line, parse_log_line, LOG_EPOCH_S};
     let text = String::from_utf8_lossy(data);
     for line in text.lines() {
-        let mcap = host_sim::mcap_log::parse_log_line(line);
+        let mcap = host_sim::output::mcap::parse_log_line(line);
         let Some(e) = parse_log_line(line) else {
             continue;
         };
@@ -716,13 +716,13 @@ pub fn text_one(data: &[u8]) {
             "{line:?}"
         );
     }
-    if let Ok(frames) = host_sim::replay::parse(&text, 0.005) {
+    if let Ok(frames) = host_sim::sim::replay::parse(&text, 0.005) {
         assert!(frames.windows(2).all(|w| w[0].tick <= w[1].tick));
         assert!(frames
             .iter()
             .all(|f| f.frame.id <= 0x7FF && f.frame.len <= 8));
     }
-    let _ = host_sim::toml_scenario::parse(&text);
+    let _ = host_sim::scenario::file::parse(&text);
     let _ = planner_core::robot::Robot::from_toml(&text);
 }
 

@@ -1,22 +1,24 @@
 //! host-sim: the HRP-2 simulation around the planner (the project's main job).
 //!
-//! * [`paper`]: the paper's modification experiments (Fig. 4, Tables I and II) through the gait
-//!   API.
-//! * [`mcap_log`]: the walk as an MCAP file for robotics viewers (Foxglove).
-//! * [`physics`]: the walk in the MuJoCo physics engine under a stabilizer (`host-sim
-//!   physics`).
-//! * [`scenario`]: timelines of footstep commands and the built-in HRP-2 scenarios.
-pub mod bus;
-pub mod faults;
-pub mod mcap_log;
-pub mod multibody;
-pub mod paper;
+//! The crate is in rooms by role; a room uses only the rooms listed before it:
+//!
+//! * [`scenario`]: what is played: timelines of footstep commands, the built-in scenarios,
+//!   scenario files (TOML), the names of what may become of a command, and the encoding of a
+//!   scenario's commands for the bus.
+//! * [`robot`]: the robot file: the planner's robot and host-sim's link model (the multi-body
+//!   description and its kinematics).
+//! * [`sim`]: the closed loop over the virtual CAN link: the bus with its fault layers, the
+//!   node fed a scenario or a recorded log (replay), and the SocketCAN front end.
+//! * [`eval`]: the evaluation of a walk: the multi-body ZMP, the paper's modification
+//!   experiments (Fig. 4, Tables I and II), the fault sweep.
+//! * [`output`]: what a run writes besides its CSV and JSON: the plots and the MCAP file.
+//! * [`physics`]: the walk in the MuJoCo physics engine under a stabilizer, with its own
+//!   outputs (`host-sim physics` and its siblings).
+//!
+//! The command line (`src/main.rs`) sits on top of all of them.
+pub mod eval;
+pub mod output;
 pub mod physics;
-pub mod plot;
-pub mod replay;
 pub mod robot;
 pub mod scenario;
 pub mod sim;
-#[cfg(feature = "socketcan")]
-pub mod socketcan_link;
-pub mod toml_scenario;

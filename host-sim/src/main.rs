@@ -20,7 +20,7 @@
 //! `run` prints every command that failed (refused by the node, never answered, or accepted
 //! and never carried out) with its time, step id and reason, and exits with status 1 if one
 //! failed that the scenario did not expect (`expect` in a TOML entry, see
-//! `host_sim::toml_scenario`). Exit status 2: a usage error, an invalid scenario, a file that
+//! `host_sim::scenario::file`). Exit status 2: a usage error, an invalid scenario, a file that
 //! cannot be read or written.
 
 use std::error::Error;
@@ -30,14 +30,16 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::multibody::{evaluate, max_zmp_error, MbSample};
-use host_sim::paper;
+use host_sim::eval::multibody::{evaluate, max_zmp_error, MbSample};
+use host_sim::eval::paper;
+use host_sim::output::plot;
 use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
+use host_sim::scenario::file::{Entry, ScenarioFile};
+use host_sim::scenario::Failure;
 use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
-use host_sim::sim::{outcomes, simulate, Failure, Outcome, SimConfig};
-use host_sim::toml_scenario::{Entry, ScenarioFile};
-use host_sim::{plot, replay, toml_scenario};
+use host_sim::sim::replay;
+use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
 use planner_core::gait::{Phase, Side};
 use planner_core::wire::Reason;
 use serde_json::json;
@@ -156,7 +158,7 @@ enum Cmd {
         #[arg(long, value_name = "DIR", default_value = "out/physics_sequence")]
         out: PathBuf,
         /// The planned step length [m].
-        #[arg(long, value_name = "M", default_value_t = host_sim::paper::SEQUENCE_BEFORE_M, allow_negative_numbers = true)]
+        #[arg(long, value_name = "M", default_value_t = host_sim::eval::paper::SEQUENCE_BEFORE_M, allow_negative_numbers = true)]
         before: f64,
         /// The new lengths of the consecutive modified steps (from step 3), comma-separated [m].
         #[arg(long, value_name = "M,M,...", default_value = host_sim::physics::sequence::DEFAULT_AFTERS, allow_hyphen_values = true)]
@@ -298,7 +300,7 @@ fn load_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
 
 #[cfg(feature = "socketcan")]
 fn node(interface: &str, seconds: Option<f64>, robot: &Robot) -> Result<(), Box<dyn Error>> {
-    host_sim::socketcan_link::run_node(interface, seconds, robot.node_config())
+    host_sim::sim::socketcan::run_node(interface, seconds, robot.node_config())
         .map_err(|e| format!("CAN interface {interface}: {e}").into())
 }
 
@@ -426,7 +428,7 @@ fn describe(c: &Command) -> String {
 /// commands.
 fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
     if name.ends_with(".toml") {
-        return Ok(toml_scenario::load_file(Path::new(name))?);
+        return Ok(scenario::file::load_file(Path::new(name))?);
     }
     let s: Scenario = scenario::built_in(name).ok_or_else(|| {
         format!(
@@ -530,9 +532,9 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     write_trajectory(&traj, run, &mb, dt)?;
     write_file(&out.join("can.log"), sim.can_log.join("\n") + "\n")?;
     let mcap = out.join("walk.mcap");
-    host_sim::mcap_log::write_mcap(
+    host_sim::output::mcap::write_mcap(
         &mcap,
-        &host_sim::mcap_log::McapInput {
+        &host_sim::output::mcap::McapInput {
             trajectory: &run.trajectory,
             dt,
             mb: &mb,
@@ -716,9 +718,9 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         .map(|(k, a, reason)| {
             json!({
                 "t_s": *k as f64 * dt,
-                "command": host_sim::sim::command_name(a.command),
+                "command": host_sim::scenario::wire::command_name(a.command),
                 "seq": a.seq,
-                "reason": host_sim::sim::reason_name(reason),
+                "reason": host_sim::scenario::expect::reason_name(reason),
             })
         })
         .collect();

@@ -1,5 +1,5 @@
 //! `can.log` against the real tools: the line format of `candump -l` with an absolute time from
-//! the stated epoch (`host_sim::bus::LOG_EPOCH_S`), the documented offset to `trajectory.csv`,
+//! the stated epoch (`host_sim::sim::bus::LOG_EPOCH_S`), the documented offset to `trajectory.csv`,
 //! can-utils' `log2asc` / `asc2log` round trip and python-can's `CanutilsLogReader`.
 //!
 //! The tool checks skip (and say so) when the tools are missing, unless
@@ -10,8 +10,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_sim::bus::{log_line, parse_log_line, Faults, LogEntry, LOG_EPOCH_S, LOG_IFACE};
 use host_sim::scenario::{self, BUILT_IN};
+use host_sim::sim::bus::{log_line, parse_log_line, Faults, LogEntry, LOG_EPOCH_S, LOG_IFACE};
 use host_sim::sim::{simulate, SimConfig};
 use planner_core::wire::ids;
 
@@ -462,8 +462,8 @@ fn python_can_reads_the_log() {
 /// 0x7FF, signs, odd data lengths; and accept any interface and either case.
 #[test]
 fn candump_readers_refuse_what_is_not_a_frame() {
-    use host_sim::bus::parse_candump_line;
-    use host_sim::mcap_log::parse_log_line as mcap_line;
+    use host_sim::output::mcap::parse_log_line as mcap_line;
+    use host_sim::sim::bus::parse_candump_line;
     for bad in [
         "(1767225600.000000) can0 010#0000\u{fffd}E",
         "(1767225600.000000) can0 01\u{e9}#00",

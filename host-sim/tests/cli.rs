@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use host_sim::sim::Failure;
+use host_sim::scenario::Failure;
 use planner_core::wire::Reason;
 
 /// A fresh directory of this test process.
@@ -89,6 +89,8 @@ fn a_refusal_is_printed_and_fails_the_run() {
             "step 2 (append, right at (1.1000, -0.1000) m",
             "refused: reach (code 12)",
             "UNEXPECTED",
+            // the limit it broke, with the value and the robot file's bound
+            "refused: reach (code 12): forward step 0.700 m > max_forward 0.300 m",
         ],
     );
     // The outputs are still written, and the summary has the step id and the reason.
@@ -217,12 +219,12 @@ fn a_step_id_beyond_the_step_numbers_is_refused_when_the_file_is_read() {
     );
     assert!(!out.exists(), "nothing is run");
     // The same for a modification, and 65534 is read (the node refuses it as a first step).
-    let e = host_sim::toml_scenario::parse(
+    let e = host_sim::scenario::file::parse(
         "name = \"m\"\n[[modify]]\nat_s = 0.0\nid = 70000\nside = \"left\"\nx = 0.0\ny = 0.0\n",
     )
     .unwrap_err();
     assert!(e.contains("[[modify]] #1 (id 70000) at line 2"), "{e}");
-    let s = host_sim::toml_scenario::parse(&format!(
+    let s = host_sim::scenario::file::parse(&format!(
         "name = \"ok\"\n{}",
         step(65534, "right", 0.2, -0.1, "")
     ))
@@ -267,9 +269,9 @@ fn every_dbc_reason_name_is_an_expectation() {
             "name = \"n\"\n{}",
             step(0, "right", 0.2, -0.1, &format!("expect = \"{name}\""))
         );
-        host_sim::toml_scenario::parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        host_sim::scenario::file::parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
-    let e = host_sim::toml_scenario::parse(&format!(
+    let e = host_sim::scenario::file::parse(&format!(
         "name = \"n\"\n{}",
         step(0, "right", 0.2, -0.1, "expect = \"far\"")
     ))

@@ -1,4 +1,4 @@
-//! The seeded fault sweep (`host_sim::faults`): every fault kind and rate on the `straight`
+//! The seeded fault sweep (`host_sim::eval::faults`): every fault kind and rate on the `straight`
 //! and `fig4` scenarios, `WALK_FAULT_SEEDS` seeds (3 by default), and the heavier mixed rows
 //! with `WALK_FAULT_HEAVY_SEEDS` seeds (10 by default; more for release runs). Prints the
 //! Markdown table.
@@ -9,12 +9,12 @@
 //! every cycle (except under a flood, where its transmit mailbox may be full: not asserted,
 //! printed). Lost commands and legs out of reach are printed, not asserted.
 
-use host_sim::faults::{markdown, run_case, sweep, FaultKind};
+use host_sim::eval::faults::{markdown, run_case, sweep, FaultKind};
 use host_sim::scenario;
 
 #[test]
 fn fault_free_runs_walk_every_step_once_inside_the_polygon() {
-    for name in host_sim::faults::SCENARIOS {
+    for name in host_sim::eval::faults::SCENARIOS {
         let s = scenario::built_in(name).unwrap();
         let r = run_case(&s, FaultKind::None, 0.0, 1).unwrap();
         println!("{name}: {r:?}");

@@ -10,8 +10,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use std::process::Command;
 
-use host_sim::bus::LOG_EPOCH_S;
-use host_sim::mcap_log::{parse_log_line, SOLE_THICKNESS, TOPICS, WORLD_FRAME};
+use host_sim::output::mcap::{parse_log_line, SOLE_THICKNESS, TOPICS, WORLD_FRAME};
+use host_sim::sim::bus::LOG_EPOCH_S;
 use serde_json::Value;
 
 /// The CSV has 6 decimals (1 µm, 1 µrad): a value read back differs by at most half a unit

@@ -1,10 +1,10 @@
-//! Tests of the HRP-2 multi-body model (`host_sim::multibody`): kinematics, the ZMP formula on
+//! Tests of the HRP-2 multi-body model (`host_sim::eval::multibody`): kinematics, the ZMP formula on
 //! cases with a known answer, and the multi-body ZMP error of real walks (printed: run with
 //! `--nocapture` to see the figures).
 
-use host_sim::multibody::{
-    evaluate, max_zmp_error, mean_yaw, rot_x, rot_y, rot_z, Body, IkError, LegAngles, MbError,
-    MbSample, Model, Pose,
+use host_sim::eval::multibody::{evaluate, max_zmp_error, MbError, MbSample};
+use host_sim::robot::model::{
+    mean_yaw, rot_x, rot_y, rot_z, Body, IkError, LegAngles, Model, Pose,
 };
 use host_sim::scenario;
 use planner_core::gait::{FootPose, GaitParams, Phase, Reference, Side};

@@ -13,10 +13,10 @@ use std::process::Command;
 
 use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSION};
 use host_sim::physics::metrics::FallCause;
-use host_sim::physics::output::scenario_trajectory;
 use host_sim::physics::{run, PhysicsConfig, PhysicsReport, Push};
 use host_sim::robot::Robot;
 use host_sim::scenario::BUILT_IN;
+use host_sim::sim::scenario_trajectory;
 
 const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
 
@@ -415,7 +415,7 @@ fn consecutive_modifications_in_the_engine() {
     let dir = temp_dir("sequence");
     let j = host_sim_json(&["physics-sequence"], &dir, "physics_sequence.json");
     let text = j.to_string();
-    let afters = &host_sim::paper::SEQUENCE_AFTERS_M;
+    let afters = &host_sim::eval::paper::SEQUENCE_AFTERS_M;
     assert_eq!(j["afters_m"], serde_json::json!(afters), "{text}");
     assert_eq!(j["stabilizer_scale"], 1.0, "{text}");
     for key in ["plain", "proposed"] {
@@ -610,7 +610,7 @@ fn physics_faults_every_row_long() {
     let dir = temp_dir("faults-all");
     let j = host_sim_json(&["physics-faults"], &dir, "physics_faults.json");
     let runs = j["runs"].as_array().expect("runs");
-    let scenarios = host_sim::faults::SCENARIOS;
+    let scenarios = host_sim::eval::faults::SCENARIOS;
     assert_eq!(runs.len(), rows().len() * scenarios.len());
     for (kind, rate) in rows() {
         for s in scenarios {

@@ -1,21 +1,23 @@
-//! Tests of `host_sim::plot`: the PNGs of the paper's figures for the `fig4` walk are valid
+//! Tests of `host_sim::output::plot`: the PNGs of the paper's figures for the `fig4` walk are valid
 //! PNGs of a sensible size that show the plotted series (their colours are found in the
 //! decoded pixels), anti-aliased; the support phases are shaded in proportion to their
 //! durations; the modification is marked, and `modification.png` and the moved landings appear
 //! only for a walk with a modification; the data behind the figures (step numbers, first
 //! planned poses, the modification instant, sole limits, the ZMP fluctuation of the
-//! comparison columns) is what the scenario says.
+//! comparison columns) is what the scenario says; a modification before the start is shown
+//! as what it is (the walk planned with it from the start), its mark inside the plot area.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use host_sim::multibody::{evaluate, MbSample, Model};
-use host_sim::plot::{
-    fluctuation, landings, modification_marks, sole_limits, walked_landings, write_plots, Walk,
-    COMPARISON_FILE, FILES, SOLE_LENGTH, SOLE_WIDTH,
+use host_sim::eval::multibody::{evaluate, MbSample};
+use host_sim::output::plot::{
+    fluctuation, landings, modification_marks, sole_limits, walked_landings, write_plots, Mark,
+    Walk, COMPARISON_FILE, FILES, PRE_START_TITLE, SOLE_LENGTH, SOLE_WIDTH,
 };
+use host_sim::robot::model::Model;
 use host_sim::scenario::{self, Run, Scenario};
-use planner_core::gait::{GaitParams, Phase, Side};
+use planner_core::gait::{Footstep, GaitParams, Phase, Side};
 
 /// The colours of `plot/time.rs` and `plot/top.rs`: COG, planned ZMP, multi-body ZMP, the
 /// modification mark, the shades of single and double support, a first planned pose.
@@ -394,7 +396,7 @@ fn the_figures_use_the_robots_sole() {
     let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
     let robot = host_sim::robot::Robot::load(&robots.join("small.toml")).unwrap();
     let p = robot.planner.params;
-    let file = host_sim::toml_scenario::load_file(&robots.join("small-walk.toml")).unwrap();
+    let file = host_sim::scenario::file::load_file(&robots.join("small-walk.toml")).unwrap();
     let s = &file.scenario;
     let run = scenario::run(s, p);
     let w = Walk::from_run("small", s, &run, p.dt, p, None).unwrap();
@@ -416,4 +418,211 @@ fn the_figures_use_the_robots_sole() {
     bad.sole = [0.16, 0.0];
     let e = write_plots(&out_dir("small-bad"), &bad).unwrap_err();
     assert!(e.to_string().contains("sole size"), "{e}");
+}
+
+/// Five 0.1 m steps and a closing step, right foot first; at t = 0, while the robot stands,
+/// steps 3 and 4 move from 0.4 m to 0.45 m; the walk starts at 0.8 s.
+const PRE_START: &str = r#"
+name = "pre-start"
+max_time_s = 20.0
+
+[[step]]
+id = 0
+side = "right"
+x = 0.1
+y = -0.1
+
+[[step]]
+id = 1
+side = "left"
+x = 0.2
+y = 0.1
+
+[[step]]
+id = 2
+side = "right"
+x = 0.3
+y = -0.1
+
+[[step]]
+id = 3
+side = "left"
+x = 0.4
+y = 0.1
+
+[[step]]
+id = 4
+side = "right"
+x = 0.4
+y = -0.1
+
+[[modify]]
+at_s = 0.0
+id = 3
+x = 0.45
+y = 0.1
+
+[[modify]]
+at_s = 0.0
+id = 4
+x = 0.45
+y = -0.1
+
+[[command]]
+at_s = 0.8
+kind = "start"
+
+[[command]]
+at_s = 0.8
+kind = "stop"
+"#;
+
+/// Every mark lies inside `t`, at least 2 % of its span right of its start (the y axis).
+fn marks_inside(marks: &[Mark], t: &std::ops::Range<f64>, what: &str) {
+    for m in marks {
+        let inset = (m.t - t.start) / (t.end - t.start);
+        assert!(
+            m.t < t.end && inset >= 0.02,
+            "{what}: mark at {} s on or next to the axis of {t:?} ({inset})",
+            m.t
+        );
+    }
+}
+
+#[test]
+fn a_modification_before_the_start_is_shown_as_planned_from_the_start() {
+    let s = scenario::file::parse(PRE_START).unwrap();
+    let run = scenario::run(&s, GaitParams::hrp2());
+    let accepted = |c: fn(&scenario::Command) -> bool| {
+        run.events
+            .iter()
+            .filter(|e| c(&e.command) && e.result.is_ok())
+            .count()
+    };
+    assert_eq!(
+        accepted(|c| matches!(c, scenario::Command::Modify(..))),
+        2,
+        "{:?}",
+        run.events
+    );
+    assert_eq!(accepted(|c| matches!(c, scenario::Command::Start)), 1);
+    // The walk lands the steps where they were moved.
+    let xs: Vec<f64> = walked_landings(&run.trajectory)
+        .iter()
+        .map(|f| f.x)
+        .collect();
+    assert_eq!(xs.len(), 5, "{xs:?}");
+    assert!((xs[3] - 0.45).abs() < 1e-9 && (xs[4] - 0.45).abs() < 1e-9);
+
+    let w = walk("pre-start", &s, &run, None);
+    assert_eq!(w.marks.len(), 1, "{:?}", w.marks);
+    let mark = &w.marks[0];
+    assert!(mark.before_start, "{mark:?}");
+    assert!(
+        mark.label.contains("before the start (0.800 s)") && mark.label.contains("steps 3–4"),
+        "{}",
+        mark.label
+    );
+    // Nothing was walked without the modification: no comparison columns (the plan without
+    // it was never begun, and "without the time adjustment" is the walk itself).
+    assert!(
+        w.columns.is_empty(),
+        "comparison columns of a modification before the start: {:?}",
+        w.columns.iter().map(|c| &c.title).collect::<Vec<_>>()
+    );
+    assert_eq!(w.title, PRE_START_TITLE);
+
+    // modification.png: the walk alone, saying the modification preceded the start, the mark
+    // inside both panels' time axes (not on the y axis).
+    let c = w.comparison().expect("modification.png is drawn");
+    assert_eq!(c.columns.len(), 1);
+    assert_eq!(c.columns[0].title, PRE_START_TITLE);
+    assert_eq!(c.columns[0].trajectory.len(), run.trajectory.len());
+    assert_eq!(c.columns[0].marks, &w.marks[..]);
+    assert!(c.caption.contains("before the start"), "{}", c.caption);
+    marks_inside(c.columns[0].marks, &c.t, "modification.png");
+    marks_inside(c.columns[0].marks, &c.zoom_t, "modification.png zoom");
+    let t_end = (run.trajectory.len() - 1) as f64 * DT;
+    assert!((c.t.end - t_end).abs() < 1e-12, "{:?}", c.t);
+    assert!((c.zoom_t.end - t_end).abs() < 1e-12, "{:?}", c.zoom_t);
+    marks_inside(&w.marks, &w.time_axis(), "sagittal.png");
+
+    // Drawn: the mark's colour is in all three time figures.
+    let dir = out_dir("pre-start");
+    let written = write_plots(&dir, &w).unwrap();
+    check_files(&written, &dir, false, true);
+    for path in [&written[0], &written[1], &written[3]] {
+        let (_, _, rgb) = pixels(path);
+        let m = count(&rgb, MARK);
+        println!("{}: mark {m} px", path.display());
+        assert!(m > 200, "{}: {m} mark pixels", path.display());
+    }
+}
+
+#[test]
+fn a_modification_before_the_start_stays_in_the_first_plan_of_a_later_one() {
+    // fig4, with step 1 also moved (0.2 m -> 0.25 m) at t = 0, before the start.
+    let (mut s, _) = play("fig4");
+    let at = s.timeline.iter().position(|(t, _)| *t > 0).unwrap();
+    let moved = Footstep::new(Side::Left, 0.25, 0.1, 0.0);
+    s.timeline
+        .insert(at, (0, scenario::Command::Modify(1, moved)));
+    let run = scenario::run(&s, GaitParams::hrp2());
+    let w = walk("fig4-pre", &s, &run, None);
+    let before: Vec<bool> = w.marks.iter().map(|m| m.before_start).collect();
+    assert_eq!(before, [true, false], "{:?}", w.marks);
+    // The comparison is about the modification during the walk: (a) is the walk as planned
+    // at the start, with step 1 moved.
+    assert_eq!(w.columns.len(), 2);
+    assert!(
+        w.columns[0].title.contains("as planned at the start"),
+        "{}",
+        w.columns[0].title
+    );
+    for tr in [&w.columns[0].trajectory, &run.trajectory] {
+        let step1 = walked_landings(tr)[1];
+        assert!((step1.x - 0.25).abs() < 1e-9, "{step1:?}");
+    }
+    let step3 = |tr| walked_landings(tr)[3].x;
+    assert!((step3(&w.columns[0].trajectory) - 0.4).abs() < 1e-9);
+    assert!((step3(&run.trajectory) - 0.6).abs() < 1e-9);
+    let c = w.comparison().unwrap();
+    assert_eq!(c.columns.len(), 3);
+    marks_inside(&w.marks, &c.t, "modification.png");
+    // The zoom is around the modification during the walk.
+    assert!(
+        c.zoom_t.contains(&4.0) && c.zoom_t.start > 2.0,
+        "{:?}",
+        c.zoom_t
+    );
+}
+
+#[test]
+fn a_modification_during_the_walk_keeps_its_comparison() {
+    let (s, run) = play("fig4");
+    let w = walk("fig4", &s, &run, None);
+    assert!(w.marks.iter().all(|m| !m.before_start));
+    let c = w.comparison().unwrap();
+    let titles: Vec<&str> = c.columns.iter().map(|c| c.title).collect();
+    assert_eq!(
+        titles,
+        [
+            "(a) as first planned: no modification",
+            "(b) modified, without the time adjustment",
+            "(c) modified, with the time adjustment: as walked",
+        ]
+    );
+    // The first plan shows no mark; the axes begin at 0; the zoom is 1 s before to 2.5 s
+    // after the modification.
+    assert!(c.columns[0].marks.is_empty());
+    assert_eq!(c.columns[2].marks, &w.marks[..]);
+    assert_eq!(c.t.start, 0.0);
+    assert_eq!(w.time_axis().start, 0.0);
+    assert!((c.zoom_t.start - 3.0).abs() < 1e-9 && (c.zoom_t.end - 6.5).abs() < 1e-9);
+    assert_eq!(
+        c.caption,
+        format!("fig4, sagittal plane: {}", w.marks[0].label)
+    );
+    let (s, run) = play("straight");
+    assert!(walk("straight", &s, &run, None).comparison().is_none());
 }

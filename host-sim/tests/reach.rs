@@ -1,10 +1,10 @@
 //! The node's footstep reach limits against the legs of the multi-body HRP-2 model
-//! (`host_sim::multibody`: thigh + shank = 0.6 m).
+//! (`host_sim::eval::multibody`: thigh + shank = 0.6 m).
 //!
 //! A limit is followable when, for every sequence of footsteps it admits, the gait's references
 //! keep every ankle joint centre at least [`MIN_MARGIN`] closer to its hip joint centre than
 //! thigh + shank (the knee never gets within that much of straight). The waist is placed as
-//! [`multibody::evaluate`](host_sim::multibody::evaluate) places it (`Model::solve_waist`, warm
+//! [`multibody::evaluate`](host_sim::eval::multibody::evaluate) places it (`Model::solve_waist`, warm
 //! started tick to tick), so a positive margin means `evaluate` does not fail with
 //! `MbError::OutOfReach`.
 //!
@@ -26,7 +26,7 @@
 //!   only **1.37 mm** (the landing of its 0.3 m step at 4.87 s): no limit that admits fig4 can
 //!   promise 5 mm. [`strict`] refuses exactly fig4's modification.
 
-use host_sim::multibody::{mean_yaw, Model, Pose};
+use host_sim::robot::model::{mean_yaw, Model, Pose};
 use host_sim::scenario::{self, Command, Run, Scenario};
 use planner_core::gait::{Footstep, GaitParams, Reference, Side};
 use planner_core::node::{Reach, Soles};
@@ -510,8 +510,8 @@ fn former_limits_were_too_wide() {
     assert!(m < -0.05, "{m}");
     let model = Model::hrp2();
     assert!(matches!(
-        host_sim::multibody::evaluate(&model, &run.trajectory, 0.005),
-        Err(host_sim::multibody::MbError::OutOfReach(..))
+        host_sim::eval::multibody::evaluate(&model, &run.trajectory, 0.005),
+        Err(host_sim::eval::multibody::MbError::OutOfReach(..))
     ));
 }
 
@@ -572,7 +572,7 @@ fn all_checked() -> Vec<(String, Vec<Checked>)> {
         .collect();
     files.sort();
     for p in files {
-        let mut s = host_sim::toml_scenario::load(&p).expect("scenario file");
+        let mut s = host_sim::scenario::file::load(&p).expect("scenario file");
         s.name = format!("{}.toml", s.name);
         scenarios.push(s);
     }
@@ -580,7 +580,7 @@ fn all_checked() -> Vec<(String, Vec<Checked>)> {
         .iter()
         .map(|s| (s.name.clone(), scenario_steps(s)))
         .collect();
-    let m = host_sim::paper::modification(GaitParams::hrp2(), 0.1, 0.3);
+    let m = host_sim::eval::paper::modification(GaitParams::hrp2(), 0.1, 0.3);
     let mut original = m.footsteps.clone();
     for (i, f) in original.iter_mut().enumerate().skip(3) {
         f.x -= 0.2;

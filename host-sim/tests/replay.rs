@@ -1,9 +1,9 @@
-//! Record and replay (`host_sim::replay`): the candump log of a run, played back into a fresh
+//! Record and replay (`host_sim::sim::replay`): the candump log of a run, played back into a fresh
 //! node, gives the run again bit for bit; the log reader takes candump's variants and refuses
 //! what it cannot place, naming the line.
 
-use host_sim::replay::{self, node_sends};
 use host_sim::scenario::{self, BUILT_IN};
+use host_sim::sim::replay::{self, node_sends};
 use host_sim::sim::{simulate, SimConfig};
 use planner_core::wire::ids;
 
@@ -215,7 +215,7 @@ fn a_burst_in_the_last_cycle_is_read_and_answered_in_full() {
         let mut log = String::new();
         for i in 0..n {
             log += &line(
-                host_sim::bus::LOG_EPOCH_S,
+                host_sim::sim::bus::LOG_EPOCH_S,
                 0,
                 &control(0, u32::from(i) + 1, ControlOp::Heartbeat),
             );
@@ -238,7 +238,7 @@ fn a_burst_in_the_last_cycle_is_read_and_answered_in_full() {
 /// of the replay's own bus log, in order.
 #[test]
 fn a_fault_run_replays_into_the_firmware_node_with_its_frames_per_cycle() {
-    use host_sim::faults::{run_case_logged, FaultKind};
+    use host_sim::eval::faults::{run_case_logged, FaultKind};
     let s = scenario::built_in("fig4").unwrap();
     let (_, log) = run_case_logged(&s, FaultKind::Drop, 0.05, 1).unwrap();
     assert!(log.len() > 1000);

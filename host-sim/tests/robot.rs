@@ -6,11 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use host_sim::multibody::{evaluate, max_zmp_error, Model};
+use host_sim::eval::multibody::{evaluate, max_zmp_error};
+use host_sim::robot::model::Model;
 use host_sim::robot::{Robot, HRP2_TOML};
+use host_sim::scenario::Failure;
 use host_sim::scenario::{self, Command as Cmd};
-use host_sim::sim::{outcomes, simulate, Failure, SimConfig};
-use host_sim::toml_scenario;
+use host_sim::sim::{outcomes, simulate, SimConfig};
 use planner_core::gait::{GaitParams, Phase, Side};
 use planner_core::node::NodeConfig;
 use planner_core::wire::Reason;
@@ -229,7 +230,7 @@ fn the_second_robot_is_read_as_written() {
 fn the_second_robot_walks_with_its_own_pendulum_timing_and_soles() {
     let robot = small();
     let p = robot.planner.params;
-    let file = toml_scenario::load_file(&robots().join("small-walk.toml")).unwrap();
+    let file = scenario::file::load_file(&robots().join("small-walk.toml")).unwrap();
     let s = &file.scenario;
     let cfg = SimConfig {
         node: robot.node_config(),

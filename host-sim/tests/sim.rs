@@ -2,8 +2,8 @@
 //! gait produces when driven directly, the controller decodes the stream to its units, and the
 //! stream keeps to the bus.
 
-use host_sim::bus::Faults;
 use host_sim::scenario::{self, BUILT_IN};
+use host_sim::sim::bus::Faults;
 use host_sim::sim::{simulate, SimConfig};
 use planner_core::gait::{Footstep, GaitParams, Side};
 use planner_core::wire::WireStep;

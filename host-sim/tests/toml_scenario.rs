@@ -1,11 +1,12 @@
-//! Tests of `host_sim::toml_scenario`: the shipped example files give the same timelines as the
+//! Tests of `host_sim::scenario::file`: the shipped example files give the same timelines as the
 //! built-in scenarios (and the same runs), the documented defaults and ordering hold, and every
 //! kind of bad input is refused with a message that says what is wrong.
 
 use std::path::Path;
 
+use host_sim::scenario::file::{load, parse, DEFAULT_MAX_TIME_S};
+use host_sim::scenario::TICK_S;
 use host_sim::scenario::{self, Command, Scenario};
-use host_sim::toml_scenario::{load, parse, DEFAULT_MAX_TIME_S, TICK_S};
 use planner_core::gait::{Footstep, GaitParams, Side};
 
 /// Coordinates written as decimals in the files differ from the built-ins' computed values by
@@ -335,7 +336,7 @@ fn the_readme_example_walks() {
         .find("name = \"my-walk\"")
         .expect("the README's scenario example");
     let end = start + readme[start..].find("```").expect("end of the example");
-    let file = host_sim::toml_scenario::parse_file(&readme[start..end]).expect("valid example");
+    let file = host_sim::scenario::file::parse_file(&readme[start..end]).expect("valid example");
     let sim = host_sim::sim::simulate(&file.scenario, &host_sim::sim::SimConfig::default())
         .expect("runs");
     let outcomes = host_sim::sim::outcomes(&file.scenario, &sim);

@@ -13,11 +13,10 @@ use std::path::{Path, PathBuf};
 use gait_loop::binlog::{Frames, Header, SliceBytes};
 use gait_loop::{Fnv, Player};
 
-use host_sim::faults::{run_case_logged, FaultKind, HEAVY};
-use host_sim::replay;
-use host_sim::scenario::{built_in, BUILT_IN};
+use host_sim::eval::faults::{run_case_logged, FaultKind, HEAVY};
+use host_sim::scenario::{self, built_in, BUILT_IN};
+use host_sim::sim::replay;
 use host_sim::sim::{simulate, start_config, SimConfig};
-use host_sim::toml_scenario;
 use planner_core::gait::{Footstep, Reference, PREVIEW};
 use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::LogClock;
@@ -86,7 +85,7 @@ pub fn cases() -> Vec<Case> {
     files.sort();
     assert!(!files.is_empty(), "no TOML scenario in {}", dir.display());
     for path in files {
-        let s = toml_scenario::load(&path).unwrap();
+        let s = scenario::file::load(&path).unwrap();
         let run = simulate(&s, &sim).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let stem = path.file_stem().unwrap().to_string_lossy();
         out.push(Case {
@@ -111,7 +110,7 @@ pub fn cases() -> Vec<Case> {
     out
 }
 
-/// `case`'s log in the image's binary format (`host_sim::replay::binary_log`).
+/// `case`'s log in the image's binary format (`host_sim::sim::replay::binary_log`).
 pub fn binary(case: &Case) -> Vec<u8> {
     replay::binary_log(&case.name, &case.log, &case.cfg)
         .unwrap_or_else(|e| panic!("{}: {e}", case.name))

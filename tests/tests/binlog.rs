@@ -1,16 +1,16 @@
-//! The QEMU image's binary CAN log: host-sim's encoder (`host_sim::replay::binary_log`)
+//! The QEMU image's binary CAN log: host-sim's encoder (`host_sim::sim::replay::binary_log`)
 //! against the target's decoder (`gait_loop::binlog`), compiled for the host.
 //!
 //! * round trip: random candump logs (any identifiers, lengths, data and non-decreasing times)
-//!   decode to exactly the frames `host_sim::replay::parse` replays, with their times, and the
+//!   decode to exactly the frames `host_sim::sim::replay::parse` replays, with their times, and the
 //!   header's period, first and last time, count and feet;
 //! * every strict prefix of a valid file is refused as truncated (never a panic, never a
 //!   shorter log taken for a whole one); single-field corruptions are refused by name.
 
 use gait_loop::binlog::{Error, Frames, Header, SliceBytes};
 use gait_loop::player::Source;
-use host_sim::bus::{log_line, LOG_EPOCH_S};
-use host_sim::replay::{self, binary_log, node_sends};
+use host_sim::sim::bus::{log_line, LOG_EPOCH_S};
+use host_sim::sim::replay::{self, binary_log, node_sends};
 use planner_core::gait::{Footstep, Side};
 use planner_core::node::NodeConfig;
 use planner_core::wire::RawFrame;

@@ -25,9 +25,9 @@
 //! nodes refuse gaps, repeats, bad CRCs, stale versions and infeasible modifications).
 
 use gait_loop::ScriptedBus;
-use host_sim::faults::{run_case_logged, FaultKind};
-use host_sim::replay;
+use host_sim::eval::faults::{run_case_logged, FaultKind};
 use host_sim::scenario::{built_in, BUILT_IN};
+use host_sim::sim::replay;
 use host_sim::sim::{references, simulate, start_config, SimConfig};
 use planner_core::gait::{Reference, PREVIEW};
 use planner_core::node::{Node, NodeConfig};

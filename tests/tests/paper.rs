@@ -2,7 +2,7 @@
 //!
 //! Run with `-- --nocapture` to see the grids side by side.
 
-use host_sim::paper::{
+use host_sim::eval::paper::{
     cells_within, modification, table, without_adjustment, PAPER_ADJUST_S, STEP_LENGTHS,
 };
 use planner_core::gait::{GaitParams, Tail};
@@ -39,7 +39,7 @@ fn fig4_adjustment_removes_the_backward_fluctuation() {
     assert!(with.sagittal_m.abs() < 0.002, "{}", with.sagittal_m);
 }
 
-fn print_grid(name: &str, grid: &[Vec<host_sim::paper::Modification>]) {
+fn print_grid(name: &str, grid: &[Vec<host_sim::eval::paper::Modification>]) {
     eprintln!("{name}: adjustment [s], ours / paper (rows: after, columns: before)");
     eprint!("{:>7}", "");
     for b in STEP_LENGTHS {

@@ -1,14 +1,14 @@
 //! The target's log player (`gait_loop::player::Player`), compiled for the host, against
-//! `host-sim replay` (`host_sim::replay::replay_into::<16>`) of the same candump log: both
+//! `host-sim replay` (`host_sim::sim::replay::replay_into::<16>`) of the same candump log: both
 //! use `planner_core::playback`'s timing rule, so the node's frames (with the cycle that sent
 //! them) and its references must agree bit for bit. The built-in scenarios and one fault-sweep
 //! run (fig4, 5 % of the frames dropped, seed 1).
 
 use gait_loop::player::{LogFrame, Player, Source};
-use host_sim::bus::parse_log_line;
-use host_sim::faults::{run_case_logged, FaultKind};
-use host_sim::replay::{self, node_sends};
+use host_sim::eval::faults::{run_case_logged, FaultKind};
 use host_sim::scenario::{built_in, BUILT_IN};
+use host_sim::sim::bus::parse_log_line;
+use host_sim::sim::replay::{self, node_sends};
 use host_sim::sim::{simulate, SimConfig};
 use planner_core::node::Node;
 use planner_core::playback::LogClock;

@@ -2,7 +2,7 @@
 //!
 //! Record and replay, as CAN engineers do with `canplayer`: this test records host-sim runs
 //! (the candump log each writes), encodes them into one file of compact binary logs
-//! (`host_sim::replay::binary_log`, the format of `gait_loop::binlog`), builds the image and
+//! (`host_sim::sim::replay::binary_log`, the format of `gait_loop::binlog`), builds the image and
 //! runs it twice under `qemu-system-arm -icount shift=0` on that file (one QEMU invocation per
 //! image run, every log in it). The image plays each log into a fresh `Node<16>` with
 //! `gait_loop::Player` (`planner_core::playback`'s rule) and prints, per log, the count and an
@@ -42,7 +42,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use host_sim::replay;
+use host_sim::sim::replay;
 use host_sim::sim::SimConfig;
 use planner_core::node::Node;
 use walk_tests::logs::{self, compare, Case, Expected};

@@ -1,4 +1,4 @@
-//! The fault sweep's "fall" measured in the engine: every row of [`crate::faults`] (each fault
+//! The fault sweep's "fall" measured in the engine: every row of [`crate::eval::faults`] (each fault
 //! kind at each rate, and the heavy mixed rows) played through the bus and the node with one
 //! seed, the node's references then run in MuJoCo under the stabilizer. Beside the engine's
 //! verdict ([`super::metrics`]) each row keeps the sweep's kinematic one (the multi-body ZMP
@@ -15,7 +15,7 @@
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::faults::{run_case_with, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::eval::faults::{run_case_with, FaultKind, HEAVY, SCENARIOS, SWEEP};
 use crate::robot::Robot;
 use crate::scenario;
 

@@ -36,7 +36,7 @@ pub mod sequence;
 pub mod stabilizer;
 pub mod tables;
 
-use crate::multibody::{mean_yaw, Pose};
+use crate::robot::model::{mean_yaw, Pose};
 use bridge::Engine;
 use metrics::{fall_check, tilt_deg, FallCause, Tracking};
 use model::{sensor, Robot};
@@ -206,7 +206,7 @@ pub fn reference_at(trajectory: &[Reference<f64>], dt: f64, t: f64) -> Reference
     }
 }
 
-fn quat_to_mat(q: [f64; 4]) -> crate::multibody::Mat3 {
+fn quat_to_mat(q: [f64; 4]) -> crate::robot::model::Mat3 {
     let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     [

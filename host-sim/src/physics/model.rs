@@ -2,7 +2,7 @@
 //! stabilizer needs from it.
 //!
 //! This is the **only** place of the physics module that reads the link table
-//! ([`crate::multibody::Model`] and its [`Body`] fields): the rest goes through [`Robot`].
+//! ([`crate::robot::model::Model`] and its [`Body`] fields): the rest goes through [`Robot`].
 //!
 //! # The MJCF
 //!
@@ -13,7 +13,7 @@
 //! `thigh` (hip pitch about y), `shank` (knee about y, `thigh_length` below), `foot` (ankle
 //! pitch about y then ankle roll about x, `shank_length` below the knee). MuJoCo composes the
 //! joints of a body in the order written, so the frames are those of
-//! [`crate::multibody`]: `R_w R_z(q1) R_x(q2) R_y(q3) R_y(q4) R_y(q5) R_x(q6)`.
+//! [`crate::eval::multibody`]: `R_w R_z(q1) R_x(q2) R_y(q3) R_y(q4) R_y(q5) R_x(q6)`.
 //!
 //! Collision shapes: the **soles** are boxes of the robot file's `[feet]` `sole_length` ×
 //! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or `ankle_height`
@@ -46,7 +46,7 @@
 //! force/torque sensor at each ankle (`force`, `torque` at the site at the ankle joint centre,
 //! in the foot frame).
 
-use crate::multibody::{Body, LegAngles, Model, Pose, Vec3};
+use crate::robot::model::{Body, LegAngles, Model, Pose, Vec3};
 use planner_core::gait::Side;
 use std::fmt::Write;
 

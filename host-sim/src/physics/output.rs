@@ -21,38 +21,10 @@ use std::path::Path;
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsRun, Push};
-use crate::plot::{write_time_plot, Curve};
+use crate::output::plot::{write_time_plot, Curve};
 use crate::robot::Robot;
-use crate::scenario::{self, BUILT_IN};
-use crate::sim::{simulate, SimConfig};
-use crate::toml_scenario;
 
-/// The planner's trajectory for a scenario (built-in name or `.toml` file) through the virtual
-/// CAN bus and `robot`'s node, and its tick \[s\]. A built-in scenario needs a robot that
-/// stands as HRP-2 ([`Robot::check_hrp2_footsteps`]).
-pub fn scenario_trajectory(
-    name: &str,
-    robot: &Robot,
-) -> Result<(String, Vec<planner_core::gait::Reference<f64>>, f64), String> {
-    let s = if name.ends_with(".toml") {
-        toml_scenario::load_file(Path::new(name))?.scenario
-    } else {
-        robot.check_hrp2_footsteps(name)?;
-        scenario::built_in(name).ok_or_else(|| {
-            format!(
-                "unknown scenario {name:?}; built-in: {} (or a .toml file)",
-                BUILT_IN.join(", ")
-            )
-        })?
-    };
-    let cfg = SimConfig {
-        node: robot.node_config(),
-        ..SimConfig::default()
-    };
-    let dt = cfg.node.params.dt;
-    let sim = simulate(&s, &cfg).map_err(|e| format!("{}: {e}", s.name))?;
-    Ok((s.name.clone(), sim.run.trajectory, dt))
-}
+use crate::sim::scenario_trajectory;
 
 /// The JSON of a run of `robot` (its name).
 pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {

@@ -34,9 +34,9 @@ use serde_json::{json, Value};
 
 use super::stabilizer::Gains;
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::physics::output::scenario_trajectory;
 use crate::robot::Robot;
 use crate::scenario::BUILT_IN;
+use crate::sim::scenario_trajectory;
 
 /// The stabilizer scales [`weakest`] tries, weakest first.
 pub const LADDER: [f64; 8] = [0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0];

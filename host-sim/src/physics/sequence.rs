@@ -26,7 +26,7 @@ use serde_json::{json, Value};
 use super::probe::ProbeArgs;
 use super::tables::window_error_in;
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::paper::{self, plain_params, Sequence};
+use crate::eval::paper::{self, plain_params, Sequence};
 use crate::robot::Robot;
 use planner_core::gait::GaitParams;
 use planner_core::node::{Reach, Soles};

@@ -47,7 +47,7 @@
 //!    the twelve joint targets, the ankle corrections are added.
 
 use super::model::{sensor, Robot};
-use crate::multibody::{mean_yaw, rot_z, LegAngles, Mat3, Pose};
+use crate::robot::model::{mean_yaw, rot_z, LegAngles, Mat3, Pose};
 use planner_core::gait::{Phase, Reference};
 
 /// The stabilizer's gains (every one stated here; `k_dcm` ∈ {0, 1, 2}, `D` ∈ {400, 1000} and

@@ -1,5 +1,5 @@
 //! The paper's Tables I and II in dynamic simulation: the same 7 × 7 grid of modifications
-//! ([`crate::paper`]: steps of length `before`, the step in flight at 4.0 s changed to
+//! ([`crate::eval::paper`]: steps of length `before`, the step in flight at 4.0 s changed to
 //! `after`), each cell run in MuJoCo under the stabilizer twice: with the **plain re-plan**
 //! (no single-support adjustment, eq. 18, and no shaping, as Table I) and with the **proposed
 //! method** (adjustment and shaping, as Table II). A cell reports whether the robot fell
@@ -19,7 +19,7 @@
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::paper::{self, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS};
+use crate::eval::paper::{self, PAPER_ERROR_WITHOUT_M, PAPER_ERROR_WITH_M, STEP_LENGTHS};
 use planner_core::gait::GaitParams;
 
 /// The paper's remark (section IV.C): walking was difficult in dynamic simulation when the ZMP
@@ -67,7 +67,7 @@ pub fn window_error_in(samples: &[super::PhysicsSample], (t0, t1): (f64, f64)) -
         .fold(0.0, f64::max)
 }
 
-pub use crate::paper::plain_params;
+pub use crate::eval::paper::plain_params;
 
 /// Runs one cell both ways with the gait `params` (the proposed method; the plain re-plan is
 /// [`plain_params`] of it) and the robot of `cfg` (its link table for the kinematic error).

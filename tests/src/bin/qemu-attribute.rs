@@ -238,12 +238,12 @@ fn write_log(scenario: &str) -> PathBuf {
         .find(|(name, _, _)| name == scenario);
     let (log, cfg) = if let Some((_, kind, rate)) = fault {
         let fig4 = host_sim::scenario::built_in("fig4").unwrap_or_else(|| fail("no fig4".into()));
-        let (_, log) = host_sim::faults::run_case_logged(&fig4, kind, rate, 1)
+        let (_, log) = host_sim::eval::faults::run_case_logged(&fig4, kind, rate, 1)
             .unwrap_or_else(|e| fail(e.to_string()));
         (log, planner_core::node::NodeConfig::hrp2())
     } else {
         let s = if scenario.ends_with(".toml") {
-            host_sim::toml_scenario::load(std::path::Path::new(scenario))
+            host_sim::scenario::file::load(std::path::Path::new(scenario))
                 .unwrap_or_else(|e| fail(e.to_string()))
         } else {
             host_sim::scenario::built_in(scenario).unwrap_or_else(|| fail("not built in".into()))
@@ -260,7 +260,7 @@ fn write_log(scenario: &str) -> PathBuf {
         .chars()
         .take(32)
         .collect();
-    let bytes = host_sim::replay::binary_log(&name, &log, &cfg).unwrap_or_else(|e| fail(e));
+    let bytes = host_sim::sim::replay::binary_log(&name, &log, &cfg).unwrap_or_else(|e| fail(e));
     let dir = std::env::temp_dir().join(format!("qemu-attribute-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| fail(e.to_string()));
     std::fs::write(dir.join("replay.wlog"), bytes).unwrap_or_else(|e| fail(e.to_string()));

@@ -13,7 +13,7 @@
 //! | `/scene` | `foxglove.SceneUpdate` | row: entity `walk` in frame `world`: the soles (cubes of the sole's length and width and [`SOLE_THICKNESS`], left blue, right red, lifted with the foot), the COG (blue sphere at the COG height), the planned ZMP (red sphere on the floor), the multi-body ZMP (green) |
 //!
 //! **Times.** A message's log time (and publish time) is in nanoseconds since the Unix epoch,
-//! on the clock of `can.log` ([`crate::bus::LOG_EPOCH_S`] is simulated time 0): a trajectory
+//! on the clock of `can.log` ([`crate::sim::bus::LOG_EPOCH_S`] is simulated time 0): a trajectory
 //! row at CSV time `t` is logged at `LOG_EPOCH_S + t`, a CAN frame at its `can.log` time
 //! (microseconds, as in the log). The messages are written in non-decreasing log time over
 //! all channels (ties: trajectory row first, then the frames in log order). The `t` field of
@@ -34,8 +34,8 @@ use mcap::{Compression, WriteOptions};
 use planner_core::gait::{FootPose, Phase, Reference, Side};
 use serde_json::{json, Value};
 
-use crate::bus::LOG_EPOCH_S;
-use crate::multibody::MbSample;
+use crate::eval::multibody::MbSample;
+use crate::sim::bus::LOG_EPOCH_S;
 
 /// The topics of the file, in the order of their channel ids.
 pub const TOPICS: [&str; 6] = [
@@ -66,7 +66,7 @@ pub struct McapInput<'a> {
     pub dt: f64,
     /// The multi-body evaluation of the trajectory (sample `j` belongs to row `j`).
     pub mb: &'a [MbSample],
-    /// The lines of `can.log` (`candump -l` format, see [`crate::bus`]).
+    /// The lines of `can.log` (`candump -l` format, see [`crate::sim::bus`]).
     pub can_log: &'a [String],
     /// The COG height of the pendulum, where `/scene` draws the COG \[m\].
     pub cog_height: f64,
@@ -86,9 +86,9 @@ pub struct LogFrame {
 }
 
 /// Parses one `candump -l` line `(SSSSSSSSSS.UUUUUU) IFACE ID#DATA` (standard identifiers,
-/// classic frames; [`crate::bus::parse_candump_line`]); the error quotes the line.
+/// classic frames; [`crate::sim::bus::parse_candump_line`]); the error quotes the line.
 pub fn parse_log_line(line: &str) -> Result<LogFrame, String> {
-    let e = crate::bus::parse_candump_line(line).ok_or_else(|| {
+    let e = crate::sim::bus::parse_candump_line(line).ok_or_else(|| {
         format!("can.log line {line:?}: not a candump -l line with a standard identifier")
     })?;
     // MCAP times are nanoseconds.

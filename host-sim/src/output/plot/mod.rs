@@ -14,7 +14,14 @@
 //! * `modification.png`, for a walk whose footsteps were modified (`fig4`, `lateral`): the
 //!   plan as first sent (no modification), the modified walk without the single-support
 //!   time adjustment (the paper's Fig. 4 a) and the walk as it went, with the adjustment
-//!   (Fig. 4 b), side by side on the same axes, in the plane of the adjustment.
+//!   (Fig. 4 b), side by side on the same axes, in the plane of the adjustment. When every
+//!   modification preceded the start (the robot still stood), nothing was walked without it:
+//!   the figure then shows the walk alone, planned with the modified steps from the start,
+//!   and says so in its caption and title. (The first planned landings are in
+//!   `footprints.png`.)
+//!
+//! A mark that would fall on the y axis (a modification in the first ticks) is kept inside
+//! the plot area: the time axis then begins a little before 0.
 //!
 //! The figures are drawn with `plotters` into bitmaps (no display needed) at
 //! [`SUPERSAMPLE`] times their size and averaged down, so lines and text are anti-aliased.
@@ -30,11 +37,12 @@ mod top;
 
 use std::error::Error;
 use std::fs;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use planner_core::gait::{Footstep, GaitParams, Reference};
 
-use crate::multibody::MbSample;
+use crate::eval::multibody::MbSample;
 use crate::scenario::{Run, Scenario};
 
 pub use canvas::SUPERSAMPLE;
@@ -79,6 +87,9 @@ pub struct Mark {
     pub t: f64,
     /// Label.
     pub label: String,
+    /// The modification was applied before the walk's start, while the robot stood: the walk
+    /// is planned with it from the start (there is no walk without it to compare with).
+    pub before_start: bool,
 }
 
 /// Another trajectory of the same scenario, drawn beside the walk in `modification.png`.
@@ -88,6 +99,31 @@ pub struct Column {
     pub title: String,
     /// One reference per tick from tick 0.
     pub trajectory: Vec<Reference<f64>>,
+}
+
+/// One column of `modification.png` as drawn.
+#[derive(Clone, Copy, Debug)]
+pub struct ComparisonColumn<'a> {
+    /// Column title.
+    pub title: &'a str,
+    /// The trajectory drawn, one reference per tick from tick 0.
+    pub trajectory: &'a [Reference<f64>],
+    /// The marks drawn in it.
+    pub marks: &'a [Mark],
+}
+
+/// What `modification.png` shows, as [`write_plots`] draws it ([`Walk::comparison`]).
+#[derive(Clone, Debug)]
+pub struct Comparison<'a> {
+    /// The figure's caption.
+    pub caption: String,
+    /// The columns, left to right: the comparison columns, then the walk itself; the walk
+    /// alone when every modification preceded the start.
+    pub columns: Vec<ComparisonColumn<'a>>,
+    /// The time axis of the upper panels \[s\].
+    pub t: Range<f64>,
+    /// The time axis of the zoom panels \[s\].
+    pub zoom_t: Range<f64>,
 }
 
 /// Everything the figures show.
@@ -106,7 +142,8 @@ pub struct Walk<'a> {
     pub mb: Option<&'a [MbSample]>,
     /// Instants marked on the time plots.
     pub marks: Vec<Mark>,
-    /// Columns drawn before the walk itself in `modification.png` (none: no such file).
+    /// Columns drawn before the walk itself in `modification.png` (none: no such file,
+    /// unless every mark precedes the start: see [`Walk::comparison`]).
     pub columns: Vec<Column>,
     /// Title of the walk's own column in `modification.png`.
     pub title: String,
@@ -166,13 +203,36 @@ impl<'a> Walk<'a> {
             w.columns = columns;
             w.plane = plane;
             w.title = "(c) modified, with the time adjustment: as walked".into();
+        } else if w.marks.iter().any(|m| m.before_start) {
+            w.plane = plane;
+            w.title = PRE_START_TITLE.into();
         }
         Ok(w)
     }
+
+    /// The time axis of `sagittal.png` and `frontal.png` \[s\]: 0 to the end of the walk,
+    /// begun a little before 0 when a mark would otherwise sit on the y axis.
+    pub fn time_axis(&self) -> Range<f64> {
+        time::plane_time_axis(self)
+    }
+
+    /// What `modification.png` shows, or `None` when it is not written: the comparison
+    /// columns and the walk itself when the walk has comparison columns; else, when it has
+    /// marks and every one of them precedes the start, the walk alone (planned with the
+    /// modifications from the start, nothing to compare it with), marked.
+    pub fn comparison(&self) -> Option<Comparison<'_>> {
+        time::comparison_layout(self)
+    }
 }
 
+/// The title of the walk's column in `modification.png` when every modification preceded the
+/// start.
+pub const PRE_START_TITLE: &str =
+    "as walked: planned with the modified steps from the start (nothing walked without them)";
+
 /// Writes `sagittal.png`, `frontal.png`, `footprints.png` and, when the walk has comparison
-/// columns, `modification.png` into `out` (created if needed) and returns their paths.
+/// columns or only modifications before its start ([`Walk::comparison`]), `modification.png`
+/// into `out` (created if needed) and returns their paths.
 ///
 /// Errors: an empty trajectory (or comparison column), a `dt` that is not positive and finite,
 /// a plane other than 0 or 1, a sole size that is not positive and finite, no usable font (see the module documentation), or an I/O or
@@ -214,9 +274,9 @@ pub fn write_plots(out: &Path, walk: &Walk<'_>) -> Result<Vec<PathBuf>, Box<dyn 
     let path = out.join(FILES[2]);
     top::footprint_figure(&path, walk)?;
     written.push(path);
-    if !walk.columns.is_empty() {
+    if let Some(c) = walk.comparison() {
         let path = out.join(COMPARISON_FILE);
-        time::comparison_figure(&path, walk)?;
+        time::comparison_figure(&path, walk, &c)?;
         written.push(path);
     }
     Ok(written)

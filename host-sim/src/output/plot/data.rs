@@ -5,7 +5,7 @@
 use planner_core::gait::{Footstep, Gait, GaitParams, Phase, Reference, Side};
 
 use super::{Column, Landing, Mark};
-use crate::paper::without_adjustment;
+use crate::eval::paper::without_adjustment;
 use crate::scenario::{self, Command, Run, Scenario};
 
 /// Same pose within 1 mm and 2 mrad.
@@ -73,24 +73,42 @@ pub fn landings(run: &Run) -> Vec<Landing> {
         .collect()
 }
 
+/// The index in `run.events` of the first accepted start, if any.
+fn first_start(run: &Run) -> Option<usize> {
+    run.events
+        .iter()
+        .position(|e| matches!((e.command, &e.result), (Command::Start, Ok(()))))
+}
+
 /// The instants of the accepted modifications: one mark per control cycle with modifications,
 /// at the first reference computed after them (a command applied in tick `k` can shape the
 /// reference of row `k + 1` on; a modification of a step that is not the next to swing
 /// changes the walk only once that step lifts off), labelled with the steps moved and the
-/// single-support adjustment of the re-plan in that row, if any.
+/// single-support adjustment of the re-plan in that row, if any. A modification applied
+/// before the first accepted start (the robot still stood) is flagged
+/// [`Mark::before_start`] and labelled so, with the start's time (that of its command).
 pub fn modification_marks(run: &Run, dt: f64) -> Vec<Mark> {
-    let mut ticks: Vec<(u64, Vec<u16>)> = Vec::new();
-    for e in &run.events {
+    let start = first_start(run);
+    let start_label = match start {
+        Some(i) => format!(
+            ", before the start ({:.3} s)",
+            run.events[i].tick as f64 * dt
+        ),
+        None => ", before any start".into(),
+    };
+    let mut ticks: Vec<(u64, bool, Vec<u16>)> = Vec::new();
+    for (i, e) in run.events.iter().enumerate() {
         if let (Command::Modify(id, _), Ok(())) = (e.command, &e.result) {
+            let before = start.is_none_or(|s| i < s);
             match ticks.last_mut() {
-                Some((t, ids)) if *t == e.tick => ids.push(id),
-                _ => ticks.push((e.tick, vec![id])),
+                Some((t, b, ids)) if *t == e.tick && *b == before => ids.push(id),
+                _ => ticks.push((e.tick, before, vec![id])),
             }
         }
     }
     ticks
         .into_iter()
-        .map(|(tick, mut ids)| {
+        .map(|(tick, before_start, mut ids)| {
             ids.sort_unstable();
             ids.dedup();
             let row = tick + 1;
@@ -113,28 +131,50 @@ pub fn modification_marks(run: &Run, dt: f64) -> Vec<Mark> {
                 .find(|a| a.tick == row)
                 .map(|a| format!(" (ΔT {:+.3} s)", a.adjust_s))
                 .unwrap_or_default();
+            let when = if before_start {
+                start_label.as_str()
+            } else {
+                ""
+            };
             Mark {
                 t: row as f64 * dt,
-                label: format!("modification at {:.3} s: {steps}{adjust}", row as f64 * dt),
+                label: format!(
+                    "modification at {:.3} s{when}: {steps}{adjust}",
+                    row as f64 * dt
+                ),
+                before_start,
             }
         })
         .collect()
 }
 
 /// The comparison columns of `modification.png` for a run of `s` with accepted
-/// modifications (none otherwise), and the plane of the first adjustment (0 if none).
+/// modifications during the walk (none otherwise), and the plane of the first adjustment (0
+/// if none).
+///
+/// A modification applied before the first accepted start changes the plan before anything
+/// is walked: there is no walk without it to compare with (the run without it was never
+/// begun, and the time adjustment has nothing to adjust), so such modifications alone give no
+/// columns, and column (a) keeps them when the walk has later ones too.
 pub(super) fn comparison(
     s: &Scenario,
     run: &Run,
     params: GaitParams<f64>,
 ) -> Result<(Vec<Column>, usize), String> {
-    let modified = run
-        .events
-        .iter()
-        .any(|e| matches!((e.command, &e.result), (Command::Modify(..), Ok(()))));
-    if !modified {
-        return Ok((Vec::new(), 0));
+    let plane = run
+        .adjustments
+        .first()
+        .map_or(0, |a| usize::from(a.plane))
+        .min(1);
+    let start = first_start(run);
+    let accepted = |i: usize| matches!(run.events[i].result, Ok(()));
+    let is_modify = |i: usize| matches!(run.events[i].command, Command::Modify(..));
+    let during = |i: usize| start.is_some_and(|s| i > s);
+    let n = run.events.len();
+    if !(0..n).any(|i| is_modify(i) && accepted(i) && during(i)) {
+        return Ok((Vec::new(), plane));
     }
+    let before = (0..n).any(|i| is_modify(i) && accepted(i) && !during(i));
     let bare = without_adjustment(params);
     // scenario::run expects parameters the gait accepts: check them here.
     for p in [params, bare] {
@@ -142,13 +182,22 @@ pub(super) fn comparison(
         Gait::<f64, 64>::new(p, left, right)
             .map_err(|e| format!("comparison runs of {}: gait parameters: {e:?}", s.name))?;
     }
+    // Event `i` is the answer to timeline entry `i` (played in order, each once).
     let mut first = s.clone();
-    first
+    first.timeline = s
         .timeline
-        .retain(|(_, c)| !matches!(c, Command::Modify(..)));
+        .iter()
+        .enumerate()
+        .filter(|&(i, (_, c))| !(matches!(c, Command::Modify(..)) && start.is_some_and(|s| i > s)))
+        .map(|(_, e)| *e)
+        .collect();
     let columns = vec![
         Column {
-            title: "(a) as first planned: no modification".into(),
+            title: if before {
+                "(a) as planned at the start: no modification during the walk".into()
+            } else {
+                "(a) as first planned: no modification".into()
+            },
             trajectory: scenario::run(&first, params).trajectory,
         },
         Column {
@@ -156,8 +205,7 @@ pub(super) fn comparison(
             trajectory: scenario::run(s, bare).trajectory,
         },
     ];
-    let plane = run.adjustments.first().map_or(0, |a| usize::from(a.plane));
-    Ok((columns, plane.min(1)))
+    Ok((columns, plane))
 }
 
 /// One support phase: `[t0, t1)` and the phase.

@@ -65,7 +65,7 @@
 //! Rejected, with a message naming the entry (and its line): TOML syntax errors, unknown keys, missing
 //! required keys, wrong types, unknown sides or command kinds, negative, non-finite or huge
 //! times, non-finite coordinates, step ids outside 0 … 65,534 (the node's step numbers:
-//! [`crate::sim::WireId`]), duplicate step ids, a `[[modify]]` of an id that no `[[step]]`
+//! [`WireId`]), duplicate step ids, a `[[modify]]` of an id that no `[[step]]`
 //! defines and without a `side`, unknown `expect` names and `not_walked` on a `[[command]]`,
 //! an empty name and a non-positive `max_time_s`. ([`load_file`] also refuses an entry that
 //! cannot be put on the bus, e.g. a modification more than 4.096 m from its append.)
@@ -79,11 +79,9 @@ use planner_core::gait::{Footstep, Side};
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::scenario::{Command, Scenario};
-use crate::sim::{Failure, WireId, MAX_WIRE_ID};
-
-/// The scenario tick \[s\] (the HRP-2 control period).
-pub const TICK_S: f64 = 0.005;
+use super::expect::Failure;
+use super::wire::{WireId, MAX_WIRE_ID};
+use super::{Command, Scenario, TICK_S};
 
 /// `max_time_s` when the file does not give it \[s\].
 pub const DEFAULT_MAX_TIME_S: f64 = 20.0;
@@ -388,13 +386,13 @@ pub fn load(path: &Path) -> Result<Scenario, String> {
 }
 
 /// Reads and parses a scenario file, with the entry behind each command, and checks that
-/// every command can be put on the bus ([`crate::sim::wire_check`]); errors name the file
+/// every command can be put on the bus ([`super::wire::wire_check`]); errors name the file
 /// and the entry.
 pub fn load_file(path: &Path) -> Result<ScenarioFile, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let file = parse_file(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    crate::sim::wire_check(&file.scenario)
+    super::wire::wire_check(&file.scenario)
         .map_err(|(i, e)| format!("{}: {}: {e}", path.display(), file.entries[i].label))?;
     Ok(file)
 }

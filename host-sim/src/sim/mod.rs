@@ -19,16 +19,23 @@
 //! by an accepted `stop_now` of the scenario counts as carried out: that is what the scenario
 //! asked for. These are the names that a scenario file's `expect` key takes ([`Failure`]).
 //!
-//! Step ids: a scenario's footstep ids are the node's step numbers ([`WireId`], 0 …
-//! [`MAX_WIRE_ID`]); the TOML reader refuses an id that does not fit, naming the entry, and
+//! Step ids: a scenario's footstep ids are the node's step numbers ([`WireId`](crate::scenario::WireId), 0 …
+//! [`MAX_WIRE_ID`](crate::scenario::MAX_WIRE_ID)); the TOML reader refuses an id that does not fit, naming the entry, and
 //! [`simulate`] refuses one too for scenarios built in code.
 
-use planner_core::gait::{Footstep, Reference, Side};
-use planner_core::node::{Counters, Node, NodeConfig};
-use planner_core::wire::{self, Ack, Command, ControlOp, RawFrame, Reason, StepBook, Stream};
+pub mod bus;
+pub mod replay;
+#[cfg(feature = "socketcan")]
+pub mod socketcan;
 
-use crate::bus::{Bus, BusStats, Faults};
-use crate::scenario::{self, Adjustment, Event, Run, Scenario};
+use planner_core::gait::{Footstep, Reference, Side};
+use planner_core::node::{Broken, Counters, Node, NodeConfig};
+use planner_core::wire::{self, Ack, ControlOp, RawFrame, Reason, StepBook, Stream};
+
+use crate::scenario::expect::{limit_text, reason_name};
+use crate::scenario::wire::{encode, Controller};
+use crate::scenario::{self, Adjustment, Event, Failure, Run, Scenario};
+use bus::{Bus, BusStats, Faults};
 
 use embedded_can::nb::Can;
 
@@ -58,42 +65,6 @@ impl Default for SimConfig {
             seed: 1,
             record: true,
             heartbeat_ticks: 20,
-        }
-    }
-}
-
-/// A footstep id as the bus carries it: the node's 16-bit step number (the low byte is byte 0
-/// of `STEP_APPEND` and `STEP_MODIFY` and the `seq` of their `ACK`, the high byte is in their
-/// CRC): the one definition of the id range, from a scenario file to the wire. The node of a
-/// run numbers its steps from 0 (its entropy is 0), so a scenario's ids are the numbers.
-pub type WireId = u16;
-
-/// The largest id a scenario may give: a start-up numbers 65,535 steps (0 … 65,534).
-pub const MAX_WIRE_ID: WireId = 0xFFFE;
-
-/// The id of a scenario command as the bus carries it, `None` if it does not fit.
-pub fn wire_id(id: u16) -> Option<WireId> {
-    (id <= MAX_WIRE_ID).then_some(id)
-}
-
-/// The controller's side of the session: the epoch the node published and the sequence
-/// counter (one for every control command).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Controller {
-    /// The session epoch the controller speaks in.
-    pub(crate) epoch: u32,
-    /// The last sequence number it used.
-    pub(crate) seq: u32,
-}
-
-impl Controller {
-    /// The next control command `op` in the session.
-    pub(crate) fn control(&mut self, op: ControlOp) -> Command {
-        self.seq += 1;
-        Command::Control {
-            session: self.epoch as u16,
-            seq: self.seq,
-            op,
         }
     }
 }
@@ -143,9 +114,13 @@ pub struct SimRun {
     /// `true` if the run ended at the scenario's `max_ticks` rather than standing after its
     /// last command.
     pub cut: bool,
+    /// For every event of `run.events`: the reach limit the node's check found broken for
+    /// its footstep in the cycle it was handled (`Node::reach_broken`, asked right after that
+    /// cycle), `None` for other commands and for footsteps within reach.
+    pub broken: Vec<Option<Broken<f64>>>,
 }
 
-fn send(port: &mut crate::bus::Port, f: RawFrame) {
+fn send(port: &mut crate::sim::bus::Port, f: RawFrame) {
     // The mailbox holds 64 frames; a scenario never sends that many in one tick.
     let _ = port.transmit(&f);
 }
@@ -181,6 +156,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut book = StepBook::new();
     let mut steps: Vec<(u16, Side, Fate)> = Vec::new();
     let mut cut = true;
+    let mut broken = Vec::new();
     let mut next = 0;
     let mut last_replan = None;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
@@ -216,6 +192,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
             }
             send(&mut ctl, wire.encode());
             events.push((k, command, wire));
+            broken.push(None);
             next += 1;
         }
         if cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0 {
@@ -225,6 +202,18 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         bus.advance(t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
         let report = node.poll(now_ms, &mut nport);
+        // Which limit each footstep of this cycle breaks, in the state the node left.
+        for (e, b) in events
+            .iter()
+            .zip(broken.iter_mut())
+            .filter(|(e, _)| e.0 == k)
+        {
+            *b = match e.1 {
+                scenario::Command::Push(_, f) => node.reach_broken(&f, None),
+                scenario::Command::Modify(id, f) => node.reach_broken(&f, Some(id)),
+                _ => None,
+            };
+        }
         trajectory.push(report.reference);
         track_steps(node.gait(), k, &mut steps);
         if let Some(info) = node.gait().last_replan() {
@@ -303,79 +292,8 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         counters: *node.counters(),
         steps: steps.into_iter().map(|(id, _, f)| (id, f)).collect(),
         cut,
+        broken,
     })
-}
-
-/// The frame of a scenario command: footsteps through the controller's step book, control
-/// commands with the next sequence number.
-fn encode(
-    command: scenario::Command,
-    ctl: &mut Controller,
-    book: &mut StepBook,
-) -> Result<Command, String> {
-    let control = |ctl: &mut Controller, op| Ok(ctl.control(op));
-    match command {
-        scenario::Command::Push(id, f) | scenario::Command::Modify(id, f) => {
-            let left = f.side == Side::Left;
-            let Some(wid) = wire_id(id) else {
-                return Err(format!(
-                    "footstep id {id} does not fit the bus (0 … {MAX_WIRE_ID})"
-                ));
-            };
-            // The limits as the codec has them.
-            let limits = |bits| {
-                let (min, max) = wire::signed_range(bits);
-                (
-                    f64::from(min) * wire::STEP_UNIT,
-                    f64::from(max) * wire::STEP_UNIT,
-                )
-            };
-            if let scenario::Command::Push(..) = command {
-                book.append(wid, left, f.x, f.y, f.yaw).ok_or_else(|| {
-                    let (min, max) = limits(wire::STEP_BITS);
-                    format!(
-                        "footstep {id} at ({}, {}) m is not representable on the bus: \
-                         STEP_APPEND carries x and y within {min} … {max} m",
-                        f.x, f.y
-                    )
-                })
-            } else {
-                let Some(base) = book.appended(wid) else {
-                    return Err(format!(
-                        "modification of footstep {id}: no append of step {id} was sent \
-                         before it, and STEP_MODIFY carries the offset from the appended \
-                         position"
-                    ));
-                };
-                let (bx, by, _) = base.si();
-                book.modify(wid, f.x, f.y, f.yaw).ok_or_else(|| {
-                    let (min, max) = limits(wire::OFFSET_BITS);
-                    format!(
-                        "modification of footstep {id} to ({}, {}) m is not representable on \
-                         the bus: it is ({:+.4}, {:+.4}) m from the appended ({bx:.4}, \
-                         {by:.4}) m, STEP_MODIFY carries offsets within {min} … {max} m",
-                        f.x,
-                        f.y,
-                        f.x - bx,
-                        f.y - by
-                    )
-                })
-            }
-        }
-        scenario::Command::Start => control(ctl, ControlOp::Start),
-        scenario::Command::Stop => control(ctl, ControlOp::Stop),
-        scenario::Command::StopNow => control(ctl, ControlOp::StopNow),
-    }
-}
-
-/// Checks that every command of `s` can be sent on the bus, as [`simulate`] would send it;
-/// on failure, the index of the first command that cannot and why.
-pub fn wire_check(s: &Scenario) -> Result<(), (usize, String)> {
-    let (mut ctl, mut book) = (Controller::default(), StepBook::new());
-    for (i, &(_, command)) in s.timeline.iter().enumerate() {
-        encode(command, &mut ctl, &mut book).map_err(|e| (i, e))?;
-    }
-    Ok(())
 }
 
 /// Follows every appended footstep through the gait after control cycle `k`.
@@ -398,75 +316,6 @@ fn track_steps(g: &planner_core::gait::Gait<f64, 64>, k: u64, steps: &mut [(u16,
             (Fate::Queued, None) => Fate::Dropped { tick: k },
             (f, None) => f,
         };
-    }
-}
-
-/// A way a command can fail: the names a scenario file's `expect` key takes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Failure {
-    /// The node refused it: `ACK` with this reason (name: the reason's, as in the DBC's
-    /// `VAL_ 128 reason` table, e.g. `reach`).
-    Refused(Reason),
-    /// No answer came (`no_answer`).
-    NoAnswer,
-    /// Accepted, never carried out: a footstep not walked at its accepted pose
-    /// (`not_walked`).
-    NotWalked,
-}
-
-/// The DBC name of the command an `ACK` answers (its `command` byte): `ESTOP`, `CONTROL`,
-/// `STEP_APPEND`, `STEP_MODIFY`, or the byte in hex for another.
-pub fn command_name(code: u8) -> String {
-    match code {
-        0x10 => "ESTOP".into(),
-        0x20 => "CONTROL".into(),
-        0x00 => "STEP_APPEND".into(),
-        0x01 => "STEP_MODIFY".into(),
-        other => format!("0x{other:02x}"),
-    }
-}
-
-/// The name of a refusal reason: the snake case of the variant, as in the DBC's value table
-/// (`Reason::SequenceGap` is `sequence_gap`).
-pub fn reason_name(r: Reason) -> String {
-    let mut out = String::new();
-    for (i, c) in format!("{r:?}").chars().enumerate() {
-        if c.is_ascii_uppercase() {
-            if i > 0 {
-                out.push('_');
-            }
-            out.push(c.to_ascii_lowercase());
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-impl Failure {
-    /// Every failure, in the order of their names' documentation.
-    pub fn all() -> impl Iterator<Item = Failure> {
-        Reason::ALL
-            .into_iter()
-            .map(Failure::Refused)
-            .chain([Failure::NoAnswer, Failure::NotWalked])
-    }
-
-    /// The name (`reach`, `sequence_gap`, …, `no_answer`, `not_walked`).
-    pub fn name(self) -> String {
-        match self {
-            Failure::Refused(r) => reason_name(r),
-            Failure::NoAnswer => "no_answer".into(),
-            Failure::NotWalked => "not_walked".into(),
-        }
-    }
-
-    /// From a name ([`Failure::name`]; `out_of_reach` is also `reach`).
-    pub fn from_name(name: &str) -> Option<Failure> {
-        if name == "out_of_reach" {
-            return Some(Failure::Refused(Reason::Reach));
-        }
-        Failure::all().find(|f| f.name() == name)
     }
 }
 
@@ -493,7 +342,7 @@ fn same_pose(a: &Footstep<f64>, b: &Footstep<f64>) -> bool {
 
 /// What became of every command of a run of `s` ([`simulate`]), in timeline order.
 pub fn outcomes(s: &Scenario, sim: &SimRun) -> Vec<Outcome> {
-    let dt = crate::toml_scenario::TICK_S;
+    let dt = crate::scenario::TICK_S;
     let end_s = (sim.run.trajectory.len() - 1) as f64 * dt;
     let stop_now_at: Vec<u64> = sim
         .run
@@ -505,12 +354,25 @@ pub fn outcomes(s: &Scenario, sim: &SimRun) -> Vec<Outcome> {
     sim.run
         .events
         .iter()
-        .map(|e| {
+        .enumerate()
+        .map(|(i, e)| {
             let (failure, detail) = match (&e.result, e.command) {
                 (Err(r), _) => match Reason::ALL.into_iter().find(|x| format!("{x:?}") == *r) {
                     Some(reason) => (
                         Some(Failure::Refused(reason)),
-                        format!("refused: {} (code {})", reason_name(reason), reason.code()),
+                        match sim.broken.get(i).copied().flatten() {
+                            Some(b) if matches!(reason, Reason::Reach | Reason::Crossing) => {
+                                format!(
+                                    "refused: {} (code {}): {}",
+                                    reason_name(reason),
+                                    reason.code(),
+                                    limit_text(&b)
+                                )
+                            }
+                            _ => {
+                                format!("refused: {} (code {})", reason_name(reason), reason.code())
+                            }
+                        },
                     ),
                     None => (
                         Some(Failure::NoAnswer),
@@ -609,4 +471,31 @@ fn step_outcome(
 /// The reference trajectory a run published.
 pub fn references(run: &SimRun) -> &[Reference<f64>] {
     &run.run.trajectory
+}
+
+/// The planner's trajectory for a scenario (built-in name or `.toml` file) through the virtual
+/// CAN bus and `robot`'s node, and its tick \[s\]. A built-in scenario needs a robot that
+/// stands as HRP-2 ([`crate::robot::Robot::check_hrp2_footsteps`]).
+pub fn scenario_trajectory(
+    name: &str,
+    robot: &crate::robot::Robot,
+) -> Result<(String, Vec<planner_core::gait::Reference<f64>>, f64), String> {
+    let s = if name.ends_with(".toml") {
+        crate::scenario::file::load_file(std::path::Path::new(name))?.scenario
+    } else {
+        robot.check_hrp2_footsteps(name)?;
+        crate::scenario::built_in(name).ok_or_else(|| {
+            format!(
+                "unknown scenario {name:?}; built-in: {} (or a .toml file)",
+                crate::scenario::BUILT_IN.join(", ")
+            )
+        })?
+    };
+    let cfg = SimConfig {
+        node: robot.node_config(),
+        ..SimConfig::default()
+    };
+    let dt = cfg.node.params.dt;
+    let sim = simulate(&s, &cfg).map_err(|e| format!("{}: {e}", s.name))?;
+    Ok((s.name.clone(), sim.run.trajectory, dt))
 }

@@ -29,9 +29,9 @@
 //!   chosen at random.
 //!
 //! What is counted per run ([`CaseResult`]):
-//! * **fall**: the multi-body ZMP ([`crate::multibody::evaluate`] of the node's references)
+//! * **fall**: the multi-body ZMP ([`crate::eval::multibody::evaluate`] of the node's references)
 //!   leaves the support polygon by more than [`FALL_MARGIN`] at some tick (ticks 2 … n−3, as
-//!   [`crate::multibody::max_zmp_error`]). The support polygon is the sole (0.24 × 0.14 m, centred on
+//!   [`crate::eval::multibody::max_zmp_error`]). The support polygon is the sole (0.24 × 0.14 m, centred on
 //!   the foot pose and turned by its yaw) of the foot on the ground in single support, and the
 //!   convex hull of both soles otherwise (the reference's phase decides);
 //! * **leg out of reach**: the model cannot follow the references to the end (a knee would
@@ -67,7 +67,7 @@ mod sweep;
 use planner_core::gait::Reference;
 use planner_core::node::NodeConfig;
 
-use crate::multibody::Model;
+use crate::robot::model::Model;
 use crate::scenario::Scenario;
 
 pub use polygon::{landings, support_polygon};

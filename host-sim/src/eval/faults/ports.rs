@@ -1,11 +1,11 @@
 //! What a fault run puts on the bus besides the controller: the babbling port of the `flood`
 //! fault ([`Flood`]) and the seeded random numbers every fault draws from ([`Rng`]). (The
-//! node's port is wrapped in [`crate::bus::Tap`] to record what the node hands to the bus.)
+//! node's port is wrapped in [`crate::sim::bus::Tap`] to record what the node hands to the bus.)
 
 use embedded_can::nb::Can;
 use planner_core::wire::RawFrame;
 
-use crate::bus::{Bus, Port};
+use crate::sim::bus::{Bus, Port};
 
 pub(super) struct Rng(u64);
 

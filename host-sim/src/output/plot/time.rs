@@ -13,7 +13,7 @@ use super::canvas::{
     bounds, configure_mesh, draw_legend, draw_series, padded, render, Area, Key, Px, Series,
 };
 use super::data::{cog, fluctuation, phase_spans, sole_limits, zmp, Span};
-use super::{Mark, Walk};
+use super::{Comparison, ComparisonColumn, Mark, Walk};
 use planner_core::gait::{Phase, Reference};
 
 pub(super) const COG_COLOR: RGBColor = RGBColor(0x1f, 0x5f, 0xbf);
@@ -40,6 +40,9 @@ const ZOOM_BEFORE_S: f64 = 1.0;
 const ZOOM_AFTER_S: f64 = 2.5;
 /// The zoom panel spans at least ± this \[mm\].
 const MIN_ZOOM_MM: f64 = 2.0;
+/// A mark lies at least this fraction of its time axis right of the axis' left end (where
+/// the y axis would hide it).
+const MARK_INSET: f64 = 0.03;
 
 /// A polyline in chart coordinates.
 type Line = Vec<(f64, f64)>;
@@ -177,6 +180,30 @@ fn time_of(k: usize, dt: f64) -> f64 {
     k as f64 * dt
 }
 
+/// The time axis `t`, begun earlier when a mark within it lies less than [`MARK_INSET`] of
+/// its span from its start (a modification in the first ticks, before the walk's start), so
+/// that the mark is drawn inside the plot area and not on the y axis; `t` itself otherwise.
+fn inset_marks(t: Range<f64>, marks: &[Mark]) -> Range<f64> {
+    let edge = t.start + MARK_INSET * (t.end - t.start);
+    let first = marks
+        .iter()
+        .map(|m| m.t)
+        .filter(|&x| x >= t.start && x < edge)
+        .fold(f64::INFINITY, f64::min);
+    if !first.is_finite() {
+        return t;
+    }
+    // first − start = MARK_INSET · (end − start).
+    let start = (first - MARK_INSET * t.end) / (1.0 - MARK_INSET);
+    start..t.end
+}
+
+/// The time axis of the plane figures.
+pub(super) fn plane_time_axis(walk: &Walk<'_>) -> Range<f64> {
+    let t_end = time_of(walk.trajectory.len().saturating_sub(1), walk.dt).max(0.1);
+    inset_marks(0.0..t_end, &walk.marks)
+}
+
 /// The upper panel's lines of one trajectory in one plane.
 fn plane_series(tr: &[Reference<f64>], dt: f64, plane: usize, axis: &str) -> Vec<Series> {
     let line = |label: String, color, f: &dyn Fn(&Reference<f64>) -> f64| Series {
@@ -297,7 +324,7 @@ pub(super) fn plane_figure(
     let y = upper_range(&series[..2], &[&limits]);
     let zoom = fluctuation_series(tr, dt, plane, axis);
     let zy = zoom_range([&zoom]);
-    let t_end = time_of(tr.len() - 1, dt).max(0.1);
+    let t = plane_time_axis(walk);
     let spans = phase_spans(tr, dt);
     let caption = format!("{}: {name}", walk.name);
     render(path, PLANE_SIZE, |root, px| {
@@ -312,7 +339,7 @@ pub(super) fn plane_figure(
             &upper,
             px,
             &Panel {
-                t: 0.0..t_end,
+                t: t.clone(),
                 y: y.clone(),
                 x_desc: "",
                 y_desc: &format!("{axis} [m]"),
@@ -329,7 +356,7 @@ pub(super) fn plane_figure(
             &lower,
             px,
             &Panel {
-                t: 0.0..t_end,
+                t: t.clone(),
                 y: zy.clone(),
                 x_desc: "time [s]",
                 y_desc: "fluctuation [mm]",
@@ -355,38 +382,40 @@ pub(super) fn plane_figure(
     })
 }
 
-/// `modification.png`: the comparison columns and the walk itself, on the same axes.
-pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<dyn Error>> {
-    let plane = walk.plane;
-    let (axis, name) = [("x", "sagittal plane"), ("y", "frontal plane")][plane];
+/// What `modification.png` shows (see [`Walk::comparison`]).
+pub(super) fn comparison_layout<'a>(walk: &'a Walk<'_>) -> Option<Comparison<'a>> {
+    let pre_start = walk.columns.is_empty()
+        && !walk.marks.is_empty()
+        && walk.marks.iter().all(|m| m.before_start);
+    if walk.columns.is_empty() && !pre_start {
+        return None;
+    }
+    let (_, name) = [("x", "sagittal plane"), ("y", "frontal plane")][walk.plane.min(1)];
     let dt = walk.dt;
-    let cols: Vec<(&str, &[Reference<f64>])> = walk
+    // The first planned column shows no mark: the modifications had not been made in it.
+    let columns: Vec<ComparisonColumn<'a>> = walk
         .columns
         .iter()
-        .map(|c| (c.title.as_str(), c.trajectory.as_slice()))
-        .chain(std::iter::once((walk.title.as_str(), walk.trajectory)))
+        .enumerate()
+        .map(|(i, c)| ComparisonColumn {
+            title: c.title.as_str(),
+            trajectory: c.trajectory.as_slice(),
+            marks: if i == 0 { &[] } else { &walk.marks },
+        })
+        .chain(std::iter::once(ComparisonColumn {
+            title: walk.title.as_str(),
+            trajectory: walk.trajectory,
+            marks: &walk.marks,
+        }))
         .collect();
-    let series: Vec<Vec<Series>> = cols
+    let t_end = columns
         .iter()
-        .map(|(_, tr)| plane_series(tr, dt, plane, axis))
-        .collect();
-    let limits: Vec<_> = cols
-        .iter()
-        .map(|(_, tr)| limit_lines(tr, dt, plane, walk.sole))
-        .collect();
-    let zooms: Vec<Series> = cols
-        .iter()
-        .map(|(_, tr)| fluctuation_series(tr, dt, plane, axis))
-        .collect();
-    let y = upper_range(series.iter().flatten(), &limits.iter().collect::<Vec<_>>());
-    let zy = zoom_range(&zooms);
-    let t_end = cols
-        .iter()
-        .map(|(_, tr)| time_of(tr.len() - 1, dt))
+        .map(|c| time_of(c.trajectory.len().saturating_sub(1), dt))
         .fold(0.1, f64::max);
-    let spans: Vec<_> = cols.iter().map(|(_, tr)| phase_spans(tr, dt)).collect();
-    // The zoom panels show the time around the first modification.
-    let zoom_t = match walk.marks.first() {
+    let t = inset_marks(0.0..t_end, &walk.marks);
+    // The zoom panels show the time around the first modification during the walk; the
+    // whole walk when every modification preceded the start.
+    let zoom_t = match walk.marks.iter().find(|m| !m.before_start) {
         Some(m) => (m.t - ZOOM_BEFORE_S).max(0.0)..(m.t + ZOOM_AFTER_S).min(t_end),
         None => 0.0..t_end,
     };
@@ -395,24 +424,60 @@ pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<
     } else {
         0.0..t_end
     };
+    let zoom_t = inset_marks(zoom_t, &walk.marks);
     let what = walk
         .marks
         .iter()
         .map(|m| m.label.as_str())
         .collect::<Vec<_>>()
         .join("; ");
-    let caption = format!("{}, {name}: {what}", walk.name);
-    let n = cols.len() as u32;
+    Some(Comparison {
+        caption: format!("{}, {name}: {what}", walk.name),
+        columns,
+        t,
+        zoom_t,
+    })
+}
+
+/// `modification.png`: the columns of `c` (the comparison columns and the walk itself, or the
+/// walk alone), on the same axes.
+pub(super) fn comparison_figure(
+    path: &Path,
+    walk: &Walk<'_>,
+    c: &Comparison<'_>,
+) -> Result<(), Box<dyn Error>> {
+    let plane = walk.plane;
+    let axis = ["x", "y"][plane];
+    let dt = walk.dt;
+    let cols = &c.columns;
+    let series: Vec<Vec<Series>> = cols
+        .iter()
+        .map(|c| plane_series(c.trajectory, dt, plane, axis))
+        .collect();
+    let limits: Vec<_> = cols
+        .iter()
+        .map(|c| limit_lines(c.trajectory, dt, plane, walk.sole))
+        .collect();
+    let zooms: Vec<Series> = cols
+        .iter()
+        .map(|c| fluctuation_series(c.trajectory, dt, plane, axis))
+        .collect();
+    let y = upper_range(series.iter().flatten(), &limits.iter().collect::<Vec<_>>());
+    let zy = zoom_range(&zooms);
+    let spans: Vec<_> = cols.iter().map(|c| phase_spans(c.trajectory, dt)).collect();
+    let zoom_t = c.zoom_t.clone();
+    // A single column is drawn as wide as two.
+    let n = cols.len().max(2) as u32;
     let size = (COLUMN_W * n + LEGEND_W, PLANE_SIZE.1);
     render(path, size, |root, px| {
         let body = root
             .margin(px.u(8), 0, 0, 0)
-            .titled(&caption, px.font(25))?;
+            .titled(&c.caption, px.font(25))?;
         let w = body.dim_in_pixel().0;
         let (plot, legend) = body.split_horizontally(w.saturating_sub(px.u(LEGEND_W)));
         let columns = plot.split_evenly((1, cols.len()));
         for (i, area) in columns.iter().enumerate() {
-            let area = area.titled(cols[i].0, px.font(17))?;
+            let area = area.titled(cols[i].title, px.font(17))?;
             let h = area.dim_in_pixel().1;
             let (upper, lower) = area.split_vertically((f64::from(h) * UPPER) as u32);
             // The largest fluctuation of the column, in its zoom panel.
@@ -426,7 +491,7 @@ pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<
                 &upper,
                 px,
                 &Panel {
-                    t: 0.0..t_end,
+                    t: c.t.clone(),
                     y: y.clone(),
                     x_desc: "",
                     y_desc: &format!("{axis} [m]"),
@@ -434,7 +499,7 @@ pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<
                     spans: &spans[i],
                     limits: Some(limits[i].clone()),
                     series: &series[i],
-                    marks: if i == 0 { &[] } else { &walk.marks },
+                    marks: cols[i].marks,
                     mark_labels: false,
                     note: None,
                 },
@@ -451,11 +516,12 @@ pub(super) fn comparison_figure(path: &Path, walk: &Walk<'_>) -> Result<(), Box<
                     spans: &spans[i],
                     limits: None,
                     series: std::slice::from_ref(&zooms[i]),
-                    marks: if i == 0 { &[] } else { &walk.marks },
+                    marks: cols[i].marks,
                     mark_labels: false,
                     note: Some(format!(
                         "zoom {:.1} … {:.1} s; largest in single support: {peak:+.1} mm",
-                        zoom_t.start, zoom_t.end
+                        zoom_t.start.max(0.0),
+                        zoom_t.end
                     )),
                 },
             )?;

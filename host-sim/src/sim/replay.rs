@@ -36,7 +36,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::bus::{parse_candump_line, Bus, Faults, Tap};
+use crate::sim::bus::{parse_candump_line, Bus, Faults, Tap};
 use embedded_can::nb::Can;
 
 /// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).

@@ -385,11 +385,11 @@ pub fn cells_within(grid: &[Vec<Modification>], dt: f64, cycles: f64) -> usize {
 /// error", as `host-sim tables` and `host-sim physics-tables` report it); `None` when the
 /// model's legs cannot reach the footsteps.
 pub fn modified_support_error(
-    model: &crate::multibody::Model,
+    model: &crate::robot::model::Model,
     m: &Modification,
     dt: f64,
 ) -> Option<f64> {
-    let mb = crate::multibody::evaluate(model, &m.trajectory, dt).ok()?;
+    let mb = crate::eval::multibody::evaluate(model, &m.trajectory, dt).ok()?;
     let start = MODIFICATION_TICK as usize;
     let support = (m.before * 3.0, -0.1);
     let mut worst: f64 = 0.0;
@@ -430,11 +430,11 @@ pub fn check_reach(
 /// the support foot (the step before the one swinging) \[m\]; `None` when the legs cannot
 /// reach the footsteps.
 pub fn sequence_support_error(
-    model: &crate::multibody::Model,
+    model: &crate::robot::model::Model,
     seq: &Sequence,
     dt: f64,
 ) -> Option<f64> {
-    let mb = crate::multibody::evaluate(model, &seq.trajectory, dt).ok()?;
+    let mb = crate::eval::multibody::evaluate(model, &seq.trajectory, dt).ok()?;
     let walked = seq.walked();
     let mut worst: f64 = 0.0;
     for s in &seq.steps {
@@ -493,10 +493,11 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
             adjust[r][c] = m.adjust_s;
             lipm_with[r][c] = m.sagittal_m.abs().max(m.frontal_m.abs());
             lipm_without[r][c] = w.sagittal_m.abs().max(w.frontal_m.abs());
-            with[r][c] = modified_support_error(&crate::multibody::Model::hrp2(), &m, params.dt)
+            with[r][c] = modified_support_error(&crate::robot::model::Model::hrp2(), &m, params.dt)
                 .unwrap_or(f64::NAN);
-            without[r][c] = modified_support_error(&crate::multibody::Model::hrp2(), &w, params.dt)
-                .unwrap_or(f64::NAN);
+            without[r][c] =
+                modified_support_error(&crate::robot::model::Model::hrp2(), &w, params.dt)
+                    .unwrap_or(f64::NAN);
             let mut m = m;
             m.trajectory.clear();
             row.push(m);
@@ -512,7 +513,7 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
         "adjust_s": adjust,
         "paper_adjust_s": PAPER_ADJUST_S,
         "cells_within_one_cycle": within,
-        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
+        "zmp_error_model": "multi-body HRP-2 model (host-sim/src/eval/multibody.rs): largest distance between its ZMP and the support-foot centre in the single support where the modification takes effect",
         "max_zmp_error_without_m": without,
         "max_zmp_error_with_m": with,
         "lipm_zmp_fluctuation_without_m": lipm_without,

@@ -1,5 +1,5 @@
 //! One run of the fault sweep ([`play`]): the retransmitting controller (see the module docs
-//! of [`crate::faults`]), the node and the virtual bus with the faults, tick by tick; then the
+//! of [`crate::eval::faults`]), the node and the virtual bus with the faults, tick by tick; then the
 //! evaluation of the node's references (the multi-body ZMP against the support polygon) and
 //! of its landings against the footsteps the controller saw accepted.
 
@@ -11,9 +11,10 @@ use planner_core::wire::{ids, Ack, Command, ControlOp, Reason, StepBook, Stream}
 use super::polygon::{landings, outside, support_polygon};
 use super::ports::{Flood, Rng};
 use super::{CaseResult, FaultKind, DELAY_NS, FALL_MARGIN, HEAVY, MAX_RETRIES, RETRY_TICKS};
-use crate::bus::{Bus, Faults, Tap};
-use crate::multibody::{evaluate, max_zmp_error, MbError, Model};
+use crate::eval::multibody::{evaluate, max_zmp_error, MbError};
+use crate::robot::model::Model;
 use crate::scenario::{self, Scenario};
+use crate::sim::bus::{Bus, Faults, Tap};
 
 /// A command of the controller, with the footstep (id, pose) it carries if any, and whether it
 /// pins a step (see [`super::run_case`]).
@@ -59,7 +60,8 @@ fn wire_step(
     id: u16,
     f: &Footstep<f64>,
 ) -> Result<Command, String> {
-    let wid = crate::sim::wire_id(id).ok_or(format!("footstep id {id} does not fit the bus"))?;
+    let wid = crate::scenario::wire::wire_id(id)
+        .ok_or(format!("footstep id {id} does not fit the bus"))?;
     let c = if append {
         book.append(wid, f.side == Side::Left, f.x, f.y, f.yaw)
     } else {
@@ -164,7 +166,7 @@ pub(super) fn play(
     // names one of its resets as the last accepted command (the answer lost). `SESSION` has no
     // CRC: the latest one read counts. The node does not tick before (nothing moves), so the
     // scenario's timing is unchanged.
-    let mut ctl_state = crate::sim::Controller::default();
+    let mut ctl_state = crate::scenario::wire::Controller::default();
     let mut pre = 0u64;
     let mut heard: Option<u32> = None;
     // (sequence number, echo, session) of each reset sent: the session opened is one more than

@@ -1,8 +1,22 @@
 //! Scenarios: a timeline of footstep commands played against the gait, one tick per 5 ms of
 //! simulated time, and the built-in HRP-2 scenarios.
 //!
-//! (The virtual CAN link and the multi-body model come with the host-sim issue; this runner
-//! drives the gait API directly, the same API that the node will call.)
+//! [`run`] drives the gait API directly (the API the node calls), without the bus;
+//! [`crate::sim`] plays a scenario through the virtual CAN link and the node.
+//!
+//! # Rooms
+//! [`file`](mod@file) reads scenario files (TOML); [`expect`] names what may become of a command (a
+//! file's `expect` key); [`wire`] encodes a scenario's commands as the controller sends them.
+
+pub mod expect;
+pub mod file;
+pub mod wire;
+
+pub use expect::Failure;
+pub use wire::{wire_check, WireId, MAX_WIRE_ID};
+
+/// The scenario tick \[s\] (the HRP-2 control period): scenario times are counted in it.
+pub const TICK_S: f64 = 0.005;
 
 use planner_core::gait::{Footstep, Gait, GaitError, GaitParams, Reference, Side};
 

@@ -29,11 +29,13 @@ use planner_core::node::NodeConfig;
 use planner_core::robot::{Robot as PlannerRobot, RobotError};
 use serde::Deserialize;
 
-use crate::multibody::{Body, Model, Vec3};
-use crate::toml_scenario::TICK_S;
+pub mod model;
+
+use crate::scenario::TICK_S;
+use model::{Body, Model, Vec3};
 
 /// The robot file shipped for HRP-2, compiled into the binary.
-pub const HRP2_TOML: &str = include_str!("../robots/hrp2.toml");
+pub const HRP2_TOML: &str = include_str!("../../robots/hrp2.toml");
 
 /// Largest difference between the link table's stance COG height and the pendulum's
 /// `cog_height` \[m\].
@@ -286,5 +288,12 @@ impl Robot {
                 self.name()
             ))
         }
+    }
+}
+
+impl Model {
+    /// HRP-2, from the robot file shipped in the repository (`host-sim/robots/hrp2.toml`).
+    pub fn hrp2() -> Self {
+        Robot::hrp2().model
     }
 }
