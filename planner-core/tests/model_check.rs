@@ -38,7 +38,9 @@
 //! identifies states by that history (with the controller's and the bus's state), which is
 //! what makes the search finite.
 //!
-//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 7 cycles).
+//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 7 cycles). The front
+//! page's "Headline figures" quote the bounds and each script's states (in millions):
+//! each check asserts that they are the measured ones (at the default bound).
 
 mod common;
 
@@ -599,7 +601,10 @@ impl Model for Protocol {
     }
 }
 
-fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>) {
+/// Checks the model of `script`; `quoted`: what the front page's model-check row must say of
+/// its state count (given the states generated, in millions with one decimal: `9.2 M`),
+/// checked at the default bound (not with `WALK_LONG=1`).
+fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: fn(&str) -> String) {
     let long = std::env::var("WALK_LONG").as_deref() == Ok("1");
     let names: Vec<&str> = goals.iter().map(|g| g.0).collect();
     let model = Protocol::new(script, goals, long);
@@ -612,6 +617,51 @@ fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>) {
         checker.max_depth(),
     );
     checker.assert_properties();
+    if !long {
+        // The front page quotes the bounds and the states generated ("9.2 M").
+        let states = format!("{:.1} M", checker.state_count() as f64 / 1e6);
+        let row = "| protocol model check (";
+        assert_quoted(
+            "README.md",
+            row,
+            &format!("{per} frames a cycle, {cycles} cycles"),
+        );
+        assert_quoted("README.md", row, &quoted(&states));
+    }
+}
+
+/// The command that measures this file's figures (the front page names it).
+const COMMAND: &str = "cargo test --release -p planner-core --test model_check -- --nocapture";
+
+/// Asserts that `doc` (relative to the repository root) quotes `expected` in its one line (or
+/// table row) that contains `anchor`: the figure the check measured is the one the document
+/// quotes. (`walk_tests::figures` does this for the other crates' tests; planner-core's tests
+/// cannot depend on walk-tests.)
+fn assert_quoted(doc: &str, anchor: &str, expected: &str) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(doc);
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{doc}: cannot read {}: {e}", path.display()));
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.contains(anchor))
+        .collect();
+    let [(at, line)] = lines[..] else {
+        panic!(
+            "{doc}: the anchor `{anchor}` is on {} lines, not one (where `{COMMAND}`'s figure \
+             `{expected}` is expected)",
+            lines.len()
+        );
+    };
+    assert!(
+        line.contains(expected),
+        "{doc}:{} (the line with `{anchor}`)\n  the document says: {}\n  measured:          \
+         {expected}\n  measured by:       `{COMMAND}`\n  write `{expected}` there",
+        at + 1,
+        line.trim()
+    );
 }
 
 /// Two sessions: appends and a modification in the first, one append possibly still in flight
@@ -670,6 +720,8 @@ fn across_a_reset_nothing_old_is_taken() {
                     && s.node.counters().by_reason[usize::from(Reason::BadCrc.code())] > 0
             }),
         ],
+        // The first of the front page's two counts.
+        |states| format!("| {states} + "),
     );
 }
 
@@ -716,5 +768,7 @@ fn walking_only_new_commands_keep_it_going_and_an_estop_never_waits() {
                 s.node.state() == NodeState::EmergencyStopped && !s.node.gait().is_standing()
             }),
         ],
+        // The second of the front page's two counts.
+        |states| format!("+ {states} states"),
     );
 }

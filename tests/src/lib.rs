@@ -2,6 +2,7 @@
 
 use std::process::Command;
 
+pub mod figures;
 pub mod logs;
 
 /// A `cargo` command run in `dir` (a firmware workspace) with this test's own build settings

@@ -31,7 +31,10 @@
 //! * the instruction counts are repeatable: both runs print the same report, line for line;
 //! * the instructions-per-timer-tick factor (40) holds, and the stack stays inside its region;
 //! * the worst control cycle over every log (a whole `Node::poll`) fits 5 % of a 5 ms cycle at
-//!   480 MHz (120,000 instructions).
+//!   480 MHz (120,000 instructions);
+//! * the documents quote what was measured: the timing table of `docs/src/timing.md` and the
+//!   front page's worst-cycle row (`walk_tests::figures`; a stale figure fails with the
+//!   measured one).
 //!
 //! `WALK_QEMU_KEEP=DIR` keeps the file of logs (`DIR/replay.wlog`) and the image's report
 //! (`DIR/report.txt`), e.g. to run the image on the same logs under a QEMU trace.
@@ -45,6 +48,7 @@ use std::sync::OnceLock;
 use host_sim::sim::replay;
 use host_sim::sim::SimConfig;
 use planner_core::node::Node;
+use walk_tests::figures::{thousands, Quotes};
 use walk_tests::logs::{self, compare, Case, Expected};
 use walk_tests::report::{self, tail, QemuRun, Record};
 use walk_tests::{build_firmware, qemu_available};
@@ -497,4 +501,109 @@ fn issue_12_targets() {
         );
         assert!(value <= ceiling, "{name}: {value} above {ceiling}");
     }
+}
+
+/// The command that measures this file's figures (the documents name it).
+const COMMAND: &str = "cargo test --release -p walk-tests --test qemu -- --nocapture";
+
+/// The figures the documents quote from this test's run are the measured ones: every figure
+/// of the timing table of `docs/src/timing.md` this test measures (worst and mean per kind of
+/// cycle, the board's whole cycle, the start-up, the number of logs, the stack high-water
+/// marks) and the front page's worst-cycle row (the number and its share of the budget).
+#[test]
+fn the_documents_quote_the_measured_figures() {
+    let Some(runs) = runs() else {
+        return;
+    };
+    let q = &runs.first;
+    let timing = |kind: &'static str| {
+        q.timing("all", kind)
+            .unwrap_or_else(|| panic!("no TIMING line for {kind}"))
+    };
+    let max = |kind: &'static str| thousands(timing(kind).num("max"));
+    // The image prints the mean rounded to an integer (`mean={:.0}`).
+    let mean = |kind: &'static str| thousands(timing(kind).num::<f64>("mean").round() as u64);
+    let whole = q
+        .of("WHOLE", "all")
+        .find(|r| r.get("kind") == "cycle")
+        .expect("no WHOLE line for the whole cycle");
+    let worst: u64 = timing("cycle").num("max");
+    let share = format!("{:.2}", worst as f64 / BUDGET as f64);
+    let logs = thousands(q.one("RUNS").num("count"));
+    let stack = q.one("STACK");
+    let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
+
+    const T: &str = "docs/src/timing.md";
+    let steady = "steady cycle (tick, encode and send";
+    let other = "other walking cycles without command";
+    let replan = "re-plan at the start of single support";
+    let adjust = "re-plan with a single-support adjustment";
+    let start = "`Start` (plans the start window)";
+    let cycle = "**worst control cycle**";
+    let board = "the board's whole cycle around it";
+    let new = "start-up: `ParkedNode::start`";
+    Quotes::new(COMMAND)
+        .line(
+            T,
+            "The figures are the worst over those",
+            &format!("{logs} logs"),
+        )
+        .cell(T, steady, "worst", &max("steady"))
+        .cell(T, steady, "mean", &mean("steady"))
+        .cell(
+            T,
+            other,
+            "worst",
+            &format!(
+                "{} / {} / {}",
+                max("settle"),
+                max("transition"),
+                max("traffic")
+            ),
+        )
+        .cell(T, replan, "worst", &max("replan"))
+        .cell(T, replan, "mean", &mean("replan"))
+        .cell(T, adjust, "worst", &max("adjust"))
+        .cell(T, adjust, "mean", &mean("adjust"))
+        .cell(T, start, "worst", &max("start"))
+        .cell(T, start, "mean", &mean("start"))
+        .cell(T, cycle, "worst", &format!("**{}**", thousands(worst)))
+        .cell(
+            T,
+            cycle,
+            "worst",
+            &format!("{share} of the {} budget", thousands(BUDGET)),
+        )
+        .cell(T, cycle, "mean", &mean("cycle"))
+        .cell(T, board, "worst", &thousands(whole.num("max")))
+        .cell(
+            T,
+            board,
+            "mean",
+            &thousands(whole.num::<f64>("mean").round() as u64),
+        )
+        .cell(T, new, "worst", &max("new"))
+        .line(
+            T,
+            "(QEMU high-water marks)",
+            &format!("{} B of stack", thousands(startup)),
+        )
+        .line(
+            T,
+            "(QEMU high-water marks)",
+            &format!("control loop {} B", thousands(control)),
+        )
+        .cell(
+            "README.md",
+            "worst control cycle on the Cortex-M7",
+            "what",
+            &format!("{logs} recorded runs"),
+        )
+        .cell(
+            "README.md",
+            "worst control cycle on the Cortex-M7",
+            "figure",
+            &format!("{} instructions, {share} of 5 %", thousands(worst)),
+        )
+        .assert();
 }

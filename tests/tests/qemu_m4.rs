@@ -23,13 +23,16 @@
 //!   is clocked at 25 MHz, as the AN500's) and the stack high-water mark inside its region.
 //!
 //! It prints the instructions per `Node::poll` by kind of cycle and asserts the target
-//! for the M4F: a worst cycle of at most 42,000 instructions (5 % of 5 ms at 168 MHz).
+//! for the M4F: a worst cycle of at most 42,000 instructions (5 % of 5 ms at 168 MHz); and that
+//! the front page and `docs/src/timing.md` quote the measured worst cycle and the target
+//! (`walk_tests::figures`).
 //!
 //! Without `qemu-system-arm` this test fails, unless `WALK_SKIP_QEMU=1` is set.
 
 use planner_core::gait::PREVIEW;
 use planner_core::node::Node;
 use planner_core::shaping::{Law, PreviewGains};
+use walk_tests::figures::{thousands, Quotes};
 use walk_tests::logs::{self, compare, Case, Expected};
 use walk_tests::report::{self, QemuRun};
 use walk_tests::{build_firmware_with, qemu_available};
@@ -201,4 +204,21 @@ fn m4f_image_matches_the_host_f32_node() {
         worst <= TARGET,
         "worst control cycle {worst} instructions > {TARGET}"
     );
+
+    // The documents quote the measured worst cycle and the target.
+    let (worst, target) = (thousands(worst), thousands(TARGET));
+    Quotes::new("cargo test --release -p walk-tests --test qemu_m4 -- --nocapture")
+        .cell(
+            "README.md",
+            "f32 node on a Cortex-M4F",
+            "figure",
+            &format!("{worst} instructions (target {target})"),
+        )
+        .cell(
+            "docs/src/timing.md",
+            "the f32 node on a Cortex-M4F",
+            "worst",
+            &format!("{worst} (target {target} "),
+        )
+        .assert();
 }
