@@ -18,7 +18,8 @@
 #    qemu-system-arm: step 1 installs it with apt-get), and the M4F one (firmware/qemu with
 #    the `m4f` feature: the f32 node on QEMU's mps2-an386, built for the Cortex-M4 into
 #    firmware/qemu/target/m4f; tests/tests/qemu_m4.rs in step 2 builds and runs it);
-# 5. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
+# 5. the book in docs/ (mdBook: built, and its Rust code blocks compiled and run);
+# 6. Miri on planner-core (tests/miri.sh: a nightly toolchain with miri, installed if missing;
 #    about 4 minutes; WALK_SKIP_MIRI=1 leaves it out).
 #
 # WALK_LONG=1 makes the long runs for a release: the fault sweep with 10 seeds per row and 40
@@ -76,7 +77,7 @@ fi
 qemu-system-arm --version | head -n 1
 
 # --- host-sim plots: a TrueType font (Debian's fonts-dejavu-core) -------------------------
-# host-sim/src/plot.rs renders the PNG text with DejaVu Sans read at run time (or the font
+# host-sim/src/output/plot renders the PNG text with DejaVu Sans read at run time (or the font
 # named by HOST_SIM_FONT); the plot tests fail without one.
 if [ -z "${HOST_SIM_FONT:-}" ] && [ ! -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ]; then
     echo "installing fonts-dejavu-core"
@@ -199,6 +200,19 @@ bash firmware/size.sh --check
     test -f "$elf"
     image_size "$elf"
 )
+
+section "the book (docs/): mdbook build, and mdbook test of its Rust code against planner-core"
+# mdbook from crates.io (installed if missing, without its file watcher and web server). Its
+# Rust code blocks are compiled and run against planner-core, built into a target dir of its
+# own so that rustdoc finds exactly one planner_core library.
+MDBOOK_VERSION=0.5.4
+if [ "$(mdbook --version 2>/dev/null)" != "mdbook v$MDBOOK_VERSION" ]; then
+    echo "installing mdbook $MDBOOK_VERSION"
+    cargo install --locked mdbook --version "$MDBOOK_VERSION" --no-default-features --features search
+fi
+cargo build -q -p planner-core --target-dir target/book
+mdbook build docs --dest-dir "$(mktemp -d)"
+mdbook test docs -L target/book/debug/deps 2>&1 | tee -a "$LOG"
 
 section "Miri: planner-core under the interpreter (nightly toolchain, bounded selection)"
 # tests/miri.sh installs the nightly toolchain with miri if missing; WALK_SKIP_MIRI=1 skips.
