@@ -43,6 +43,7 @@
 //! each check asserts that they are the measured ones (at the default bound).
 
 mod common;
+mod quoted;
 
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
@@ -621,48 +622,18 @@ fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: fn(&str) -> 
         // The front page quotes the bounds and the states generated ("9.2 M").
         let states = format!("{:.1} M", checker.state_count() as f64 / 1e6);
         let row = "| protocol model check (";
-        assert_quoted(
+        quoted::assert_quoted(
+            COMMAND,
             "README.md",
             row,
             &format!("{per} frames a cycle, {cycles} cycles"),
         );
-        assert_quoted("README.md", row, &quoted(&states));
+        quoted::assert_quoted(COMMAND, "README.md", row, &quoted(&states));
     }
 }
 
 /// The command that measures this file's figures (the front page names it).
 const COMMAND: &str = "cargo test --release -p planner-core --test model_check -- --nocapture";
-
-/// Asserts that `doc` (relative to the repository root) quotes `expected` in its one line (or
-/// table row) that contains `anchor`: the figure the check measured is the one the document
-/// quotes. (`walk_tests::figures` does this for the other crates' tests; planner-core's tests
-/// cannot depend on walk-tests.)
-fn assert_quoted(doc: &str, anchor: &str, expected: &str) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(doc);
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{doc}: cannot read {}: {e}", path.display()));
-    let lines: Vec<(usize, &str)> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| l.contains(anchor))
-        .collect();
-    let [(at, line)] = lines[..] else {
-        panic!(
-            "{doc}: the anchor `{anchor}` is on {} lines, not one (where `{COMMAND}`'s figure \
-             `{expected}` is expected)",
-            lines.len()
-        );
-    };
-    assert!(
-        line.contains(expected),
-        "{doc}:{} (the line with `{anchor}`)\n  the document says: {}\n  measured:          \
-         {expected}\n  measured by:       `{COMMAND}`\n  write `{expected}` there",
-        at + 1,
-        line.trim()
-    );
-}
 
 /// Two sessions: appends and a modification in the first, one append possibly still in flight
 /// at the `Reset`, an emergency stop that the `Reset` leaves (the bus may deliver both in one

@@ -12,6 +12,7 @@
 //! Run `cargo test -p planner-core --test oracle -- --nocapture` to see the measured figures;
 //! test 1 asserts that the front page and the solver's page quote its figures as measured.
 
+mod quoted;
 use nalgebra::{DMatrix, DVector};
 use planner_core::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M};
 use planner_core::{Segment, State};
@@ -412,12 +413,14 @@ fn planner_matches_the_general_44_unknown_formulation() {
         "COG {:.1e} m, ZMP {:.1e} m (tolerance {:e})",
         worst_cog, worst_zmp, 1e-9
     );
-    assert_quoted(
+    quoted::assert_quoted(
+        COMMAND,
         "README.md",
         "paper's general 44-unknown formulation",
         &figure,
     );
-    assert_quoted(
+    quoted::assert_quoted(
+        COMMAND,
         "docs/src/solver.md",
         "the general 44-unknown formulation",
         &figure,
@@ -426,36 +429,6 @@ fn planner_matches_the_general_44_unknown_formulation() {
 
 /// The command that measures this file's figures (the documents name it).
 const COMMAND: &str = "cargo test -p planner-core --test oracle -- --nocapture";
-
-/// Asserts that `doc` (relative to the repository root) quotes `expected` in its one line (or
-/// table row) that contains `anchor`: the figure a test measured is the one the document
-/// quotes. (`walk_tests::figures` does this for the other crates' tests; planner-core's tests
-/// cannot depend on walk-tests.)
-fn assert_quoted(doc: &str, anchor: &str, expected: &str) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(doc);
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{doc}: cannot read {}: {e}", path.display()));
-    let lines: Vec<(usize, &str)> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| l.contains(anchor))
-        .collect();
-    let [(at, line)] = lines[..] else {
-        panic!(
-            "{doc}: the anchor `{anchor}` is on {} lines, not one (where `{COMMAND}`'s figure              `{expected}` is expected)",
-            lines.len()
-        );
-    };
-    assert!(
-        line.contains(expected),
-        "{doc}:{} (the line with `{anchor}`)\n  the document says: {}\n  measured:          \
-         {expected}\n  measured by:       `{COMMAND}`\n  write `{expected}` there",
-        at + 1,
-        line.trim()
-    );
-}
 
 /// The oracle really is a different computation: it must notice a wrong boundary value.
 #[test]
@@ -540,7 +513,8 @@ fn rk4_integration_matches_the_closed_form_cog() {
         }
     }
     eprintln!("RK4 (h ≤ 1e-4 s) vs planner, worst: pos {worst_pos:.2e} m, vel {worst_vel:.2e} m/s");
-    assert_quoted(
+    quoted::assert_quoted(
+        COMMAND,
         "docs/src/solver.md",
         "RK4 integration of",
         &format!("{worst_pos:.1e} m, {worst_vel:.1e} m/s (tolerance 1e-6 m)"),
@@ -622,7 +596,8 @@ fn boundary_conditions_hold() {
     eprintln!(
         "boundary conditions: worst error {worst:.2e}; pendulum residual {worst_ode:.2e} m/s²"
     );
-    assert_quoted(
+    quoted::assert_quoted(
+        COMMAND,
         "docs/src/solver.md",
         "every boundary condition of a window",
         &format!("{worst:.1e}, pendulum residual {worst_ode:.1e} m/s² (tolerance 1e-9)"),

@@ -9,21 +9,7 @@ use planner_core::wire::Reason;
 use proptest::prelude::*;
 
 fn hrp2() -> (Reach, Soles) {
-    (
-        Reach {
-            max_forward: 0.30,
-            max_backward: 0.20,
-            min_width: 0.15,
-            max_width: 0.28,
-            max_yaw: 0.30,
-            max_feet_distance: 0.361,
-            yaw_cost: 0.3,
-            max_stride: 0.43,
-            max_growth: 0.22,
-            sole_gap: 0.01,
-        },
-        Soles::of(&GaitParams::hrp2()),
-    )
+    (Reach::default(), Soles::of(&GaitParams::hrp2()))
 }
 
 fn side(left: bool) -> Side {
@@ -68,6 +54,7 @@ proptest! {
             Some(b) => {
                 let reason = if b.limit == Limit::Crossing { Reason::Crossing } else { Reason::Reach };
                 prop_assert_eq!(check, Err(reason));
+                prop_assert_eq!(b.reason(), reason);
                 // The value is beyond its bound (`min_width`: below, the others: above;
                 // crossing: either a negative width or soles nearer than the gap).
                 match b.limit {

@@ -249,14 +249,8 @@ impl<T: Real> Reach<T> {
         from_rest: bool,
         soles: &Soles<T>,
     ) -> Result<(), Reason> {
-        self.check_frames(
-            &Frame::of(other),
-            &Frame::of(same),
-            &Frame::of(step),
-            step.side,
-            from_rest,
-            soles,
-        )
+        self.broken(other, same, step, from_rest, soles)
+            .map_or(Ok(()), |b| Err(b.reason()))
     }
 
     /// The first limit that [`Reach::check_with`] finds broken ([`Limit`] order), with the
@@ -280,24 +274,8 @@ impl<T: Real> Reach<T> {
         )
     }
 
-    pub(super) fn check_frames(
-        &self,
-        other: &Frame<T>,
-        same: &Frame<T>,
-        step: &Frame<T>,
-        side: Side,
-        from_rest: bool,
-        soles: &Soles<T>,
-    ) -> Result<(), Reason> {
-        match self.broken_frames(other, same, step, side, from_rest, soles) {
-            None => Ok(()),
-            Some(b) if b.limit == Limit::Crossing => Err(Reason::Crossing),
-            Some(_) => Err(Reason::Reach),
-        }
-    }
-
     /// The first limit `step` breaks ([`Limit`] order), with the measured value and the
-    /// bound; `None` if the legs can take it. [`Reach::check_frames`] is this, by reason.
+    /// bound; `None` if the legs can take it.
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must break a limit
     pub(super) fn broken_frames(
         &self,
@@ -427,6 +405,15 @@ pub struct Broken<T = f64> {
 }
 
 impl<T> Broken<T> {
+    /// The refusal's reason: `Crossing` for [`Limit::Crossing`], `Reach` for the others.
+    pub fn reason(&self) -> Reason {
+        if self.limit == Limit::Crossing {
+            Reason::Crossing
+        } else {
+            Reason::Reach
+        }
+    }
+
     fn new(limit: Limit, value: T, bound: T) -> Self {
         Self {
             limit,
