@@ -8,6 +8,8 @@
 //! * [`window`]: the 7-interval plan window, its 20×20 boundary-value matrix `Z`, factorised once
 //!   per timing and solved for the x and y planes.
 //! * [`timing`]: eq. 17, the time and size of the worst ZMP fluctuation in a quartic interval.
+//! * [`capture`]: the divergent component of motion and the step offset that captures a
+//!   measured deviation from the plan (the law of the node's step adjustment).
 //! * `robot` (feature `robot`, std): the robot file, one TOML file per robot.
 //! * [`real`]: the scalar type (`f64` or `f32`), all transcendental functions through `libm`.
 //!
@@ -22,6 +24,7 @@
 #[cfg(feature = "robot")]
 extern crate std;
 
+pub mod capture;
 pub mod gait;
 pub mod lipm;
 #[cfg(feature = "robot")]

@@ -1,0 +1,152 @@
+//! The divergent component of motion and the step that captures a deviation from the plan.
+//!
+//! # The divergent component
+//! For the pendulum `ẍ = ω²(x − p)` (one horizontal coordinate; `x` the COG, `p` the ZMP,
+//! `ω = √(g/z_c)`), the divergent component of motion (DCM, Englsberger et al., IROS 2011; the
+//! instantaneous capture point of Pratt et al., Humanoids 2006) is
+//!
+//! ```text
+//! ξ = x + ẋ/ω,        ξ̇ = ω (ξ − p).
+//! ```
+//!
+//! Its stable companion `x − ẋ/ω` converges to the ZMP by itself; `ξ` runs away from it.
+//!
+//! # A deviation from the plan, at touch-down
+//! Let the plan have the DCM `ξ_plan(t)` under its ZMP `p_plan(t)`, and the robot's measured
+//! state give `ξ_meas(t)`. While the robot follows the plan's ZMP (`p = p_plan`), the
+//! deviation `e = ξ_meas − ξ_plan` obeys `ė = ω e`, whatever the plan is, so at the end of the
+//! single support, `T_r` from now,
+//!
+//! ```text
+//! e(T_r) = e(t) · e^{ω T_r}.                                             (predicted error)
+//! ```
+//!
+//! A stabilizer moves the ZMP inside the sole to reduce `e`; what it cannot absorb in time
+//! reaches the touch-down. The plan's next landing was chosen for `ξ_plan`; landing instead
+//! at the planned pose moved by `e(T_r)` puts the foot where it stands to the measured DCM as
+//! the planned foot stands to the planned one: the walk after it is the plan, shifted (the
+//! step-adjustment law of Englsberger et al. 2011, sec. IV, and of Khadiv et al., Humanoids
+//! 2016, without its timing adaptation: eq. 18 of the paper adjusts the timing after the
+//! modification).
+//!
+//! # The dead band
+//! Small deviations are the stabilizer's to absorb (moving the ZMP by up to the sole's half
+//! size): the step moves only by what exceeds a dead band `d` [m], in the direction of the
+//! predicted error, `offset = e(T_r) · max(0, 1 − d/|e(T_r)|)` (the two coordinates together,
+//! so that the direction is kept). `d = 0` moves by the whole predicted error.
+//!
+//! [`touchdown_error`] and [`step_offset`] are the law; the node clamps the result to its reach
+//! limits and sends it through its modification path (eq. 17's check, eq. 18, the shaping).
+
+use crate::real::Real;
+
+/// The DCM `ξ = x + ẋ/ω` of one coordinate \[m\].
+#[inline]
+pub fn dcm<T: Real>(cog: T, cog_vel: T, omega: T) -> T {
+    cog + cog_vel / omega
+}
+
+/// The predicted deviation of the DCM from the plan's at the end of the single support,
+/// `remaining` \[s\] from now, for the measured and the planned COG positions and velocities
+/// (each `[x, y]`): `e(T_r) = (ξ_meas − ξ_plan) e^{ω T_r}` per coordinate. A negative
+/// `remaining` counts as zero.
+pub fn touchdown_error<T: Real>(
+    measured: ([T; 2], [T; 2]),
+    planned: ([T; 2], [T; 2]),
+    omega: T,
+    remaining: T,
+) -> [T; 2] {
+    let grow = (omega * remaining.max(T::ZERO)).exp();
+    let e = |k: usize| {
+        (dcm(measured.0[k], measured.1[k], omega) - dcm(planned.0[k], planned.1[k], omega)) * grow
+    };
+    [e(0), e(1)]
+}
+
+/// The move of the next landing for a predicted touch-down error `error` \[m\] (`[x, y]`) with
+/// the dead band `dead_band` \[m\]: zero inside it, else the error less the dead band along
+/// its own direction.
+pub fn step_offset<T: Real>(error: [T; 2], dead_band: T) -> [T; 2] {
+    let norm = (error[0] * error[0] + error[1] * error[1]).sqrt();
+    let d = dead_band.max(T::ZERO);
+    // `!(norm > d)`: a norm that is not a number moves nothing.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(norm > d) {
+        return [T::ZERO; 2];
+    }
+    let k = T::ONE - d / norm;
+    [error[0] * k, error[1] * k]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// RK4 of `ẍ = ω²(x − p(t))` from `(x, v)` over `t` with a ZMP `p(t)`.
+    fn integrate(x: f64, v: f64, omega: f64, t: f64, p: impl Fn(f64) -> f64) -> (f64, f64) {
+        let n = 20_000;
+        let h = t / n as f64;
+        let (mut x, mut v, mut s) = (x, v, 0.0);
+        let f = |s: f64, x: f64| omega * omega * (x - p(s));
+        for _ in 0..n {
+            let (k1x, k1v) = (v, f(s, x));
+            let (k2x, k2v) = (v + 0.5 * h * k1v, f(s + 0.5 * h, x + 0.5 * h * k1x));
+            let (k3x, k3v) = (v + 0.5 * h * k2v, f(s + 0.5 * h, x + 0.5 * h * k2x));
+            let (k4x, k4v) = (v + h * k3v, f(s + h, x + h * k3x));
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            s += h;
+        }
+        (x, v)
+    }
+
+    /// The closed form agrees with integrating the plan and the deviated state under the same
+    /// (moving) ZMP: the deviation's growth does not depend on the plan.
+    #[test]
+    fn touchdown_error_matches_integration() {
+        let omega = crate::omega(9.8, 0.814);
+        let zmp = |s: f64| 0.02 + 0.05 * s - 0.03 * s * s;
+        let mut u = crate::test_uniform(7);
+        for _ in 0..50 {
+            let t = 0.05 + 0.7 * u();
+            let (px, pv) = (0.1 * u() - 0.05, 0.4 * u() - 0.2);
+            let (dx, dv) = (0.02 * u() - 0.01, 0.2 * u() - 0.1);
+            let e = touchdown_error(
+                ([px + dx, 0.0], [pv + dv, 0.0]),
+                ([px, 0.0], [pv, 0.0]),
+                omega,
+                t,
+            );
+            let plan = integrate(px, pv, omega, t, zmp);
+            let meas = integrate(px + dx, pv + dv, omega, t, zmp);
+            let oracle = dcm(meas.0, meas.1, omega) - dcm(plan.0, plan.1, omega);
+            assert!((e[0] - oracle).abs() < 1e-9, "{} vs {oracle}", e[0]);
+            assert_eq!(e[1], 0.0);
+        }
+    }
+
+    /// No deviation, no move; inside the dead band, no move; outside, the excess along the
+    /// error's direction.
+    #[test]
+    fn the_offset_is_the_excess_over_the_dead_band() {
+        assert_eq!(step_offset([0.0, 0.0], 0.02), [0.0, 0.0]);
+        assert_eq!(step_offset([0.01, -0.015], 0.02), [0.0, 0.0]);
+        let o = step_offset([0.03, 0.04], 0.02);
+        assert!((o[0] - 0.018).abs() < 1e-15 && (o[1] - 0.024).abs() < 1e-15, "{o:?}");
+        assert_eq!(step_offset([0.03, 0.04], 0.0), [0.03, 0.04]);
+        assert_eq!(step_offset([f64::NAN, 0.0], 0.02), [0.0, 0.0]);
+    }
+
+    /// The touch-down error grows with the time left, and a state on the plan has none.
+    #[test]
+    fn on_the_plan_nothing_to_capture() {
+        let omega = crate::omega(9.8, 0.814);
+        let s = ([0.1, -0.05], [0.3, 0.1]);
+        assert_eq!(touchdown_error(s, s, omega, 0.4), [0.0, 0.0]);
+        let m = ([0.11, -0.05], [0.3, 0.1]);
+        let early = touchdown_error(m, s, omega, 0.4)[0];
+        let late = touchdown_error(m, s, omega, 0.1)[0];
+        assert!(early > late && late > 0.01, "{early} {late}");
+        assert!((touchdown_error(m, s, omega, -1.0)[0] - 0.01).abs() < 1e-15);
+    }
+}
