@@ -31,7 +31,7 @@
 //!
 //! # The dead band
 //! Small deviations are the stabilizer's to absorb (moving the ZMP by up to the sole's half
-//! size): the step moves only by what exceeds a dead band `d` [m], in the direction of the
+//! size): the step moves only by what exceeds a dead band `d` \[m\], in the direction of the
 //! predicted error, `offset = e(T_r) · max(0, 1 − d/|e(T_r)|)` (the two coordinates together,
 //! so that the direction is kept). `d = 0` moves by the whole predicted error.
 //!
