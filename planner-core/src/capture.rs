@@ -132,7 +132,10 @@ mod tests {
         assert_eq!(step_offset([0.0, 0.0], 0.02), [0.0, 0.0]);
         assert_eq!(step_offset([0.01, -0.015], 0.02), [0.0, 0.0]);
         let o = step_offset([0.03, 0.04], 0.02);
-        assert!((o[0] - 0.018).abs() < 1e-15 && (o[1] - 0.024).abs() < 1e-15, "{o:?}");
+        assert!(
+            (o[0] - 0.018).abs() < 1e-15 && (o[1] - 0.024).abs() < 1e-15,
+            "{o:?}"
+        );
         assert_eq!(step_offset([0.03, 0.04], 0.0), [0.03, 0.04]);
         assert_eq!(step_offset([f64::NAN, 0.0], 0.02), [0.0, 0.0]);
     }
