@@ -7,9 +7,20 @@
 //! The engine is PyPI's `mujoco` (pinned in `host_sim::physics::bridge::MUJOCO_VERSION`).
 //! Without it the engine tests skip and say so, unless `WALK_REQUIRE_MUJOCO=1`
 //! (tests/run-all.sh installs it and sets that), which makes a missing engine a failure.
+//!
+//! The figures the book (docs/src/physics.md) and the front page quote from these runs are
+//! checked against the measured ones ([`common::figures`]): the table of the built-in
+//! scenarios (its open-loop column under `WALK_LONG=1`), the headline row, the pushes, the
+//! second robot and the deterministic columns of the run-time table (engine runs, simulated
+//! seconds; never the wall-clock times). MuJoCo's results are bit-stable from run to run on
+//! one machine, so the figures are compared as written (rounded as the document rounds them).
+
+mod common;
 
 use std::path::PathBuf;
 use std::process::Command;
+
+use common::figures::Quotes;
 
 use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSION};
 use host_sim::physics::metrics::FallCause;
@@ -25,6 +36,42 @@ const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
 const COP_MEAN_BOUND_M: f64 = 0.015;
 const COP_MAX_BOUND_M: f64 = 0.060;
 const TILT_BOUND_DEG: f64 = 2.0;
+
+/// The command that measures the figures the documents quote from the default tests.
+const COMMAND: &str = "cargo test --release -p host-sim --test physics -- --nocapture";
+/// The same with the long runs ([`long_runs`]).
+const LONG_COMMAND: &str =
+    "WALK_LONG=1 cargo test --release -p host-sim --test physics -- --nocapture";
+/// The book's page on the engine runs.
+const BOOK: &str = "docs/src/physics.md";
+/// The heading of its run-time table's column of simulated seconds (the settle, the
+/// trajectory and the tail: what the engine steps through).
+const SIMULATED: &str = "simulated (settle 1 s + walk + tail 1 s)";
+
+/// `m` metres in millimetres as the book writes them: `3.4 mm`.
+fn mm(m: f64) -> String {
+    format!("{:.1} mm", m * 1e3)
+}
+
+/// A mean and a worst in millimetres: `9.8 / 36.3 mm`.
+fn mm_pair(mean_m: f64, worst_m: f64) -> String {
+    format!("{:.1} / {:.1} mm", mean_m * 1e3, worst_m * 1e3)
+}
+
+/// `yes` or `no`.
+fn yes_no(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+/// What the engine steps through for a run that reports `simulated_s` (trajectory time at
+/// its end: the trajectory and the tail) [s]: the settle before it too.
+fn engine_seconds(simulated_s: f64) -> f64 {
+    PhysicsConfig::default().settle_s + simulated_s
+}
 
 /// `true` when MuJoCo can be used; otherwise a failure under `WALK_REQUIRE_MUJOCO=1`, else
 /// `false` after saying that the test is skipped.
@@ -52,12 +99,51 @@ fn report(scenario: &str, cfg: &PhysicsConfig) -> PhysicsReport {
     run(&trajectory, dt, cfg).expect("engine run").report
 }
 
-fn assert_walked(name: &str, r: &PhysicsReport) {
-    assert!(
-        !r.fell,
-        "{name}: fell at {:?} s ({:?})",
-        r.fall_time_s, r.fall_cause
-    );
+/// The figures of a run that the book's table of the built-in scenarios quotes (from a
+/// [`PhysicsReport`] or from the `physics.json` it was written to).
+#[derive(Clone, Copy, Debug)]
+struct Walk {
+    fell: bool,
+    fall_time_s: Option<f64>,
+    max_tilt_deg: f64,
+    cop_err_mean_m: f64,
+    cop_err_max_m: f64,
+    cog_drift_max_m: f64,
+    foot_drift_max_m: f64,
+    simulated_s: f64,
+}
+
+impl Walk {
+    fn of(r: &PhysicsReport) -> Self {
+        Walk {
+            fell: r.fell,
+            fall_time_s: r.fall_time_s,
+            max_tilt_deg: r.max_tilt_deg,
+            cop_err_mean_m: r.cop_err_mean_m,
+            cop_err_max_m: r.cop_err_max_m,
+            cog_drift_max_m: r.cog_drift_max_m,
+            foot_drift_max_m: r.foot_drift_max_m,
+            simulated_s: r.simulated_s,
+        }
+    }
+
+    fn from_json(j: &serde_json::Value) -> Self {
+        let num = |k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k} in {j}"));
+        Walk {
+            fell: j["fell"].as_bool().unwrap_or_else(|| panic!("fell in {j}")),
+            fall_time_s: j["fall_time_s"].as_f64(),
+            max_tilt_deg: num("max_tilt_deg"),
+            cop_err_mean_m: num("cop_err_mean_m"),
+            cop_err_max_m: num("cop_err_max_m"),
+            cog_drift_max_m: num("cog_drift_max_m"),
+            foot_drift_max_m: num("foot_drift_max_m"),
+            simulated_s: num("simulated_s"),
+        }
+    }
+}
+
+fn assert_walked(name: &str, r: &Walk) {
+    assert!(!r.fell, "{name}: fell at {:?} s: {r:?}", r.fall_time_s);
     assert!(r.max_tilt_deg < TILT_BOUND_DEG, "{name}: tilt {r:?}");
     assert!(r.cop_err_mean_m < COP_MEAN_BOUND_M, "{name}: {r:?}");
     assert!(r.cop_err_max_m < COP_MAX_BOUND_M, "{name}: {r:?}");
@@ -70,26 +156,78 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// The built-in scenarios under the stabilizer, run once for the tests that read them:
+/// `straight` through the command line (`host-sim physics straight --out DIR`), the others
+/// through [`run`] with the default configuration (HRP-2's; the book's table was made with
+/// `host-sim physics NAME`, which gives the same figures). `None` without the engine.
+struct BuiltInWalks {
+    /// `straight`'s `DIR/physics.json`.
+    straight_json: String,
+    /// The files `host-sim physics straight` wrote into DIR.
+    straight_files: Vec<String>,
+    /// Every built-in scenario in [`BUILT_IN`]'s order (`straight` from its `physics.json`).
+    walks: Vec<(&'static str, Walk)>,
+}
+
+fn built_in_walks() -> Option<&'static BuiltInWalks> {
+    static WALKS: std::sync::OnceLock<Option<BuiltInWalks>> = std::sync::OnceLock::new();
+    WALKS
+        .get_or_init(|| {
+            if !engine_here("the built-in scenarios under the stabilizer") {
+                return None;
+            }
+            let dir = temp_dir("straight");
+            let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+                .args(["physics", "straight", "--out"])
+                .arg(&dir)
+                .output()
+                .expect("host-sim runs");
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let straight_json =
+                std::fs::read_to_string(dir.join("physics.json")).expect("physics.json");
+            let mut straight_files: Vec<String> = std::fs::read_dir(&dir)
+                .expect("the output directory")
+                .map(|e| {
+                    e.expect("an entry")
+                        .file_name()
+                        .to_string_lossy()
+                        .into_owned()
+                })
+                .collect();
+            straight_files.sort();
+            let _ = std::fs::remove_dir_all(&dir);
+            let j: serde_json::Value = serde_json::from_str(&straight_json).expect("JSON");
+            let walks = BUILT_IN
+                .iter()
+                .map(|&name| {
+                    let w = if name == "straight" {
+                        Walk::from_json(&j)
+                    } else {
+                        Walk::of(&report(name, &PhysicsConfig::default()))
+                    };
+                    (name, w)
+                })
+                .collect();
+            Some(BuiltInWalks {
+                straight_json,
+                straight_files,
+                walks,
+            })
+        })
+        .as_ref()
+}
+
 /// The contract: `host-sim physics straight --out DIR` writes DIR/physics.json with the
 /// figures, and the straight walk does not fall.
 #[test]
 fn straight_walks_through_the_command_line_contract() {
-    if !engine_here("straight_walks_through_the_command_line_contract") {
-        return;
-    }
-    let dir = temp_dir("straight");
-    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(["physics", "straight", "--out"])
-        .arg(&dir)
-        .output()
-        .expect("host-sim runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = std::fs::read_to_string(dir.join("physics.json")).expect("physics.json");
-    let j: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let Some(b) = built_in_walks() else { return };
+    let text = &b.straight_json;
+    let j: serde_json::Value = serde_json::from_str(text).expect("JSON");
     assert_eq!(j["fell"], serde_json::Value::Bool(false), "{text}");
     assert!(j["fall_time_s"].is_null(), "{text}");
     let num = |k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k} in {text}"));
@@ -109,25 +247,111 @@ fn straight_walks_through_the_command_line_contract() {
         "physics_cop_x.png",
         "physics_cop_y.png",
     ] {
-        assert!(dir.join(f).is_file(), "{f} missing");
+        assert!(
+            b.straight_files.iter().any(|g| g == f),
+            "{f} missing: {:?}",
+            b.straight_files
+        );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Every other built-in scenario walks through too.
 #[test]
 fn other_built_in_scenarios_walk_through() {
-    if !engine_here("other_built_in_scenarios_walk_through") {
-        return;
-    }
-    for name in BUILT_IN.iter().filter(|n| **n != "straight") {
-        let r = report(name, &PhysicsConfig::default());
-        assert_walked(name, &r);
+    let Some(b) = built_in_walks() else { return };
+    for (name, w) in b.walks.iter().filter(|(n, _)| *n != "straight") {
+        assert_walked(name, w);
     }
 }
 
+/// The book's table of the built-in scenarios under the stabilizer quotes every one as
+/// measured (fell, max tilt, CoP error mean / worst, COG drift, foot drift; the open-loop
+/// column: [`built_in_scenarios_open_loop_long`]), as do its sentence above the table and the
+/// front page's headline row (the falls and the largest tilt over all of them), and the
+/// run-time table's `physics straight` row and `fig4`'s length (simulated seconds: the
+/// trajectories, the same on every machine; the wall-clock times are not checked).
+#[test]
+fn the_documents_quote_the_built_in_scenarios_as_measured() {
+    let Some(b) = built_in_walks() else { return };
+    assert_eq!(b.walks.len(), BUILT_IN.len());
+    let mut q = Quotes::new(COMMAND);
+    for (name, w) in &b.walks {
+        let row = format!("| {name} |");
+        q = q
+            .cell(BOOK, &row, "fell", yes_no(w.fell))
+            .cell(BOOK, &row, "max tilt", &format!("{:.2}°", w.max_tilt_deg))
+            .cell(
+                BOOK,
+                &row,
+                "CoP error mean / worst",
+                &mm_pair(w.cop_err_mean_m, w.cop_err_max_m),
+            )
+            .cell(BOOK, &row, "COG drift", &mm(w.cog_drift_max_m))
+            .cell(BOOK, &row, "foot drift", &mm(w.foot_drift_max_m));
+    }
+    let falls = b.walks.iter().filter(|(_, w)| w.fell).count();
+    let tilt = b
+        .walks
+        .iter()
+        .map(|(_, w)| w.max_tilt_deg)
+        .fold(0.0, f64::max);
+    let walk = |name: &str| b.walks.iter().find(|(n, _)| *n == name).expect(name).1;
+    q.line(
+        BOOK,
+        "Every built-in scenario walks through with",
+        &format!("{falls} falls"),
+    )
+    .cell(
+        "README.md",
+        "| the built-in scenarios in MuJoCo under the stabilizer |",
+        "figure",
+        &format!("{falls} falls, tilt at most {tilt:.2}°"),
+    )
+    .cell(BOOK, "`physics straight --out out/t`", "engine runs", "1")
+    .cell(
+        BOOK,
+        "`physics straight --out out/t`",
+        SIMULATED,
+        &format!("{:.1} s", engine_seconds(walk("straight").simulated_s)),
+    )
+    .line(
+        BOOK,
+        "(The fig4 length:",
+        &format!("{:.2} s", walk("fig4").simulated_s),
+    )
+    .assert();
+}
+
+/// `WALK_LONG=1`: every built-in scenario played open loop (`host-sim physics NAME
+/// --open-loop`: the stabilizer off) is quoted as measured in the book's table (its last
+/// column: the CoP error mean / worst and whether it fell).
+#[test]
+fn built_in_scenarios_open_loop_long() {
+    if !long_runs("built_in_scenarios_open_loop_long") {
+        return;
+    }
+    let mut cfg = PhysicsConfig::default();
+    cfg.gains.enabled = false;
+    let mut q = Quotes::new(LONG_COMMAND);
+    for name in BUILT_IN {
+        let r = report(name, &cfg);
+        let fell = match r.fall_time_s {
+            Some(t) => format!("fell at {t:.2} s"),
+            None => "no fall".into(),
+        };
+        q = q.cell(
+            BOOK,
+            &format!("| {name} |"),
+            "open loop: CoP mean / worst",
+            &format!("{} ({fell})", mm_pair(r.cop_err_mean_m, r.cop_err_max_m)),
+        );
+    }
+    q.assert();
+}
+
 /// A 150 N push for 0.1 s (15 N s) forward on the trunk in single support: the stabilizer
-/// keeps walking, the same pattern played open loop falls over.
+/// keeps walking, the same pattern played open loop falls over (the book quotes the
+/// stabilized worst CoP error and the open-loop fall).
 #[test]
 fn the_stabilizer_rejects_a_push_that_fells_open_loop_playback() {
     if !engine_here("the_stabilizer_rejects_a_push_that_fells_open_loop_playback") {
@@ -151,6 +375,22 @@ fn the_stabilizer_rejects_a_push_that_fells_open_loop_playback() {
     assert!(t > push.t_s, "fell before the push: {open:?}");
     assert_eq!(open.fall_cause, Some(FallCause::Tilt));
     assert!(open.max_tilt_deg > 20.0);
+    Quotes::new(COMMAND)
+        .line(
+            BOOK,
+            "separates the two: the stabilizer recovers",
+            &format!(
+                "worst {:.0} mm at the push, {}",
+                stabilized.cop_err_max_m * 1e3,
+                if stabilized.fell { "fell" } else { "no fall" }
+            ),
+        )
+        .line(
+            BOOK,
+            "450 N sideways fells both",
+            &format!("falls at {t:.2} s (tilt)"),
+        )
+        .assert();
 }
 
 /// A 450 N push sideways for 0.1 s fells the robot even with the stabilizer, soon after it.
@@ -272,7 +512,10 @@ fn physics_tables_reduced_grid() {
 /// lengths, rows "after" and columns "before", and each simulated cell's kinematic multi-body
 /// error is `tables.json`'s for that cell (plain re-plan: Table I's `max_zmp_error_without_m`,
 /// proposed: Table II's `max_zmp_error_with_m`). The reduced grid's two cells are each
-/// other's mirror with different errors, so a transposed grid fails.
+/// other's mirror with different errors, so a transposed grid fails. The book's run-time
+/// table quotes the full grid's engine runs (a run for every cell and pattern the legs reach
+/// in `tables.json`: [`physics_tables_full_grid_long`] checks that those are the ones run)
+/// and their simulated seconds (the trajectories' lengths).
 #[test]
 fn physics_tables_follow_tables_json() {
     let Some(p) = reduced_grid() else { return };
@@ -306,11 +549,63 @@ fn physics_tables_follow_tables_json() {
             assert!((a - m).abs() > 1e-4, "({r}, {c}) and its mirror: {a} {m}");
         }
     }
+    use host_sim::eval::paper::{modification, plain_params, STEP_LENGTHS};
+    let params = Robot::hrp2().planner.params;
+    let n = STEP_LENGTHS.len();
+    // The trajectory of each cell and pattern the legs reach: its walk [s] and the single
+    // support's adjustment in it.
+    let (mut asked, mut walks) = (0, vec![]);
+    for (kinematic, params) in [
+        ("max_zmp_error_without_m", plain_params(params)),
+        ("max_zmp_error_with_m", params),
+    ] {
+        for r in 0..n {
+            for c in 0..n {
+                asked += 1;
+                if t[kinematic][r][c].is_f64() {
+                    let m = modification(params, STEP_LENGTHS[c], STEP_LENGTHS[r]);
+                    walks.push(((m.trajectory.len() - 1) as f64 * params.dt, m.adjust_s));
+                }
+            }
+        }
+    }
+    let runs = walks.len();
+    // The scenario's timing: the walk less the adjustment, the same in every cell.
+    let unadjusted = walks[0].0 - walks[0].1;
+    for (walk, adjust) in &walks {
+        assert!((walk - adjust - unadjusted).abs() < 1e-9, "{walks:?}");
+    }
+    let seconds = |walk: f64| engine_seconds(walk + PhysicsConfig::default().tail_s);
+    let (lo, hi) = walks.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), w| {
+        (lo.min(seconds(w.0)), hi.max(seconds(w.0)))
+    });
+    let row = "`physics-tables --out out/t` (full grid)";
+    Quotes::new(COMMAND)
+        .line(
+            BOOK,
+            "physics-tables --out out/physics_tables ",
+            &format!("{runs} engine runs"),
+        )
+        .cell(
+            BOOK,
+            row,
+            "engine runs",
+            &format!("{runs} ({asked} asked, {} out of reach)", asked - runs),
+        )
+        .cell(
+            BOOK,
+            row,
+            SIMULATED,
+            &format!("{lo:.1}–{hi:.1} s each ({unadjusted:.1} s ± the adjustment"),
+        )
+        .assert();
 }
 
 /// `host-sim physics-faults --rows 19` (the first heavy mixed row: 30 % each of 600 ms delays,
 /// drops and corruptions, seed 1, on both sweep scenarios): `physics_faults.json` has one entry
-/// per scenario with the kinematic and the engine verdicts; neither falls.
+/// per scenario with the kinematic and the engine verdicts; neither falls. The book quotes
+/// the default command's engine runs (every row on both scenarios) and their simulated
+/// seconds (the node's references without a fault, seed 1).
 #[test]
 fn physics_faults_heavy_row() {
     if !engine_here("physics_faults_heavy_row") {
@@ -346,6 +641,38 @@ fn physics_faults_heavy_row() {
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
     }
     let _ = std::fs::remove_dir_all(&dir);
+    use host_sim::eval::faults::{run_case_with, FaultKind};
+    use host_sim::physics::fault_sweep::{parse_rows, plan, DEFAULT_ROWS};
+    let runs = plan(&parse_rows(DEFAULT_ROWS).expect("the default rows"))
+        .expect("the plan")
+        .len();
+    let robot = Robot::hrp2();
+    let node = robot.node_config();
+    let seconds = |name: &str| {
+        let s = host_sim::scenario::built_in(name).expect(name);
+        let case = run_case_with(&s, FaultKind::None, 0.0, 1, node, &robot.model).expect(name);
+        let walk = (case.trajectory.len() - 1) as f64 * node.params.dt;
+        engine_seconds(walk + PhysicsConfig::default().tail_s)
+    };
+    let row = "`physics-faults --out out/t` (every row, seed 1)";
+    Quotes::new(COMMAND)
+        .cell(BOOK, row, "engine runs", &runs.to_string())
+        .cell(
+            BOOK,
+            row,
+            SIMULATED,
+            &format!(
+                "{:.1} s (straight) / {:.1} s (fig4) each",
+                seconds("straight"),
+                seconds("fig4")
+            ),
+        )
+        .line(
+            BOOK,
+            "physics-faults --out out/physics_faults`,",
+            &format!("{runs} engine"),
+        )
+        .assert();
 }
 
 /// `host-sim physics-faults` takes the probe options of `physics-tables` (one definition):
@@ -460,6 +787,17 @@ fn consecutive_modifications_in_the_engine() {
     let md = std::fs::read_to_string(dir.join("physics_sequence.md")).expect("md");
     assert!(md.contains("| plain re-plan |") && md.contains("| proposed method |"));
     let _ = std::fs::remove_dir_all(&dir);
+    let seconds = |k: &str| engine_seconds(j[k]["simulated_s"].as_f64().expect("simulated_s"));
+    let row = "`physics-sequence --out out/t`";
+    Quotes::new(COMMAND)
+        .cell(BOOK, row, "engine runs", "2")
+        .cell(
+            BOOK,
+            row,
+            SIMULATED,
+            &format!("{:.1} + {:.1} s", seconds("plain"), seconds("proposed")),
+        )
+        .assert();
 }
 
 /// `host-sim physics small-walk.toml --robot small.toml`: the second robot (17.4 kg, soles
@@ -502,6 +840,18 @@ fn a_second_robot_walks_on_its_own_soles() {
     assert!(num("cop_err_mean_m") < COP_MEAN_BOUND_M, "{text}");
     assert!(num("cop_err_max_m") < COP_MAX_BOUND_M, "{text}");
     assert!(num("foot_drift_max_m") < 0.02, "{text}");
+    Quotes::new(COMMAND)
+        .line(
+            BOOK,
+            "with HRP-2's unscaled servos",
+            &format!(
+                "tilt {:.2}°, CoP error mean {:.1} mm, worst {:.1} mm",
+                num("max_tilt_deg"),
+                num("cop_err_mean_m") * 1e3,
+                num("cop_err_max_m") * 1e3
+            ),
+        )
+        .assert();
     let _ = std::fs::remove_dir_all(&dir);
     let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args(["physics", "straight", "--robot"])

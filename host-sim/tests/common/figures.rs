@@ -1,0 +1,252 @@
+//! Figures quoted in the documents, checked by the tests that measure them: the few lines of
+//! `walk_tests::figures` (tests/src/figures.rs) that host-sim's tests need, with the same
+//! behaviour and failure message (host-sim's tests cannot use walk-tests, which depends on
+//! host-sim).
+//!
+//! A test that measures a figure the front page or the book quotes formats it exactly as the
+//! document writes it and asserts that the document says so, at the line or table row named
+//! by an anchor text:
+//!
+//! ```ignore
+//! Quotes::new("cargo test --release -p host-sim --test physics -- --nocapture")
+//!     .cell("docs/src/physics.md", "| straight |", "max tilt", "0.23°")
+//!     .line("README.md", "in MuJoCo under the stabilizer", "tilt at most 0.24°")
+//!     .assert();
+//! ```
+//!
+//! A figure that is no longer quoted fails the test with what the document says there, what
+//! was measured and the command that measures it, so that the maintainer knows what to write.
+//! Every figure of a [`Quotes`] is checked before it fails: one run reports every stale one.
+//!
+//! The anchor must be on exactly one line of the document; the expected text must occur in
+//! that line (or in the named cell of that table row) as a whole figure: `3,240` is not found
+//! in `13,240` nor in `3,2405`, `0.32` not in `0.325`.
+
+use std::path::{Path, PathBuf};
+
+/// The repository's root (documents are named relative to it).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .canonicalize()
+        .expect("the repository root")
+}
+
+/// The figures one command measures, checked against the documents that quote them; every
+/// mismatch is collected and [`Quotes::assert`] reports them all.
+#[must_use = "call `assert` to check the figures"]
+pub struct Quotes {
+    command: String,
+    checked: usize,
+    failures: Vec<String>,
+}
+
+impl Quotes {
+    /// Figures measured by `command` (named in the failure message: it is the command a
+    /// maintainer runs to see the measured figure).
+    pub fn new(command: &str) -> Self {
+        Quotes {
+            command: command.to_string(),
+            checked: 0,
+            failures: vec![],
+        }
+    }
+
+    /// `doc` (relative to the repository root) quotes `expected` in its line (or table row)
+    /// that contains `anchor`.
+    pub fn line(mut self, doc: &str, anchor: &str, expected: &str) -> Self {
+        self.checked += 1;
+        if let Err(e) = check(doc, anchor, None, expected, &self.command) {
+            self.failures.push(e);
+        }
+        self
+    }
+
+    /// `doc` (relative to the repository root) quotes `expected` in the cell of column
+    /// `column` (the text of its header cell, trimmed) of its table row that contains `anchor`.
+    pub fn cell(mut self, doc: &str, anchor: &str, column: &str, expected: &str) -> Self {
+        self.checked += 1;
+        if let Err(e) = check(doc, anchor, Some(column), expected, &self.command) {
+            self.failures.push(e);
+        }
+        self
+    }
+
+    /// Panics, listing every figure that is not quoted as measured; prints how many were
+    /// checked otherwise.
+    pub fn assert(self) {
+        assert!(
+            self.failures.is_empty(),
+            "{} of {} quoted figures differ from the measured ones (update the documents):\n\n{}",
+            self.failures.len(),
+            self.checked,
+            self.failures.join("\n\n")
+        );
+        println!(
+            "{} figures measured by `{}` quoted as measured",
+            self.checked, self.command
+        );
+    }
+}
+
+/// Whether `doc` quotes `expected` at `anchor` (in `column`'s cell, if given); the failure
+/// message otherwise.
+fn check(
+    doc: &str,
+    anchor: &str,
+    column: Option<&str>,
+    expected: &str,
+    command: &str,
+) -> Result<(), String> {
+    let path = repo_root().join(doc);
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("{doc}: cannot read {}: {e}", path.display()))?;
+    check_text(doc, &text, anchor, column, expected, command)
+}
+
+/// [`check`] on the document's text `text` (`doc` names it in the message).
+fn check_text(
+    doc: &str,
+    text: &str,
+    anchor: &str,
+    column: Option<&str>,
+    expected: &str,
+    command: &str,
+) -> Result<(), String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let found: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].contains(anchor))
+        .collect();
+    let at = match found[..] {
+        [i] => i,
+        [] => {
+            return Err(format!(
+                "{doc}: no line contains the anchor `{anchor}`, where `{command}`'s measured \
+                 figure `{expected}` is expected: restore the line or move the test's anchor"
+            ))
+        }
+        _ => {
+            let nums: Vec<String> = found.iter().map(|i| (i + 1).to_string()).collect();
+            return Err(format!(
+                "{doc}: the anchor `{anchor}` is on lines {}: make it name one line",
+                nums.join(", ")
+            ));
+        }
+    };
+    let line = lines[at];
+    let (place, says) = match column {
+        None => (format!("{doc}:{}", at + 1), line.trim().to_string()),
+        Some(col) => {
+            let cell = table_cell(&lines, at, col)
+                .map_err(|e| format!("{doc}:{}: the row with `{anchor}`: {e}", at + 1))?;
+            (
+                format!("{doc}:{}, column `{col}`", at + 1),
+                cell.to_string(),
+            )
+        }
+    };
+    if contains_figure(&says, expected) {
+        return Ok(());
+    }
+    Err(format!(
+        "{place} (the line with `{anchor}`)\n  the document says: {says}\n  measured:          \
+         {expected}\n  measured by:       `{command}`\n  write `{expected}` there (and check \
+         the prose around it)"
+    ))
+}
+
+/// The cell of column `column` of the table row `lines[row]`: the header is the first line of
+/// the block of table lines (`|…`) the row is in.
+fn table_cell<'a>(lines: &[&'a str], row: usize, column: &str) -> Result<&'a str, String> {
+    let is_row = |l: &str| l.trim_start().starts_with('|');
+    if !is_row(lines[row]) {
+        return Err("not a table row".into());
+    }
+    let mut head = row;
+    while head > 0 && is_row(lines[head - 1]) {
+        head -= 1;
+    }
+    if head == row {
+        return Err("the anchor is in the table's header row".into());
+    }
+    let header = cells(lines[head]);
+    let index = header
+        .iter()
+        .position(|h| *h == column)
+        .ok_or_else(|| format!("the table has no column `{column}` (its columns: {header:?})"))?;
+    cells(lines[row])
+        .get(index)
+        .copied()
+        .ok_or_else(|| format!("the row has no cell for column `{column}`"))
+}
+
+/// The trimmed cells of the table row `line` (`| a | b |`).
+fn cells(line: &str) -> Vec<&str> {
+    let t = line.trim();
+    let t = t.strip_prefix('|').unwrap_or(t);
+    let t = t.strip_suffix('|').unwrap_or(t);
+    t.split('|').map(str::trim).collect()
+}
+
+/// Whether `figure` occurs in `text` as a whole: not inside a longer number or word (`3,240`
+/// is not in `13,240` nor in `3,2405`; `0.32` not in `0.325`).
+fn contains_figure(text: &str, figure: &str) -> bool {
+    if figure.is_empty() {
+        return true;
+    }
+    let part_of = |c: Option<char>, beyond: Option<char>| match c {
+        Some(c) if c.is_alphanumeric() => true,
+        // A separator joining the figure to more digits: `3,2405`, `1.0.32`.
+        Some('.' | ',') => beyond.is_some_and(|b| b.is_ascii_digit()),
+        _ => false,
+    };
+    text.match_indices(figure).any(|(i, _)| {
+        let mut before = text[..i].chars().rev();
+        let mut after = text[i + figure.len()..].chars();
+        let (b, bb) = (before.next(), before.next());
+        let (a, aa) = (after.next(), after.next());
+        let first = figure.chars().next();
+        let last = figure.chars().last();
+        // The neighbours only matter where the figure itself begins or ends with a word
+        // character (`9.2 M + ` may be followed by anything).
+        let clean_start = !first.is_some_and(|c| c.is_alphanumeric()) || !part_of(b, bb);
+        let clean_end = !last.is_some_and(|c| c.is_alphanumeric()) || !part_of(a, aa);
+        clean_start && clean_end
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DOC: &str = "# T\n\nEvery built-in scenario walks through with 0 falls.\n\n\
+        | scenario | fell | max tilt | foot drift |\n|---|---|---|---|\n\
+        | straight | no | 0.23° | 3.4 mm |\n| lateral | no | 0.24° | 4.7 mm |\n";
+
+    #[test]
+    fn a_figure_is_found_in_its_row_and_cell() {
+        let ok = |anchor, column, expected| check_text("T", DOC, anchor, column, expected, "c");
+        assert!(ok("walks through with", None, "0 falls").is_ok());
+        assert!(ok("| straight |", Some("max tilt"), "0.23°").is_ok());
+        assert!(ok("| lateral |", Some("foot drift"), "4.7 mm").is_ok());
+        let e = ok("| straight |", Some("max tilt"), "0.24°").unwrap_err();
+        assert!(e.contains("the document says: 0.23°"), "{e}");
+        assert!(e.contains("measured:          0.24°"), "{e}");
+        assert!(e.contains("measured by:       `c`"), "{e}");
+        assert!(e.contains("write `0.24°` there"), "{e}");
+        // A whole figure only: not inside a longer number.
+        assert!(ok("| straight |", Some("max tilt"), "0.2").is_err());
+        assert!(ok("| lateral |", Some("foot drift"), "7 mm").is_err());
+        assert!(!contains_figure("0.325 of", "0.32"));
+    }
+
+    #[test]
+    fn an_anchor_names_one_line() {
+        let e = check_text("T", DOC, "| no |", None, "0.23°", "c").unwrap_err();
+        assert!(e.contains("is on lines 7, 8"), "{e}");
+        let e = check_text("T", DOC, "no such row", None, "0.23°", "c").unwrap_err();
+        assert!(e.contains("no line contains"), "{e}");
+        let e = check_text("T", DOC, "| straight |", Some("tilt"), "0.23°", "c").unwrap_err();
+        assert!(e.contains("no column `tilt`"), "{e}");
+    }
+}

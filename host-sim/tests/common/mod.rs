@@ -1,0 +1,4 @@
+//! Helpers shared by host-sim's integration tests (each test file that needs them declares
+//! `mod common;`).
+
+pub mod figures;
