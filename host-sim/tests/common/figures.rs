@@ -72,6 +72,26 @@ impl Quotes {
         self
     }
 
+    /// [`Quotes::cell`] for a figure that may be spelt any of `spellings` (a value within a
+    /// rounding tolerance of a rounding boundary: the engine may land on either side of it on
+    /// another CPU); the failure names the first.
+    pub fn cell_any(mut self, doc: &str, anchor: &str, column: &str, spellings: &[String]) -> Self {
+        self.checked += 1;
+        let mut first = None;
+        for s in spellings {
+            match check(doc, anchor, Some(column), s, &self.command) {
+                Ok(()) => return self,
+                Err(e) => {
+                    first.get_or_insert(e);
+                }
+            }
+        }
+        if let Some(e) = first {
+            self.failures.push(e);
+        }
+        self
+    }
+
     /// Panics, listing every figure that is not quoted as measured; prints how many were
     /// checked otherwise.
     pub fn assert(self) {
