@@ -115,7 +115,8 @@ fn an_expected_refusal_passes() {
             &t,
             &[
                 "step 2 (append",
-                "refused: reach (code 12) (expected reach)",
+                "refused: reach (code 12): forward step 0.700 m > max_forward 0.300 m \
+                 (expected reach)",
             ],
         );
         assert!(!t.contains("UNEXPECTED"), "{t}");
