@@ -2,10 +2,10 @@
 # The board image's flash and static RAM, from the build: the line firmware/README.md quotes.
 #
 #     bash firmware/size.sh           builds the board image (release) and prints the line
-#     bash firmware/size.sh --check   ... and fails if firmware/README.md does not contain it
+#     bash firmware/size.sh --check   ... and fails if firmware/README.md (or the front page's headline row) does not quote it
 #                                     (tests/run-all.sh runs this, so the figures cannot go stale)
 #
-# Either fails when the image is over issue 12's targets (flash 96 KB, static RAM 32 KB) or
+# Either fails when the image is over its targets (flash 96 KB, static RAM 32 KB) or
 # when .data holds more than 1 KiB (the parked node must stay all zero bytes, in .bss).
 #
 # Needs an `llvm-size` (LLVM on PATH, or rustup's llvm-tools component: `rustup component add
@@ -53,7 +53,7 @@ echo "$line"
 # Issue 12's targets for the board image: flash <= 96 KB, static RAM <= 32 KB (1 KB = 1000 B,
 # as the READMEs quote sizes).
 if [ "$flash" -gt 96000 ] || [ "$ram" -gt 32000 ]; then
-    echo "the board image is over issue 12's targets (flash <= 96000 B, static RAM <= 32000 B)" >&2
+    echo "the board image is over its targets (flash <= 96000 B, static RAM <= 32000 B)" >&2
     exit 1
 fi
 # The node's `static` is parked (`Node::parked`: every byte zero) so that it lives in .bss; a
@@ -70,4 +70,12 @@ if [ "${1:-}" = "--check" ]; then
         exit 1
     fi
     echo "firmware/README.md quotes these sizes"
+    # The front page's headline row, with thousands separators.
+    sep() { echo "$1" | sed -e ':a' -e 's/\B[0-9]\{3\}\>/,&/' -e 'ta'; }
+    headline="flash $(sep "$flash") B, static RAM $(sep "$ram") B"
+    if ! grep -F -- "| board image (STM32H743) |" ../README.md | grep -qF -- "$headline"; then
+        echo "README.md's board image row does not say: $headline" >&2
+        exit 1
+    fi
+    echo "README.md's headline row quotes them"
 fi

@@ -30,6 +30,13 @@ impl ClassicFrame {
         ]
     }
 
+    /// `true` if [`from_element`](Self::from_element) takes the element (a classic standard
+    /// data frame of at most 8 bytes), without building the frame.
+    pub fn is_classic(e: &[u32; 4]) -> bool {
+        let [r0, r1, _, _] = *e;
+        r0 & (0b11 << 29) == 0 && r1 & (1 << 21) == 0 && (r1 >> 16) & 0xF <= 8
+    }
+
     /// A message-RAM RX FIFO element as a frame; `None` for what is not a classic standard
     /// data frame of at most 8 bytes (extended id: R0 bit 30, remote: bit 29, FD: R1 bit 21,
     /// a DLC above 8).
@@ -139,6 +146,21 @@ mod tests {
         let mut e = base;
         e[1] = (e[1] & !(0xF << 16)) | (9 << 16); // DLC 9 is an FD length
         assert_eq!(ClassicFrame::from_element(&e), None);
+        // `is_classic` says the same as `from_element`, for every combination of the bits.
+        for xtd_rtr in 0..4u32 {
+            for fdf in 0..2u32 {
+                for dlc in 0..16u32 {
+                    let mut e = base;
+                    e[0] |= xtd_rtr << 29;
+                    e[1] = (e[1] & !(0xF << 16)) | (dlc << 16) | (fdf << 21);
+                    assert_eq!(
+                        ClassicFrame::is_classic(&e),
+                        ClassicFrame::from_element(&e).is_some(),
+                        "{e:x?}"
+                    );
+                }
+            }
+        }
         let mut e = base;
         e[2] = 0xFFFF_FFFF;
         assert_eq!(

@@ -4,7 +4,13 @@
 //!
 //! * [`link`]: the CAN link adapter, `embedded_can::nb::Can` for the node over the small
 //!   [`link::Fdcan`] trait (the run-time register accesses of the FDCAN): software queues,
-//!   bus-off recovery and the error state, replacement of stale stream frames, counters;
+//!   bus-off recovery and the error state, replacement of stale stream frames, counters,
+//!   `ESTOP` (RX FIFO1) before everything else;
+//! * [`fdcan`]: the FDCAN at register level over a register-access trait
+//!   ([`fdcan::FdcanRegs`]): the board's configuration and its bring-up with read-back
+//!   (the bus is joined only if every register and filter element reads back as written),
+//!   and [`link::Fdcan`] over the registers ([`fdcan::RegFdcan`]);
+//! * [`bor`]: when to program the brown-out level's option byte, and what its result means;
 //! * [`frame`]: the classic frame and the message-RAM element format;
 //! * [`pace`]: the 5 ms slots from a free-running 32-bit counter, missed slots counted;
 //! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
@@ -20,17 +26,21 @@
 //!   the watchdog feed, what to log), run by the board image, the QEMU image and the no-panic
 //!   check alike.
 //!
-//! The board implements [`link::Fdcan`] on FDCAN1 (`firmware/board/src/fdcan1.rs`); the tests
-//! (`tests/link.rs`) on a model of the peripheral, with planner-core's node on top. The QEMU
-//! image runs [`control`] around its replayed polls, over the real [`Link`] on an in-memory
-//! FDCAN.
+//! The board implements [`fdcan::FdcanRegs`] on FDCAN1 (`firmware/board/src/fdcan1.rs`) and
+//! runs [`fdcan::bring_up`] and [`fdcan::RegFdcan`] over it; the tests run the same code over
+//! a register-level model that enforces RM0433's rules (`tests/fdcan_model.rs`), and the
+//! adapter over a simpler model of the peripheral (`tests/link.rs`), with planner-core's node
+//! on top. The QEMU image runs [`control`] around its replayed polls, over the real [`Link`]
+//! on an in-memory FDCAN.
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod bor;
 pub mod control;
 pub mod cycle;
 pub mod fault_entry;
+pub mod fdcan;
 pub mod frame;
 pub mod link;
 pub mod node;

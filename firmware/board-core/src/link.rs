@@ -2,15 +2,25 @@
 //! peripheral ([`Fdcan`]), with software queues, the error state machine (bus-off recovery,
 //! counters) and the replacement of stale frames.
 //!
-//! # Message RAM (the board's layout, see firmware/README.md)
-//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements and there are [`TX_SLOTS`] (32) dedicated TX
-//! buffers, 8-byte elements. At 1 Mbit/s a classic frame takes at least 47 bit times (~21
+//! # Message RAM (the board's layout: [`crate::fdcan::layout`])
+//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`crate::fdcan::RX1_ELEMENTS`] (16),
+//! and there are [`TX_SLOTS`] (32) dedicated TX buffers, 8-byte elements. At 1 Mbit/s a
+//! classic frame takes at least 47 bit times (~21
 //! frames per ms with 8-byte frames far fewer), so 64 elements hold ≥ 2.9 ms of a saturated bus
 //! without being read: the node's worst poll (~0.25 ms) and a whole 5 ms cycle of any
 //! realistic command burst fit, and [`Link::service`] drains the FIFO while the loop waits. No
-//! interrupt is needed for that; an overflow is still detected (`RF0L`), counted
+//! interrupt is needed for that; an overflow is still detected (`RF0L`, `RF1L`), counted
 //! ([`Health::rx_lost`]) and reported once to the node as a receive error (its `DIAG` bus
 //! errors).
+//!
+//! # `ESTOP` first
+//! The acceptance filters put `ESTOP` into RX FIFO1 and the other commands into RX FIFO0.
+//! [`Link::receive`](Can::receive) reads FIFO1 first, every time, even before it reports a
+//! lost frame: an `ESTOP` reaches the node in the first frames of the poll after it arrived,
+//! however many commands wait in FIFO0 and in the software queue (the node takes at most
+//! `max_rx` commands a cycle, and stops receiving for the cycle at a receive error).
+//! [`Link::service`] leaves FIFO1 to the poll (16 elements: more than the node takes in a
+//! cycle).
 //!
 //! # Transmission
 //! A frame goes into a free TX buffer, or waits in a software queue of [`SOFT_TX`] frames.
@@ -40,7 +50,7 @@ use crate::frame::ClassicFrame;
 pub const RX_ELEMENTS: usize = 64;
 /// Dedicated TX buffers in the board's message-RAM layout (the M_CAN maximum).
 pub const TX_SLOTS: usize = 32;
-/// Frames the software receive queue holds (beyond the hardware FIFO).
+/// Frames the software receive queue of RX FIFO0 holds (beyond the hardware FIFO).
 pub const SOFT_RX: usize = 32;
 /// Frames the software transmit queue holds (beyond the TX buffers).
 pub const SOFT_TX: usize = 32;
@@ -56,11 +66,18 @@ pub mod psr {
 }
 
 /// The few accesses to the FDCAN peripheral that the adapter needs at run time. The board
-/// implements it on FDCAN1's registers and message RAM; the host tests on a model.
+/// uses [`crate::fdcan::RegFdcan`] (over FDCAN1's registers and message RAM); the host tests
+/// that and simpler models.
 pub trait Fdcan {
     /// Reads the oldest element of RX FIFO0 and acknowledges it (`RXF0A`); `None` if empty.
     fn rx_pop(&mut self) -> Option<[u32; 4]>;
-    /// `true` once after a frame was lost because RX FIFO0 was full (`IR.RF0L`, cleared).
+    /// Reads the oldest element of RX FIFO1 (`ESTOP`) and acknowledges it (`RXF1A`); `None`
+    /// if empty. The default is for a device without FIFO1 (every frame in FIFO0).
+    fn rx_pop_fifo1(&mut self) -> Option<[u32; 4]> {
+        None
+    }
+    /// `true` once after a frame was lost because an RX FIFO was full (`IR.RF0L` or
+    /// `IR.RF1L`, cleared).
     fn rx_take_lost(&mut self) -> bool;
     /// Pending TX buffers (`TXBRP`: bit `i` = buffer `i` waits for or is in transmission).
     fn tx_pending(&self) -> u32;
@@ -115,7 +132,7 @@ pub struct Health {
     pub bus_offs: u16,
     /// Entries into error-passive since start-up.
     pub passive_episodes: u16,
-    /// RX FIFO0 overflows seen (frames lost while the FIFO was full).
+    /// RX FIFO overflows seen (frames lost while FIFO0 or FIFO1 was full).
     pub rx_lost: u16,
     /// Frames superseded before they were sent (software queue or cancelled TX buffer).
     pub replaced: u16,
@@ -140,7 +157,7 @@ impl Health {
     }
 }
 
-/// The receive error: frames were lost (RX FIFO0 overflowed) since the last report.
+/// The receive error: frames were lost (an RX FIFO overflowed) since the last report.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RxLost;
 
@@ -205,8 +222,8 @@ impl<P: Fdcan> Link<P> {
         self.health
     }
 
-    /// The frames waiting in the software receive queue, oldest first (the node receives them
-    /// before those still in RX FIFO0).
+    /// The frames waiting in the software receive queue (of RX FIFO0), oldest first (the
+    /// node receives them after RX FIFO1's and before those still in RX FIFO0).
     pub fn rx_waiting(&self) -> impl Iterator<Item = &ClassicFrame> {
         self.rx.iter()
     }
@@ -216,8 +233,9 @@ impl<P: Fdcan> Link<P> {
         self.tx.len()
     }
 
-    /// Error state machine, then RX FIFO0 into the software queue and the software transmit
-    /// queue into free TX buffers. Call it often while the loop waits (cheap when idle).
+    /// Error state machine, then RX FIFO0 into the software queue (RX FIFO1 is left to
+    /// [`Link::receive`](Can::receive)) and the software transmit queue into free TX buffers.
+    /// Call it often while the loop waits (cheap when idle).
     pub fn service(&mut self) {
         self.check_errors();
         self.drain_rx();
@@ -262,11 +280,15 @@ impl<P: Fdcan> Link<P> {
         }
     }
 
-    fn drain_rx(&mut self) {
+    fn take_lost(&mut self) {
         if self.hw.rx_take_lost() {
             self.health.rx_lost = self.health.rx_lost.saturating_add(1);
             self.lost_unreported = true;
         }
+    }
+
+    fn drain_rx(&mut self) {
+        self.take_lost();
         while !self.rx.is_full() {
             let Some(f) = self.read_hw() else {
                 break;
@@ -278,7 +300,15 @@ impl<P: Fdcan> Link<P> {
 
     /// The next classic frame of RX FIFO0 (others are counted and dropped).
     fn read_hw(&mut self) -> Option<ClassicFrame> {
-        while let Some(e) = self.hw.rx_pop() {
+        self.read_hw_after(None)
+    }
+
+    /// The next classic frame: `first` (an element already read) if it is one, else the next
+    /// of RX FIFO0 (others are counted and dropped). RX FIFO1's element comes through here
+    /// too (`receive`), so that the poll inlines one element conversion, not two (~300 B of
+    /// flash on the board); with `first` = `None` this is the plain FIFO0 loop.
+    fn read_hw_after(&mut self, mut first: Option<[u32; 4]>) -> Option<ClassicFrame> {
+        while let Some(e) = first.take().or_else(|| self.hw.rx_pop()) {
             match ClassicFrame::from_element(&e) {
                 Some(f) => return Some(f),
                 None => self.health.rx_foreign = self.health.rx_foreign.saturating_add(1),
@@ -396,20 +426,29 @@ impl<P: Fdcan> Can for Link<P> {
         }
     }
 
-    /// The oldest frame (software queue, then RX FIFO0); once after an overflow, [`RxLost`].
+    /// `ESTOP` first (RX FIFO1), then, once after an overflow, [`RxLost`], then the oldest
+    /// other frame (the software queue, then RX FIFO0).
     fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
-        if self.hw.rx_take_lost() {
-            self.health.rx_lost = self.health.rx_lost.saturating_add(1);
-            self.lost_unreported = true;
+        // RX FIFO1's oldest element, converted by the same code as RX FIFO0's below; one that
+        // is not a classic frame is counted and dropped, and this call goes on as without.
+        let estop = match self.hw.rx_pop_fifo1() {
+            Some(e) if !ClassicFrame::is_classic(&e) => {
+                self.health.rx_foreign = self.health.rx_foreign.saturating_add(1);
+                None
+            }
+            e => e,
+        };
+        if estop.is_none() {
+            self.take_lost();
+            if self.lost_unreported {
+                self.lost_unreported = false;
+                return Err(nb::Error::Other(RxLost));
+            }
+            if let Some(f) = self.rx.pop_front() {
+                return Ok(f);
+            }
         }
-        if self.lost_unreported {
-            self.lost_unreported = false;
-            return Err(nb::Error::Other(RxLost));
-        }
-        if let Some(f) = self.rx.pop_front() {
-            return Ok(f);
-        }
-        match self.read_hw() {
+        match self.read_hw_after(estop) {
             Some(f) => Ok(f),
             None => Err(nb::Error::WouldBlock),
         }

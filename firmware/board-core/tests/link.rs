@@ -1,6 +1,6 @@
 //! The board's CAN link adapter on a model of the FDCAN (`mock`): queues, replacement of stale
-//! frames, bus-off recovery, error counters, and a burst of commands during a node's poll with
-//! planner-core's real node on top.
+//! frames, bus-off recovery, error counters, a burst of commands during a node's poll and
+//! `ESTOP` overtaking a full RX FIFO0, with planner-core's real node on top.
 
 mod mock;
 
@@ -9,7 +9,7 @@ use board_core::{BusState, Link, RxLost};
 use embedded_can::nb::Can;
 use embedded_can::Frame;
 use mock::{frame, MockFdcan};
-use planner_core::node::{Node, NodeConfig};
+use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame};
 
 /// A heartbeat of the start-up's session (epoch 0: the node has no entropy); before the
@@ -299,4 +299,89 @@ fn health_goes_into_link_as_published() {
         (back.reset, back.missed_slots, back.passive_episodes),
         (5, 255, 1)
     );
+}
+
+fn estop() -> [u32; 4] {
+    let raw = Command::EmergencyStop { seq: 9 }.encode();
+    frame(raw.id, raw.bytes()).to_element()
+}
+
+/// 48 commands (three cycles of the node's receive budget) wait, 32 of them already in the
+/// software queue, when an `ESTOP` arrives; the cycles until the node is emergency-stopped.
+fn cycles_to_estop(estop_fifo1: bool) -> u32 {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
+    mock.estop_fifo1 = estop_fifo1;
+    let mut link = Link::new(mock);
+    for seq in 1..=48 {
+        link.peripheral_mut().arrive(heartbeat(seq));
+    }
+    link.service();
+    link.peripheral_mut().arrive(estop());
+    for cycle in 1..=10 {
+        node.poll(5 * cycle, &mut link);
+        if node.state() == NodeState::EmergencyStopped {
+            return cycle;
+        }
+    }
+    panic!("never stopped");
+}
+
+#[test]
+fn an_estop_in_fifo1_overtakes_a_full_fifo0() {
+    assert_eq!(cycles_to_estop(true), 1);
+}
+
+#[test]
+fn an_estop_behind_commands_in_fifo0_waits_cycles() {
+    // The routing before (every command into FIFO0): the ESTOP waits behind 48 commands,
+    // 16 a cycle; the check above is not vacuous.
+    assert_eq!(cycles_to_estop(false), 4);
+}
+
+#[test]
+fn fifo1_comes_before_the_software_queue_and_a_loss_report() {
+    let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
+    mock.estop_fifo1 = true;
+    let mut link = Link::new(mock);
+    link.peripheral_mut().arrive(heartbeat(1));
+    link.service(); // the heartbeat into the software queue; FIFO1 is left to `receive`
+    link.peripheral_mut().arrive(estop());
+    link.peripheral_mut().rx_lost_flag = true;
+    assert_eq!(link.receive().unwrap().raw_id(), ids::ESTOP);
+    assert!(matches!(link.receive(), Err(nb::Error::Other(RxLost))));
+    assert_eq!(link.receive().unwrap().raw_id(), ids::CONTROL);
+    assert!(matches!(link.receive(), Err(nb::Error::WouldBlock)));
+}
+
+#[test]
+fn a_foreign_element_in_fifo1_is_dropped_without_reordering() {
+    // An ESTOP element that is no classic frame (DLC 9), then a real one; FIFO0 and the
+    // software queue hold commands.
+    let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
+    mock.estop_fifo1 = true;
+    let mut link = Link::new(mock);
+    link.peripheral_mut().arrive(heartbeat(1));
+    link.service(); // heartbeat 1 into the software queue
+    link.peripheral_mut().arrive(heartbeat(2)); // FIFO0
+    let mut bad = estop();
+    bad[1] = (bad[1] & !(0xF << 16)) | (9 << 16);
+    link.peripheral_mut().arrive(bad);
+    link.peripheral_mut().arrive(estop());
+    let seqs: Vec<(u16, u8)> = std::iter::from_fn(|| link.receive().ok())
+        .map(|f| (f.raw_id(), f.data()[0]))
+        .collect();
+    // The bad element dropped (counted); the call it was read in goes on in order (the
+    // software queue first); the real ESTOP comes at the next call, before FIFO0.
+    let hb = |seq: u8| {
+        let raw = Command::Control {
+            session: 0,
+            seq: u32::from(seq),
+            op: ControlOp::Heartbeat,
+        }
+        .encode();
+        (raw.id, raw.bytes()[0])
+    };
+    assert_eq!(seqs, [hb(1), (ids::ESTOP, 9), hb(2)]);
+    assert_eq!(link.health().rx_foreign, 1);
 }

@@ -1,5 +1,6 @@
 //! The safe state: what HardFault, an unexpected interrupt, a panic and the clock security
-//! system's NMI all do, and the reset reason read at start-up.
+//! system's NMI all do, the reset reason read at start-up, and the state of a board whose
+//! CAN configuration did not read back ([`off_bus`]).
 //!
 //! HardFault and the NMI enter through `board_core::fault_entry!`, which first moves the stack
 //! pointer back to the top of the stack region (a stack overflow leaves none).
@@ -12,15 +13,23 @@
 //! node publishes (`LINK`), and the fault pin is low again (GPIO reset).
 //!
 //! The IWDG is not stopped: if the reset request itself failed, the watchdog resets the MCU.
+//!
+//! [`off_bus`]: the same signals without the reset: FDCAN1 held in its initialisation state,
+//! the fault pin high, the mark left (a later software reset reads as `fault`), one error line,
+//! the watchdog fed. A configuration that reads back wrong is not transient;
+//! resetting would only repeat the start-up at its own rate, and the node could publish
+//! nothing either way.
 
 #![allow(unsafe_code)]
 
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 
+use board_core::fdcan::BringUpError;
 use board_core::reset::{MARK_CLOCK, MARK_FAULT};
 use board_core::ResetReason;
 use cortex_m_rt::exception;
+use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
 use stm32h7xx_hal::pac;
 
 use crate::fdcan1;
@@ -51,17 +60,43 @@ pub fn take_reset_reason(rcc: &pac::RCC) -> ResetReason {
     ResetReason::decode(rsr, mark)
 }
 
-/// Silences the CAN output, raises the fault pin, leaves `mark` and resets the MCU.
-pub fn fail_safe(mark: u32) -> ! {
-    cortex_m::interrupt::disable();
+/// Core cycles between two feeds of the watchdog in [`off_bus`] (10 ms at 480 MHz).
+const FEED_CYCLES: u32 = 4_800_000;
+
+/// CAN output off, fault pin high, `mark` left in the no-init word.
+fn signal(mark: u32) {
     fdcan1::silence();
     // SAFETY: a single write of the port's set/reset register (bit-set only: no other pin
     // changes); GPIOB's clock is on and PB14 is a push-pull output since start-up.
     unsafe { (*pac::GPIOB::ptr()).bsrr.write(|w| w.bs14().set_bit()) };
-    // SAFETY: see `MARK`; nothing reads it before the reset.
+    // SAFETY: see `MARK`; nothing reads it before the next start-up.
     unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, mark) };
+}
+
+/// Silences the CAN output, raises the fault pin, leaves `mark` and resets the MCU.
+pub fn fail_safe(mark: u32) -> ! {
+    cortex_m::interrupt::disable();
+    signal(mark);
     cortex_m::asm::delay(HOLD_CYCLES);
     cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// FDCAN1's bring-up failed (`err`): the node does not join the bus. CAN output off, fault
+/// pin high, the fault mark left, one error line (the RTT ring keeps it for a probe that
+/// attaches later); then, for ever, the watchdog fed (no reset loop). Call it once the fault
+/// pin is configured.
+pub fn off_bus(watchdog: &mut IndependentWatchdog, err: BringUpError) -> ! {
+    signal(MARK_FAULT);
+    let (what, detail) = err.describe();
+    defmt::error!(
+        "FDCAN1 configuration did not read back ({=str}, {=u32:#x}): off the bus",
+        what,
+        detail
+    );
+    loop {
+        cortex_m::asm::delay(FEED_CYCLES);
+        watchdog.feed();
+    }
 }
 
 // HardFault and the clock security system's NMI enter through board-core's `fault_entry!`:

@@ -1,39 +1,115 @@
-//! Start-up register accesses the HAL does not offer: the brown-out level (an option byte),
-//! the clock security system, the free-running microsecond counter on TIM2, the IWDG's
-//! freeze while a debugger halts the core, and the MPU guard below the stack.
+//! Start-up register accesses the HAL does not offer: the brown-out level (an option byte,
+//! with the no-init word that remembers a failed change), the clock security system, the
+//! free-running microsecond counter on TIM2, the IWDG's freeze while a debugger halts the
+//! core, and the MPU guard below the stack.
 
 #![allow(unsafe_code)]
 
+use core::cell::UnsafeCell;
+use core::mem::MaybeUninit;
+
+use board_core::bor::{self, BorPlan, BorStatus};
+use cortex_m::peripheral::DWT;
 use stm32h7xx_hal::pac;
 
 /// Option-byte keys (RM0433 §4.9.4).
 const OPTKEY1: u32 = 0x0819_2A3B;
 const OPTKEY2: u32 = 0x4C5D_6E7F;
 
+/// The longest wait for an option-byte change \[core cycles\]: 3 s at the reset clock (HSI,
+/// 64 MHz), ten times the ~300 ms reported for an STM32H743.
+const OPT_WAIT_CYCLES: u32 = 192_000_000;
+/// The same bound in polls of `OPT_BUSY` (each takes more than 3 cycles), should the cycle
+/// counter not run.
+const OPT_WAIT_POLLS: u32 = OPT_WAIT_CYCLES / 3;
+
+struct Word(UnsafeCell<MaybeUninit<u32>>);
+// SAFETY: read and written only by `ensure_bor_level`, once, at start-up, before anything
+// else could touch it (no interrupts are enabled; the fault handler does not use it).
+unsafe impl Sync for Word {}
+
+/// Survives every reset but a power-on (DTCM keeps its contents; `.uninit` is not zeroed):
+/// board-core's `bor` mark of an attempt to change the brown-out level, so that a failed or
+/// interrupted change is not tried again at every boot.
+#[link_section = ".uninit.BOR_MARK"]
+static BOR_MARK: Word = Word(UnsafeCell::new(MaybeUninit::uninit()));
+
+fn mark() -> u32 {
+    // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned RAM; see `Word`.
+    unsafe { core::ptr::read_volatile(BOR_MARK.0.get() as *const u32) }
+}
+
+fn set_mark(value: u32) {
+    // SAFETY: as for `mark`.
+    unsafe { core::ptr::write_volatile(BOR_MARK.0.get() as *mut u32, value) }
+}
+
+/// The brown-out level in force (`FLASH_OPTSR_CUR.BOR_LEV`).
+pub fn bor_level(flash: &pac::FLASH) -> u8 {
+    bor::level(flash.optsr_cur().read().bits())
+}
+
 /// Makes `FLASH_OPTSR.BOR_LEV` equal to `level` (0 off, 1 ≈ 2.1 V, 2 ≈ 2.4 V, 3 ≈ 2.7 V,
-/// rising thresholds of the datasheet). Programs the option byte only when it differs (so
-/// once per board: option bytes are flash and wear); `true` if it did.
-pub fn ensure_bor_level(flash: &pac::FLASH, level: u8) -> bool {
+/// rising thresholds of the datasheet), board-core's `bor::plan` deciding: programs the option
+/// byte only when it differs (so once per board: option bytes are flash and wear), and not
+/// again after a failed or interrupted attempt until a power-on. Call it BEFORE the
+/// independent watchdog starts (the change stalls the core for a long time; a watchdog reset
+/// in the middle of it is what ST warns against), with the DWT cycle counter running (it
+/// bounds the wait). The change's result is checked: `OPT_BUSY` clear within
+/// [`OPT_WAIT_CYCLES`], `OPTCHANGEERR` clear, `BOR_LEV` the new level; a failure is left in
+/// the no-init mark and reported, and the start-up goes on at the current level.
+pub fn ensure_bor_level(flash: &pac::FLASH, level: u8) -> BorStatus {
     let level = level & 3;
-    if flash.optsr_cur().read().bor_lev().bits() == level {
-        return false;
+    match bor::plan(bor_level(flash), level, mark()) {
+        BorPlan::Keep => {
+            set_mark(0);
+            return BorStatus::Kept;
+        }
+        BorPlan::GiveUp(why) => {
+            set_mark(bor::failure_mark(level, why));
+            return BorStatus::NotRetried(why);
+        }
+        BorPlan::Program => {}
     }
+    // A reset from here until the mark is replaced reads as an interrupted attempt.
+    set_mark(bor::attempt_mark(level));
     if flash.optcr().read().optlock().bit_is_set() {
         // SAFETY: the documented unlock sequence of the option bytes.
         flash.optkeyr().write(|w| unsafe { w.bits(OPTKEY1) });
         // SAFETY: as above.
         flash.optkeyr().write(|w| unsafe { w.bits(OPTKEY2) });
     }
+    // An error flag of an earlier change would read as this one's.
+    flash.optccr().write(|w| w.clr_optchangeerr().set_bit());
     // OPTSR_PRG holds the current options after reset: only BOR_LEV changes.
     // SAFETY: a 2-bit field given a value in 0..=3.
     flash
         .optsr_prg()
         .modify(|_, w| unsafe { w.bor_lev().bits(level) });
     flash.optcr().modify(|_, w| w.optstart().set_bit());
-    // Bounded by the independent watchdog, which runs already.
-    while flash.optsr_cur().read().opt_busy().bit_is_set() {}
+    let t0 = DWT::cycle_count();
+    let mut polls = 0u32;
+    let timed_out = loop {
+        if flash.optsr_cur().read().opt_busy().bit_is_clear() {
+            break false;
+        }
+        polls += 1;
+        if DWT::cycle_count().wrapping_sub(t0) > OPT_WAIT_CYCLES || polls > OPT_WAIT_POLLS {
+            break true;
+        }
+    };
+    let result = bor::outcome(flash.optsr_cur().read().bits(), timed_out, level);
     flash.optcr().modify(|_, w| w.optlock().set_bit());
-    true
+    match result {
+        Ok(()) => {
+            set_mark(0);
+            BorStatus::Programmed
+        }
+        Err(why) => {
+            set_mark(bor::failure_mark(level, why));
+            BorStatus::Failed(why)
+        }
+    }
 }
 
 /// Turns on the HSE clock security system (`RCC_CR.HSECSSON`): a failing HSE raises the NMI

@@ -2,16 +2,20 @@
 //!
 //! * board settings ([`HSE`], [`BOR_LEVEL`], [`WATCHDOG_MS`]) at the top of this file;
 //! * start-up: the reset reason (`RCC_RSR` and the fault handler's mark, [`fault`]), the
-//!   independent watchdog, the brown-out level (an option byte, programmed once), then the
-//!   clocks: 480 MHz from the **HSE** through PLL1 (VOS0, rev V silicon), the HSE clock
-//!   security system on (its NMI is the safe state), I- and D-cache; PLL1Q = 80 MHz is the
-//!   FDCAN kernel clock;
+//!   brown-out level (an option byte, programmed once, BEFORE the watchdog runs: the change
+//!   stalls the core for a long time; its result checked, a failure not retried until a
+//!   power-on: [`hw::ensure_bor_level`]), the independent watchdog, then the clocks: 480 MHz
+//!   from the **HSE** through PLL1 (VOS0, rev V silicon), the HSE clock security system on
+//!   (its NMI is the safe state), I- and D-cache; PLL1Q = 80 MHz is the FDCAN kernel clock;
 //! * FDCAN1 in classic CAN mode at 1 Mbit/s on the pins of a Nucleo-H743ZI's CN9 (PD0 = RX,
-//!   PD1 = TX, AF9), configured by the `fdcan` crate (bit timing, the acceptance filters
-//!   [`COMMAND_FILTERS`] for exactly [`ids::COMMANDS`], mode), message RAM re-laid out and
-//!   driven at run time by [`fdcan1`] (64 RX FIFO elements, 32 dedicated TX buffers) behind
-//!   board-core's [`Link`] adapter (queues, bus-off recovery, error counters, stale frames
-//!   replaced);
+//!   PD1 = TX, AF9), configured by board-core's register code (`board_core::fdcan`: bit
+//!   timing, message RAM layout, acceptance filters for exactly `ids::COMMANDS` with `ESTOP`
+//!   into RX FIFO1 and the others into RX FIFO0, a global filter rejecting everything else),
+//!   every configuration register and filter element read back before the node joins the
+//!   bus ([`fdcan1::bring_up`]; if anything differs the node stays off the bus with the fault
+//!   pin high, [`fault::off_bus`]); at run time [`fdcan1::Fdcan1`] behind board-core's
+//!   [`Link`] adapter (`ESTOP` first, queues, bus-off recovery, error counters, stale frames
+//!   replaced). The HAL only switches FDCAN's clocks on (RCC) and sets the pins;
 //! * the loop is board-core's [`ControlLoop`] (`board_core::control`: the same cycle code the
 //!   QEMU image and the no-panic check run) over the board's hardware ([`cycle_io`]: TIM2,
 //!   DWT, IWDG; [`Busy`]; [`cycle_log`]: defmt);
@@ -51,18 +55,11 @@ mod hw;
 mod logger;
 mod stack;
 
-use core::num::{NonZeroU16, NonZeroU8};
-
 use board_core::control::{BusyPin, ControlLoop, Io};
+use board_core::fdcan::BIT_TIMING;
 use board_core::{cycle, Link, Pacer};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
-use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
-use fdcan::filter::{
-    Action, ExtendedFilter, ExtendedFilterSlot, FilterType, StandardFilter, STANDARD_FILTER_MAX,
-};
-use fdcan::id::StandardId;
-use stm32h7xx_hal::can::CanExt as _;
 use stm32h7xx_hal::gpio::{Output, Pin, PushPull, Speed};
 use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
 use stm32h7xx_hal::rcc::rec::ResetEnable as _;
@@ -72,7 +69,6 @@ use stm32h7xx_hal::{pac, prelude::*};
 
 use planner_core::gait::GaitError;
 use planner_core::node::NodeConfig;
-use planner_core::wire::ids;
 use static_cell::ConstStaticCell;
 use walk_robot::{Gains, Node, ParkedNode};
 
@@ -92,7 +88,8 @@ pub enum Hse {
 /// `Hse::Crystal(its frequency)`; the PLL set-up below derives 480 MHz and 80 MHz from it.
 pub const HSE: Hse = Hse::Bypass(8_000_000);
 /// Brown-out reset level (`BOR_LEV`): 3 = about 2.7 V rising (datasheet VBOR3), for a 3.3 V
-/// supply; programmed into the option bytes once if different.
+/// supply; programmed into the option bytes once if different (a failed change is not retried
+/// until a power-on).
 pub const BOR_LEVEL: u8 = 3;
 /// Independent watchdog period \[ms\] (10 control cycles; LSI 32 kHz nominal, 29.76-33.6 kHz
 /// over temperature: 47.6-53.8 ms).
@@ -115,58 +112,8 @@ const QUEUE: usize = 16;
 // A summary every second.
 const _: () = assert!(cycle::SUMMARY_EVERY == CYCLE_HZ);
 
-/// Standard-id filter elements of FDCAN1 (all of them, so none is left as it was): element
-/// `i` accepts exactly identifier `ids::COMMANDS[i]` into RX FIFO0 (a dual-id filter with both
-/// ids equal), the others are disabled. With the global filter rejecting non-matching and
-/// remote frames, only the node's own commands reach the software.
-const COMMAND_FILTERS: [StandardFilter; STANDARD_FILTER_MAX as usize] = command_filters();
-
-/// Builds [`COMMAND_FILTERS`] at compile time (an identifier above 0x7FF or more commands than
-/// filter elements fail the build, not the board).
-const fn command_filters() -> [StandardFilter; STANDARD_FILTER_MAX as usize] {
-    const DISABLED: StandardFilter = StandardFilter {
-        filter: FilterType::Disabled,
-        action: Action::Disable,
-    };
-    const _: () = assert!(ids::COMMANDS.len() <= STANDARD_FILTER_MAX as usize);
-    let mut filters = [DISABLED; STANDARD_FILTER_MAX as usize];
-    let mut i = 0;
-    while i < ids::COMMANDS.len() {
-        let Some(id) = StandardId::new(ids::COMMANDS[i]) else {
-            panic!("a command identifier is not an 11-bit identifier");
-        };
-        filters[i] = StandardFilter {
-            filter: FilterType::DedicatedSingle(id),
-            action: Action::StoreInFifo0,
-        };
-        i += 1;
-    }
-    filters
-}
-
-/// 1 Mbit/s from the 80 MHz kernel clock: prescaler 2 gives 40 time quanta per bit,
-/// 1 (sync) + 34 + 5, sample point at 35/40 = 87.5 % (CiA 301), SJW 5.
-fn bit_timing() -> NominalBitTiming {
-    const PRESCALER: NonZeroU16 = match NonZeroU16::new(2) {
-        Some(v) => v,
-        None => panic!(),
-    };
-    const SEG1: NonZeroU8 = match NonZeroU8::new(34) {
-        Some(v) => v,
-        None => panic!(),
-    };
-    const SEG2: NonZeroU8 = match NonZeroU8::new(5) {
-        Some(v) => v,
-        None => panic!(),
-    };
-    const _: () = assert!(FDCAN_KER_HZ / 2 / (1 + 34 + 5) == 1_000_000);
-    NominalBitTiming {
-        prescaler: PRESCALER,
-        seg1: SEG1,
-        seg2: SEG2,
-        sync_jump_width: SEG2,
-    }
-}
+// board-core's bit timing assumes exactly this kernel clock (checked at run time below too).
+const _: () = assert!(BIT_TIMING.bit_rate(FDCAN_KER_HZ) == 1_000_000);
 
 /// The busy pin: the HAL's push-pull output behind board-core's [`BusyPin`].
 struct Busy<const P: char, const N: u8>(Pin<P, N, Output<PushPull>>);
@@ -206,13 +153,20 @@ fn main() -> ! {
 
     // Nothing accessible below the stack: an overflow faults at once, into the safe state.
     let guarded = hw::guard_below_stack(&mut cp.MPU);
-    // Why we started (before anything can reset again), then the watchdog, so that every
-    // later start-up step is bounded by it too, then the brown-out level.
+    // Why we started (before anything can reset again).
     let reset = fault::take_reset_reason(&dp.RCC);
+    // Cycle counter (the Cortex-M7's DWT has a software lock): it bounds the option-byte wait.
+    cp.DCB.enable_trace();
+    DWT::unlock();
+    cp.DWT.enable_cycle_counter();
+    // The brown-out level BEFORE the watchdog: an option-byte change stalls the core for a
+    // long time (~300 ms reported), and a watchdog reset in the middle of it is what ST warns
+    // against. Bounded by its own wait; a failure is reported and not retried until a
+    // power-on. Then the watchdog, so that every later start-up step is bounded by it.
+    let bor = hw::ensure_bor_level(&dp.FLASH, BOR_LEVEL);
     hw::freeze_iwdg_in_debug(&dp.DBGMCU);
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.start(WATCHDOG_MS.millis());
-    let bor_programmed = hw::ensure_bor_level(&dp.FLASH, BOR_LEVEL);
 
     // 480 MHz needs voltage scale 0, and a wide-range VCO (960 MHz): the PLL's default
     // ("normal") strategy stays in the 150-420 MHz medium range and cannot reach it. The HAL
@@ -236,11 +190,6 @@ fn main() -> ! {
         _ => panic!("PLL1Q is not 80 MHz: no CAN bit timing for it"),
     }
 
-    // Cycle counter (the Cortex-M7's DWT has a software lock).
-    cp.DCB.enable_trace();
-    DWT::unlock();
-    cp.DWT.enable_cycle_counter();
-
     let gpioe = dp.GPIOE.split(ccdr.peripheral.GPIOE);
     let mut busy = Busy(gpioe.pe1.into_push_pull_output());
     busy.set_busy(false);
@@ -249,42 +198,42 @@ fn main() -> ! {
     let mut fault_pin = gpiob.pb14.into_push_pull_output();
     fault_pin.set_low();
 
-    // FDCAN1 on PD0 (RX) / PD1 (TX), classic CAN, 1 Mbit/s.
+    // FDCAN1 on PD0 (RX) / PD1 (TX), classic CAN, 1 Mbit/s. The HAL: pins, and FDCAN's
+    // kernel clock (PLL1Q), bus clock and reset (RCC); the rest is board-core's register
+    // code (fdcan1.rs): configuration mode, bit timing, layout, filters, read-back, join.
     let gpiod = dp.GPIOD.split(ccdr.peripheral.GPIOD);
-    let rx = gpiod.pd0.into_alternate::<9>().speed(Speed::VeryHigh);
-    let tx = gpiod.pd1.into_alternate::<9>().speed(Speed::VeryHigh);
-    let prec = ccdr
-        .peripheral
+    let _can_pins = (
+        gpiod.pd0.into_alternate::<9>().speed(Speed::VeryHigh),
+        gpiod.pd1.into_alternate::<9>().speed(Speed::VeryHigh),
+    );
+    ccdr.peripheral
         .FDCAN
-        .kernel_clk_mux(rec::FdcanClkSel::Pll1Q);
-    let mut fdcan = dp.FDCAN1.fdcan(tx, rx, prec);
-    fdcan.set_protocol_exception_handling(false);
-    fdcan.set_frame_transmit(FrameTransmissionConfig::ClassicCanOnly);
-    fdcan.set_nominal_bit_timing(bit_timing());
-    // Only the node's commands (standard data frames) into RX FIFO0. Extended frames are not
-    // part of the message set: one extended filter rejects them all (the global filter would
-    // too); the global filter rejects non-matching standard frames and every remote frame.
-    fdcan.set_standard_filters(&COMMAND_FILTERS);
-    fdcan.set_extended_filter(ExtendedFilterSlot::_0, ExtendedFilter::reject_all());
-    fdcan.set_global_filter(GlobalFilter::reject_all());
-    // Still in configuration mode: 64 RX FIFO0 elements and 32 TX buffers (fdcan1.rs).
-    fdcan1::layout();
-    // From here on the run-time accesses are fdcan1.rs's; the driver is not used again.
-    let _normal = fdcan.into_normal();
-    let mut bus = Link::new(Fdcan1::new());
+        .kernel_clk_mux(rec::FdcanClkSel::Pll1Q)
+        .enable()
+        .reset();
+    watchdog.feed();
+    let can = fdcan1::bring_up(dp.FDCAN1);
 
     defmt::info!(
-        "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1; stack guard {=bool}",
+        "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1 {=str}; stack guard {=bool}",
         reset as u8,
         ccdr.clocks.sys_ck().raw(),
-        BOR_LEVEL,
-        if bor_programmed {
-            " (programmed now)"
-        } else {
-            ""
-        },
+        hw::bor_level(&dp.FLASH),
+        bor.note(),
+        if can.is_ok() { "joined" } else { "NOT joined" },
         guarded,
     );
+    if let Some(why) = bor.failure() {
+        defmt::warn!(
+            "BOR level {=u8} not programmed: {=str}",
+            BOR_LEVEL,
+            why.name()
+        );
+    }
+    if let Err(e) = can {
+        fault::off_bus(&mut watchdog, e);
+    }
+    let mut bus = Link::new(Fdcan1::new());
 
     // The node's entropy: 32 bits of the true random number generator (its kernel clock from
     // PLL1Q, 80 MHz), so that every start-up draws another session epoch and first step

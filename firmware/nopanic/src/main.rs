@@ -39,10 +39,9 @@
 //! TIM2, GPIOE, IWDG, FDCAN1 and DWT are registers (volatile): the optimiser knows none of the
 //! inputs.
 //!
-//! Not here: the board's set-up (clocks, pins, the HAL's and the `fdcan` crate's FDCAN
-//! configuration, the option bytes): start-up code that asserts on the hardware (the `fdcan`
-//! crate's `into_config_mode` checks the core's release and endianness registers, the HAL's RCC
-//! `freeze` checks the clock tree), not the cycle; and the fault handlers (`board/src/fault.rs`:
+//! Not here: the board's set-up (clocks, pins, FDCAN1's bring-up with its read-back, the option
+//! bytes): start-up code, some of which asserts on the hardware (the HAL's RCC `freeze` checks
+//! the clock tree), not the cycle; and the fault handlers (`board/src/fault.rs`:
 //! register writes and a reset). Nor what is not a panic: stack overflow, integer overflow
 //! (wraps in release builds), NaN.
 //!

@@ -1,16 +1,23 @@
 //! A model of the FDCAN peripheral behind `board_core::Fdcan`: RX FIFO0 of a given depth that
-//! drops (and flags) frames when full, 32 dedicated TX buffers that the "bus" sends by
-//! identifier priority, cancellation (immediate or deferred), PSR/ECR and CCCR.INIT.
+//! drops (and flags) frames when full, optionally an RX FIFO1 that takes `ESTOP` (as the
+//! board's filters route it), 32 dedicated TX buffers that the "bus" sends by identifier
+//! priority, cancellation (immediate or deferred), PSR/ECR and CCCR.INIT. (The register-level
+//! model of the real path is `regmodel`, used by `fdcan_model.rs`.)
 
 use std::collections::VecDeque;
 
 use board_core::link::TX_SLOTS;
 use board_core::{ClassicFrame, Fdcan};
 use embedded_can::{Frame, StandardId};
+use planner_core::wire::ids;
 
 pub struct MockFdcan {
     pub rx_depth: usize,
     pub rx: VecDeque<[u32; 4]>,
+    /// `ESTOP` goes into RX FIFO1 (`rx1`, of the same depth), as on the board; else every
+    /// frame into FIFO0.
+    pub estop_fifo1: bool,
+    pub rx1: VecDeque<[u32; 4]>,
     pub rx_lost_flag: bool,
     /// Elements that arrive at the first `rx_pop` (a burst during the node's poll).
     pub burst: Vec<[u32; 4]>,
@@ -32,6 +39,8 @@ impl MockFdcan {
         Self {
             rx_depth,
             rx: VecDeque::new(),
+            estop_fifo1: false,
+            rx1: VecDeque::new(),
             rx_lost_flag: false,
             burst: Vec::new(),
             slots: [None; TX_SLOTS],
@@ -48,10 +57,16 @@ impl MockFdcan {
 
     /// A frame arrives from the bus (dropped and flagged if the FIFO is full).
     pub fn arrive(&mut self, e: [u32; 4]) {
-        if self.rx.len() >= self.rx_depth {
+        let estop = (e[0] >> 18) & 0x7FF == u32::from(ids::ESTOP);
+        let fifo = if self.estop_fifo1 && estop {
+            &mut self.rx1
+        } else {
+            &mut self.rx
+        };
+        if fifo.len() >= self.rx_depth {
             self.rx_lost_flag = true;
         } else {
-            self.rx.push_back(e);
+            fifo.push_back(e);
         }
     }
 
@@ -91,6 +106,13 @@ impl Fdcan for MockFdcan {
             self.arrive(e);
         }
         self.rx.pop_front()
+    }
+    fn rx_pop_fifo1(&mut self) -> Option<[u32; 4]> {
+        if self.estop_fifo1 {
+            self.rx1.pop_front()
+        } else {
+            None
+        }
     }
     fn rx_take_lost(&mut self) -> bool {
         std::mem::take(&mut self.rx_lost_flag)

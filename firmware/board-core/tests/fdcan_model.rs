@@ -1,0 +1,705 @@
+//! The board's FDCAN bring-up and run-time path against a register-level model of FDCAN1
+//! that enforces RM0433's rules (`regmodel`): configuration only in configuration mode, the
+//! read-back, the acceptance filters on frames of a modelled bus, `ESTOP` through RX FIFO1
+//! before everything else, and the sequence the `fdcan` crate ran before (caught letting
+//! every standard frame in).
+
+mod regmodel;
+
+use board_core::fdcan::{self, layout, BringUpError, FdcanRegs, Reg, RegFdcan};
+use board_core::link::{psr, RX_ELEMENTS, TX_SLOTS};
+use board_core::{BusState, Fdcan, Link};
+use embedded_can::Frame;
+use planner_core::node::{Node, NodeConfig, NodeState};
+use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame};
+use regmodel::{BusFrame, FdcanModel, Verdict, Violation};
+
+/// A model brought up by board-core, with no violation.
+fn brought_up() -> FdcanModel {
+    let mut m = FdcanModel::after_reset();
+    assert_eq!(fdcan::bring_up(&mut m), Ok(()));
+    assert_eq!(m.violations(), []);
+    assert!(!m.st().in_init());
+    assert_eq!(m.st().joins, 1);
+    m
+}
+
+/// Frames that are not the node's commands, of every kind: a foreign data frame, remote
+/// frames (foreign, and on a command's identifier), extended frames (one whose low 11 bits
+/// are a command's), the extremes of the identifier range.
+fn foreign_frames() -> Vec<BusFrame> {
+    vec![
+        BusFrame::std(0x123, &[0]),
+        BusFrame::std(0x000, &[1, 2]),
+        BusFrame::std(0x7FF, &[]),
+        BusFrame::std(ids::ACK, &[0; 8]),
+        BusFrame::std(ids::COG, &[0; 8]),
+        BusFrame::std(ids::ESTOP + 1, &[0]),
+        BusFrame::std_remote(0x123, 0),
+        BusFrame::std_remote(ids::ESTOP, 1),
+        BusFrame::std_remote(ids::CONTROL, 8),
+        BusFrame::ext(0x123, &[0]),
+        BusFrame::ext(u32::from(ids::CONTROL), &[0; 8]),
+        BusFrame::ext(0x1FFF_FFFF, &[]),
+    ]
+}
+
+/// The foreign frames (of [`foreign_frames`]) the model stores into a FIFO.
+fn foreign_accepted(m: &FdcanModel) -> Vec<(BusFrame, Verdict)> {
+    foreign_frames()
+        .into_iter()
+        .map(|f| (f, m.st().arrive(f)))
+        .filter(|(_, v)| v.stored())
+        .collect()
+}
+
+fn command(c: Command) -> BusFrame {
+    BusFrame::raw(&c.encode())
+}
+
+fn heartbeat(seq: u32) -> BusFrame {
+    command(Command::Control {
+        session: 0,
+        seq,
+        op: ControlOp::Heartbeat,
+    })
+}
+
+/// A `STEP_APPEND` / `STEP_MODIFY` identifier with 8 bytes (decoded or not, the filters
+/// only look at the identifier).
+fn step(id: u16) -> BusFrame {
+    BusFrame::std(id, &[0; 8])
+}
+
+// --- the bring-up ---
+
+#[test]
+fn bring_up_follows_the_rules_and_reads_back() {
+    let m = brought_up();
+    let s = m.st();
+    assert_eq!(
+        s.peek(regmodel::GFC),
+        0x3F,
+        "reject non-matching and remote"
+    );
+    assert_eq!(s.peek(regmodel::NBTP), 0x0801_2104, "1 Mbit/s at 80 MHz");
+    assert_eq!(s.peek(regmodel::SIDFC), 4 << 16, "4 elements at word 0");
+    assert_eq!(s.peek(regmodel::XIDFC), 4 << 2, "no extended filter");
+    assert_eq!(s.peek(regmodel::RXF0C), (64 << 16) | (4 << 2));
+    assert_eq!(s.peek(regmodel::RXF1C), (16 << 16) | (260 << 2));
+    assert_eq!(s.peek(regmodel::TXBC), (32 << 16) | (324 << 2));
+    assert_eq!(s.peek(regmodel::CCCR) & regmodel::CCCR_PROTECTED, 1 << 12);
+    // RM0433's standard filter element: SFT 01 (dual id), SFEC 010 (FIFO1) for ESTOP, 001
+    // (FIFO0) for the others, SFID1 = SFID2 = the identifier.
+    assert_eq!(s.peek_ram(0), 0x5010_0010);
+    assert_eq!(s.peek_ram(1), 0x4820_0020);
+    assert_eq!(s.peek_ram(2), 0x4900_0100);
+    assert_eq!(s.peek_ram(3), 0x4901_0101);
+    drop(s);
+    // The read-back passes on the bus too.
+    assert_eq!(fdcan::verify(&m), Ok(()));
+}
+
+#[test]
+fn foreign_remote_and_extended_frames_are_rejected() {
+    let m = brought_up();
+    assert_eq!(foreign_accepted(&m), []);
+    let s = m.st();
+    assert_eq!((s.fill(0), s.fill(1)), (0, 0));
+    // Each for the reason RM0433 gives: remote frames by RRFS, the others by ANFS / ANFE.
+    for (f, v) in &s.arrivals {
+        let want = if f.remote {
+            Verdict::RemoteRejected
+        } else {
+            Verdict::NonMatchingRejected
+        };
+        assert_eq!(*v, want, "{f:?}");
+    }
+}
+
+#[test]
+fn estop_lands_in_fifo1_and_the_commands_in_fifo0() {
+    let m = brought_up();
+    let estop = command(Command::EmergencyStop { seq: 1 });
+    assert_eq!(
+        m.st().arrive(estop),
+        Verdict::Fifo {
+            n: 1,
+            filter: Some(0)
+        }
+    );
+    for (i, f) in [heartbeat(1), step(ids::STEP_APPEND), step(ids::STEP_MODIFY)]
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!(
+            m.st().arrive(f),
+            Verdict::Fifo {
+                n: 0,
+                filter: Some(i as u32 + 1)
+            }
+        );
+    }
+    // The RX element as RM0433 lays it out, where board-core's layout says.
+    let s = m.st();
+    assert_eq!(s.peek_ram(layout::RX_FIFO1), u32::from(ids::ESTOP) << 18);
+    assert_eq!(s.peek_ram(layout::RX_FIFO1 + 1), 1 << 16); // DLC 1, FIDX 0
+    assert_eq!(s.peek_ram(layout::RX_FIFO0), u32::from(ids::CONTROL) << 18);
+    assert_eq!((s.fill(0), s.fill(1)), (3, 1));
+}
+
+#[test]
+fn a_configuration_write_outside_init_is_caught() {
+    let mut m = brought_up();
+    m.write(Reg::Gfc, 0);
+    assert_eq!(
+        m.violations(),
+        [Violation::Protected {
+            offset: 0x080,
+            value: 0
+        }]
+    );
+    // Ignored, as the hardware ignores it.
+    assert_eq!(m.st().peek(regmodel::GFC), 0x3F);
+    // In INIT but without CCE: still refused; CCE before INIT reads set: refused.
+    let mut m = FdcanModel::after_reset();
+    m.write(Reg::Nbtp, 0x0801_2104);
+    m.write(Reg::Cccr, 0x3); // INIT already set at reset: CCE taken
+    m.write(Reg::Cccr, 0x0); // leave: CCE cleared at once
+    m.write(Reg::Txbc, 0);
+    m.st().settle();
+    m.write(Reg::Cccr, 0x3); // INIT requested, not yet read set: CCE refused
+    assert_eq!(
+        m.violations(),
+        [
+            Violation::Protected {
+                offset: 0x01C,
+                value: 0x0801_2104
+            },
+            Violation::Protected {
+                offset: 0x0C0,
+                value: 0
+            },
+            Violation::CceWithoutInit,
+        ]
+    );
+    // The mode bits of CCCR likewise.
+    let mut m = brought_up();
+    m.write(Reg::Cccr, 1 << 8);
+    assert!(matches!(
+        m.violations()[..],
+        [Violation::ProtectedCccrBits { .. }]
+    ));
+}
+
+#[test]
+fn bring_up_refuses_to_join_when_a_register_reads_back_otherwise() {
+    // GFC's RRFS bit does not take a write (a stand-in for any register that reads back
+    // otherwise): the bring-up names it and stays off the bus.
+    let mut m = FdcanModel::after_reset();
+    m.st().stuck_bits.push((regmodel::GFC, 1 << 1));
+    assert_eq!(
+        fdcan::bring_up(&mut m),
+        Err(BringUpError::Register(Reg::Gfc))
+    );
+    m.st().settle();
+    assert!(m.st().in_init(), "not on the bus");
+    assert_eq!(m.st().joins, 0, "and never was");
+    assert_eq!(
+        m.st().arrive(BusFrame::std(ids::CONTROL, &[0])),
+        Verdict::NotOnBus
+    );
+    assert_eq!(m.violations(), []);
+    // NBTP, a FIFO's configuration, TXBC, SIDFC: each named (a bit the value has, stuck at 0).
+    for (off, bit, reg) in [
+        (regmodel::NBTP, 16, Reg::Nbtp),
+        (regmodel::RXF1C, 20, Reg::Rxf1c),
+        (regmodel::TXBC, 21, Reg::Txbc),
+        (regmodel::SIDFC, 18, Reg::Sidfc),
+    ] {
+        let mut m = FdcanModel::after_reset();
+        m.st().stuck_bits.push((off, 1 << bit));
+        assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::Register(reg)));
+        m.st().settle();
+        assert!(m.st().in_init());
+        assert_eq!(m.st().joins, 0);
+    }
+    // A filter element.
+    let mut m = FdcanModel::after_reset();
+    m.st().stuck_word = Some(layout::STD_FILTERS + 2);
+    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::StdFilter(2)));
+    m.st().settle();
+    assert!(m.st().in_init());
+    assert_eq!(m.st().joins, 0);
+}
+
+#[test]
+fn bring_up_is_bounded_when_init_never_changes() {
+    let mut m = FdcanModel::after_reset();
+    // After a reset INIT is set already; take the core out of it first.
+    m.st().settle();
+    m.write(Reg::Cccr, 0);
+    m.st().settle();
+    m.st().init_never_set = true;
+    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::InitTimeout));
+    let mut m = FdcanModel::after_reset();
+    m.st().init_never_clear = true;
+    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::JoinTimeout));
+    assert_eq!(m.violations(), []);
+}
+
+#[test]
+fn bring_up_after_a_run_starts_from_any_state() {
+    // A second bring-up over a running core (a warm start without a peripheral reset).
+    let mut m = brought_up();
+    m.st().arrive(heartbeat(1));
+    assert_eq!(fdcan::bring_up(&mut m), Ok(()));
+    assert_eq!(m.violations(), []);
+}
+
+// --- today's sequence (the `fdcan` crate's), replayed ---
+
+/// `reg.modify(|r, w| ..)` as the PAC does it: a read, then a write.
+fn modify(r: &mut impl FdcanRegs, reg: Reg, f: impl FnOnce(u32) -> u32) {
+    let v = r.read(reg);
+    r.write(reg, f(v));
+}
+
+fn set(r: &mut impl FdcanRegs, reg: Reg, mask: u32, value: u32) {
+    modify(r, reg, |v| (v & !mask) | (value & mask));
+}
+
+/// The register sequence of the board's start-up before this change, transcribed from the
+/// sources: stm32h7xx-hal 0.16's `FDCAN1.fdcan()` (`Can::fdcan1`: `FdCan::new(..)
+/// .into_config_mode()`, then `message_ram_layout!(can, 0)`), the board's calls on the
+/// `fdcan` 0.2.1 driver in configuration mode (`set_protocol_exception_handling(false)`,
+/// `set_frame_transmit(ClassicCanOnly)`, `set_nominal_bit_timing`, `set_standard_filters`,
+/// `set_extended_filter(_0, reject_all)`, `set_global_filter(reject_all)`), the board's
+/// `fdcan1::layout()`, and `into_normal()`: `set_normal_operations` and `leave_init_mode`,
+/// whose `apply_config(self.control.config)` ends with `set_global_filter(config
+/// .global_filter)` — the default, "accept non-matching into FIFO0", since
+/// `set_global_filter` never stores what it writes — before CCE and INIT are cleared.
+fn fdcan_crate_sequence(r: &mut impl FdcanRegs) {
+    const INIT: u32 = 1;
+    const CCE: u32 = 2;
+    // into_config_mode: set_power_down_mode(false) (CSR = 0, wait for CSA = 0) ...
+    set(r, Reg::Cccr, 1 << 4, 0);
+    while r.read(Reg::Cccr) & (1 << 3) != 0 {}
+    // ... enter_init_mode ...
+    set(r, Reg::Cccr, INIT, INIT);
+    while r.read(Reg::Cccr) & INIT == 0 {}
+    set(r, Reg::Cccr, CCE, CCE);
+    // ... reset_msg_ram (its 212 words: 28 + 2 x 8 filters, 2 x 3 RX, 3 TX events, 3 TX) ...
+    for w in 0..212 {
+        r.ram_write(w, 0);
+    }
+    assert_eq!(r.read(Reg::Crel) >> 28, 3);
+    assert_eq!(r.read(Reg::Endn), 0x8765_4321);
+    // ... TX buffers in queue mode, 28 standard and 8 extended filter elements, disabled.
+    r.write(Reg::Txbc, 1 << 30);
+    set(r, Reg::Sidfc, 0xFF << 16, 28 << 16);
+    set(r, Reg::Xidfc, 0x7F << 16, 8 << 16);
+    for i in 0..28 {
+        r.ram_write(i, 0b11 << 30); // SFT disabled, SFEC disable
+    }
+    for i in 0..8 {
+        r.ram_write(28 + 2 * i, 0);
+        r.ram_write(28 + 2 * i + 1, 0b11 << 30);
+    }
+    // The HAL's message_ram_layout!(can, 0x000).
+    set(r, Reg::Sidfc, 0xFFFC, 0);
+    set(r, Reg::Xidfc, 0xFFFC, 28 << 2);
+    set(
+        r,
+        Reg::Rxf0c,
+        0x7F7F_FFFC,
+        (3 << 24) | (3 << 16) | (44 << 2),
+    );
+    set(
+        r,
+        Reg::Rxf1c,
+        0x7F7F_FFFC,
+        (3 << 24) | (3 << 16) | (98 << 2),
+    );
+    set(
+        r,
+        Reg::Txefc,
+        0x3F3F_FFFC,
+        (3 << 24) | (3 << 16) | (152 << 2),
+    );
+    set(r, Reg::Txbc, 0x3F00_FFFC, (3 << 24) | (158 << 2));
+    set(r, Reg::Rxbc, 0xFFFC, 212 << 2);
+    set(r, Reg::Rxesc, 0x777, 0x777);
+    set(r, Reg::Txesc, 0x7, 0x7);
+    // The board's main.rs.
+    set(r, Reg::Cccr, 1 << 12, 1 << 12); // PXHD: protocol exception handling off
+    set(r, Reg::Cccr, 3 << 8, 0); // FDOE = BRSE = 0
+    r.write(Reg::Nbtp, (4 << 25) | (1 << 16) | (33 << 8) | 4);
+    for (i, id) in ids::COMMANDS.iter().enumerate() {
+        let id = u32::from(*id);
+        r.ram_write(i as u32, (0b01 << 30) | (0b001 << 27) | (id << 16) | id);
+    }
+    for i in ids::COMMANDS.len() as u32..28 {
+        r.ram_write(i, 0b11 << 30);
+    }
+    r.ram_write(28, 0b011 << 29); // reject, classic filter 0 / mask 0: every extended id
+    r.ram_write(29, 0b10 << 30);
+    set(r, Reg::Gfc, 0x3F, 0x3F); // GlobalFilter::reject_all()
+                                  // The board's fdcan1::layout().
+    r.write(Reg::Rxf0c, (64 << 16) | (44 << 2));
+    r.write(Reg::Rxf1c, 0);
+    r.write(Reg::Txefc, 0);
+    r.write(Reg::Txbc, (32 << 16) | (300 << 2));
+    r.write(Reg::Rxesc, 0);
+    r.write(Reg::Txesc, 0);
+    // into_normal(): set_normal_operations = set_loopback_mode(None): TEST = MON = 0,
+    // TEST.LBCK = 0 ...
+    set(r, Reg::Cccr, 1 << 7, 0);
+    set(r, Reg::Cccr, 1 << 5, 0);
+    set(r, Reg::Test, 1 << 4, 0);
+    // ... leave_init_mode: apply_config(self.control.config) ...
+    r.write(Reg::Dbtp, 0x0000_0A33); // DataBitTiming::default()
+    r.write(Reg::Nbtp, (4 << 25) | (1 << 16) | (33 << 8) | 4);
+    set(r, Reg::Cccr, 1 << 6, 0); // DAR: automatic retransmission
+    set(r, Reg::Cccr, 1 << 14, 0); // TXP
+    set(r, Reg::Cccr, 3 << 8, 0); // ClassicCanOnly
+    r.write(Reg::Ils, 0);
+    set(r, Reg::Cccr, 1 << 15, 0); // NISO
+    set(r, Reg::Cccr, 1 << 13, 0); // EFBI
+    set(r, Reg::Cccr, 1 << 12, 1 << 12); // PXHD (stored by the driver)
+    set(r, Reg::Gfc, 0x3F, 0x00); // GlobalFilter::default(): never stored, so reset here
+                                  // ... then CCE and INIT cleared, and INIT waited for.
+    set(r, Reg::Cccr, CCE, 0);
+    set(r, Reg::Cccr, INIT, 0);
+    while r.read(Reg::Cccr) & INIT != 0 {}
+}
+
+#[test]
+fn old_fdcan_crate_sequence_is_caught_letting_every_standard_frame_in() {
+    let mut m = FdcanModel::after_reset();
+    fdcan_crate_sequence(&mut m);
+    // The driver kept RM0433's rules (and its layout was sound) ...
+    assert_eq!(m.violations(), []);
+    assert!(!m.st().in_init());
+    // ... but GFC is back at "accept non-matching into FIFO0, filter remote frames": the
+    // read-back names it, and the bus is open to every standard frame.
+    assert_eq!(m.st().peek(regmodel::GFC), 0);
+    assert_eq!(fdcan::verify(&m), Err(BringUpError::Register(Reg::Gfc)));
+    let accepted = foreign_accepted(&m);
+    let ids: Vec<_> = accepted.iter().map(|(f, _)| (f.id, f.remote)).collect();
+    // Every standard data frame and every standard remote frame; the extended frames only
+    // because of the extended reject-all element.
+    assert_eq!(
+        ids,
+        [
+            (0x123, false),
+            (0x000, false),
+            (0x7FF, false),
+            (u32::from(ids::ACK), false),
+            (u32::from(ids::COG), false),
+            (u32::from(ids::ESTOP) + 1, false),
+            (0x123, true),
+            (u32::from(ids::ESTOP), true),
+            (u32::from(ids::CONTROL), true),
+        ]
+    );
+    for (_, v) in &accepted {
+        assert!(matches!(v, Verdict::Fifo { n: 0, .. }), "{v:?}");
+    }
+    // And ESTOP shared FIFO0 with everything else.
+    assert_eq!(
+        m.st().arrive(command(Command::EmergencyStop { seq: 1 })),
+        Verdict::Fifo {
+            n: 0,
+            filter: Some(0)
+        }
+    );
+}
+
+// --- the model's own rules ---
+
+#[test]
+fn interrupt_flags_are_write_one_to_clear() {
+    let mut m = brought_up();
+    for i in 0..=RX_ELEMENTS as u32 {
+        m.st().arrive(heartbeat(i));
+    }
+    let ir = m.read(Reg::Ir);
+    assert_ne!(ir & regmodel::IR_RF0L, 0, "the 65th frame was lost");
+    m.write(Reg::Ir, 0);
+    assert_eq!(m.read(Reg::Ir), ir, "a 0 clears nothing");
+    m.write(Reg::Ir, regmodel::IR_RF0L);
+    assert_eq!(m.read(Reg::Ir), ir & !regmodel::IR_RF0L);
+    assert_eq!(
+        (m.read(Reg::Rxf0s) >> 25) & 1,
+        0,
+        "RXF0S.RF0L follows IR.RF0L"
+    );
+    assert_eq!(m.violations(), []);
+}
+
+#[test]
+fn fifo_indices_and_acknowledgements_follow_rm0433() {
+    let mut m = brought_up();
+    for i in 0..5 {
+        m.st().arrive(heartbeat(i));
+    }
+    let s = m.read(Reg::Rxf0s);
+    assert_eq!((s & 0x7F, (s >> 8) & 0x3F, (s >> 16) & 0x3F), (5, 0, 5));
+    // Acknowledging index 2 releases elements 0, 1 and 2.
+    m.write(Reg::Rxf0a, 2);
+    let s = m.read(Reg::Rxf0s);
+    assert_eq!((s & 0x7F, (s >> 8) & 0x3F), (2, 3));
+    assert_eq!(m.violations(), []);
+    // An index outside the fill (element 1 is free again), of an empty FIFO: caught.
+    m.write(Reg::Rxf0a, 1);
+    m.write(Reg::Rxf1a, 0);
+    assert_eq!(
+        m.violations(),
+        [
+            Violation::AckOutsideFill { fifo: 0, index: 1 },
+            Violation::AckOutsideFill { fifo: 1, index: 0 },
+        ]
+    );
+}
+
+#[test]
+fn tx_requests_pend_until_sent_or_cancelled() {
+    let mut m = brought_up();
+    let e = RawFrame::new(ids::STATUS, &[1; 8]).unwrap();
+    let el = board_core::ClassicFrame::new(embedded_can::StandardId::new(e.id).unwrap(), e.bytes())
+        .unwrap()
+        .to_element();
+    for (k, w) in el.iter().enumerate() {
+        m.ram_write(layout::TX_BUFFERS + 4 + k as u32, *w);
+    }
+    m.write(Reg::Txbar, 1 << 1);
+    assert_eq!(m.read(Reg::Txbrp), 1 << 1);
+    // Writing a pending buffer, requesting a buffer TXBC does not configure: caught.
+    m.ram_write(layout::TX_BUFFERS + 4, 0);
+    assert_eq!(
+        m.violations(),
+        [Violation::BufferWrittenWhilePending { slot: 1 }]
+    );
+    m.st().violations.clear();
+    m.write(Reg::Txbcr, 1 << 1);
+    assert_eq!(m.read(Reg::Txbrp), 0);
+    assert_eq!(m.read(Reg::Txbcf), 1 << 1);
+    assert_eq!(m.st().bus_sends(8), 0);
+    let mut m = FdcanModel::after_reset();
+    m.st().settle();
+    m.write(Reg::Txbar, 1);
+    assert_eq!(m.violations(), [Violation::UnconfiguredBuffer { bits: 1 }]);
+}
+
+#[test]
+fn the_message_ram_is_bounded_and_its_layout_checked_when_leaving_init() {
+    let mut m = brought_up();
+    m.ram_write(1024, 0);
+    assert_eq!(m.ram_read(2000), 0);
+    assert_eq!(
+        m.violations(),
+        [
+            Violation::RamBounds { word: 1024 },
+            Violation::RamBounds { word: 2000 }
+        ]
+    );
+    // RX FIFO1 over RX FIFO0, and the TX buffers past the end.
+    let mut m = FdcanModel::after_reset();
+    fdcan::configure(&mut m).unwrap();
+    m.write(Reg::Rxf1c, (16 << 16) | ((layout::RX_FIFO0 + 8) << 2));
+    m.write(Reg::Txbc, (32 << 16) | (1000 << 2));
+    assert_eq!(fdcan::join(&mut m), Ok(()));
+    let v = m.violations();
+    assert!(
+        v.contains(&Violation::LayoutOverlap("RX FIFO0", "RX FIFO1")),
+        "{v:?}"
+    );
+    assert!(v.contains(&Violation::Layout {
+        section: "TX buffers",
+        problem: "beyond FDCAN1's 1,024 words"
+    }));
+}
+
+#[test]
+fn the_filter_engine_follows_rm0433() {
+    // Hand-written elements, one of each kind, and GFC sending non-matching frames to FIFO1.
+    let mut m = FdcanModel::after_reset();
+    fdcan::configure(&mut m).unwrap();
+    let sfe =
+        |sft: u32, sfec: u32, id1: u32, id2: u32| (sft << 30) | (sfec << 27) | (id1 << 16) | id2;
+    let elements = [
+        sfe(0b00, 0b001, 0x200, 0x20F), // range 0x200-0x20F -> FIFO0
+        sfe(0b10, 0b010, 0x300, 0x7F0), // classic: 0x30x -> FIFO1
+        sfe(0b11, 0b001, 0x400, 0x400), // SFT disabled
+        sfe(0b01, 0b000, 0x401, 0x401), // SFEC disabled
+        sfe(0b01, 0b011, 0x402, 0x403), // dual: reject 0x402 and 0x403
+        sfe(0b01, 0b001, 0x403, 0x403), // never reached for 0x403 (first match wins)
+        sfe(0b00, 0b111, 0x404, 0x000), // RX buffer: SFT ignored, SFID1 the id
+    ];
+    // The lists after board-core's layout (words 600 and 620, free).
+    for (w, e) in (600..).zip(elements) {
+        m.ram_write(w, e);
+    }
+    m.write(Reg::Sidfc, ((elements.len() as u32) << 16) | (600 << 2));
+    // One extended element: classic filter 0x100 / mask 0x1FF, XIDAM clearing bit 12.
+    m.ram_write(620, (0b001 << 29) | 0x100);
+    m.ram_write(621, (0b10 << 30) | 0x1FF);
+    m.write(Reg::Xidfc, (1 << 16) | (620 << 2));
+    m.write(Reg::Xidam, 0x1FFF_EFFF);
+    m.write(Reg::Gfc, (0b01 << 4) | (0b11 << 2)); // non-matching std -> FIFO1, ext rejected
+    fdcan::join(&mut m).unwrap();
+    assert_eq!(m.violations(), []);
+    let fifo = |n, filter| Verdict::Fifo { n, filter };
+    let cases = [
+        (BusFrame::std(0x205, &[]), fifo(0, Some(0))),
+        (BusFrame::std(0x210, &[]), fifo(1, None)),
+        (BusFrame::std(0x30A, &[]), fifo(1, Some(1))),
+        (BusFrame::std(0x400, &[]), fifo(1, None)),
+        (BusFrame::std(0x401, &[]), fifo(1, None)),
+        (BusFrame::std(0x402, &[]), Verdict::FilterRejected(4)),
+        (BusFrame::std(0x403, &[]), Verdict::FilterRejected(4)),
+        (BusFrame::std(0x404, &[]), Verdict::RxBuffer(6)),
+        // RRFS = 0: remote frames are filtered like data frames.
+        (BusFrame::std_remote(0x205, 0), fifo(0, Some(0))),
+        // 0x1100 & XIDAM = 0x0100, & 0x1FF = 0x100: matches; 0x300 too, 0x200 not.
+        (BusFrame::ext(0x1100, &[]), fifo(0, Some(0))),
+        (BusFrame::ext(0x0300, &[]), fifo(0, Some(0))),
+        (BusFrame::ext(0x0200, &[]), Verdict::NonMatchingRejected),
+    ];
+    for (f, want) in cases {
+        assert_eq!(m.st().arrive(f), want, "{f:x?}");
+    }
+    // The stored elements: R1 with ANMF for a non-matching frame, R0 with XTD and the
+    // identifier as received (FIFO0's third element).
+    let s = m.st();
+    assert_eq!(s.peek_ram(layout::RX_FIFO1), 0x210 << 18);
+    assert_eq!(s.peek_ram(layout::RX_FIFO1 + 1) >> 31, 1);
+    assert_eq!(s.peek_ram(layout::RX_FIFO0 + 8), (1 << 30) | 0x1100);
+}
+
+// --- the run-time path over the registers ---
+
+type ModelLink = Link<RegFdcan<FdcanModel>>;
+
+fn link() -> ModelLink {
+    Link::new(RegFdcan::new(brought_up()))
+}
+
+fn model(l: &ModelLink) -> &FdcanModel {
+    l.peripheral().regs()
+}
+
+/// The node's `ACK`s on the modelled wire: (identifier of the command, sequence number).
+fn acks(l: &ModelLink) -> Vec<Ack> {
+    model(l)
+        .st()
+        .wire
+        .iter()
+        .filter(|f| u32::from(ids::ACK) == f.id)
+        .filter_map(|f| RawFrame::new(f.id as u16, &f.data[..usize::from(f.dlc)]))
+        .filter_map(|r| Ack::decode(&r))
+        .collect()
+}
+
+fn run(node: &mut Node<16>, l: &mut ModelLink, first_ms: u32, cycles: u32) {
+    for k in 0..cycles {
+        node.poll(first_ms + 5 * k, l);
+        for _ in 0..4 {
+            model(l).st().bus_sends(64);
+            l.service();
+        }
+    }
+}
+
+#[test]
+fn commands_reach_the_node_and_its_frames_the_bus_over_the_registers() {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut l = link();
+    for f in foreign_frames() {
+        model(&l).st().arrive(f);
+    }
+    for seq in 1..=16 {
+        model(&l).st().arrive(heartbeat(seq));
+    }
+    run(&mut node, &mut l, 0, 6);
+    let seqs: Vec<u8> = acks(&l).iter().map(|a| a.seq).collect();
+    assert_eq!(seqs, (1..=16).collect::<Vec<u8>>());
+    // The filters kept the foreign frames out: the node never saw one.
+    assert_eq!(node.counters().foreign, 0);
+    assert_eq!(l.health().rx_foreign, 0);
+    // STATUS, DIAG, SESSION went out too, through the TX buffers.
+    assert!(model(&l)
+        .st()
+        .wire
+        .iter()
+        .any(|f| f.id == u32::from(ids::STATUS)));
+    assert_eq!(model(&l).violations(), []);
+}
+
+#[test]
+fn an_estop_behind_a_full_fifo0_stops_the_node_in_its_cycle() {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut l = link();
+    // 48 commands fill the node's receive budget of three cycles (16 a cycle); the ESTOP
+    // arrives last.
+    for seq in 1..=48 {
+        model(&l).st().arrive(heartbeat(seq));
+    }
+    l.service(); // 32 of them into the software queue already
+    model(&l)
+        .st()
+        .arrive(command(Command::EmergencyStop { seq: 7 }));
+    node.poll(0, &mut l);
+    assert_eq!(node.state(), NodeState::EmergencyStopped);
+    assert_eq!(model(&l).violations(), []);
+}
+
+#[test]
+fn overflow_bus_off_and_silence_over_the_registers() {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut l = link();
+    // An RX FIFO1 overflow (17 ESTOPs into 16 elements) is reported once, the flag cleared
+    // by writing 1.
+    for seq in 0..17 {
+        model(&l)
+            .st()
+            .arrive(command(Command::EmergencyStop { seq }));
+    }
+    assert_eq!(
+        model(&l).st().peek(regmodel::IR) & regmodel::IR_RF1L,
+        regmodel::IR_RF1L
+    );
+    l.service();
+    assert_eq!(l.health().rx_lost, 1);
+    assert_eq!(model(&l).st().peek(regmodel::IR) & regmodel::IR_RF1L, 0);
+    // The ESTOPs first (16: the node's `max_rx`), then the loss, in the next cycle.
+    node.poll(0, &mut l);
+    assert_eq!(node.state(), NodeState::EmergencyStopped);
+    assert_eq!(node.counters().bus_errors, 0);
+    node.poll(5, &mut l);
+    assert_eq!(node.counters().bus_errors, 1);
+    // Bus-off: the core sets INIT itself; the adapter cancels the pending buffers and
+    // clears INIT (a CCCR write that changes no protected bit).
+    assert_ne!(model(&l).st().pending(), 0, "frames wait in the TX buffers");
+    model(&l).st().bus_off();
+    assert_eq!(l.peripheral().protocol_status() & psr::BO, psr::BO);
+    l.service();
+    assert_eq!(l.health().state, BusState::BusOff);
+    assert_eq!(model(&l).st().pending(), 0);
+    model(&l).st().settle();
+    assert!(!model(&l).st().in_init(), "recovery started");
+    l.service();
+    assert_eq!(l.health().bus_offs, 1);
+    assert_eq!(l.health().state, BusState::Active);
+    // The fault path: off the bus, every request cancelled, nothing sent.
+    model(&l).st().arrive(heartbeat(1)); // answered: a frame waits in a TX buffer
+    node.poll(10, &mut l);
+    assert_ne!(model(&l).st().pending(), 0);
+    fdcan::silence(l.peripheral_mut().regs_mut());
+    model(&l).st().settle();
+    assert!(model(&l).st().in_init());
+    assert_eq!(model(&l).st().pending(), 0);
+    assert_eq!(model(&l).st().bus_sends(TX_SLOTS), 0);
+    assert_eq!(model(&l).violations(), []);
+}
