@@ -100,6 +100,18 @@ if ! dpkg-query -W -f='${Status}' liblapack-dev 2>/dev/null | grep -q "ok instal
 fi
 # --- end LAPACK -----------------------------------------------------------------------------
 
+# --- llvm-mca and llvm-objdump for the M7/M4F cycle estimate (tests/tests/cycles.rs) --------
+# Debian's llvm (its Cortex-M7 and Cortex-M4 scheduling models); WALK_SKIP_LLVM_MCA=1 skips
+# the estimate's test instead.
+if [ "${WALK_SKIP_LLVM_MCA:-0}" != 1 ] && ! command -v llvm-mca >/dev/null 2>&1; then
+    echo "installing llvm (llvm-mca, llvm-objdump)"
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q llvm
+fi
+# --- end llvm ---------------------------------------------------------------------------------
+
 # --- the real CAN tools that read host-sim's can.log (host-sim/tests/canlog.rs) -----------
 # Debian's can-utils (log2asc, asc2log), python-can and cantools (for the python3 on PATH;
 # cantools for the example controller, host-sim/tests/controller.rs). With

@@ -4,6 +4,7 @@ use std::process::Command;
 
 pub mod figures;
 pub mod logs;
+pub mod trace;
 
 /// A `cargo` command run in `dir` (a firmware workspace) with this test's own build settings
 /// removed, so that they do not leak into the firmware's build: its target and rustflags come
