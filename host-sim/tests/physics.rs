@@ -9,18 +9,16 @@
 //! (tests/run-all.sh installs it and sets that), which makes a missing engine a failure.
 //!
 //! The figures the book (docs/src/physics.md) and the front page quote from these runs are
-//! checked against the measured ones ([`common::figures`]): the table of the built-in
+//! checked against the measured ones ([`doc_figures`]): the table of the built-in
 //! scenarios (its open-loop column under `WALK_LONG=1`), the headline row, the pushes, the
 //! second robot and the deterministic columns of the run-time table (engine runs, simulated
 //! seconds; never the wall-clock times). MuJoCo's results are bit-stable from run to run on
 //! one machine, so the figures are compared as written (rounded as the document rounds them).
 
-mod common;
-
 use std::path::PathBuf;
 use std::process::Command;
 
-use common::figures::Quotes;
+use doc_figures::Quotes;
 
 use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSION};
 use host_sim::physics::metrics::FallCause;

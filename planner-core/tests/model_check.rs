@@ -43,7 +43,6 @@
 //! each check asserts that they are the measured ones (at the default bound).
 
 mod common;
-mod quoted;
 
 use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
@@ -622,13 +621,13 @@ fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: fn(&str) -> 
         // The front page quotes the bounds and the states generated ("9.2 M").
         let states = format!("{:.1} M", checker.state_count() as f64 / 1e6);
         let row = "| protocol model check (";
-        quoted::assert_quoted(
-            COMMAND,
+        doc_figures::assert_quoted(
             "README.md",
             row,
             &format!("{per} frames a cycle, {cycles} cycles"),
+            COMMAND,
         );
-        quoted::assert_quoted(COMMAND, "README.md", row, &quoted(&states));
+        doc_figures::assert_quoted("README.md", row, &quoted(&states), COMMAND);
     }
 }
 

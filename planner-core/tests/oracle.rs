@@ -12,7 +12,6 @@
 //! Run `cargo test -p planner-core --test oracle -- --nocapture` to see the measured figures;
 //! test 1 asserts that the front page and the solver's page quote its figures as measured.
 
-mod quoted;
 use nalgebra::{DMatrix, DVector};
 use planner_core::window::{Factorized, Plan, PlanError, PlaneBoundary, Timing, M};
 use planner_core::{Segment, State};
@@ -413,17 +412,17 @@ fn planner_matches_the_general_44_unknown_formulation() {
         "COG {:.1e} m, ZMP {:.1e} m (tolerance {:e})",
         worst_cog, worst_zmp, 1e-9
     );
-    quoted::assert_quoted(
-        COMMAND,
+    doc_figures::assert_quoted(
         "README.md",
         "paper's general 44-unknown formulation",
         &figure,
-    );
-    quoted::assert_quoted(
         COMMAND,
+    );
+    doc_figures::assert_quoted(
         "docs/src/solver.md",
         "the general 44-unknown formulation",
         &figure,
+        COMMAND,
     );
 }
 
@@ -513,11 +512,11 @@ fn rk4_integration_matches_the_closed_form_cog() {
         }
     }
     eprintln!("RK4 (h ≤ 1e-4 s) vs planner, worst: pos {worst_pos:.2e} m, vel {worst_vel:.2e} m/s");
-    quoted::assert_quoted(
-        COMMAND,
+    doc_figures::assert_quoted(
         "docs/src/solver.md",
         "RK4 integration of",
         &format!("{worst_pos:.1e} m, {worst_vel:.1e} m/s (tolerance 1e-6 m)"),
+        COMMAND,
     );
 }
 
@@ -596,11 +595,11 @@ fn boundary_conditions_hold() {
     eprintln!(
         "boundary conditions: worst error {worst:.2e}; pendulum residual {worst_ode:.2e} m/s²"
     );
-    quoted::assert_quoted(
-        COMMAND,
+    doc_figures::assert_quoted(
         "docs/src/solver.md",
         "every boundary condition of a window",
         &format!("{worst:.1e}, pendulum residual {worst_ode:.1e} m/s² (tolerance 1e-9)"),
+        COMMAND,
     );
 }
 

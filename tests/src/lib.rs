@@ -2,7 +2,7 @@
 
 use std::process::Command;
 
-pub mod figures;
+pub use doc_figures as figures;
 pub mod logs;
 pub mod trace;
 

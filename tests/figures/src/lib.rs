@@ -1,16 +1,18 @@
-//! Figures quoted in the documents, checked by the tests that measure them: the few lines of
-//! `walk_tests::figures` (tests/src/figures.rs) that host-sim's tests need, with the same
-//! behaviour and failure message (host-sim's tests cannot use walk-tests, which depends on
-//! host-sim).
+//! Figures quoted in the documents, checked by the tests that measure them (used by the tests
+//! of planner-core, host-sim and walk-tests; `walk_tests::figures` re-exports it).
 //!
 //! A test that measures a figure the front page or the book quotes formats it exactly as the
-//! document writes it and asserts that the document says so, at the line or table row named
-//! by an anchor text:
+//! document writes it (thousands separators, the same rounding: [`thousands`], [`sci`]) and
+//! asserts that the document says so, at the line or table row named by an anchor text:
 //!
-//! ```ignore
-//! Quotes::new("cargo test --release -p host-sim --test physics -- --nocapture")
-//!     .cell("docs/src/physics.md", "| straight |", "max tilt", "0.23°")
-//!     .line("README.md", "in MuJoCo under the stabilizer", "tilt at most 0.24°")
+//! ```no_run
+//! use doc_figures::{thousands, Quotes};
+//!
+//! let worst: u64 = 38_360; // measured
+//! Quotes::new("cargo test --release -p walk-tests --test qemu -- --nocapture")
+//!     .cell("README.md", "worst control cycle on the Cortex-M7", "figure",
+//!           &format!("{} instructions", thousands(worst)))
+//!     .line("docs/src/timing.md", "(QEMU high-water marks)", "2,844 B of stack")
 //!     .assert();
 //! ```
 //!
@@ -28,8 +30,29 @@ use std::path::{Path, PathBuf};
 pub fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("..")
+        .join("..")
         .canonicalize()
         .expect("the repository root")
+}
+
+/// `n` with a comma every three digits, as the documents write counts: `38,360`, `120,000`,
+/// `18`.
+pub fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `x` in scientific notation with `digits` significant digits and a signed exponent, as the
+/// documents write small errors: `sci(1.96e-11, 2)` is `2.0e-11`.
+pub fn sci(x: f64, digits: usize) -> String {
+    format!("{:.*e}", digits.saturating_sub(1), x)
 }
 
 /// The figures one command measures, checked against the documents that quote them; every
@@ -109,9 +132,22 @@ impl Quotes {
     }
 }
 
+/// Asserts that `doc` (relative to the repository root) quotes `expected` in its line (or
+/// table row) that contains `anchor`; the failure names `command`, which measures it.
+pub fn assert_quoted(doc: &str, anchor: &str, expected: &str, command: &str) {
+    Quotes::new(command).line(doc, anchor, expected).assert();
+}
+
+/// [`assert_quoted`] in the cell of column `column` of the table row that contains `anchor`.
+pub fn assert_quoted_in(doc: &str, anchor: &str, column: &str, expected: &str, command: &str) {
+    Quotes::new(command)
+        .cell(doc, anchor, column, expected)
+        .assert();
+}
+
 /// Whether `doc` quotes `expected` at `anchor` (in `column`'s cell, if given); the failure
 /// message otherwise.
-fn check(
+pub fn check(
     doc: &str,
     anchor: &str,
     column: Option<&str>,
@@ -125,7 +161,7 @@ fn check(
 }
 
 /// [`check`] on the document's text `text` (`doc` names it in the message).
-fn check_text(
+pub fn check_text(
     doc: &str,
     text: &str,
     anchor: &str,
@@ -201,7 +237,7 @@ fn table_cell<'a>(lines: &[&'a str], row: usize, column: &str) -> Result<&'a str
 }
 
 /// The trimmed cells of the table row `line` (`| a | b |`).
-fn cells(line: &str) -> Vec<&str> {
+pub fn cells(line: &str) -> Vec<&str> {
     let t = line.trim();
     let t = t.strip_prefix('|').unwrap_or(t);
     let t = t.strip_suffix('|').unwrap_or(t);
@@ -239,34 +275,62 @@ fn contains_figure(text: &str, figure: &str) -> bool {
 mod tests {
     use super::*;
 
-    const DOC: &str = "# T\n\nEvery built-in scenario walks through with 0 falls.\n\n\
-        | scenario | fell | max tilt | foot drift |\n|---|---|---|---|\n\
-        | straight | no | 0.23° | 3.4 mm |\n| lateral | no | 0.24° | 4.7 mm |\n";
+    const DOC: &str = "# T\n\nThe figures are the worst over those 18 logs.\n\n\
+        | kind | worst | mean |\n|---|---|---|\n| steady cycle | 3,240 (ceiling 3,300) | 2,387 |\n\
+        | the board's whole cycle | **38,520** | 2,568 |\n";
+
+    #[test]
+    fn numbers_are_written_as_the_documents_write_them() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(18), "18");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1_000), "1,000");
+        assert_eq!(thousands(38_360), "38,360");
+        assert_eq!(thousands(120_000), "120,000");
+        assert_eq!(thousands(9_216_000), "9,216,000");
+        assert_eq!(sci(1.96e-11, 2), "2.0e-11");
+        assert_eq!(sci(5.27e-11, 2), "5.3e-11");
+        assert_eq!(sci(1e-9, 1), "1e-9");
+    }
 
     #[test]
     fn a_figure_is_found_in_its_row_and_cell() {
         let ok = |anchor, column, expected| check_text("T", DOC, anchor, column, expected, "c");
-        assert!(ok("walks through with", None, "0 falls").is_ok());
-        assert!(ok("| straight |", Some("max tilt"), "0.23°").is_ok());
-        assert!(ok("| lateral |", Some("foot drift"), "4.7 mm").is_ok());
-        let e = ok("| straight |", Some("max tilt"), "0.24°").unwrap_err();
-        assert!(e.contains("the document says: 0.23°"), "{e}");
-        assert!(e.contains("measured:          0.24°"), "{e}");
-        assert!(e.contains("measured by:       `c`"), "{e}");
-        assert!(e.contains("write `0.24°` there"), "{e}");
-        // A whole figure only: not inside a longer number.
-        assert!(ok("| straight |", Some("max tilt"), "0.2").is_err());
-        assert!(ok("| lateral |", Some("foot drift"), "7 mm").is_err());
+        assert!(ok("worst over those", None, "18 logs").is_ok());
+        assert!(ok("steady cycle", Some("worst"), "3,240").is_ok());
+        assert!(ok("steady cycle", Some("mean"), "2,387").is_ok());
+        assert!(ok("whole cycle", Some("worst"), "38,520").is_ok());
+        // In the row, not in that cell.
+        assert!(ok("steady cycle", None, "2,387").is_ok());
+        let e = ok("steady cycle", Some("worst"), "2,387").unwrap_err();
+        assert!(e.contains("says: 3,240 (ceiling 3,300)"), "{e}");
+        assert!(e.contains("measured:          2,387"), "{e}");
+        assert!(e.contains("`c`"), "{e}");
+    }
+
+    #[test]
+    fn a_figure_inside_a_longer_one_is_not_found() {
+        let ok = |anchor, expected| check_text("T", DOC, anchor, None, expected, "c");
+        assert!(ok("steady cycle", "240").is_err());
+        assert!(ok("steady cycle", "3,24").is_err());
+        assert!(ok("steady cycle", "3,2").is_err());
+        assert!(ok("steady cycle", "2,38").is_err());
+        assert!(ok("worst over", "8 logs").is_err());
+        assert!(contains_figure("0.32 of", "0.32"));
         assert!(!contains_figure("0.325 of", "0.32"));
+        assert!(contains_figure("9.2 M + 9.2 M states", "9.2 M + "));
+        assert!(contains_figure("9.2 M + 9.2 M states", "+ 9.2 M states"));
+        assert!(!contains_figure("19.2 M + 9.2 M states", "9.2 M + "));
+        assert!(contains_figure("COG 2.0e-11 m, ZMP", "COG 2.0e-11 m"));
     }
 
     #[test]
     fn an_anchor_names_one_line() {
-        let e = check_text("T", DOC, "| no |", None, "0.23°", "c").unwrap_err();
+        let e = check_text("T", DOC, "cycle", None, "3,240", "c").unwrap_err();
         assert!(e.contains("is on lines 7, 8"), "{e}");
-        let e = check_text("T", DOC, "no such row", None, "0.23°", "c").unwrap_err();
+        let e = check_text("T", DOC, "no such row", None, "3,240", "c").unwrap_err();
         assert!(e.contains("no line contains"), "{e}");
-        let e = check_text("T", DOC, "| straight |", Some("tilt"), "0.23°", "c").unwrap_err();
-        assert!(e.contains("no column `tilt`"), "{e}");
+        let e = check_text("T", DOC, "steady", Some("best"), "3,240", "c").unwrap_err();
+        assert!(e.contains("no column `best`"), "{e}");
     }
 }
