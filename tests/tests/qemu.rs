@@ -423,7 +423,7 @@ fn a_stack_overflow_reaches_the_fault_handler() {
 /// ≤ 16 KiB; the start-up stack also ≤ 4 KiB (issue 11: "a few KB"; the node is configured
 /// in place, nothing of it is built on the stack).
 #[test]
-fn issue_12_targets() {
+fn timing_targets() {
     let Some(runs) = runs() else {
         return;
     };
