@@ -242,6 +242,12 @@ fn m4f_worst_cycle_is_quoted() {
             "(the cycle estimate of the M4F)",
             &format!("{} cycles per instruction", cpi(worst)),
         )
+        .cell(
+            "README.md",
+            "f32 node on a Cortex-M4F",
+            "figure",
+            &format!("est. {} M4 cycles ({} of 5 %", range(worst), shares(worst)),
+        )
         .assert();
 }
 
