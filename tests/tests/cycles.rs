@@ -24,6 +24,11 @@ use std::path::Path;
 use std::process::Command;
 
 use walk_tests::figures::{thousands, Quotes};
+
+/// How far the quoted estimates may be from the measured ones (relative, on every number):
+/// the same sources built in another checkout gave estimates up to 0.8 % apart (re-plan
+/// 37.6–39.9 k against 37.3–39.6 k), the blocks QEMU translated being costed one by one.
+const ESTIMATE_TOLERANCE: f64 = 0.02;
 use walk_tests::report::Record;
 use walk_tests::{build_firmware, build_firmware_with, qemu_available};
 
@@ -159,6 +164,7 @@ fn m7_cycles_of_every_kind_are_quoted() {
     let cycle = "**worst control cycle**";
     let prose = "(the cycle estimate of the worst control cycle)";
     Quotes::new(COMMAND)
+        .within(ESTIMATE_TOLERANCE)
         .cell(T, steady, COLUMN, &range(of(&e, "steady")))
         .cell(T, replan, COLUMN, &range(of(&e, "replan")))
         .cell(T, adjust, COLUMN, &range(of(&e, "adjust")))
@@ -227,6 +233,7 @@ fn m4f_worst_cycle_is_quoted() {
     assert_eq!(worst.get("mcpu"), "cortex-m4");
     assert_eq!(worst.num::<u64>("budget"), 42_000);
     Quotes::new(COMMAND)
+        .within(ESTIMATE_TOLERANCE)
         .cell(
             T,
             "the f32 node on a Cortex-M4F",

@@ -62,6 +62,8 @@ pub struct Quotes {
     command: String,
     checked: usize,
     failures: Vec<String>,
+    /// Relative tolerance of every number of a figure ([`Quotes::within`]); 0: exact text.
+    tolerance: f64,
 }
 
 impl Quotes {
@@ -72,14 +74,24 @@ impl Quotes {
             command: command.to_string(),
             checked: 0,
             failures: vec![],
+            tolerance: 0.0,
         }
+    }
+
+    /// Figures that are estimates whose last digits move with things the test does not hold
+    /// fixed (the image's layout, say): every number of the quoted text may differ from the
+    /// measured one by `relative` of it, plus half a unit of its last quoted digit; the words
+    /// between the numbers must be the same.
+    pub fn within(mut self, relative: f64) -> Self {
+        self.tolerance = relative;
+        self
     }
 
     /// `doc` (relative to the repository root) quotes `expected` in its line (or table row)
     /// that contains `anchor`.
     pub fn line(mut self, doc: &str, anchor: &str, expected: &str) -> Self {
         self.checked += 1;
-        if let Err(e) = check(doc, anchor, None, expected, &self.command) {
+        if let Err(e) = check_near(doc, anchor, None, expected, &self.command, self.tolerance) {
             self.failures.push(e);
         }
         self
@@ -89,7 +101,14 @@ impl Quotes {
     /// `column` (the text of its header cell, trimmed) of its table row that contains `anchor`.
     pub fn cell(mut self, doc: &str, anchor: &str, column: &str, expected: &str) -> Self {
         self.checked += 1;
-        if let Err(e) = check(doc, anchor, Some(column), expected, &self.command) {
+        if let Err(e) = check_near(
+            doc,
+            anchor,
+            Some(column),
+            expected,
+            &self.command,
+            self.tolerance,
+        ) {
             self.failures.push(e);
         }
         self
@@ -102,7 +121,7 @@ impl Quotes {
         self.checked += 1;
         let mut first = None;
         for s in spellings {
-            match check(doc, anchor, Some(column), s, &self.command) {
+            match check_near(doc, anchor, Some(column), s, &self.command, self.tolerance) {
                 Ok(()) => return self,
                 Err(e) => {
                     first.get_or_insert(e);
@@ -160,6 +179,21 @@ pub fn check(
     check_text(doc, &text, anchor, column, expected, command)
 }
 
+/// [`check`] with every number within `tolerance` ([`Quotes::within`]; 0: exact text).
+fn check_near(
+    doc: &str,
+    anchor: &str,
+    column: Option<&str>,
+    expected: &str,
+    command: &str,
+    tolerance: f64,
+) -> Result<(), String> {
+    let path = repo_root().join(doc);
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("{doc}: cannot read {}: {e}", path.display()))?;
+    check_text_near(doc, &text, anchor, column, expected, command, tolerance)
+}
+
 /// [`check`] on the document's text `text` (`doc` names it in the message).
 pub fn check_text(
     doc: &str,
@@ -168,6 +202,19 @@ pub fn check_text(
     column: Option<&str>,
     expected: &str,
     command: &str,
+) -> Result<(), String> {
+    check_text_near(doc, text, anchor, column, expected, command, 0.0)
+}
+
+/// [`check_text`] with every number within `tolerance` ([`Quotes::within`]).
+fn check_text_near(
+    doc: &str,
+    text: &str,
+    anchor: &str,
+    column: Option<&str>,
+    expected: &str,
+    command: &str,
+    tolerance: f64,
 ) -> Result<(), String> {
     let lines: Vec<&str> = text.lines().collect();
     let found: Vec<usize> = (0..lines.len())
@@ -201,7 +248,12 @@ pub fn check_text(
             )
         }
     };
-    if contains_figure(&says, expected) {
+    let quoted = if tolerance > 0.0 {
+        contains_near(&says, expected, tolerance)
+    } else {
+        contains_figure(&says, expected)
+    };
+    if quoted {
         return Ok(());
     }
     Err(format!(
@@ -271,8 +323,80 @@ fn contains_figure(text: &str, figure: &str) -> bool {
     })
 }
 
+/// A number of a figure at the start of `s` (digits with `,` groups and one `.`): its value,
+/// the unit of its last digit and its length in bytes.
+fn number_at(s: &str) -> Option<(f64, f64, usize)> {
+    let b = s.as_bytes();
+    let mut end = 0;
+    let mut decimals = None;
+    while end < b.len() {
+        let c = b[end];
+        let next_digit = b.get(end + 1).is_some_and(u8::is_ascii_digit);
+        if c.is_ascii_digit() {
+            decimals = decimals.map(|d: i32| d + 1);
+        } else if c == b',' && decimals.is_none() && next_digit && end > 0 {
+        } else if c == b'.' && decimals.is_none() && next_digit && end > 0 {
+            decimals = Some(0);
+        } else {
+            break;
+        }
+        end += 1;
+    }
+    if end == 0 || !b[0].is_ascii_digit() {
+        return None;
+    }
+    let value: f64 = s[..end].replace(',', "").parse().ok()?;
+    Some((value, 10f64.powi(-decimals.unwrap_or(0)), end))
+}
+
+/// Whether `text` holds `figure` with its words as written and each of its numbers within
+/// `tolerance` of it (plus half a unit of the number's last quoted digit).
+fn contains_near(text: &str, figure: &str, tolerance: f64) -> bool {
+    let matches_at = |mut t: &str| {
+        let mut f = figure;
+        while !f.is_empty() {
+            match number_at(f) {
+                Some((want, _, flen)) => {
+                    let Some((got, unit, tlen)) = number_at(t) else {
+                        return false;
+                    };
+                    if (got - want).abs() > tolerance * want.abs() + 0.5 * unit + 1e-12 {
+                        return false;
+                    }
+                    f = &f[flen..];
+                    t = &t[tlen..];
+                }
+                None => {
+                    let c = f.chars().next().unwrap_or(' ');
+                    if !t.starts_with(c) {
+                        return false;
+                    }
+                    f = &f[c.len_utf8()..];
+                    t = &t[c.len_utf8()..];
+                }
+            }
+        }
+        true
+    };
+    text.char_indices().any(|(i, _)| {
+        // A number of the figure must not start inside a number of the text.
+        let inside = text[..i].chars().last().is_some_and(|c| c.is_ascii_digit());
+        !(inside && figure.starts_with(|c: char| c.is_ascii_digit())) && matches_at(&text[i..])
+    })
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn estimates_match_within_their_tolerance() {
+        let cell = "**61.8–69.1 k** (0.52–0.58 of the 120,000 budget)";
+        assert!(super::contains_near(cell, "**61.8–69.0 k**", 0.01));
+        assert!(super::contains_near(cell, "0.51–0.58 of the 120,000", 0.01));
+        assert!(!super::contains_near(cell, "**60.0–69.0 k**", 0.01));
+        assert!(!super::contains_near(cell, "**61.8–69.0 M**", 0.01));
+        assert!(!super::contains_near("161.8 k", "61.8 k", 0.01));
+    }
+
     use super::*;
 
     const DOC: &str = "# T\n\nThe figures are the worst over those 18 logs.\n\n\
