@@ -173,10 +173,7 @@ pub fn check(
     expected: &str,
     command: &str,
 ) -> Result<(), String> {
-    let path = repo_root().join(doc);
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| format!("{doc}: cannot read {}: {e}", path.display()))?;
-    check_text(doc, &text, anchor, column, expected, command)
+    check_near(doc, anchor, column, expected, command, 0.0)
 }
 
 /// [`check`] with every number within `tolerance` ([`Quotes::within`]; 0: exact text).
