@@ -503,6 +503,12 @@ fn timing_targets() {
     }
 }
 
+/// How far a quoted instruction count may be from this run's: one tick of the 25 MHz timer
+/// the image reads them from (40 instructions under `-icount shift=0`). The count of a run is
+/// repeatable, but the timer's phase at a cycle's start moves with the emulator's version (a
+/// fresh machine's QEMU read one tick off this one's in several rows).
+const TICK: f64 = 40.0;
+
 /// The command that measures this file's figures (the documents name it).
 const COMMAND: &str = "cargo test --release -p walk-tests --test qemu -- --nocapture";
 
@@ -548,6 +554,7 @@ fn the_documents_quote_the_measured_figures() {
             "The figures are the worst over those",
             &format!("{logs} logs"),
         )
+        .within_units(TICK)
         .cell(T, steady, "worst", &max("steady"))
         .cell(T, steady, "mean", &mean("steady"))
         .cell(
@@ -568,12 +575,6 @@ fn the_documents_quote_the_measured_figures() {
         .cell(T, start, "worst", &max("start"))
         .cell(T, start, "mean", &mean("start"))
         .cell(T, cycle, "worst", &format!("**{}**", thousands(worst)))
-        .cell(
-            T,
-            cycle,
-            "worst",
-            &format!("{share} of the {} budget", thousands(BUDGET)),
-        )
         .cell(T, cycle, "mean", &mean("cycle"))
         .cell(T, board, "worst", &thousands(whole.num("max")))
         .cell(
@@ -583,6 +584,19 @@ fn the_documents_quote_the_measured_figures() {
             &thousands(whole.num::<f64>("mean").round() as u64),
         )
         .cell(T, new, "worst", &max("new"))
+        .cell(
+            "README.md",
+            "worst control cycle on the Cortex-M7",
+            "figure",
+            &format!("{} instructions", thousands(worst)),
+        )
+        .exact()
+        .cell(
+            T,
+            cycle,
+            "worst",
+            &format!("{share} of the {} budget", thousands(BUDGET)),
+        )
         .line(
             T,
             "(QEMU high-water marks)",
@@ -603,7 +617,7 @@ fn the_documents_quote_the_measured_figures() {
             "README.md",
             "worst control cycle on the Cortex-M7",
             "figure",
-            &format!("{} instructions, {share} of 5 %", thousands(worst)),
+            &format!("{share} of 5 %"),
         )
         .assert();
 }

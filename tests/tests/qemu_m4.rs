@@ -205,20 +205,35 @@ fn m4f_image_matches_the_host_f32_node() {
         "worst control cycle {worst} instructions > {TARGET}"
     );
 
-    // The documents quote the measured worst cycle and the target.
+    // The documents quote the measured worst cycle (to a timer tick: its phase moves with the
+    // emulator's version) and the target (exactly).
     let (worst, target) = (thousands(worst), thousands(TARGET));
     Quotes::new("cargo test --release -p walk-tests --test qemu_m4 -- --nocapture")
+        .within_units(INSTRUCTIONS_PER_TICK as f64)
         .cell(
             "README.md",
             "f32 node on a Cortex-M4F",
             "figure",
-            &format!("{worst} instructions (target {target})"),
+            &format!("{worst} instructions (target"),
         )
         .cell(
             "docs/src/timing.md",
             "the f32 node on a Cortex-M4F",
             "worst",
-            &format!("{worst} (target {target} "),
+            &format!("{worst} (target"),
+        )
+        .exact()
+        .cell(
+            "README.md",
+            "f32 node on a Cortex-M4F",
+            "figure",
+            &format!("(target {target})"),
+        )
+        .cell(
+            "docs/src/timing.md",
+            "the f32 node on a Cortex-M4F",
+            "worst",
+            &format!("(target {target} "),
         )
         .assert();
 }

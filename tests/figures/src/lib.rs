@@ -62,8 +62,9 @@ pub struct Quotes {
     command: String,
     checked: usize,
     failures: Vec<String>,
-    /// Relative tolerance of every number of a figure ([`Quotes::within`]); 0: exact text.
-    tolerance: f64,
+    /// How far every number of the figures checked next may be from the measured one
+    /// ([`Quotes::within`], [`Quotes::within_units`], [`Quotes::exact`]).
+    tolerance: Tolerance,
 }
 
 impl Quotes {
@@ -74,16 +75,38 @@ impl Quotes {
             command: command.to_string(),
             checked: 0,
             failures: vec![],
-            tolerance: 0.0,
+            tolerance: Tolerance::EXACT,
         }
     }
 
     /// Figures that are estimates whose last digits move with things the test does not hold
     /// fixed (the image's layout, say): every number of the quoted text may differ from the
     /// measured one by `relative` of it, plus half a unit of its last quoted digit; the words
-    /// between the numbers must be the same.
+    /// between the numbers must be the same. It holds for the figures checked after it.
     pub fn within(mut self, relative: f64) -> Self {
-        self.tolerance = relative;
+        self.tolerance = Tolerance {
+            relative,
+            absolute: 0.0,
+        };
+        self
+    }
+
+    /// Figures that are counts read off a clock with a coarser tick than the count (QEMU's
+    /// instruction counts through a 25 MHz timer: 40 instructions a tick, whose phase moves
+    /// with the emulator's version): every number of the quoted text may differ from the
+    /// measured one by `units` of it, plus half a unit of its last quoted digit; the words
+    /// between the numbers must be the same. It holds for the figures checked after it.
+    pub fn within_units(mut self, units: f64) -> Self {
+        self.tolerance = Tolerance {
+            relative: 0.0,
+            absolute: units,
+        };
+        self
+    }
+
+    /// The figures checked after it must be quoted exactly as measured (the default).
+    pub fn exact(mut self) -> Self {
+        self.tolerance = Tolerance::EXACT;
         self
     }
 
@@ -173,7 +196,7 @@ pub fn check(
     expected: &str,
     command: &str,
 ) -> Result<(), String> {
-    check_near(doc, anchor, column, expected, command, 0.0)
+    check_near(doc, anchor, column, expected, command, Tolerance::EXACT)
 }
 
 /// [`check`] with every number within `tolerance` ([`Quotes::within`]; 0: exact text).
@@ -183,7 +206,7 @@ fn check_near(
     column: Option<&str>,
     expected: &str,
     command: &str,
-    tolerance: f64,
+    tolerance: Tolerance,
 ) -> Result<(), String> {
     let path = repo_root().join(doc);
     let text = std::fs::read_to_string(&path)
@@ -200,7 +223,15 @@ pub fn check_text(
     expected: &str,
     command: &str,
 ) -> Result<(), String> {
-    check_text_near(doc, text, anchor, column, expected, command, 0.0)
+    check_text_near(
+        doc,
+        text,
+        anchor,
+        column,
+        expected,
+        command,
+        Tolerance::EXACT,
+    )
 }
 
 /// [`check_text`] with every number within `tolerance` ([`Quotes::within`]).
@@ -211,7 +242,7 @@ fn check_text_near(
     column: Option<&str>,
     expected: &str,
     command: &str,
-    tolerance: f64,
+    tolerance: Tolerance,
 ) -> Result<(), String> {
     let lines: Vec<&str> = text.lines().collect();
     let found: Vec<usize> = (0..lines.len())
@@ -245,7 +276,7 @@ fn check_text_near(
             )
         }
     };
-    let quoted = if tolerance > 0.0 {
+    let quoted = if tolerance != Tolerance::EXACT {
         contains_near(&says, expected, tolerance)
     } else {
         contains_figure(&says, expected)
@@ -346,9 +377,25 @@ fn number_at(s: &str) -> Option<(f64, f64, usize)> {
     Some((value, 10f64.powi(-decimals.unwrap_or(0)), end))
 }
 
+/// How far a quoted number may be from the measured one: `relative` of it plus `absolute`
+/// (plus half a unit of its last quoted digit, when not exact).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Tolerance {
+    relative: f64,
+    absolute: f64,
+}
+
+impl Tolerance {
+    /// The quoted text is the measured one.
+    const EXACT: Tolerance = Tolerance {
+        relative: 0.0,
+        absolute: 0.0,
+    };
+}
+
 /// Whether `text` holds `figure` with its words as written and each of its numbers within
 /// `tolerance` of it (plus half a unit of the number's last quoted digit).
-fn contains_near(text: &str, figure: &str, tolerance: f64) -> bool {
+fn contains_near(text: &str, figure: &str, tolerance: Tolerance) -> bool {
     let matches_at = |mut t: &str| {
         let mut f = figure;
         while !f.is_empty() {
@@ -357,7 +404,8 @@ fn contains_near(text: &str, figure: &str, tolerance: f64) -> bool {
                     let Some((got, unit, tlen)) = number_at(t) else {
                         return false;
                     };
-                    if (got - want).abs() > tolerance * want.abs() + 0.5 * unit + 1e-12 {
+                    let allowed = tolerance.relative * want.abs() + tolerance.absolute;
+                    if (got - want).abs() > allowed + 0.5 * unit + 1e-12 {
                         return false;
                     }
                     f = &f[flen..];
@@ -386,12 +434,30 @@ fn contains_near(text: &str, figure: &str, tolerance: f64) -> bool {
 mod tests {
     #[test]
     fn estimates_match_within_their_tolerance() {
+        let rel = super::Tolerance {
+            relative: 0.01,
+            absolute: 0.0,
+        };
         let cell = "**61.8–69.1 k** (0.52–0.58 of the 120,000 budget)";
-        assert!(super::contains_near(cell, "**61.8–69.0 k**", 0.01));
-        assert!(super::contains_near(cell, "0.51–0.58 of the 120,000", 0.01));
-        assert!(!super::contains_near(cell, "**60.0–69.0 k**", 0.01));
-        assert!(!super::contains_near(cell, "**61.8–69.0 M**", 0.01));
-        assert!(!super::contains_near("161.8 k", "61.8 k", 0.01));
+        assert!(super::contains_near(cell, "**61.8–69.0 k**", rel));
+        assert!(super::contains_near(cell, "0.51–0.58 of the 120,000", rel));
+        assert!(!super::contains_near(cell, "**60.0–69.0 k**", rel));
+        assert!(!super::contains_near(cell, "**61.8–69.0 M**", rel));
+        assert!(!super::contains_near("161.8 k", "61.8 k", rel));
+    }
+
+    #[test]
+    fn tick_counts_match_within_a_tick() {
+        let tick = super::Tolerance {
+            relative: 0.0,
+            absolute: 40.0,
+        };
+        let cell = "**38,400** instructions";
+        assert!(super::contains_near(cell, "**38,440** instructions", tick));
+        assert!(super::contains_near(cell, "**38,360** instructions", tick));
+        assert!(!super::contains_near(cell, "**38,480** instructions", tick));
+        assert!(!super::contains_near(cell, "**38,440** cycles", tick));
+        assert!(!super::contains_near("138,400", "38,400", tick));
     }
 
     use super::*;
