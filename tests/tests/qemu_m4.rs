@@ -22,7 +22,7 @@
 //! * the instructions-per-tick factor (40 under `-icount shift=0`: the AN386's CMSDK timer 0
 //!   is clocked at 25 MHz, as the AN500's) and the stack high-water mark inside its region.
 //!
-//! It prints the instructions per `Node::poll` by kind of cycle and asserts the target
+//! It prints the instructions per `Node::poll` by kind of cycle and asserts the target
 //! for the M4F: a worst cycle of at most 42,000 instructions (5 % of 5 ms at 168 MHz); and that
 //! the front page and `docs/src/timing.md` quote the measured worst cycle and the target
 //! (`walk_tests::figures`).
@@ -37,7 +37,7 @@ use walk_tests::logs::{self, compare, Case, Expected};
 use walk_tests::report::{self, QemuRun};
 use walk_tests::{build_firmware_with, qemu_available};
 
-/// The target for the M4F's worst control cycle (5 % of 5 ms at 168 MHz), asserted.
+/// The target for the M4F's worst control cycle (5 % of 5 ms at 168 MHz), asserted.
 const TARGET: u64 = 42_000;
 /// Instructions per CMSDK timer tick under `-icount shift=0`.
 const INSTRUCTIONS_PER_TICK: u64 = 40;

@@ -8,7 +8,7 @@
 //!   and flags it, `IR.RF0L`, as the hardware does). No acceptance filter: the hardware's
 //!   filters are configuration, not the adapter's, and the host's replay the image is compared
 //!   with feeds the node every logged frame (foreign ones included);
-//! * **transmit**: a frame written into a TX buffer is on the wire at once, in the order the
+//! * **transmit**: a frame written into a TX buffer or the TX FIFO is on the wire at once, in the order the
 //!   node sent it (the in-memory device has no bus time, as [`crate::ScriptedBus`] had none):
 //!   no buffer is ever pending, so the adapter never replaces a stale frame here and the wire
 //!   carries exactly the node's frames. The wire holds [`WIRE`] frames until the player reads
@@ -89,6 +89,18 @@ impl ReplayFdcan {
         ClassicFrame::from_element(&e).and_then(|f| RawFrame::from_frame(&f))
     }
 
+    /// A frame onto the wire (as the board's buffer write: a few stores); lost and counted if
+    /// the wire is full.
+    fn put_on_wire(&mut self, element: &[u32; 4]) {
+        match self.wire.get_mut(self.written) {
+            Some(e) => {
+                *e = *element;
+                self.written += 1;
+            }
+            None => self.wire_lost = self.wire_lost.saturating_add(1),
+        }
+    }
+
     /// Frames lost because RX FIFO0 was full.
     pub fn rx_overflow(&self) -> u32 {
         self.rx_overflow
@@ -116,14 +128,16 @@ impl Fdcan for ReplayFdcan {
         0
     }
     fn tx_start(&mut self, slot: usize, element: &[u32; 4]) {
-        // As the board's buffer write: a few stores.
-        match self.wire.get_mut(self.written) {
-            Some(e) if slot < TX_SLOTS => {
-                *e = *element;
-                self.written += 1;
-            }
-            _ => self.wire_lost = self.wire_lost.saturating_add(1),
+        if slot < TX_SLOTS {
+            self.put_on_wire(element);
+        } else {
+            self.wire_lost = self.wire_lost.saturating_add(1);
         }
+    }
+    fn tx_fifo_put(&mut self, element: &[u32; 4]) -> bool {
+        // The TX FIFO on an idle bus: never full, on the wire at once.
+        self.put_on_wire(element);
+        true
     }
     fn tx_cancel(&mut self, _mask: u32) {}
     fn protocol_status(&self) -> u32 {
@@ -136,6 +150,9 @@ impl Fdcan for ReplayFdcan {
         false
     }
     fn leave_init(&mut self) {}
+    fn take_ram_failure(&mut self) -> bool {
+        false
+    }
 }
 
 impl Device for ReplayLink {

@@ -1,4 +1,4 @@
-//! The target's player of a recorded CAN log (issue 12's record and replay): the QEMU image
+//! The target's player of a recorded CAN log (record and replay): the QEMU image
 //! replays host-sim's logs with it ([`crate::binlog`] reads them).
 //!
 //! [`Player`] feeds logged frames into the node through an in-memory [`Device`] (the

@@ -14,7 +14,8 @@
 //! 1. **wait** for the next slot of the [`Pacer`], calling [`Port::service`] (the CAN link
 //!    adapter's upkeep) meanwhile; [`MicrosClock::idle_until`] says until when there is
 //!    nothing else to do (the board spins, a simulated clock may jump);
-//! 2. tell the node its link health ([`ControlNode::set_link_health`]: the port's
+//! 2. one cycle to the port ([`Port::cycle`]: the bus-off back-off counts in cycles), then
+//!    tell the node its link health ([`ControlNode::set_link_health`]: the port's
 //!    [`Health`], the reset reason and the missed slots, published in `LINK`);
 //! 3. the busy pin high, **one timed poll** ([`poll`], a frame of its own) with the slot's
 //!    time, the busy pin low;
@@ -79,11 +80,16 @@ pub trait Port: Can {
     fn service(&mut self);
     /// What the board publishes about the link.
     fn health(&self) -> Health;
+    /// One control cycle has passed (the bus-off back-off counts in cycles).
+    fn cycle(&mut self) {}
 }
 
 impl<P: Fdcan> Port for Link<P> {
     fn service(&mut self) {
         Link::service(self);
+    }
+    fn cycle(&mut self) {
+        Link::cycle(self);
     }
     fn health(&self) -> Health {
         Link::health(self)
@@ -242,6 +248,7 @@ where
         port: &mut P,
     ) -> SlotRun<N::Scalar> {
         let begun = self.io.counter.cycles();
+        port.cycle();
         node.set_link_health(port.health().to_wire(self.reset, self.pacer.missed()));
 
         self.io.busy.set_busy(true);

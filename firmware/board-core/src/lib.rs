@@ -14,7 +14,12 @@
 //! * [`frame`]: the classic frame and the message-RAM element format;
 //! * [`pace`]: the 5 ms slots from a free-running 32-bit counter, missed slots counted;
 //! * [`reset`]: the reset reason from `RCC_RSR` and the fault handler's mark;
+//! * [`uninit`]: the no-init RAM words on ECC RAM, written before any read after a power-on;
+//! * [`clock`]: the system clock the silicon revision allows (480 MHz only on revision V);
 //! * [`rtt`]: the never-blocking part of the board's RTT logger (whole frames or nothing);
+//! * [`safe_state`]: the order of the fault handlers' safe state (the CAN TX pin recessive
+//!   as a GPIO, the reset mark, the fault pin, then the FDCAN, then a reset at once) over a
+//!   small trait of the hardware;
 //! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
 //!   before any Rust code runs, and the MPU guard below the stack ([`StackGuard`]);
 //! * [`node`]: the node's contract with the control cycle ([`ControlNode`], implemented for
@@ -37,6 +42,7 @@
 #![warn(missing_docs)]
 
 pub mod bor;
+pub mod clock;
 pub mod control;
 pub mod cycle;
 pub mod fault_entry;
@@ -47,6 +53,8 @@ pub mod node;
 pub mod pace;
 pub mod reset;
 pub mod rtt;
+pub mod safe_state;
+pub mod uninit;
 
 pub use control::{ControlLoop, Io, LogSink, Port, SlotRun};
 pub use fault_entry::StackGuard;

@@ -3,8 +3,9 @@
 //! counters) and the replacement of stale frames.
 //!
 //! # Message RAM (the board's layout: [`crate::fdcan::layout`])
-//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`crate::fdcan::RX1_ELEMENTS`] (16),
-//! and there are [`TX_SLOTS`] (32) dedicated TX buffers, 8-byte elements. At 1 Mbit/s a
+//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`crate::fdcan::RX1_ELEMENTS`] (16);
+//! there are [`TX_SLOTS`] (16) dedicated TX buffers and a TX FIFO of [`TX_FIFO`] (16)
+//! elements, 8-byte elements. At 1 Mbit/s a
 //! classic frame takes at least 47 bit times (~21
 //! frames per ms with 8-byte frames far fewer), so 64 elements hold ≥ 2.9 ms of a saturated bus
 //! without being read: the node's worst poll (~0.25 ms) and a whole 5 ms cycle of any
@@ -23,22 +24,39 @@
 //! cycle).
 //!
 //! # Transmission
-//! A frame goes into a free TX buffer, or waits in a software queue of [`SOFT_TX`] frames.
-//! Every identifier except [`ids::ACK`] is a stream (a newer frame supersedes the older): a
-//! frame whose identifier already waits **replaces** it: in the software queue in place; in a
-//! TX buffer by cancelling that buffer (the new frame takes another free buffer or waits; a
-//! buffer is not reused before the core has finished cancelling it, and a frame already on
-//! the wire when the cancellation comes is sent). `ACK`s, one per
-//! command, are always queued. So after a stall the bus gets the newest reference, not 25 ms of
-//! old ones.
+//! Every identifier except [`ids::ACK`] is a stream (a newer frame supersedes the older). A
+//! stream frame goes into a free dedicated TX buffer; an `ACK` into the TX FIFO; either
+//! waits in a software queue of [`SOFT_TX`] frames when there is no room (the queue is
+//! emptied in its order). A stream frame whose identifier already waits **replaces** it: in
+//! the software queue in place; in a TX buffer by cancelling that buffer (the new frame takes
+//! another free buffer or waits; a buffer is not reused before the core has finished
+//! cancelling it, and a frame already on the wire when the cancellation comes is sent). So
+//! after a stall the bus gets the newest reference, not 25 ms of old ones.
+//!
+//! `ACK`s, one per command, are never replaced and leave **in the order of the commands**:
+//! the TX FIFO sends its elements in the order they were put, whereas among dedicated
+//! buffers of equal identifier the core sends the lowest buffer first, whichever was written
+//! last. (The FIFO's oldest element competes with the dedicated buffers by identifier; the
+//! `ACK` identifier is below every stream identifier of the node.)
 //!
 //! # Errors
 //! [`Link::service`] reads the protocol status and error counters each time it runs. When the
 //! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter cancels every pending
-//! TX buffer (old frames), counts the bus-off and clears `INIT`: the core then waits for 129
-//! occurrences of 11 recessive bits (~1.4 ms at 1 Mbit/s) and is error-active again. Entering
-//! error-passive counts one episode. [`Link::health`] is what the board publishes (TEC, REC,
-//! state, counters).
+//! dedicated TX buffer (old stream frames; the `ACK`s in the TX FIFO stay, still owed) and
+//! counts the bus-off; the core stays off the bus for a **back-off** of whole control cycles
+//! ([`Link::cycle`], once per cycle): 1 cycle after the first bus-off, doubling at every
+//! further one up to [`BACKOFF_CAP`] (64 cycles, 320 ms), and back to 1 after
+//! [`BACKOFF_RESET_CYCLES`] cycles error-active on the bus. Then the adapter clears `INIT`:
+//! the core waits for 129 occurrences of 11 recessive bits (~1.4 ms at 1 Mbit/s) and is
+//! error-active again. So a node on a faulty bus (a wiring fault, a wrong bit rate) re-joins
+//! at most every 320 ms instead of every ~3 ms, and the joints' traffic sees its error flags
+//! that rarely. Entering error-passive counts one episode.
+//!
+//! A **message RAM access failure** (`IR.MRAF`: the core could not read or write an element in
+//! time; a transmit failure also puts it into restricted operation, `CCCR.ASM`, where it
+//! sends nothing) is counted ([`Health::ram_faults`]), the flag cleared and restricted
+//! operation left (`ASM` may be cleared at any time): the core transmits again.
+//! [`Link::health`] is what the board publishes (TEC, REC, state, counters, the back-off).
 
 use embedded_can::nb::Can;
 use heapless::Deque;
@@ -48,12 +66,22 @@ use crate::frame::ClassicFrame;
 
 /// Elements of RX FIFO0 in the board's message-RAM layout.
 pub const RX_ELEMENTS: usize = 64;
-/// Dedicated TX buffers in the board's message-RAM layout (the M_CAN maximum).
-pub const TX_SLOTS: usize = 32;
+/// Dedicated TX buffers in the board's message-RAM layout (buffers 0 … 15; the stream
+/// frames: 9 identifiers, with room for buffers still being cancelled).
+pub const TX_SLOTS: usize = 16;
+/// Elements of the TX FIFO (buffers 16 … 31, after the dedicated ones; the `ACK`s: as many
+/// as the commands the node takes in a cycle). Together at the M_CAN maximum of 32.
+pub const TX_FIFO: usize = 16;
 /// Frames the software receive queue of RX FIFO0 holds (beyond the hardware FIFO).
 pub const SOFT_RX: usize = 32;
 /// Frames the software transmit queue holds (beyond the TX buffers).
 pub const SOFT_TX: usize = 32;
+/// The longest bus-off back-off \[control cycles\] (320 ms at 5 ms): the first bus-off waits
+/// 1 cycle, each further one twice the one before, up to this.
+pub const BACKOFF_CAP: u16 = 64;
+/// Control cycles error-active on the bus (no bus-off, no warning, no error-passive) after
+/// which the back-off starts again from 1 cycle (1 s).
+pub const BACKOFF_RESET_CYCLES: u16 = 200;
 
 /// `PSR` bits the adapter reads (RM0433 FDCAN_PSR).
 pub mod psr {
@@ -81,8 +109,13 @@ pub trait Fdcan {
     fn rx_take_lost(&mut self) -> bool;
     /// Pending TX buffers (`TXBRP`: bit `i` = buffer `i` waits for or is in transmission).
     fn tx_pending(&self) -> u32;
-    /// Writes buffer `slot` (< [`TX_SLOTS`], not pending) and requests its transmission.
+    /// Writes dedicated buffer `slot` (< [`TX_SLOTS`], not pending) and requests its
+    /// transmission.
     fn tx_start(&mut self, slot: usize, element: &[u32; 4]);
+    /// Writes `element` into the TX FIFO at its put index (`TXFQS.TFQPI`) and requests it
+    /// (`TXBAR`); `false` (nothing written) if the FIFO is full (`TXFQS.TFQF`). The FIFO sends
+    /// its elements in the order they were put.
+    fn tx_fifo_put(&mut self, element: &[u32; 4]) -> bool;
     /// Requests the cancellation of the buffers in `mask` (`TXBCR`); a buffer stays pending
     /// until the core has cancelled it (or sent it, if it was already on the bus).
     fn tx_cancel(&mut self, mask: u32);
@@ -95,6 +128,9 @@ pub trait Fdcan {
     fn in_init(&self) -> bool;
     /// Leaves the initialisation state (clears `CCCR.INIT`): bus-off recovery begins.
     fn leave_init(&mut self);
+    /// `true` once after a message RAM access failure (`IR.MRAF`, cleared) or in restricted
+    /// operation (`CCCR.ASM`, left): the core is back in normal operation afterwards.
+    fn take_ram_failure(&mut self) -> bool;
 }
 
 /// The state of the node on the bus (ISO 11898-1 fault confinement).
@@ -138,6 +174,11 @@ pub struct Health {
     pub replaced: u16,
     /// Received elements that were not classic standard data frames (dropped).
     pub rx_foreign: u16,
+    /// The bus-off back-off: 0 none (no bus-off since the last error-free stretch); `n` ≥ 1:
+    /// the last bus-off kept the node off the bus for 2^(n-1) control cycles (7: the cap, 64).
+    pub backoff: u8,
+    /// Message RAM access failures (`IR.MRAF`, `CCCR.ASM`) since start-up, each recovered.
+    pub ram_faults: u16,
 }
 
 impl Health {
@@ -153,6 +194,8 @@ impl Health {
             bus_offs: self.bus_offs,
             passive_episodes: self.passive_episodes,
             missed_slots: missed_slots.min(255) as u8,
+            backoff: self.backoff,
+            ram_faults: self.ram_faults.min(u16::from(u8::MAX)) as u8,
         }
     }
 }
@@ -178,6 +221,12 @@ pub struct Link<P: Fdcan> {
     cancelling: u32,
     /// An overflow was seen and not yet reported to the receiver.
     lost_unreported: bool,
+    /// Control cycles the core stays off the bus (bus-off back-off); 0: not backing off.
+    backoff_wait: u16,
+    /// Control cycles error-active since the last bus-off (up to [`BACKOFF_RESET_CYCLES`]).
+    quiet_cycles: u16,
+    /// `INIT` clear requested after a back-off and not yet seen clear.
+    rejoining: bool,
     health: Health,
 }
 
@@ -186,7 +235,11 @@ pub fn supersedes(id: u16) -> bool {
     id != ids::ACK
 }
 
-/// Buffer mask covering all TX buffers.
+/// [`Health::backoff`] at the cap: 2^(7-1) = [`BACKOFF_CAP`] cycles.
+const BACKOFF_LEVEL_CAP: u8 = BACKOFF_CAP.trailing_zeros() as u8 + 1;
+const _: () = assert!(BACKOFF_CAP.is_power_of_two() && BACKOFF_LEVEL_CAP <= 15);
+
+/// Buffer mask covering the dedicated TX buffers (the TX FIFO's buffers follow them).
 const ALL_SLOTS: u32 = if TX_SLOTS >= 32 {
     u32::MAX
 } else {
@@ -203,6 +256,9 @@ impl<P: Fdcan> Link<P> {
             slot_id: [0; TX_SLOTS],
             cancelling: 0,
             lost_unreported: false,
+            backoff_wait: 0,
+            quiet_cycles: 0,
+            rejoining: false,
             health: Health::default(),
         }
     }
@@ -242,7 +298,38 @@ impl<P: Fdcan> Link<P> {
         self.pump_tx();
     }
 
+    /// One control cycle has passed (call it once per cycle): the bus-off back-off counts
+    /// down and, at its end, the core leaves `INIT` (bus-off recovery begins); on the bus,
+    /// error-active cycles count towards resetting the back-off.
+    pub fn cycle(&mut self) {
+        if self.backoff_wait > 0 {
+            self.backoff_wait -= 1;
+            if self.backoff_wait == 0 {
+                // Recovery: the core re-joins after 129 × 11 recessive bits.
+                self.hw.leave_init();
+                self.rejoining = true;
+            }
+            return;
+        }
+        if self.health.state != BusState::Active {
+            self.quiet_cycles = 0;
+            return;
+        }
+        self.quiet_cycles = self.quiet_cycles.saturating_add(1);
+        if self.quiet_cycles >= BACKOFF_RESET_CYCLES {
+            self.health.backoff = 0;
+        }
+    }
+
+    /// Control cycles the core still stays off the bus (0: not backing off).
+    pub fn backoff_remaining(&self) -> u16 {
+        self.backoff_wait
+    }
+
     fn check_errors(&mut self) {
+        if self.hw.take_ram_failure() {
+            self.health.ram_faults = self.health.ram_faults.saturating_add(1);
+        }
         let psr = self.hw.protocol_status();
         let ecr = self.hw.error_counters();
         let h = &mut self.health;
@@ -258,26 +345,31 @@ impl<P: Fdcan> Link<P> {
         } else {
             BusState::Active
         };
-        // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
-        // bus-off that came before this adapter saw the recovery end).
         let in_init = state == BusState::BusOff && self.hw.in_init();
-        if state == BusState::BusOff && (h.state != BusState::BusOff || in_init) {
+        if !in_init {
+            self.rejoining = false;
+        }
+        // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
+        // bus-off that came before this adapter saw the recovery end); not while the adapter
+        // itself holds the core in INIT (the back-off) or has just asked it out.
+        let waiting = self.backoff_wait > 0 || self.rejoining;
+        if state == BusState::BusOff && !waiting && (h.state != BusState::BusOff || in_init) {
             h.bus_offs = h.bus_offs.saturating_add(1);
-            // What waits in the TX buffers is old by the time the bus is back.
+            // What waits in the dedicated TX buffers is old by the time the bus is back.
             let pending = self.hw.tx_pending() & ALL_SLOTS;
             if pending != 0 {
                 self.hw.tx_cancel(pending);
                 self.cancelling |= pending;
             }
+            // The back-off: 1, 2, 4, … cycles, up to the cap.
+            h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
+            self.backoff_wait = 1 << (h.backoff - 1);
+            self.quiet_cycles = 0;
         }
         if state == BusState::Passive && !matches!(h.state, BusState::Passive) {
             h.passive_episodes = h.passive_episodes.saturating_add(1);
         }
         h.state = state;
-        if in_init {
-            // Recovery: the core re-joins after 129 × 11 recessive bits.
-            self.hw.leave_init();
-        }
     }
 
     fn take_lost(&mut self) {
@@ -324,10 +416,14 @@ impl<P: Fdcan> Link<P> {
         !pending & !self.cancelling & ALL_SLOTS
     }
 
-    /// Starts `f` in a free buffer; `false` if none is free (or the bus is off).
+    /// Starts `f`: an `ACK` in the TX FIFO, a stream frame in a free dedicated buffer;
+    /// `false` if there is no room (or the bus is off).
     fn start(&mut self, f: &ClassicFrame) -> bool {
         if self.health.state == BusState::BusOff {
             return false;
+        }
+        if !supersedes(f.raw_id()) {
+            return self.hw.tx_fifo_put(&f.to_element());
         }
         let free = self.free_slots();
         if free == 0 {
@@ -401,8 +497,9 @@ impl<P: Fdcan> Can for Link<P> {
     type Frame = ClassicFrame;
     type Error = RxLost;
 
-    /// Never displaces a frame (`Ok(None)`); `WouldBlock` only when every TX buffer and the
-    /// software queue are taken.
+    /// Never displaces a frame (`Ok(None)`); `WouldBlock` only when the frame's TX buffers
+    /// (the TX FIFO for an `ACK`, the dedicated ones for a stream frame) and the software
+    /// queue are taken.
     fn transmit(&mut self, frame: &ClassicFrame) -> nb::Result<Option<ClassicFrame>, RxLost> {
         if self.tx.is_empty() {
             // The common case: nothing waits in software, so only a TX buffer can hold a

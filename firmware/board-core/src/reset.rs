@@ -2,6 +2,9 @@
 //! mark for a reset by its fault handler.
 
 /// Reset reason, as published (4 bits in `LINK`).
+///
+/// The mark is read only after a reset that kept RAM: after a power-on or a brown-out the
+/// start-up writes it before any read ([`crate::uninit`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ResetReason {
     /// No flag the board knows (or flags not read yet).
@@ -24,6 +27,9 @@ pub enum ResetReason {
     ClockFailure = 8,
     /// A low-power reset (illegal Stop/Standby entry).
     LowPower = 9,
+    /// The HSE did not become ready at start-up within its bound; the start-up reset the MCU
+    /// with the fault pin raised (instead of waiting until the watchdog bites).
+    HseNotReady = 10,
 }
 
 /// `RCC_RSR` flags.
@@ -51,11 +57,13 @@ pub const FAULT_MARK: u32 = 0xFA17_0000;
 pub const MARK_FAULT: u32 = FAULT_MARK | 1;
 /// [`FAULT_MARK`] for a clock failure (CSS NMI).
 pub const MARK_CLOCK: u32 = FAULT_MARK | 2;
+/// [`FAULT_MARK`] for an HSE that did not become ready at start-up.
+pub const MARK_HSE: u32 = FAULT_MARK | 3;
 
 impl ResetReason {
     /// Every reason, in the order of its code (the `reset` value table of `LINK` in
     /// host-sim/can/walking.dbc is checked against it).
-    pub const ALL: [ResetReason; 10] = [
+    pub const ALL: [ResetReason; 11] = [
         Self::Unknown,
         Self::PowerOn,
         Self::Pin,
@@ -66,6 +74,7 @@ impl ResetReason {
         Self::Fault,
         Self::ClockFailure,
         Self::LowPower,
+        Self::HseNotReady,
     ];
 
     /// The reason from `RCC_RSR` and the fault handler's `mark` (the no-init word, garbage
@@ -86,6 +95,8 @@ impl ResetReason {
             Self::Fault
         } else if rsr & SFTRSTF != 0 && mark == MARK_CLOCK {
             Self::ClockFailure
+        } else if rsr & SFTRSTF != 0 && mark == MARK_HSE {
+            Self::HseNotReady
         } else if rsr & BORRSTF != 0 {
             Self::BrownOut
         } else if rsr & SFTRSTF != 0 {
@@ -112,6 +123,7 @@ mod tests {
             (SFTRSTF | PINRSTF, 0, ResetReason::Software),
             (SFTRSTF | PINRSTF, MARK_FAULT, ResetReason::Fault),
             (SFTRSTF | PINRSTF, MARK_CLOCK, ResetReason::ClockFailure),
+            (SFTRSTF | PINRSTF, MARK_HSE, ResetReason::HseNotReady),
             (
                 IWDG1RSTF | PINRSTF,
                 MARK_FAULT,

@@ -7,17 +7,26 @@
 mod regmodel;
 
 use board_core::fdcan::{self, layout, BringUpError, FdcanRegs, Reg, RegFdcan};
-use board_core::link::{psr, RX_ELEMENTS, TX_SLOTS};
+use board_core::link::{psr, RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 use board_core::{BusState, Fdcan, Link};
 use embedded_can::Frame;
 use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame};
 use regmodel::{BusFrame, FdcanModel, Verdict, Violation};
 
+/// The board's nominal bit timing (its setting in `board/src/main.rs`): 1 Mbit/s from 80 MHz,
+/// 40 time quanta, sample point 87.5 %.
+const TIMING: fdcan::BitTiming = fdcan::BitTiming {
+    prescaler: 2,
+    seg1: 34,
+    seg2: 5,
+    sjw: 5,
+};
+
 /// A model brought up by board-core, with no violation.
 fn brought_up() -> FdcanModel {
     let mut m = FdcanModel::after_reset();
-    assert_eq!(fdcan::bring_up(&mut m), Ok(()));
+    assert_eq!(fdcan::bring_up(&mut m, &TIMING), Ok(()));
     assert_eq!(m.violations(), []);
     assert!(!m.st().in_init());
     assert_eq!(m.st().joins, 1);
@@ -75,6 +84,13 @@ fn step(id: u16) -> BusFrame {
 
 #[test]
 fn bring_up_follows_the_rules_and_reads_back() {
+    assert!(TIMING.is_valid());
+    assert_eq!(TIMING.bit_rate(80_000_000), 1_000_000);
+    assert_eq!(TIMING.sample_point_permille(), 875);
+    assert!(
+        !fdcan::BitTiming { sjw: 6, ..TIMING }.is_valid(),
+        "SJW above seg2"
+    );
     let m = brought_up();
     let s = m.st();
     assert_eq!(
@@ -83,21 +99,29 @@ fn bring_up_follows_the_rules_and_reads_back() {
         "reject non-matching and remote"
     );
     assert_eq!(s.peek(regmodel::NBTP), 0x0801_2104, "1 Mbit/s at 80 MHz");
-    assert_eq!(s.peek(regmodel::SIDFC), 4 << 16, "4 elements at word 0");
-    assert_eq!(s.peek(regmodel::XIDFC), 4 << 2, "no extended filter");
-    assert_eq!(s.peek(regmodel::RXF0C), (64 << 16) | (4 << 2));
-    assert_eq!(s.peek(regmodel::RXF1C), (16 << 16) | (260 << 2));
-    assert_eq!(s.peek(regmodel::TXBC), (32 << 16) | (324 << 2));
+    // One standard filter element (one word) per identifier the node receives.
+    let n = ids::COMMANDS.len() as u32;
+    assert_eq!(s.peek(regmodel::SIDFC), n << 16, "{n} elements at word 0");
+    assert_eq!(s.peek(regmodel::XIDFC), n << 2, "no extended filter");
+    assert_eq!(s.peek(regmodel::RXF0C), (64 << 16) | (n << 2));
+    // FIFO0: 64 elements of 4 words; FIFO1: 16, then 16 dedicated buffers and a TX FIFO
+    // (TFQM = 0) of 16.
+    assert_eq!(s.peek(regmodel::RXF1C), (16 << 16) | ((n + 256) << 2));
+    assert_eq!(
+        s.peek(regmodel::TXBC),
+        (16 << 24) | (16 << 16) | ((n + 320) << 2)
+    );
     assert_eq!(s.peek(regmodel::CCCR) & regmodel::CCCR_PROTECTED, 1 << 12);
     // RM0433's standard filter element: SFT 01 (dual id), SFEC 010 (FIFO1) for ESTOP, 001
     // (FIFO0) for the others, SFID1 = SFID2 = the identifier.
     assert_eq!(s.peek_ram(0), 0x5010_0010);
     assert_eq!(s.peek_ram(1), 0x4820_0020);
-    assert_eq!(s.peek_ram(2), 0x4900_0100);
-    assert_eq!(s.peek_ram(3), 0x4901_0101);
+    assert_eq!(s.peek_ram(2), 0x48D8_00D8);
+    assert_eq!(s.peek_ram(3), 0x4900_0100);
+    assert_eq!(s.peek_ram(4), 0x4901_0101);
     drop(s);
     // The read-back passes on the bus too.
-    assert_eq!(fdcan::verify(&m), Ok(()));
+    assert_eq!(fdcan::verify(&m, &TIMING), Ok(()));
 }
 
 #[test]
@@ -128,15 +152,16 @@ fn estop_lands_in_fifo1_and_the_commands_in_fifo0() {
             filter: Some(0)
         }
     );
-    for (i, f) in [heartbeat(1), step(ids::STEP_APPEND), step(ids::STEP_MODIFY)]
-        .into_iter()
-        .enumerate()
-    {
+    for f in [heartbeat(1), step(ids::STEP_APPEND), step(ids::STEP_MODIFY)] {
+        let i = ids::COMMANDS
+            .iter()
+            .position(|&id| u32::from(id) == f.id)
+            .unwrap();
         assert_eq!(
             m.st().arrive(f),
             Verdict::Fifo {
                 n: 0,
-                filter: Some(i as u32 + 1)
+                filter: Some(i as u32)
             }
         );
     }
@@ -199,7 +224,7 @@ fn bring_up_refuses_to_join_when_a_register_reads_back_otherwise() {
     let mut m = FdcanModel::after_reset();
     m.st().stuck_bits.push((regmodel::GFC, 1 << 1));
     assert_eq!(
-        fdcan::bring_up(&mut m),
+        fdcan::bring_up(&mut m, &TIMING),
         Err(BringUpError::Register(Reg::Gfc))
     );
     m.st().settle();
@@ -210,24 +235,41 @@ fn bring_up_refuses_to_join_when_a_register_reads_back_otherwise() {
         Verdict::NotOnBus
     );
     assert_eq!(m.violations(), []);
-    // NBTP, a FIFO's configuration, TXBC, SIDFC: each named (a bit the value has, stuck at 0).
+    // NBTP, a FIFO's configuration, TXBC (NDTB, the TX FIFO's size), SIDFC: each named (a bit
+    // the value has, stuck at 0).
     for (off, bit, reg) in [
         (regmodel::NBTP, 16, Reg::Nbtp),
         (regmodel::RXF1C, 20, Reg::Rxf1c),
-        (regmodel::TXBC, 21, Reg::Txbc),
+        (regmodel::TXBC, 20, Reg::Txbc),
+        (regmodel::TXBC, 28, Reg::Txbc),
         (regmodel::SIDFC, 18, Reg::Sidfc),
     ] {
         let mut m = FdcanModel::after_reset();
         m.st().stuck_bits.push((off, 1 << bit));
-        assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::Register(reg)));
+        assert_eq!(
+            fdcan::bring_up(&mut m, &TIMING),
+            Err(BringUpError::Register(reg))
+        );
         m.st().settle();
         assert!(m.st().in_init());
         assert_eq!(m.st().joins, 0);
     }
+    // TXBC in queue mode (TFQM reads 1): the ACKs would leave by identifier, not in order.
+    let mut m = FdcanModel::after_reset();
+    m.st().forced_bits.push((regmodel::TXBC, 1 << 30));
+    assert_eq!(
+        fdcan::bring_up(&mut m, &TIMING),
+        Err(BringUpError::Register(Reg::Txbc))
+    );
+    m.st().settle();
+    assert_eq!(m.st().joins, 0);
     // A filter element.
     let mut m = FdcanModel::after_reset();
     m.st().stuck_word = Some(layout::STD_FILTERS + 2);
-    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::StdFilter(2)));
+    assert_eq!(
+        fdcan::bring_up(&mut m, &TIMING),
+        Err(BringUpError::StdFilter(2))
+    );
     m.st().settle();
     assert!(m.st().in_init());
     assert_eq!(m.st().joins, 0);
@@ -241,10 +283,16 @@ fn bring_up_is_bounded_when_init_never_changes() {
     m.write(Reg::Cccr, 0);
     m.st().settle();
     m.st().init_never_set = true;
-    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::InitTimeout));
+    assert_eq!(
+        fdcan::bring_up(&mut m, &TIMING),
+        Err(BringUpError::InitTimeout)
+    );
     let mut m = FdcanModel::after_reset();
     m.st().init_never_clear = true;
-    assert_eq!(fdcan::bring_up(&mut m), Err(BringUpError::JoinTimeout));
+    assert_eq!(
+        fdcan::bring_up(&mut m, &TIMING),
+        Err(BringUpError::JoinTimeout)
+    );
     assert_eq!(m.violations(), []);
 }
 
@@ -253,7 +301,7 @@ fn bring_up_after_a_run_starts_from_any_state() {
     // A second bring-up over a running core (a warm start without a peripheral reset).
     let mut m = brought_up();
     m.st().arrive(heartbeat(1));
-    assert_eq!(fdcan::bring_up(&mut m), Ok(()));
+    assert_eq!(fdcan::bring_up(&mut m, &TIMING), Ok(()));
     assert_eq!(m.violations(), []);
 }
 
@@ -384,7 +432,10 @@ fn old_fdcan_crate_sequence_is_caught_letting_every_standard_frame_in() {
     // ... but GFC is back at "accept non-matching into FIFO0, filter remote frames": the
     // read-back names it, and the bus is open to every standard frame.
     assert_eq!(m.st().peek(regmodel::GFC), 0);
-    assert_eq!(fdcan::verify(&m), Err(BringUpError::Register(Reg::Gfc)));
+    assert_eq!(
+        fdcan::verify(&m, &TIMING),
+        Err(BringUpError::Register(Reg::Gfc))
+    );
     let accepted = foreign_accepted(&m);
     let ids: Vec<_> = accepted.iter().map(|(f, _)| (f.id, f.remote)).collect();
     // Every standard data frame and every standard remote frame; the extended frames only
@@ -506,7 +557,7 @@ fn the_message_ram_is_bounded_and_its_layout_checked_when_leaving_init() {
     );
     // RX FIFO1 over RX FIFO0, and the TX buffers past the end.
     let mut m = FdcanModel::after_reset();
-    fdcan::configure(&mut m).unwrap();
+    fdcan::configure(&mut m, &TIMING).unwrap();
     m.write(Reg::Rxf1c, (16 << 16) | ((layout::RX_FIFO0 + 8) << 2));
     m.write(Reg::Txbc, (32 << 16) | (1000 << 2));
     assert_eq!(fdcan::join(&mut m), Ok(()));
@@ -525,7 +576,7 @@ fn the_message_ram_is_bounded_and_its_layout_checked_when_leaving_init() {
 fn the_filter_engine_follows_rm0433() {
     // Hand-written elements, one of each kind, and GFC sending non-matching frames to FIFO1.
     let mut m = FdcanModel::after_reset();
-    fdcan::configure(&mut m).unwrap();
+    fdcan::configure(&mut m, &TIMING).unwrap();
     let sfe =
         |sft: u32, sfec: u32, id1: u32, id2: u32| (sft << 30) | (sfec << 27) | (id1 << 16) | id2;
     let elements = [
@@ -679,14 +730,26 @@ fn overflow_bus_off_and_silence_over_the_registers() {
     assert_eq!(node.counters().bus_errors, 0);
     node.poll(5, &mut l);
     assert_eq!(node.counters().bus_errors, 1);
-    // Bus-off: the core sets INIT itself; the adapter cancels the pending buffers and
-    // clears INIT (a CCCR write that changes no protected bit).
-    assert_ne!(model(&l).st().pending(), 0, "frames wait in the TX buffers");
+    // Bus-off: the core sets INIT itself; the adapter cancels the pending dedicated buffers
+    // (stream frames) and, after the back-off, clears INIT (a CCCR write that changes no
+    // protected bit); the ACKs stay in the TX FIFO (buffers 16 … 31).
+    let dedicated = (1u32 << TX_SLOTS) - 1;
+    assert_ne!(
+        model(&l).st().pending() & dedicated,
+        0,
+        "frames wait in the TX buffers"
+    );
+    assert_ne!(model(&l).st().pending() & !dedicated, 0, "ACKs in the FIFO");
+    let acks_waiting = model(&l).st().pending() & !dedicated;
     model(&l).st().bus_off();
     assert_eq!(l.peripheral().protocol_status() & psr::BO, psr::BO);
     l.service();
     assert_eq!(l.health().state, BusState::BusOff);
-    assert_eq!(model(&l).st().pending(), 0);
+    assert_eq!(model(&l).st().pending(), acks_waiting);
+    // The back-off (one cycle the first time), then recovery.
+    model(&l).st().settle();
+    assert!(model(&l).st().in_init(), "backing off");
+    l.cycle();
     model(&l).st().settle();
     assert!(!model(&l).st().in_init(), "recovery started");
     l.service();
@@ -701,5 +764,233 @@ fn overflow_bus_off_and_silence_over_the_registers() {
     assert!(model(&l).st().in_init());
     assert_eq!(model(&l).st().pending(), 0);
     assert_eq!(model(&l).st().bus_sends(TX_SLOTS), 0);
+    assert_eq!(model(&l).violations(), []);
+}
+
+// --- the TX FIFO and the order of the ACKs ---
+
+fn element(id: u16, data: &[u8]) -> [u32; 4] {
+    board_core::ClassicFrame::new(embedded_can::StandardId::new(id).unwrap(), data)
+        .unwrap()
+        .to_element()
+}
+
+/// The sequence numbers of the ACKs on the modelled wire, in order.
+fn ack_seqs(m: &FdcanModel) -> Vec<u8> {
+    m.st()
+        .wire
+        .iter()
+        .filter(|f| f.id == u32::from(ids::ACK))
+        .map(|f| f.data[1])
+        .collect()
+}
+
+/// Writes `e` into the lowest free dedicated buffer and requests it: how every frame, ACKs
+/// included, was sent before the TX FIFO.
+fn start_lowest_free(m: &mut FdcanModel, e: [u32; 4]) -> u32 {
+    let slot = (!m.read(Reg::Txbrp)).trailing_zeros();
+    assert!(slot < TX_SLOTS as u32);
+    for (k, w) in e.iter().enumerate() {
+        m.ram_write(layout::TX_BUFFERS + 4 * slot + k as u32, *w);
+    }
+    m.write(Reg::Txbar, 1 << slot);
+    slot
+}
+
+#[test]
+fn acks_in_dedicated_buffers_leave_out_of_order_and_through_the_tx_fifo_in_order() {
+    // The old way, over the model: ACK 0, a COG, ACK 1, ACK 2; the COG superseded (its
+    // buffer's cancellation completing after the new COG took another buffer); ACK 3 takes
+    // the lowest free buffer, the COG's old one. Equal identifiers: lowest buffer first.
+    let mut m = brought_up();
+    m.st().defer_cancel = true;
+    let ack = |seq: u8| element(ids::ACK, &[0x20, seq]);
+    assert_eq!(start_lowest_free(&mut m, ack(0)), 0);
+    assert_eq!(start_lowest_free(&mut m, element(ids::COG, &[1])), 1);
+    assert_eq!(start_lowest_free(&mut m, ack(1)), 2);
+    assert_eq!(start_lowest_free(&mut m, ack(2)), 3);
+    m.write(Reg::Txbcr, 1 << 1);
+    assert_eq!(start_lowest_free(&mut m, element(ids::COG, &[2])), 4);
+    m.st().complete_cancels();
+    assert_eq!(start_lowest_free(&mut m, ack(3)), 1);
+    m.st().bus_sends(16);
+    assert_eq!(ack_seqs(&m), [0, 3, 1, 2]);
+    assert_eq!(m.violations(), []);
+
+    // The adapter, the same sends: the ACKs through the TX FIFO, in order.
+    let mut l = link();
+    model(&l).st().defer_cancel = true;
+    let f = |id: u16, data: &[u8]| {
+        board_core::ClassicFrame::new(embedded_can::StandardId::new(id).unwrap(), data).unwrap()
+    };
+    use embedded_can::nb::Can;
+    for (id, data) in [
+        (ids::ACK, [0x20, 0]),
+        (ids::COG, [1, 0]),
+        (ids::ACK, [0x20, 1]),
+        (ids::ACK, [0x20, 2]),
+        (ids::COG, [2, 0]),
+    ] {
+        l.transmit(&f(id, &data)).unwrap();
+    }
+    model(&l).st().complete_cancels();
+    l.transmit(&f(ids::ACK, &[0x20, 3])).unwrap();
+    model(&l).st().bus_sends(16);
+    assert_eq!(ack_seqs(model(&l)), [0, 1, 2, 3]);
+    // The superseded COG never went out.
+    let cogs: Vec<u8> = model(&l)
+        .st()
+        .wire
+        .iter()
+        .filter(|w| w.id == u32::from(ids::COG))
+        .map(|w| w.data[0])
+        .collect();
+    assert_eq!(cogs, [2]);
+    assert_eq!(model(&l).violations(), []);
+}
+
+#[test]
+fn the_tx_fifo_follows_its_put_index_and_full_flag() {
+    let mut r = RegFdcan::new(brought_up());
+    let fifo0 = TX_SLOTS as u32;
+    let st = r.regs().read(Reg::Txfqs);
+    assert_eq!(st & 0x3F, TX_FIFO as u32, "all free");
+    assert_eq!((st >> 16) & 0x1F, fifo0, "put index: the first FIFO buffer");
+    // A request of a FIFO buffer other than the put index: caught.
+    r.regs_mut().write(Reg::Txbar, 1 << (fifo0 + 3));
+    assert_eq!(
+        r.regs().violations(),
+        [Violation::FifoNotAtPutIndex {
+            bits: 1 << (fifo0 + 3),
+            put: fifo0
+        }]
+    );
+    r.regs().st().violations.clear();
+    // The FIFO keeps put order whatever the identifiers: a high one first, then ACKs.
+    assert!(r.tx_fifo_put(&element(ids::LINK, &[9; 8])));
+    for seq in 0..TX_FIFO as u8 - 1 {
+        assert!(r.tx_fifo_put(&element(ids::ACK, &[0x20, seq])));
+    }
+    let st = r.regs().read(Reg::Txfqs);
+    assert_eq!(st & 0x3F, 0, "no free element");
+    assert_ne!(st & (1 << 21), 0, "TFQF");
+    // Full: the adapter's put refuses (nothing written), a raw request is caught.
+    assert!(!r.tx_fifo_put(&element(ids::ACK, &[0x20, 99])));
+    assert_eq!(r.regs().violations(), []);
+    r.regs_mut().write(Reg::Txbar, 1 << fifo0);
+    assert_eq!(r.regs().violations(), [Violation::FifoFull]);
+    r.regs().st().violations.clear();
+    // A dedicated buffer with a lower identifier than the FIFO's oldest goes first; the FIFO
+    // then leaves in put order (LINK before the ACKs, though its identifier is higher).
+    r.tx_start(0, &element(ids::COG, &[1]));
+    assert_eq!(r.regs().st().bus_sends(3), 3);
+    let ids_sent: Vec<u32> = r.regs().st().wire.iter().map(|w| w.id).collect();
+    assert_eq!(
+        ids_sent,
+        [
+            u32::from(ids::COG),
+            u32::from(ids::LINK),
+            u32::from(ids::ACK)
+        ]
+    );
+    // Room again: the put index wrapped past the elements sent.
+    let st = r.regs().read(Reg::Txfqs);
+    assert_eq!(st & 0x3F, 2);
+    assert_eq!((st >> 16) & 0x1F, fifo0);
+    assert!(r.tx_fifo_put(&element(ids::ACK, &[0x20, 100])));
+    r.regs().st().bus_sends(64);
+    let seqs = ack_seqs(r.regs());
+    assert_eq!(
+        seqs,
+        (0..TX_FIFO as u8 - 1).chain([100]).collect::<Vec<_>>()
+    );
+    assert_eq!(r.regs().violations(), []);
+}
+
+// --- bus-off back-off and message RAM access failures ---
+
+/// Control cycles (`Link::cycle`, with services between) until the core re-joins the bus
+/// after a bus-off; `None` if it has not within 1,000.
+fn cycles_to_rejoin(l: &mut ModelLink) -> Option<u32> {
+    let joins = model(l).st().joins;
+    for k in 1..=1000 {
+        l.cycle();
+        for _ in 0..4 {
+            l.service();
+        }
+        if model(l).st().joins > joins {
+            return Some(k);
+        }
+    }
+    None
+}
+
+#[test]
+fn bus_off_recovery_backs_off_doubling_to_a_cap_and_resets_after_a_quiet_stretch() {
+    use board_core::link::{BACKOFF_CAP, BACKOFF_RESET_CYCLES};
+    let mut l = link();
+    let mut waits = Vec::new();
+    let mut published = Vec::new();
+    for _ in 0..9 {
+        model(&l).st().bus_off();
+        l.service();
+        assert_eq!(l.health().state, BusState::BusOff);
+        published.push(
+            l.health()
+                .to_wire(board_core::ResetReason::PowerOn, 0)
+                .backoff,
+        );
+        waits.push(cycles_to_rejoin(&mut l).expect("re-joins"));
+        assert!(!model(&l).st().in_init());
+    }
+    // 1, 2, 4, … cycles, capped at 64 (320 ms); one bus-off counted each time.
+    assert_eq!(waits, [1, 2, 4, 8, 16, 32, 64, 64, 64]);
+    assert_eq!(*waits.iter().max().unwrap(), u32::from(BACKOFF_CAP));
+    assert_eq!(published, [1, 2, 3, 4, 5, 6, 7, 7, 7]);
+    assert_eq!(l.health().bus_offs, 9);
+    // Error-active on the bus for a while, but not long enough: the back-off stays.
+    for _ in 0..BACKOFF_RESET_CYCLES - 2 {
+        l.cycle();
+        l.service();
+    }
+    model(&l).st().bus_off();
+    l.service();
+    assert_eq!(cycles_to_rejoin(&mut l), Some(64));
+    // A whole quiet stretch: back to 1 cycle (and published as none meanwhile).
+    for _ in 0..BACKOFF_RESET_CYCLES {
+        l.cycle();
+        l.service();
+    }
+    assert_eq!(l.health().backoff, 0);
+    model(&l).st().bus_off();
+    l.service();
+    assert_eq!(cycles_to_rejoin(&mut l), Some(1));
+    assert_eq!(model(&l).violations(), []);
+}
+
+#[test]
+fn a_message_ram_access_failure_is_counted_and_restricted_operation_left() {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut l = link();
+    model(&l).st().arrive(heartbeat(1));
+    node.poll(0, &mut l);
+    assert_ne!(model(&l).st().pending(), 0, "the node's frames wait");
+    // The TX handler could not read an element in time: restricted operation, nothing sent.
+    model(&l).st().ram_access_failure(true);
+    assert_eq!(model(&l).st().bus_sends(64), 0);
+    l.service();
+    assert_eq!(l.health().ram_faults, 1);
+    let s = model(&l).st().peek(regmodel::CCCR);
+    assert_eq!(s & regmodel::CCCR_ASM, 0, "restricted operation left");
+    assert_eq!(model(&l).st().peek(regmodel::IR) & regmodel::IR_MRAF, 0);
+    assert!(model(&l).st().bus_sends(64) > 0, "sending again");
+    assert_eq!(acks(&l).len(), 1);
+    // An RX handler failure: counted (no restricted operation); published in LINK.
+    model(&l).st().ram_access_failure(false);
+    l.service();
+    l.service();
+    assert_eq!(l.health().ram_faults, 2, "counted once");
+    let w = l.health().to_wire(board_core::ResetReason::PowerOn, 0);
+    assert_eq!(w.encode().data[2] >> 6, 2);
     assert_eq!(model(&l).violations(), []);
 }

@@ -4,7 +4,7 @@
 
 mod mock;
 
-use board_core::link::{psr, SOFT_TX, TX_SLOTS};
+use board_core::link::{psr, SOFT_TX, TX_FIFO};
 use board_core::{BusState, Link, RxLost};
 use embedded_can::nb::Can;
 use embedded_can::Frame;
@@ -134,7 +134,7 @@ fn a_deferred_cancellation_keeps_its_buffer_and_the_newest_frame_is_sent() {
 #[test]
 fn acks_are_never_replaced_and_block_only_when_everything_is_full() {
     let mut link = Link::new(MockFdcan::new(64));
-    for seq in 0..(TX_SLOTS + SOFT_TX) {
+    for seq in 0..(TX_FIFO + SOFT_TX) {
         let f = frame(ids::ACK, &[0x20, seq as u8]);
         assert_eq!(link.transmit(&f), Ok(None), "ACK {seq}");
     }
@@ -142,11 +142,13 @@ fn acks_are_never_replaced_and_block_only_when_everything_is_full() {
         link.transmit(&frame(ids::ACK, &[0x20, 0xFF])),
         Err(nb::Error::WouldBlock)
     );
-    link.peripheral_mut().bus_sends(TX_SLOTS);
+    link.peripheral_mut().bus_sends(TX_FIFO);
     link.service();
-    link.peripheral_mut().bus_sends(TX_SLOTS);
+    link.peripheral_mut().bus_sends(TX_FIFO);
+    link.service();
+    link.peripheral_mut().bus_sends(TX_FIFO);
     let seqs: Vec<u8> = link.peripheral().wire.iter().map(|f| f.data()[1]).collect();
-    assert_eq!(seqs, (0..(TX_SLOTS + SOFT_TX) as u8).collect::<Vec<_>>());
+    assert_eq!(seqs, (0..(TX_FIFO + SOFT_TX) as u8).collect::<Vec<_>>());
     assert_eq!(link.health().replaced, 0);
 }
 
@@ -163,17 +165,27 @@ fn bus_off_is_counted_and_recovered_and_old_frames_are_dropped() {
     link.service();
     let h = link.health();
     assert_eq!((h.state, h.bus_offs, h.tec), (BusState::BusOff, 1, 255));
-    assert_eq!(link.peripheral().leave_init_calls, 1);
-    assert!(!link.peripheral().init);
-    assert_eq!(link.peripheral().pending_count(), 0);
-    assert_eq!(link.peripheral().cancelled.len(), 2);
-    // While off: frames wait in software (and stream frames still replace).
+    // Off the bus for the back-off (1 cycle the first time): INIT not cleared yet.
+    assert_eq!(h.backoff, 1);
+    assert_eq!(link.backoff_remaining(), 1);
+    assert_eq!(link.peripheral().leave_init_calls, 0);
+    // The stream frame cancelled; the ACK, owed, stays in the TX FIFO.
+    assert_eq!(link.peripheral().cancelled, [frame(ids::COG, &[1])]);
+    assert_eq!(link.peripheral().fifo.len(), 1);
+    assert_eq!(link.peripheral().pending_count(), 1);
+    // While off: frames wait in software (and stream frames still replace); servicing during
+    // the back-off counts nothing again.
     link.transmit(&frame(ids::COG, &[2])).unwrap();
     link.transmit(&frame(ids::COG, &[3])).unwrap();
+    link.service();
+    assert_eq!(link.health().bus_offs, 1);
+    // The cycle ends the back-off: INIT cleared, recovery begins.
+    link.cycle();
+    assert_eq!(link.peripheral().leave_init_calls, 1);
+    assert!(!link.peripheral().init);
     link.service(); // still bus-off (recovery sequence running): not counted again
     assert_eq!(link.health().bus_offs, 1);
-    assert_eq!(link.peripheral().leave_init_calls, 1);
-    assert_eq!(link.peripheral().pending_count(), 0);
+    assert_eq!(link.peripheral().pending_count(), 1);
     // Recovered: error-active, counters reset by the core.
     let hw = link.peripheral_mut();
     hw.psr = 0;
@@ -181,22 +193,30 @@ fn bus_off_is_counted_and_recovered_and_old_frames_are_dropped() {
     link.service();
     link.peripheral_mut().bus_sends(64);
     assert_eq!(link.health().state, BusState::Active);
-    assert_eq!(link.peripheral().wire, [frame(ids::COG, &[3])]);
-    // A second bus-off is a second count.
+    assert_eq!(
+        link.peripheral().wire,
+        [frame(ids::ACK, &[1]), frame(ids::COG, &[3])]
+    );
+    // A second bus-off is a second count, with twice the back-off.
     let hw = link.peripheral_mut();
     hw.psr = psr::BO;
     hw.init = true;
     link.service();
     assert_eq!(link.health().bus_offs, 2);
+    assert_eq!(link.backoff_remaining(), 2);
+    link.cycle();
+    link.service();
+    assert_eq!(link.peripheral().leave_init_calls, 1, "still backing off");
+    link.cycle();
     assert_eq!(link.peripheral().leave_init_calls, 2);
     // A third one before the adapter saw the recovery end (INIT set again, BO never cleared
-    // in between): counted and recovered too.
+    // in between): counted and backed off too.
     link.service();
     assert_eq!(link.health().bus_offs, 2, "recovering: not a new event");
     link.peripheral_mut().init = true;
     link.service();
     assert_eq!(link.health().bus_offs, 3);
-    assert_eq!(link.peripheral().leave_init_calls, 3);
+    assert_eq!(link.backoff_remaining(), 4);
 }
 
 #[test]

@@ -5,20 +5,27 @@
 //! HardFault and the NMI enter through `board_core::fault_entry!`, which first moves the stack
 //! pointer back to the top of the stack region (a stack overflow leaves none).
 //!
-//! [`fail_safe`]: interrupts off; FDCAN1 into its initialisation state with every pending TX
-//! buffer cancelled (the node falls silent on the bus at once: recessive, no error frames,
-//! no stale references); the fault pin (PB14 = LD3, red, on the NUCLEO-H743ZI2;
-//! configured by `main`) high; a mark in a no-init RAM word saying why; about 20 ms so that the pin
-//! is seen; then a system reset. After the reset the mark and `RCC_RSR` give the reason the
-//! node publishes (`LINK`), and the fault pin is low again (GPIO reset).
+//! [`fail_safe`]: interrupts off, then board-core's `safe_state::fail_safe` over the board's
+//! pins and registers ([`BoardSafeState`]), in this order: PD1 (FDCAN1 TX) taken from the
+//! FDCAN as a GPIO push-pull output driven recessive (high), which silences the node even
+//! when the FDCAN's kernel clock is gone (a clock-security failure stops PLL1Q, and `INIT` or
+//! `TXBCR` writes then never take effect); a mark in a no-init RAM word saying why; the fault
+//! pin (PB14 = LD3, red, on the NUCLEO-H743ZI2) high; only then FDCAN1 into its
+//! initialisation state with every pending TX buffer cancelled (should that access fault
+//! again, the output, the mark and the pin are already set); then a system reset at once (no
+//! hold: after a clock failure the core runs from the 64 MHz HSI, and a delay there would
+//! outlast the 50 ms watchdog and the reason would read "watchdog"). After the reset the mark
+//! and `RCC_RSR` give the reason the node publishes (`LINK`); the pins are back in their reset
+//! state (the fault pin low). The order is board-core's, host-tested
+//! (`board-core/tests/safe_state.rs`).
 //!
 //! The IWDG is not stopped: if the reset request itself failed, the watchdog resets the MCU.
 //!
-//! [`off_bus`]: the same signals without the reset: FDCAN1 held in its initialisation state,
-//! the fault pin high, the mark left (a later software reset reads as `fault`), one error line,
-//! the watchdog fed. A configuration that reads back wrong is not transient;
-//! resetting would only repeat the start-up at its own rate, and the node could publish
-//! nothing either way.
+//! [`off_bus`]: the same signals without the reset: PD1 recessive, FDCAN1 held in its
+//! initialisation state, the fault pin high, the mark left (a later software reset reads as
+//! `fault`), an error line every second, the watchdog fed. A configuration that reads back
+//! wrong is not transient; resetting would only repeat the start-up at its own rate, and the
+//! node could publish nothing either way.
 
 #![allow(unsafe_code)]
 
@@ -27,6 +34,8 @@ use core::mem::MaybeUninit;
 
 use board_core::fdcan::BringUpError;
 use board_core::reset::{MARK_CLOCK, MARK_FAULT};
+use board_core::safe_state::{self, SafeStateHw};
+use board_core::uninit::{self, NoInitWord};
 use board_core::ResetReason;
 use cortex_m_rt::exception;
 use stm32h7xx_hal::independent_watchdog::IndependentWatchdog;
@@ -34,66 +43,133 @@ use stm32h7xx_hal::pac;
 
 use crate::fdcan1;
 
-/// Core cycles the fault pin stays high before the reset (20 ms at 480 MHz; longer if the
-/// clock has fallen back to the 64 MHz HSI).
-const HOLD_CYCLES: u32 = 9_600_000;
-
 struct Mark(UnsafeCell<MaybeUninit<u32>>);
 // SAFETY: written only by `fail_safe` (interrupts off, never returns) and read/cleared once by
 // `take_reset_reason` at start-up before anything else runs.
 unsafe impl Sync for Mark {}
 
 /// Survives a system reset (DTCM keeps its contents; `.uninit` is not zeroed by the start-up
-/// code); garbage after a power-on, which `ResetReason::decode` never reads as a fault.
+/// code); after a power-on or a brown-out it is written before it is read (ECC RAM:
+/// board-core's `uninit`).
 #[link_section = ".uninit.FAULT_MARK"]
 static MARK: Mark = Mark(UnsafeCell::new(MaybeUninit::uninit()));
 
-/// Why the MCU started; clears the reset flags and the mark. Call it once, first thing.
-pub fn take_reset_reason(rcc: &pac::RCC) -> ResetReason {
-    let rsr = rcc.rsr.read().bits();
-    // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned in RAM; no other
-    // code runs yet.
-    let mark = unsafe { core::ptr::read_volatile(MARK.0.get() as *const u32) };
-    // SAFETY: as above.
-    unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, 0) };
-    rcc.rsr.modify(|_, w| w.rmvf().clear());
-    ResetReason::decode(rsr, mark)
+/// [`MARK`] as board-core's no-init word.
+struct MarkWord;
+
+impl NoInitWord for MarkWord {
+    fn read(&self) -> u32 {
+        // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned in RAM; see
+        // `Mark` for who accesses it when.
+        unsafe { core::ptr::read_volatile(MARK.0.get() as *const u32) }
+    }
+    fn write(&mut self, value: u32) {
+        // SAFETY: as for `read`.
+        unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, value) }
+    }
 }
 
-/// Core cycles between two feeds of the watchdog in [`off_bus`] (10 ms at 480 MHz).
+/// Why the MCU started, and `RCC_RSR` as it was; clears the reset flags and the mark (after a
+/// power-on or a brown-out the mark is written before it is read: board-core's
+/// `uninit::take`). Call it once, first thing.
+pub fn take_reset_reason(rcc: &pac::RCC) -> (ResetReason, u32) {
+    let rsr = rcc.rsr.read().bits();
+    let mark = uninit::take(&mut MarkWord, rsr);
+    rcc.rsr.modify(|_, w| w.rmvf().clear());
+    (ResetReason::decode(rsr, mark), rsr)
+}
+
+/// Core cycles between two feeds of the watchdog in [`off_bus`] (10 ms at 480 MHz, 12 ms at
+/// 400 MHz).
 const FEED_CYCLES: u32 = 4_800_000;
 
-/// CAN output off, fault pin high, `mark` left in the no-init word.
-fn signal(mark: u32) {
-    fdcan1::silence();
-    // SAFETY: a single write of the port's set/reset register (bit-set only: no other pin
-    // changes); GPIOB's clock is on and PB14 is a push-pull output since start-up.
-    unsafe { (*pac::GPIOB::ptr()).bsrr.write(|w| w.bs14().set_bit()) };
-    // SAFETY: see `MARK`; nothing reads it before the next start-up.
-    unsafe { core::ptr::write_volatile(MARK.0.get() as *mut u32, mark) };
+/// `RCC_AHB4ENR`: the clocks of GPIOB (bit 1) and GPIOD (bit 3).
+const AHB4ENR_GPIOB_GPIOD: u32 = (1 << 1) | (1 << 3);
+/// PD1: FDCAN1 TX.
+const CAN_TX_PIN: u32 = 1;
+/// PB14: the fault pin.
+const FAULT_PIN: u32 = 14;
+
+/// Makes pin `n` of `port` a push-pull output driven high: the level first (`BSRR`), then the
+/// output type and the mode, so that it is high from the moment it is an output.
+fn drive_high(port: &pac::gpioa::RegisterBlock, n: u32) {
+    // SAFETY: `BSRR` sets only pin `n`'s output bit; `OTYPER` and `MODER` change only pin
+    // `n`'s bits (read-modify-write with interrupts off, the fault path being the only code
+    // running). Every value is a valid bit pattern of these registers.
+    unsafe {
+        port.bsrr.write(|w| w.bits(1 << n));
+        port.otyper.modify(|r, w| w.bits(r.bits() & !(1 << n)));
+        port.moder
+            .modify(|r, w| w.bits((r.bits() & !(0b11 << (2 * n))) | (0b01 << (2 * n))));
+    }
 }
 
-/// Silences the CAN output, raises the fault pin, leaves `mark` and resets the MCU.
+/// The board's side of board-core's safe state: PD1, the no-init mark, PB14, FDCAN1, the
+/// system reset.
+struct BoardSafeState;
+
+impl SafeStateHw for BoardSafeState {
+    fn can_tx_recessive(&mut self) {
+        // SAFETY: RCC_AHB4ENR gets the two GPIO clocks set (nothing cleared), so that the pins
+        // can be driven even from a fault before `main` configured them; then PD1 leaves
+        // FDCAN1 (its alternate function) for a GPIO output driven high: recessive at the
+        // transceiver.
+        let rcc = unsafe { &*pac::RCC::ptr() };
+        // SAFETY: setting clock-enable bits only.
+        rcc.ahb4enr
+            .modify(|r, w| unsafe { w.bits(r.bits() | AHB4ENR_GPIOB_GPIOD) });
+        // SAFETY: GPIOD's register block at its fixed address; see `drive_high`.
+        drive_high(unsafe { &*pac::GPIOD::ptr() }, CAN_TX_PIN);
+    }
+
+    fn write_mark(&mut self, mark: u32) {
+        // Nothing reads it before the next start-up.
+        MarkWord.write(mark);
+    }
+
+    fn raise_fault_pin(&mut self) {
+        // SAFETY: GPIOB's register block at its fixed address (clock on since
+        // `can_tx_recessive`); see `drive_high`.
+        drive_high(unsafe { &*pac::GPIOB::ptr() }, FAULT_PIN);
+    }
+
+    fn silence_fdcan(&mut self) {
+        fdcan1::silence();
+    }
+
+    fn reset(&mut self) -> ! {
+        cortex_m::peripheral::SCB::sys_reset()
+    }
+}
+
+/// Silences the CAN output, leaves `mark`, raises the fault pin, stops FDCAN1 and resets the
+/// MCU at once (board-core's `safe_state::fail_safe`).
 pub fn fail_safe(mark: u32) -> ! {
     cortex_m::interrupt::disable();
-    signal(mark);
-    cortex_m::asm::delay(HOLD_CYCLES);
-    cortex_m::peripheral::SCB::sys_reset()
+    safe_state::fail_safe(&mut BoardSafeState, mark)
 }
 
-/// FDCAN1's bring-up failed (`err`): the node does not join the bus. CAN output off, fault
-/// pin high, the fault mark left, one error line (the RTT ring keeps it for a probe that
-/// attaches later); then, for ever, the watchdog fed (no reset loop). Call it once the fault
-/// pin is configured.
+/// Feeds of the watchdog in [`off_bus`] between two error lines (one a second).
+const FEEDS_PER_LINE: u32 = 100;
+
+/// FDCAN1's bring-up failed (`err`): the node does not join the bus. CAN output off (PD1
+/// recessive, FDCAN1 in `INIT`), fault pin high, the fault mark left (board-core's
+/// `safe_state::signal`); then, for ever, the watchdog fed every 10 ms (no reset loop) and an
+/// error line every second (the RTT ring keeps the latest for a probe that attaches later).
 pub fn off_bus(watchdog: &mut IndependentWatchdog, err: BringUpError) -> ! {
-    signal(MARK_FAULT);
+    safe_state::signal(&mut BoardSafeState, MARK_FAULT);
     let (what, detail) = err.describe();
-    defmt::error!(
-        "FDCAN1 configuration did not read back ({=str}, {=u32:#x}): off the bus",
-        what,
-        detail
-    );
+    let mut feeds = 0u32;
     loop {
+        if feeds == 0 {
+            defmt::error!(
+                "FDCAN1 configuration did not read back ({=str}, {=u32:#x}): off the bus",
+                what,
+                detail
+            );
+            feeds = FEEDS_PER_LINE;
+        }
+        feeds -= 1;
         cortex_m::asm::delay(FEED_CYCLES);
         watchdog.feed();
     }

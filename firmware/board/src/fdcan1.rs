@@ -6,14 +6,14 @@
 //! Everything else is board-core's, written once and host-tested against a register-level
 //! model of FDCAN1 (`board-core/tests/fdcan_model.rs`): the configuration (bit timing,
 //! message RAM layout, acceptance filters, `GFC`), its read-back, the layout
-//! (`board_core::fdcan::layout`: 4 standard filter elements, RX FIFO0 64 elements, RX FIFO1 8
-//! elements for `ESTOP`, 32 dedicated TX buffers) and the run-time accesses
+//! (`board_core::fdcan::layout`: 4 standard filter elements, RX FIFO0 64 elements, RX FIFO1 16
+//! elements for `ESTOP`, 16 dedicated TX buffers for the streams, a TX FIFO of 16 for the `ACK`s) and the run-time accesses
 //! (`board_core::fdcan::RegFdcan`). FDCAN1's part of the shared 10 KiB message RAM is its
 //! first 1,024 words, from 0x4000_AC00.
 
 #![allow(unsafe_code)]
 
-use board_core::fdcan::{self, BringUpError, FdcanRegs, Reg, RegFdcan, RAM_WORDS};
+use board_core::fdcan::{self, BitTiming, BringUpError, FdcanRegs, Reg, RegFdcan, RAM_WORDS};
 use board_core::Fdcan;
 use stm32h7xx_hal::pac;
 
@@ -61,17 +61,19 @@ impl FdcanRegs for Fdcan1Regs {
     }
 }
 
-/// Configures FDCAN1 (`board_core::fdcan::bring_up`: configuration mode, bit timing,
+/// Configures FDCAN1 (`board_core::fdcan::bring_up`: configuration mode, the bit timing
+/// `timing` (the board's setting),
 /// message RAM layout, filters, `GFC`, every value read back) and joins the bus only if all
 /// of it reads back as written; otherwise the core stays in its initialisation state, off
 /// the bus. Takes the PAC's FDCAN1: nothing else configures it. Call it with FDCAN1's
 /// clocks on (RCC) and its pins in their alternate function.
-pub fn bring_up(_fdcan1: pac::FDCAN1) -> Result<(), BringUpError> {
-    fdcan::bring_up(&mut Fdcan1Regs { _private: () })
+pub fn bring_up(_fdcan1: pac::FDCAN1, timing: &BitTiming) -> Result<(), BringUpError> {
+    fdcan::bring_up(&mut Fdcan1Regs { _private: () }, timing)
 }
 
-/// Stops FDCAN1 sending (fault handler): the core enters its initialisation state, the pins
-/// stay recessive, and every pending TX buffer is cancelled. Works from any context.
+/// Stops FDCAN1 sending (the safe state's FDCAN step, after PD1 was taken as a recessive
+/// GPIO): the core is asked into its initialisation state and every pending TX buffer is
+/// cancelled. Takes effect only while FDCAN1's clocks run.
 pub fn silence() {
     fdcan::silence(&mut Fdcan1Regs { _private: () });
 }
@@ -103,6 +105,9 @@ impl Fdcan for Fdcan1 {
     fn tx_start(&mut self, slot: usize, element: &[u32; 4]) {
         self.0.tx_start(slot, element)
     }
+    fn tx_fifo_put(&mut self, element: &[u32; 4]) -> bool {
+        self.0.tx_fifo_put(element)
+    }
     fn tx_cancel(&mut self, mask: u32) {
         self.0.tx_cancel(mask)
     }
@@ -117,5 +122,8 @@ impl Fdcan for Fdcan1 {
     }
     fn leave_init(&mut self) {
         self.0.leave_init()
+    }
+    fn take_ram_failure(&mut self) -> bool {
+        self.0.take_ram_failure()
     }
 }

@@ -9,6 +9,7 @@ use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
 
 use board_core::bor::{self, BorPlan, BorStatus};
+use board_core::uninit::{self, NoInitWord};
 use cortex_m::peripheral::DWT;
 use stm32h7xx_hal::pac;
 
@@ -28,20 +29,66 @@ struct Word(UnsafeCell<MaybeUninit<u32>>);
 // else could touch it (no interrupts are enabled; the fault handler does not use it).
 unsafe impl Sync for Word {}
 
-/// Survives every reset but a power-on (DTCM keeps its contents; `.uninit` is not zeroed):
-/// board-core's `bor` mark of an attempt to change the brown-out level, so that a failed or
-/// interrupted change is not tried again at every boot.
+/// Survives every reset but a power-on or a brown-out (DTCM keeps its contents; `.uninit` is
+/// not zeroed): board-core's `bor` mark of an attempt to change the brown-out level, so that a
+/// failed or interrupted change is not tried again at every boot. Written 0 before any read
+/// after a loss of supply ([`prepare_bor_mark`]: ECC RAM).
 #[link_section = ".uninit.BOR_MARK"]
 static BOR_MARK: Word = Word(UnsafeCell::new(MaybeUninit::uninit()));
 
+/// [`BOR_MARK`] as board-core's no-init word.
+struct BorWord;
+
+impl NoInitWord for BorWord {
+    fn read(&self) -> u32 {
+        // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned RAM; see
+        // `Word`.
+        unsafe { core::ptr::read_volatile(BOR_MARK.0.get() as *const u32) }
+    }
+    fn write(&mut self, value: u32) {
+        // SAFETY: as for `read`.
+        unsafe { core::ptr::write_volatile(BOR_MARK.0.get() as *mut u32, value) }
+    }
+}
+
 fn mark() -> u32 {
-    // SAFETY: a `u32` has no invalid bit patterns; the word is 4-byte aligned RAM; see `Word`.
-    unsafe { core::ptr::read_volatile(BOR_MARK.0.get() as *const u32) }
+    BorWord.read()
 }
 
 fn set_mark(value: u32) {
-    // SAFETY: as for `mark`.
-    unsafe { core::ptr::write_volatile(BOR_MARK.0.get() as *mut u32, value) }
+    BorWord.write(value)
+}
+
+/// Writes the brown-out mark before anything reads it if the supply was lost (`rsr`: `RCC_RSR`
+/// at start-up; board-core's `uninit::prepare`). Call it before [`ensure_bor_level`].
+pub fn prepare_bor_mark(rsr: u32) {
+    uninit::prepare(&mut BorWord, rsr);
+}
+
+/// The longest wait for `HSERDY` \[core cycles\]: 10 ms at the reset clock (HSI, 64 MHz), a
+/// crystal's start-up being a few ms; well inside the 50 ms watchdog.
+const HSE_WAIT_CYCLES: u32 = 640_000;
+
+/// Starts the HSE (`HSEBYP` for an external clock, set while the HSE is off, then `HSEON`) and
+/// waits for `HSERDY` at most [`HSE_WAIT_CYCLES`] (DWT, or as many polls should the counter
+/// not run); `false` if it did not become ready. The HAL's clock set-up then finds it ready
+/// (its own wait is unbounded). Call it with the DWT cycle counter running.
+pub fn start_hse(rcc: &pac::RCC, bypass: bool) -> bool {
+    if rcc.cr.read().hseon().is_off() {
+        rcc.cr.modify(|_, w| w.hsebyp().bit(bypass));
+    }
+    rcc.cr.modify(|_, w| w.hseon().on());
+    let t0 = DWT::cycle_count();
+    let mut polls = 0u32;
+    loop {
+        if rcc.cr.read().hserdy().is_ready() {
+            return true;
+        }
+        polls += 1;
+        if DWT::cycle_count().wrapping_sub(t0) > HSE_WAIT_CYCLES || polls > HSE_WAIT_CYCLES {
+            return false;
+        }
+    }
 }
 
 /// The brown-out level in force (`FLASH_OPTSR_CUR.BOR_LEV`).

@@ -44,6 +44,8 @@ struct ControlBlock {
 // SAFETY: the pointers are to statics; the offsets are atomics; the rest is never written.
 unsafe impl Sync for ControlBlock {}
 
+/// Word-aligned, so that [`prepare_ring`] writes whole words (ECC RAM).
+#[repr(C, align(4))]
 struct Ring(UnsafeCell<[u8; RING]>);
 // SAFETY: written only by the logger with interrupts disabled; read by the probe.
 unsafe impl Sync for Ring {}
@@ -87,6 +89,24 @@ static STATE: Shared = Shared(UnsafeCell::new(State {
 }));
 
 static DROPPED: AtomicU32 = AtomicU32::new(0);
+
+/// Writes the whole ring (zeros, word by word) if the supply was lost (`rsr`: `RCC_RSR` at
+/// start-up; board-core's `uninit::power_lost`): ECC RAM never written since power-on may
+/// report an error when read (by the probe) or when a byte of it is written (a
+/// read-modify-write of its word). Call it before the first log call.
+// The no-panic check includes this module but not the start-up that calls this.
+#[allow(dead_code)]
+pub fn prepare_ring(rsr: u32) {
+    if !board_core::uninit::power_lost(rsr) {
+        return;
+    }
+    let words = RING_BUF.0.get() as *mut u32;
+    for i in 0..RING / 4 {
+        // SAFETY: `RING_BUF` is `RING` bytes, 4-byte aligned (`Ring`); word `i` < RING / 4 is
+        // inside it; no log call has run yet (start-up, single-threaded).
+        unsafe { core::ptr::write_volatile(words.add(i), 0) };
+    }
+}
 
 /// Log frames dropped since start-up (ring full, frame too long, or nested).
 pub fn dropped() -> u32 {

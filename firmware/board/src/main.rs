@@ -1,11 +1,15 @@
 //! The STM32H743 image: board set-up, then the CAN node in fixed 5 ms slots.
 //!
-//! * board settings ([`HSE`], [`BOR_LEVEL`], [`WATCHDOG_MS`]) at the top of this file;
-//! * start-up: the reset reason (`RCC_RSR` and the fault handler's mark, [`fault`]), the
+//! * board settings ([`HSE`], [`CAN_BIT_TIMING`], [`BOR_LEVEL`], [`WATCHDOG_MS`]) at the top
+//!   of this file;
+//! * start-up: the reset reason (`RCC_RSR` and the fault handler's mark, [`fault`]; after a
+//!   power-on or a brown-out every no-init word is written before it is read: ECC RAM), the
 //!   brown-out level (an option byte, programmed once, BEFORE the watchdog runs: the change
 //!   stalls the core for a long time; its result checked, a failure not retried until a
-//!   power-on: [`hw::ensure_bor_level`]), the independent watchdog, then the clocks: 480 MHz
-//!   from the **HSE** through PLL1 (VOS0, rev V silicon), the HSE clock security system on
+//!   power-on: [`hw::ensure_bor_level`]), the independent watchdog, the HSE (its ready wait
+//!   bounded: [`hw::start_hse`]; a timeout is a fault with its own mark), then the clocks from
+//!   the **HSE** through PLL1: 480 MHz at VOS0 on revision V silicon, 400 MHz at VOS1 on any
+//!   other (`DBGMCU_IDC.REV_ID`, board-core's `ClockPlan`), the HSE clock security system on
 //!   (its NMI is the safe state), I- and D-cache; PLL1Q = 80 MHz is the FDCAN kernel clock;
 //! * FDCAN1 in classic CAN mode at 1 Mbit/s on the pins of a Nucleo-H743ZI's CN9 (PD0 = RX,
 //!   PD1 = TX, AF9), configured by board-core's register code (`board_core::fdcan`: bit
@@ -55,8 +59,10 @@ mod hw;
 mod logger;
 mod stack;
 
+use board_core::clock::ClockPlan;
 use board_core::control::{BusyPin, ControlLoop, Io};
-use board_core::fdcan::BIT_TIMING;
+use board_core::fdcan::BitTiming;
+use board_core::reset::MARK_HSE;
 use board_core::{cycle, Link, Pacer};
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
@@ -87,6 +93,16 @@ pub enum Hse {
 /// The HSE of this board: NUCLEO-H743ZI2, ST-LINK MCO at 8 MHz. A robot board with a crystal:
 /// `Hse::Crystal(its frequency)`; the PLL set-up below derives 480 MHz and 80 MHz from it.
 pub const HSE: Hse = Hse::Bypass(8_000_000);
+/// CAN nominal bit timing (a board setting: it must suit the bus's other nodes): 1 Mbit/s from
+/// the 80 MHz FDCAN kernel clock (PLL1Q): prescaler 2 gives 40 time quanta per bit, 1 (sync) +
+/// 34 + 5, sample point 35/40 = 87.5 %, SJW 5. A bus whose nodes sample elsewhere (e.g. 75 %
+/// at 1 Mbit/s) needs `seg1`/`seg2` moved to match.
+pub const CAN_BIT_TIMING: BitTiming = BitTiming {
+    prescaler: 2,
+    seg1: 34,
+    seg2: 5,
+    sjw: 5,
+};
 /// Brown-out reset level (`BOR_LEV`): 3 = about 2.7 V rising (datasheet VBOR3), for a 3.3 V
 /// supply; programmed into the option bytes once if different (a failed change is not retried
 /// until a power-on).
@@ -95,8 +111,6 @@ pub const BOR_LEVEL: u8 = 3;
 /// over temperature: 47.6-53.8 ms).
 pub const WATCHDOG_MS: u32 = 50;
 
-/// System clock \[Hz\].
-const SYSCLK_HZ: u32 = 480_000_000;
 /// FDCAN kernel clock (PLL1Q = VCO 960 MHz / 12) \[Hz\].
 const FDCAN_KER_HZ: u32 = 80_000_000;
 /// Control cycle \[Hz\] (5 ms).
@@ -105,15 +119,14 @@ const CYCLE_HZ: u32 = 200;
 const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
 /// Control cycle in ticks of the microsecond counter.
 const PERIOD_US: u32 = 1_000_000 / CYCLE_HZ;
-/// Core cycles in one control cycle.
-const PERIOD_CYCLES: u32 = SYSCLK_HZ / CYCLE_HZ;
 /// Footstep queue capacity of the node.
 const QUEUE: usize = 16;
 // A summary every second.
 const _: () = assert!(cycle::SUMMARY_EVERY == CYCLE_HZ);
 
-// board-core's bit timing assumes exactly this kernel clock (checked at run time below too).
-const _: () = assert!(BIT_TIMING.bit_rate(FDCAN_KER_HZ) == 1_000_000);
+// The bit timing assumes exactly this kernel clock (checked at run time below too).
+const _: () = assert!(CAN_BIT_TIMING.is_valid());
+const _: () = assert!(CAN_BIT_TIMING.bit_rate(FDCAN_KER_HZ) == 1_000_000);
 
 /// The busy pin: the HAL's push-pull output behind board-core's [`BusyPin`].
 struct Busy<const P: char, const N: u8>(Pin<P, N, Output<PushPull>>);
@@ -153,9 +166,14 @@ fn main() -> ! {
 
     // Nothing accessible below the stack: an overflow faults at once, into the safe state.
     let guarded = hw::guard_below_stack(&mut cp.MPU);
-    // Why we started (before anything can reset again).
-    let reset = fault::take_reset_reason(&dp.RCC);
-    // Cycle counter (the Cortex-M7's DWT has a software lock): it bounds the option-byte wait.
+    // Why we started (before anything can reset again). After a power-on or a brown-out every
+    // no-init word is written before it is read (ECC RAM): the fault mark here, then the BOR
+    // mark and the logger's ring.
+    let (reset, rsr) = fault::take_reset_reason(&dp.RCC);
+    hw::prepare_bor_mark(rsr);
+    logger::prepare_ring(rsr);
+    // Cycle counter (the Cortex-M7's DWT has a software lock): it bounds the option-byte and
+    // HSE waits.
     cp.DCB.enable_trace();
     DWT::unlock();
     cp.DWT.enable_cycle_counter();
@@ -168,17 +186,25 @@ fn main() -> ! {
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.start(WATCHDOG_MS.millis());
 
-    // 480 MHz needs voltage scale 0, and a wide-range VCO (960 MHz): the PLL's default
-    // ("normal") strategy stays in the 150-420 MHz medium range and cannot reach it. The HAL
-    // waits for the HSE to be ready: without it, the watchdog resets the board.
-    let pwrcfg = dp.PWR.constrain().vos0(&dp.SYSCFG).freeze();
+    // The HSE first, bounded: one that does not become ready (no MCO, no crystal, or
+    // `Hse::Bypass` on a board with a crystal) is a fault with its own mark (reset reason
+    // `hse_not_ready`, the fault pin pulsed), not silent watchdog resets.
+    if !hw::start_hse(&dp.RCC, matches!(HSE, Hse::Bypass(_))) {
+        fault::fail_safe(MARK_HSE);
+    }
+    // 480 MHz needs voltage scale 0, which only revision V silicon has (board-core's
+    // `ClockPlan`: other revisions run 400 MHz at VOS1), and a wide-range VCO: the PLL's
+    // default ("normal") strategy stays in the 150-420 MHz medium range.
+    let plan = ClockPlan::for_revision(ClockPlan::rev_id(dp.DBGMCU.idc.read().bits()));
+    let pwr = dp.PWR.constrain();
+    let pwrcfg = if plan.vos0 { pwr.vos0(&dp.SYSCFG) } else { pwr }.freeze();
     let rcc = match HSE {
         Hse::Bypass(hz) => dp.RCC.constrain().use_hse(hz.Hz()).bypass_hse(),
         Hse::Crystal(hz) => dp.RCC.constrain().use_hse(hz.Hz()),
     };
     let ccdr = rcc
         .pll1_strategy(PllConfigStrategy::Iterative)
-        .sys_ck(SYSCLK_HZ.Hz())
+        .sys_ck(plan.sysclk_hz.Hz())
         .pll1_q_ck(FDCAN_KER_HZ.Hz())
         .freeze(pwrcfg, &dp.SYSCFG);
     hw::enable_css();
@@ -212,7 +238,7 @@ fn main() -> ! {
         .enable()
         .reset();
     watchdog.feed();
-    let can = fdcan1::bring_up(dp.FDCAN1);
+    let can = fdcan1::bring_up(dp.FDCAN1, &CAN_BIT_TIMING);
 
     defmt::info!(
         "reset: {=u8}; sysclk {=u32} Hz from HSE; BOR level {=u8}{=str}; CAN 1 Mbit/s on PD0/PD1 {=str}; stack guard {=bool}",
@@ -279,7 +305,8 @@ fn main() -> ! {
             log: cycle_log::DefmtLog,
         },
         pacer,
-        PERIOD_CYCLES,
+        // Core cycles in one control cycle.
+        plan.sysclk_hz / CYCLE_HZ,
         reset,
     );
     // board-core's control cycle: wait (servicing the link), link health, the timed poll, the

@@ -45,11 +45,10 @@
 //! register writes and a reset). Nor what is not a panic: stack overflow, integer overflow
 //! (wraps in release builds), NaN.
 //!
-//! History: before the board's own FDCAN accesses, this build did not link: the `fdcan` 0.2.1
-//! driver's `Mailbox::new` `unreachable!()` on hardware indices and its filter-slot
-//! conversions, and defmt-rtt's reentrancy panics, were reachable; the check then covered a
-//! scope without them, still available as `--features scoped` (`mock-can`: arbitrary frames
-//! instead of the adapter; `no-log`: without the log calls).
+//! A narrower scope is available as `--features scoped` (`mock-can`: arbitrary frames instead
+//! of the adapter; `no-log`: without the log calls), for when a dependency brings a reachable
+//! panic (as the `fdcan` 0.2.1 driver's `Mailbox::new` `unreachable!()` on hardware indices
+//! and defmt-rtt's reentrancy panics do; the board uses neither).
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]

@@ -142,10 +142,12 @@ pub fn guard_below_stack() -> bool {
 // overflow`) and expects the `FAULT` line.
 board_core::fault_entry!(HardFault => hard_fault);
 
-/// A fault ends the run with exit code 1 and a `FAULT hardfault sp=… overflow=…` line
-/// (`overflow=1`: the stack pointer at the fault was below the stack region) instead of
-/// cortex-m-rt's default endless loop, which would only show as a timeout; with the faulting
-/// code's `pc` and `lr` when its exception frame was stacked inside the stack region.
+/// A fault prints a `FAULT hardfault sp=… overflow=…` line (`overflow=1`: the stack pointer
+/// at the fault was below the stack region; with the faulting code's `pc` and `lr` when its
+/// exception frame was stacked inside the stack region), then runs the board's safe state,
+/// board-core's `safe_state::fail_safe`, over QEMU stand-ins ([`QemuSafeState`]: each step
+/// prints a `SAFE step=…` line, the reset ends the run with exit code 1) instead of
+/// cortex-m-rt's default endless loop, which would only show as a timeout.
 extern "C" fn hard_fault(sp: u32) -> ! {
     // SAFETY: FPCCR (0xE000_EF34), an architectural register of the FPU; reading it has no
     // side effect. Bit 0 (LSPACT) must be clear: the entry dropped the lazy save into the
@@ -178,8 +180,34 @@ extern "C" fn hard_fault(sp: u32) -> ! {
             lspact
         );
     }
-    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
+    board_core::safe_state::fail_safe(&mut QemuSafeState, board_core::reset::MARK_FAULT)
+}
+
+/// The safe state's steps on the QEMU image: the MPS2 board has no CAN, no fault pin and no
+/// reset mark, so each step prints what it stands for (`SAFE step=tx_recessive`,
+/// `SAFE step=mark mark=0x…`, `SAFE step=fault_pin`, `SAFE step=fdcan`, `SAFE step=reset`), in
+/// the order board-core calls them; the reset ends the run with exit code 1.
+/// `tests/tests/qemu.rs` checks the order after a stack overflow.
+struct QemuSafeState;
+
+impl board_core::safe_state::SafeStateHw for QemuSafeState {
+    fn can_tx_recessive(&mut self) {
+        cortex_m_semihosting::hprintln!("SAFE step=tx_recessive");
+    }
+    fn write_mark(&mut self, mark: u32) {
+        cortex_m_semihosting::hprintln!("SAFE step=mark mark={:#010x}", mark);
+    }
+    fn raise_fault_pin(&mut self) {
+        cortex_m_semihosting::hprintln!("SAFE step=fault_pin");
+    }
+    fn silence_fdcan(&mut self) {
+        cortex_m_semihosting::hprintln!("SAFE step=fdcan");
+    }
+    fn reset(&mut self) -> ! {
+        cortex_m_semihosting::hprintln!("SAFE step=reset");
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+        loop {
+            cortex_m::asm::wfi();
+        }
     }
 }

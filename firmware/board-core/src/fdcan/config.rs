@@ -1,12 +1,12 @@
-//! The board's FDCAN configuration and its bring-up: bit timing, message RAM layout,
-//! acceptance filters, the register values ([`CONFIG`]), and the sequence that writes them in
-//! configuration mode, reads every one back and joins the bus only if all agree
-//! ([`bring_up`]); [`silence`] takes the core off the bus again.
+//! The board's FDCAN configuration and its bring-up: message RAM layout, acceptance filters,
+//! the register values ([`config`], for the nominal bit timing the board sets: [`BitTiming`]),
+//! and the sequence that writes them in configuration mode, reads every one back and joins
+//! the bus only if all agree ([`bring_up`]); [`silence`] takes the core off the bus again.
 
 use planner_core::wire::ids;
 
 use super::regs::{cccr, field, ir, FdcanRegs, Reg, ENDN_VALUE, RAM_WORDS};
-use crate::link::{RX_ELEMENTS, TX_SLOTS};
+use crate::link::{RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 
 /// Nominal bit timing in time quanta.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,18 +31,24 @@ impl BitTiming {
     pub const fn nbtp(&self) -> u32 {
         field::nbtp(self.prescaler, self.seg1, self.seg2, self.sjw)
     }
-}
 
-/// The board's timing: 1 Mbit/s from the 80 MHz kernel clock (PLL1Q): prescaler 2 gives 40
-/// time quanta per bit, 1 (sync) + 34 + 5, sample point 35/40 = 87.5 % (CiA 301), SJW 5.
-pub const BIT_TIMING: BitTiming = BitTiming {
-    prescaler: 2,
-    seg1: 34,
-    seg2: 5,
-    sjw: 5,
-};
-const _: () = assert!(BIT_TIMING.bit_rate(80_000_000) == 1_000_000);
-const _: () = assert!(BIT_TIMING.sjw <= BIT_TIMING.seg2);
+    /// The sample point in per mille of the bit (after sync and `seg1`).
+    pub const fn sample_point_permille(&self) -> u32 {
+        1000 * (1 + self.seg1) / (1 + self.seg1 + self.seg2)
+    }
+
+    /// `true` if every field is within `NBTP`'s range and `sjw` ≤ `seg2`.
+    pub const fn is_valid(&self) -> bool {
+        self.prescaler >= 1
+            && self.prescaler <= 512
+            && self.seg1 >= 1
+            && self.seg1 <= 256
+            && self.seg2 >= 1
+            && self.seg2 <= 128
+            && self.sjw >= 1
+            && self.sjw <= self.seg2
+    }
+}
 
 /// Elements of RX FIFO1, which receives only `ESTOP` (read before everything else at every
 /// receive: more `ESTOP`s than the node takes in a cycle).
@@ -57,13 +63,14 @@ pub const RX1_ELEMENTS: usize = 16;
 /// | —         | no extended filter elements (XIDFC.LSE = 0, its start address at word 4) |
 /// | 4 … 259   | RX FIFO0: [`RX_ELEMENTS`] elements, blocking (the commands but `ESTOP`) |
 /// | 260 … 323 | RX FIFO1: [`RX1_ELEMENTS`] elements, blocking (`ESTOP`) |
-/// | 324 … 451 | [`TX_SLOTS`] dedicated TX buffers |
+/// | 324 … 387 | [`TX_SLOTS`] dedicated TX buffers (buffers 0 … 15: the stream frames) |
+/// | 388 … 451 | the TX FIFO, [`TX_FIFO`] elements (buffers 16 … 31: the `ACK`s, in order) |
 ///
-/// No RX buffers, no TX FIFO/queue, no TX event FIFO. The rest of the message RAM is not
+/// No RX buffers, no TX event FIFO. The rest of the message RAM is not
 /// initialised (a reset does not): the core reads only the filter elements before they are
 /// written (it writes the RX elements itself, the adapter each TX buffer before requesting it).
 pub mod layout {
-    use super::{RX1_ELEMENTS, RX_ELEMENTS, STD_FILTER_COUNT, TX_SLOTS};
+    use super::{RX1_ELEMENTS, RX_ELEMENTS, STD_FILTER_COUNT, TX_FIFO, TX_SLOTS};
 
     /// Words of an element with an 8-byte data field (2 header words, 2 data words).
     pub const ELEMENT_WORDS: u32 = 4;
@@ -75,13 +82,13 @@ pub mod layout {
     pub const RX_FIFO0: u32 = EXT_FILTERS;
     /// RX FIFO1.
     pub const RX_FIFO1: u32 = RX_FIFO0 + ELEMENT_WORDS * RX_ELEMENTS as u32;
-    /// The dedicated TX buffers.
+    /// The TX buffers: the dedicated ones, then the TX FIFO's (one section, `TXBC.TBSA`).
     pub const TX_BUFFERS: u32 = RX_FIFO1 + ELEMENT_WORDS * RX1_ELEMENTS as u32;
     /// The first word after the layout.
-    pub const END: u32 = TX_BUFFERS + ELEMENT_WORDS * TX_SLOTS as u32;
+    pub const END: u32 = TX_BUFFERS + ELEMENT_WORDS * (TX_SLOTS + TX_FIFO) as u32;
 }
 const _: () = assert!(layout::END <= RAM_WORDS);
-const _: () = assert!(RX_ELEMENTS <= 64 && RX1_ELEMENTS <= 64 && TX_SLOTS <= 32);
+const _: () = assert!(RX_ELEMENTS <= 64 && RX1_ELEMENTS <= 64 && TX_SLOTS + TX_FIFO <= 32);
 
 /// Standard filter elements: one per identifier of `ids::COMMANDS`.
 pub const STD_FILTER_COUNT: usize = ids::COMMANDS.len();
@@ -120,37 +127,44 @@ pub const GFC: u32 = field::gfc(field::REJECT, field::REJECT, true, true);
 /// monitoring, restricted, non-ISO mode, edge filtering or transmit pause.
 pub const CCCR_MODE: u32 = cccr::PXHD;
 
-/// Every configuration register the bring-up writes, with its value, in the order written and
-/// read back (`GFC` first: what keeps foreign frames out). `CCCR`'s protected bits
-/// ([`CCCR_MODE`]) are written and checked besides.
-pub const CONFIG: [(Reg, u32); 14] = [
-    (Reg::Gfc, GFC),
-    (Reg::Nbtp, BIT_TIMING.nbtp()),
-    (
-        Reg::Sidfc,
-        field::sidfc(STD_FILTER_COUNT as u32, layout::STD_FILTERS),
-    ),
-    (Reg::Xidfc, field::xidfc(0, layout::EXT_FILTERS)),
-    // Its reset value (all 29 bits compared); unused without extended filters.
-    (Reg::Xidam, 0x1FFF_FFFF),
-    (
-        Reg::Rxf0c,
-        field::rxfc(RX_ELEMENTS as u32, layout::RX_FIFO0),
-    ),
-    (
-        Reg::Rxf1c,
-        field::rxfc(RX1_ELEMENTS as u32, layout::RX_FIFO1),
-    ),
-    (Reg::Rxbc, 0),
-    // 8-byte data fields (code 0) in RX FIFO0, RX FIFO1 and the RX buffers.
-    (Reg::Rxesc, 0),
-    (Reg::Txbc, field::txbc(TX_SLOTS as u32, layout::TX_BUFFERS)),
-    (Reg::Txesc, 0),
-    (Reg::Txefc, 0),
-    // No interrupts: the loop polls.
-    (Reg::Ie, 0),
-    (Reg::Ile, 0),
-];
+/// Every configuration register the bring-up writes, with its value for the nominal bit
+/// timing `timing` (a board setting), in the order written and read back (`GFC` first: what
+/// keeps foreign frames out). `CCCR`'s protected bits ([`CCCR_MODE`]) are written and
+/// checked besides.
+pub const fn config(timing: &BitTiming) -> [(Reg, u32); 14] {
+    [
+        (Reg::Gfc, GFC),
+        (Reg::Nbtp, timing.nbtp()),
+        (
+            Reg::Sidfc,
+            field::sidfc(STD_FILTER_COUNT as u32, layout::STD_FILTERS),
+        ),
+        (Reg::Xidfc, field::xidfc(0, layout::EXT_FILTERS)),
+        // Its reset value (all 29 bits compared); unused without extended filters.
+        (Reg::Xidam, 0x1FFF_FFFF),
+        (
+            Reg::Rxf0c,
+            field::rxfc(RX_ELEMENTS as u32, layout::RX_FIFO0),
+        ),
+        (
+            Reg::Rxf1c,
+            field::rxfc(RX1_ELEMENTS as u32, layout::RX_FIFO1),
+        ),
+        (Reg::Rxbc, 0),
+        // 8-byte data fields (code 0) in RX FIFO0, RX FIFO1 and the RX buffers.
+        (Reg::Rxesc, 0),
+        // Dedicated buffers for the streams, a TX FIFO (TFQM = 0) for the ACKs.
+        (
+            Reg::Txbc,
+            field::txbc(TX_SLOTS as u32, TX_FIFO as u32, layout::TX_BUFFERS),
+        ),
+        (Reg::Txesc, 0),
+        (Reg::Txefc, 0),
+        // No interrupts: the loop polls.
+        (Reg::Ie, 0),
+        (Reg::Ile, 0),
+    ]
+}
 
 /// Reads of `CCCR` a wait for `INIT` takes at most (an APB read is some tens of core cycles:
 /// a few ms at 480 MHz, well inside the watchdog period).
@@ -203,14 +217,14 @@ fn wait_init<R: FdcanRegs>(regs: &R, set: bool) -> bool {
     false
 }
 
-/// The whole bring-up: [`configure`], [`verify`], [`join`], then [`verify`] once more on the
-/// bus; on any error the core is left in (or put back into) its initialisation state, off
-/// the bus ([`silence`]).
-pub fn bring_up<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
-    let done = configure(regs)
-        .and_then(|()| verify(regs))
+/// The whole bring-up with the nominal bit timing `timing`: [`configure`], [`verify`],
+/// [`join`], then [`verify`] once more on the bus; on any error the core is left in (or put
+/// back into) its initialisation state, off the bus ([`silence`]).
+pub fn bring_up<R: FdcanRegs>(regs: &mut R, timing: &BitTiming) -> Result<(), BringUpError> {
+    let done = configure(regs, timing)
+        .and_then(|()| verify(regs, timing))
         .and_then(|()| join(regs))
-        .and_then(|()| verify(regs));
+        .and_then(|()| verify(regs, timing));
     if done.is_err() {
         silence(regs);
     }
@@ -219,7 +233,7 @@ pub fn bring_up<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
 
 /// Configuration mode, then every configuration register and the standard filter list; the
 /// interrupt flags cleared. The core stays in configuration mode (`INIT` = `CCE` = 1).
-pub fn configure<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
+pub fn configure<R: FdcanRegs>(regs: &mut R, timing: &BitTiming) -> Result<(), BringUpError> {
     if regs.read(Reg::Endn) != ENDN_VALUE {
         return Err(BringUpError::NotFdcan);
     }
@@ -240,17 +254,17 @@ pub fn configure<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
     for (w, f) in (layout::STD_FILTERS..).zip(STD_FILTERS) {
         regs.ram_write(w, f);
     }
-    for (reg, value) in CONFIG {
+    for (reg, value) in config(timing) {
         regs.write(reg, value);
     }
     regs.write(Reg::Ir, ir::ALL);
     Ok(())
 }
 
-/// Reads back every configuration register of [`CONFIG`], `CCCR`'s protected bits and every
-/// standard filter element; the first that differs is the error.
-pub fn verify<R: FdcanRegs>(regs: &R) -> Result<(), BringUpError> {
-    for (reg, value) in CONFIG {
+/// Reads back every configuration register of [`config`]`(timing)`, `CCCR`'s protected bits
+/// and every standard filter element; the first that differs is the error.
+pub fn verify<R: FdcanRegs>(regs: &R, timing: &BitTiming) -> Result<(), BringUpError> {
+    for (reg, value) in config(timing) {
         if regs.read(reg) != value {
             return Err(BringUpError::Register(reg));
         }

@@ -1,6 +1,6 @@
 //! The FDCAN at register level, written once for the board and the host tests: the
 //! register-access trait ([`FdcanRegs`], [`Reg`]), the board's configuration and its bring-up
-//! with read-back ([`bring_up`], [`CONFIG`], [`STD_FILTERS`], [`layout`]), the fault path's
+//! with read-back ([`bring_up`], [`config`], [`STD_FILTERS`], [`layout`]), the fault path's
 //! [`silence`], and the link adapter's run-time accesses over the registers ([`RegFdcan`]).
 //!
 //! The board implements [`FdcanRegs`] on FDCAN1 (`firmware/board/src/fdcan1.rs`: volatile
@@ -11,16 +11,15 @@
 //!
 //! No `fdcan` crate: its `into_normal()` re-applies its stored configuration while leaving
 //! the initialisation state, and that configuration never holds the global filter, so `GFC`
-//! was reset to "accept non-matching frames into FIFO0" behind the board's back (see
-//! firmware/README.md).
+//! would be reset to "accept non-matching frames into FIFO0" (see firmware/README.md).
 
 pub mod config;
 pub mod regs;
 pub mod runtime;
 
 pub use config::{
-    bring_up, configure, join, layout, silence, verify, BitTiming, BringUpError, BIT_TIMING,
-    CCCR_MODE, CONFIG, GFC, INIT_WAIT_READS, RX1_ELEMENTS, STD_FILTERS, STD_FILTER_COUNT,
+    bring_up, config, configure, join, layout, silence, verify, BitTiming, BringUpError, CCCR_MODE,
+    GFC, INIT_WAIT_READS, RX1_ELEMENTS, STD_FILTERS, STD_FILTER_COUNT,
 };
 pub use regs::{FdcanRegs, Reg, RAM_WORDS};
 pub use runtime::RegFdcan;

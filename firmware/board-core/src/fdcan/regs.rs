@@ -173,8 +173,25 @@ pub mod ir {
     pub const RF0L: u32 = 1 << 3;
     /// RX FIFO1: a frame was lost (the FIFO was full).
     pub const RF1L: u32 = 1 << 7;
+    /// Message RAM access failure: an RX or TX handler could not access the message RAM in
+    /// time (a TX failure also switches the core into restricted operation mode, `CCCR.ASM`).
+    pub const MRAF: u32 = 1 << 17;
     /// Every flag (bits 29:0).
     pub const ALL: u32 = 0x3FFF_FFFF;
+}
+
+/// Fields of `FDCAN_TXFQS` (RM0433 §56.5.33).
+pub mod txfqs {
+    /// TX FIFO free level (bits 5:0).
+    pub const fn free(status: u32) -> u32 {
+        status & 0x3F
+    }
+    /// TX FIFO put index (bits 20:16): the buffer index the next element goes into.
+    pub const fn put(status: u32) -> u32 {
+        (status >> 16) & 0x1F
+    }
+    /// TX FIFO full (bit 21).
+    pub const FULL: u32 = 1 << 21;
 }
 
 /// Fields of `FDCAN_RXF0S` / `FDCAN_RXF1S` (RM0433 §56.5.24, §56.5.28).
@@ -218,9 +235,10 @@ pub mod field {
     pub const fn rxfc(elements: u32, start_word: u32) -> u32 {
         (elements << 16) | (start_word << 2)
     }
-    /// `TXBC` with dedicated buffers only (no FIFO/queue): NDTB 21:16, TBSA 15:2.
-    pub const fn txbc(buffers: u32, start_word: u32) -> u32 {
-        (buffers << 16) | (start_word << 2)
+    /// `TXBC` with `buffers` dedicated TX buffers followed by a TX FIFO of `fifo` elements
+    /// (`TFQM` = 0: FIFO mode): TFQM 30, TFQS 29:24, NDTB 21:16, TBSA 15:2.
+    pub const fn txbc(buffers: u32, fifo: u32, start_word: u32) -> u32 {
+        (fifo << 24) | (buffers << 16) | (start_word << 2)
     }
     /// A standard filter element (RM0433 §56.4.21): SFT 31:30, SFEC 29:27, SFID1 26:16,
     /// SFID2 10:0.

@@ -2,12 +2,12 @@
 //! message RAM of a configured FDCAN ([`RegFdcan`]), in the layout of [`super::layout`].
 
 use super::config::{layout, RX1_ELEMENTS};
-use super::regs::{cccr, ir, rxfs, FdcanRegs, Reg};
-use crate::link::{Fdcan, RX_ELEMENTS, TX_SLOTS};
+use super::regs::{cccr, ir, rxfs, txfqs, FdcanRegs, Reg};
+use crate::link::{Fdcan, RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 
 /// `link::Fdcan` over an FDCAN brought up by [`super::bring_up`]: RX FIFO0 and FIFO1 read
-/// by their get index and acknowledged, TX buffers written and requested, `PSR`, `ECR` and
-/// `CCCR.INIT`. The board's `Fdcan1` is this over FDCAN1's volatile accesses; the host tests
+/// by their get index and acknowledged, dedicated TX buffers written and requested, the TX
+/// FIFO written at its put index and requested, `PSR`, `ECR` and `CCCR.INIT`. The board's `Fdcan1` is this over FDCAN1's volatile accesses; the host tests
 /// run it over the register model.
 pub struct RegFdcan<R> {
     regs: R,
@@ -85,6 +85,25 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
         self.regs.write(Reg::Txbar, 1 << slot);
     }
 
+    fn tx_fifo_put(&mut self, element: &[u32; 4]) -> bool {
+        let s = self.regs.read(Reg::Txfqs);
+        let put = txfqs::put(s);
+        // Full, or a put index outside the FIFO's buffers (never in hardware): refused.
+        if s & txfqs::FULL != 0
+            || txfqs::free(s) == 0
+            || !(TX_SLOTS as u32..(TX_SLOTS + TX_FIFO) as u32).contains(&put)
+        {
+            return false;
+        }
+        let base = layout::TX_BUFFERS + layout::ELEMENT_WORDS * put;
+        for (w, v) in (base..).zip(element) {
+            self.regs.ram_write(w, *v);
+        }
+        // The request of the put index's buffer advances the put index.
+        self.regs.write(Reg::Txbar, 1 << put);
+        true
+    }
+
     fn tx_cancel(&mut self, mask: u32) {
         self.regs.write(Reg::Txbcr, mask);
     }
@@ -99,6 +118,20 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
 
     fn in_init(&self) -> bool {
         self.regs.read(Reg::Cccr) & cccr::INIT != 0
+    }
+
+    fn take_ram_failure(&mut self) -> bool {
+        let mraf = self.regs.read(Reg::Ir) & ir::MRAF;
+        if mraf != 0 {
+            self.regs.write(Reg::Ir, mraf); // write 1 to clear (only this)
+        }
+        let c = self.regs.read(Reg::Cccr);
+        if c & cccr::ASM != 0 {
+            // Restricted operation left: ASM may be cleared at any time (RM0433 §56.5.6);
+            // nothing else changes.
+            self.regs.write(Reg::Cccr, c & !(cccr::ASM | cccr::CSA));
+        }
+        mraf != 0 || c & cccr::ASM != 0
     }
 
     fn leave_init(&mut self) {

@@ -1,12 +1,12 @@
 //! A model of the FDCAN peripheral behind `board_core::Fdcan`: RX FIFO0 of a given depth that
 //! drops (and flags) frames when full, optionally an RX FIFO1 that takes `ESTOP` (as the
-//! board's filters route it), 32 dedicated TX buffers that the "bus" sends by identifier
-//! priority, cancellation (immediate or deferred), PSR/ECR and CCCR.INIT. (The register-level
+//! board's filters route it), 16 dedicated TX buffers and a TX FIFO of 16 that the "bus"
+//! sends by identifier priority (the FIFO's oldest element competing, as buffer 16), cancellation (immediate or deferred), PSR/ECR and CCCR.INIT. (The register-level
 //! model of the real path is `regmodel`, used by `fdcan_model.rs`.)
 
 use std::collections::VecDeque;
 
-use board_core::link::TX_SLOTS;
+use board_core::link::{TX_FIFO, TX_SLOTS};
 use board_core::{ClassicFrame, Fdcan};
 use embedded_can::{Frame, StandardId};
 use planner_core::wire::ids;
@@ -22,6 +22,8 @@ pub struct MockFdcan {
     /// Elements that arrive at the first `rx_pop` (a burst during the node's poll).
     pub burst: Vec<[u32; 4]>,
     pub slots: [Option<[u32; 4]>; TX_SLOTS],
+    /// The TX FIFO, oldest first.
+    pub fifo: VecDeque<[u32; 4]>,
     /// Cancellations requested and not completed (deferred mode).
     pub cancel_requested: u32,
     pub defer_cancel: bool,
@@ -44,6 +46,7 @@ impl MockFdcan {
             rx_lost_flag: false,
             burst: Vec::new(),
             slots: [None; TX_SLOTS],
+            fifo: VecDeque::new(),
             cancel_requested: 0,
             defer_cancel: false,
             psr: 0,
@@ -75,9 +78,14 @@ impl MockFdcan {
         for _ in 0..n {
             let next = (0..TX_SLOTS)
                 .filter_map(|i| self.slots[i].map(|e| (e[0] >> 18, i)))
+                .chain(self.fifo.front().map(|e| (e[0] >> 18, TX_SLOTS)))
                 .min();
             let Some((_, i)) = next else { return };
-            let e = self.slots[i].take().unwrap();
+            let e = if i == TX_SLOTS {
+                self.fifo.pop_front().unwrap()
+            } else {
+                self.slots[i].take().unwrap()
+            };
             self.cancel_requested &= !(1 << i);
             self.wire.push(ClassicFrame::from_element(&e).unwrap());
         }
@@ -96,7 +104,7 @@ impl MockFdcan {
     }
 
     pub fn pending_count(&self) -> usize {
-        self.slots.iter().filter(|s| s.is_some()).count()
+        self.slots.iter().filter(|s| s.is_some()).count() + self.fifo.len()
     }
 }
 
@@ -129,6 +137,13 @@ impl Fdcan for MockFdcan {
         );
         self.slots[slot] = Some(*element);
     }
+    fn tx_fifo_put(&mut self, element: &[u32; 4]) -> bool {
+        if self.fifo.len() >= TX_FIFO {
+            return false;
+        }
+        self.fifo.push_back(*element);
+        true
+    }
     fn tx_cancel(&mut self, mask: u32) {
         self.cancel_requested |= mask & self.tx_pending();
         if !self.defer_cancel {
@@ -147,6 +162,9 @@ impl Fdcan for MockFdcan {
     fn leave_init(&mut self) {
         self.init = false;
         self.leave_init_calls += 1;
+    }
+    fn take_ram_failure(&mut self) -> bool {
+        false
     }
 }
 

@@ -237,13 +237,75 @@ impl State {
         }
     }
 
+    /// `TXBC`: (NDTB, TFQS, TFQM): dedicated buffers, TX FIFO/queue elements after them,
+    /// queue mode.
+    pub(super) fn txbc_fields(&self) -> (u32, u32, bool) {
+        let txbc = self.regs[idx(TXBC)];
+        (
+            (txbc >> 16) & 0x3F,
+            (txbc >> 24) & 0x3F,
+            txbc & (1 << 30) != 0,
+        )
+    }
+
+    /// The TX FIFO's buffers (bits NDTB … NDTB + TFQS - 1).
+    fn fifo_mask(&self) -> u32 {
+        let (ndtb, tfqs, _) = self.txbc_fields();
+        self.tx_configured() & !((1u64 << ndtb.min(32)) - 1) as u32 & {
+            let end = (ndtb + tfqs).min(32);
+            ((1u64 << end) - 1) as u32
+        }
+    }
+
+    /// Drops cancelled elements at the get index (RM0433: a cancelled request at the get
+    /// index moves it on to the next pending element).
+    fn txq_skip_cancelled(&mut self) {
+        let (ndtb, tfqs, _) = self.txbc_fields();
+        while self.txq_fill > 0 && self.txbrp & (1 << (ndtb + self.txq_get)) == 0 {
+            self.txq_get = (self.txq_get + 1) % tfqs;
+            self.txq_fill -= 1;
+        }
+    }
+
+    /// `TXFQS` (RM0433 §56.5.33): free level 5:0, get index 12:8, put index 20:16, full 21;
+    /// indices are buffer numbers (the FIFO's follow the dedicated buffers).
+    pub(super) fn txfqs(&mut self) -> u32 {
+        let (ndtb, tfqs, _) = self.txbc_fields();
+        if tfqs == 0 {
+            return 0;
+        }
+        self.txq_skip_cancelled();
+        let free = tfqs - self.txq_fill;
+        let get = ndtb + self.txq_get;
+        let put = ndtb + (self.txq_get + self.txq_fill) % tfqs;
+        free | get << 8 | put << 16 | u32::from(free == 0) << 21
+    }
+
     pub(super) fn tx_add(&mut self, v: u32) {
         let cfg = self.tx_configured();
         if v & !cfg != 0 {
             self.violations
                 .push(Violation::UnconfiguredBuffer { bits: v & !cfg });
         }
-        self.txbrp |= v & cfg;
+        let fifo = v & cfg & self.fifo_mask();
+        if fifo != 0 {
+            let (_, _, queue) = self.txbc_fields();
+            if queue {
+                self.violations.push(Violation::QueueModeUnmodelled);
+            }
+            let st = self.txfqs();
+            let put = (st >> 16) & 0x1F;
+            if st & (1 << 21) != 0 {
+                self.violations.push(Violation::FifoFull);
+            } else if fifo != 1 << put {
+                self.violations
+                    .push(Violation::FifoNotAtPutIndex { bits: fifo, put });
+            } else {
+                self.txbrp |= fifo;
+                self.txq_fill += 1;
+            }
+        }
+        self.txbrp |= v & cfg & !self.fifo_mask();
     }
 
     pub(super) fn tx_cancel(&mut self, v: u32) {
@@ -270,17 +332,31 @@ impl State {
         self.txbrp
     }
 
-    /// The bus carries up to `n` pending frames, highest priority (lowest identifier, then
-    /// lowest buffer) first; none while the core is in `INIT` or bus-off. Returns how many.
+    /// The bus carries up to `n` pending frames, highest priority first; none while the core
+    /// is in `INIT`, bus-off or restricted operation (`CCCR.ASM`). Returns how many. RM0433 §56.4.13/14: the candidates are the
+    /// pending dedicated buffers and the TX FIFO's element at its get index (the FIFO's
+    /// elements leave in put order); among them the lowest identifier wins, then the lowest
+    /// buffer number.
     pub fn bus_sends(&mut self, n: usize) -> usize {
         let txbc = self.regs[idx(TXBC)];
         let tbsa = (txbc >> 2) & 0x3FFF;
         let ew = element_words(self.regs[idx(TXESC)]);
+        let (ndtb, tfqs, _) = self.txbc_fields();
         let mut sent = 0;
-        while sent < n && !self.in_init() && self.psr & PSR_BO == 0 && self.txbrp != 0 {
+        // Restricted operation (ASM): no data frames sent.
+        let restricted = self.regs[idx(CCCR)] & CCCR_ASM != 0;
+        while sent < n
+            && !restricted
+            && !self.in_init()
+            && self.psr & PSR_BO == 0
+            && self.txbrp != 0
+        {
+            self.txq_skip_cancelled();
+            let fifo_head = (self.txq_fill > 0).then_some(ndtb + self.txq_get);
             let element = |slot: u32| tbsa + slot * ew;
             let Some(slot) = (0..32)
                 .filter(|s| self.txbrp & (1 << s) != 0)
+                .filter(|s| *s < ndtb || Some(*s) == fifo_head)
                 .min_by_key(|s| {
                     let t0 = self.ram[element(*s) as usize];
                     let key = if t0 & (1 << 30) != 0 {
@@ -310,6 +386,10 @@ impl State {
                 dlc: ((t1 >> 16) & 0xF) as u8,
                 data,
             });
+            if Some(slot) == fifo_head {
+                self.txq_get = (self.txq_get + 1) % tfqs;
+                self.txq_fill -= 1;
+            }
             let b = 1 << slot;
             // A frame on the wire is sent even if its cancellation was requested.
             self.txbrp &= !b;

@@ -94,6 +94,7 @@ pub const CCE: u32 = 1 << 1;
 pub const CSA: u32 = 1 << 3;
 pub const CSR: u32 = 1 << 4;
 pub const CCCR_TEST: u32 = 1 << 7;
+pub const CCCR_ASM: u32 = 1 << 2;
 /// ASM, MON, DAR, TEST, FDOE, BRSE, PXHD, EFBI, TXP, NISO.
 pub const CCCR_PROTECTED: u32 = 0b1111_0011_1110_0100;
 /// The implemented CCCR bits.
@@ -108,6 +109,7 @@ pub const IR_RF1F: u32 = 1 << 6;
 pub const IR_RF1L: u32 = 1 << 7;
 pub const IR_TC: u32 = 1 << 9;
 pub const IR_TCF: u32 = 1 << 10;
+pub const IR_MRAF: u32 = 1 << 17;
 pub const IR_MASK: u32 = 0x3FFF_FFFF;
 
 // PSR bits.
@@ -180,6 +182,12 @@ pub enum Violation {
     },
     /// Leaving `INIT` with two sections of the message RAM layout overlapping.
     LayoutOverlap(&'static str, &'static str),
+    /// `TXBAR` requested TX FIFO buffers other than the one at the put index (`TXFQS.TFQPI`).
+    FifoNotAtPutIndex { bits: u32, put: u32 },
+    /// `TXBAR` requested a TX FIFO buffer while the FIFO was full (`TXFQS.TFQF`).
+    FifoFull,
+    /// The model covers the TX FIFO, not the TX queue (`TXBC.TFQM` = 1).
+    QueueModeUnmodelled,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -214,6 +222,8 @@ pub struct State {
     pub init_never_clear: bool,
     /// Fault injection: (register offset, bits) that keep their value whatever is written.
     pub stuck_bits: Vec<(u32, u32)>,
+    /// Fault injection: (register offset, bits) that read 1 whatever is written.
+    pub forced_bits: Vec<(u32, u32)>,
     /// Fault injection: a message RAM word that ignores writes.
     pub stuck_word: Option<u32>,
     test: u32,
@@ -222,6 +232,10 @@ pub struct State {
     txbto: u32,
     txbcf: u32,
     cancel_requested: u32,
+    /// TX FIFO: the get index's offset in the FIFO's buffers, and the elements requested
+    /// (from the get index on; cancelled ones leave at the get index).
+    txq_get: u32,
+    txq_fill: u32,
     /// Cancellations complete only at [`State::complete_cancels`] (or a transmission).
     pub defer_cancel: bool,
     psr: u32,
@@ -263,6 +277,7 @@ impl State {
             init_never_set: false,
             init_never_clear: false,
             stuck_bits: Vec::new(),
+            forced_bits: Vec::new(),
             stuck_word: None,
             test: 0,
             fifo: [Fifo::default(); 2],
@@ -270,6 +285,8 @@ impl State {
             txbto: 0,
             txbcf: 0,
             cancel_requested: 0,
+            txq_get: 0,
+            txq_fill: 0,
             defer_cancel: false,
             psr: PSR_RESET,
             ecr: 0,
@@ -332,6 +349,16 @@ impl State {
         }
     }
 
+    /// A message RAM access failure (`IR.MRAF`): of the RX handler (an element not stored),
+    /// or of the TX handler (`tx`), which also puts the core into restricted operation
+    /// (`CCCR.ASM`): it then sends nothing until software clears `ASM`.
+    pub fn ram_access_failure(&mut self, tx: bool) {
+        self.ir |= IR_MRAF;
+        if tx {
+            self.regs[idx(CCCR)] |= CCCR_ASM;
+        }
+    }
+
     /// The core goes bus-off: `PSR.BO`, TEC at its limit, `CCCR.INIT` set by the core itself.
     pub fn bus_off(&mut self) {
         self.psr |= PSR_BO;
@@ -346,8 +373,13 @@ impl State {
             .iter()
             .filter(|(o, _)| *o == offset)
             .fold(0, |m, (_, b)| m | b);
+        let forced = self
+            .forced_bits
+            .iter()
+            .filter(|(o, _)| *o == offset)
+            .fold(0, |m, (_, b)| m | b);
         let r = &mut self.regs[idx(offset)];
-        *r = (*r & stuck) | (value & mask & !stuck);
+        *r = (*r & stuck) | (value & mask & !stuck) | forced;
     }
 
     fn read(&mut self, offset: u32) -> u32 {
@@ -375,7 +407,8 @@ impl State {
             TXBCF => self.txbcf,
             // RX pin recessive.
             TEST => self.test | 1 << 7,
-            TXFQS | TXEFS | HPMS | NDAT1 | NDAT2 | TSCV => 0,
+            TXFQS => self.txfqs(),
+            TXEFS | HPMS | NDAT1 | NDAT2 | TSCV => 0,
             _ => self.regs[idx(offset)],
         }
     }
@@ -422,7 +455,13 @@ impl State {
     fn write_cccr(&mut self, v: u32) {
         let cur = self.regs[idx(CCCR)];
         let mut new = cur;
-        if (v ^ cur) & CCCR_PROTECTED != 0 {
+        // ASM (restricted operation) can be cleared by software at any time (RM0433
+        // §56.5.6); setting it, like the other protected bits, needs INIT and CCE.
+        if cur & CCCR_ASM != 0 && v & CCCR_ASM == 0 {
+            new &= !CCCR_ASM;
+        }
+        let changed = (v ^ new) & CCCR_PROTECTED;
+        if changed != 0 {
             if self.config_enabled() {
                 new = (new & !CCCR_PROTECTED) | (v & CCCR_PROTECTED);
             } else {
@@ -441,6 +480,8 @@ impl State {
                 self.txbto = 0;
                 self.txbcf = 0;
                 self.cancel_requested = 0;
+                self.txq_get = 0;
+                self.txq_fill = 0;
             } else {
                 self.violations.push(Violation::CceWithoutInit);
             }
