@@ -54,7 +54,7 @@ pub fn decode_one(data: &[u8]) {
 }
 
 /// The controller's side of the wire on any frame: the decoders of what the node sends
-/// (`ACK`, `STATUS`, `DIAG`, `LINK`, the five stream frames) never panic; `ACK`, `STATUS` and
+/// (`ACK`, `STATUS`, `DIAG`, `LINK`, `ADJUST`, the five stream frames) never panic; `ACK`, `STATUS` and
 /// `DIAG` are canonical (what they accept re-encodes to the same frame); `LINK` re-encodes to
 /// the frame with its two unused bits cleared; a stream frame decodes to finite values that
 /// re-encode to a frame which decodes to the same values.
@@ -69,10 +69,12 @@ fn replies_checked(frame: &RawFrame) {
         assert_eq!(d.encode(), *frame, "{d:?}");
     }
     if let Some(l) = planner_core::wire::LinkHealth::decode(frame) {
-        let mut cleared = *frame;
-        cleared.data[2] &= 0x3F;
-        assert_eq!(l.encode(), cleared, "{l:?}");
-        assert_eq!(planner_core::wire::LinkHealth::decode(&cleared), Some(l));
+        // Every bit of LINK is a field's: the frame encodes back exactly.
+        assert_eq!(l.encode(), *frame, "{l:?}");
+    }
+    if let Some(a) = planner_core::wire::Adjust::decode(frame) {
+        // Every bit of ADJUST is a field's (or the CRC): canonical.
+        assert_eq!(a.encode(), *frame, "{a:?}");
     }
     let mut s = Stream::default();
     if s.decode_into(frame) {
@@ -294,7 +296,7 @@ impl Driver {
             assert_eq!(frames.len(), 1, "stream id {id:#x}: {:?}", self.can.tx);
             assert!(stream.decode_into(frames[0]));
         }
-        assert_eq!(stream.tick, (self.cycles & 0xFF) as u8);
+        assert_eq!(stream.tick, self.cycles & (planner_core::wire::STAMPS - 1));
         // Every command frame handled is answered once, no other frame is: at most 16
         // commands and 128 others per cycle, and the node receives until one of the bounds
         // or an empty queue (a planning command beyond the cycle's budget is answered

@@ -29,14 +29,23 @@
 //! 2016, without its timing adaptation: eq. 18 of the paper adjusts the timing after the
 //! modification).
 //!
-//! # The dead band
-//! Small deviations are the stabilizer's to absorb (moving the ZMP by up to the sole's half
-//! size): the step moves only by what exceeds a dead band `d` \[m\], in the direction of the
-//! predicted error, `offset = e(T_r) · max(0, 1 − d/|e(T_r)|)` (the two coordinates together,
-//! so that the direction is kept). `d = 0` moves by the whole predicted error.
+//! # What the stabilizer absorbs
+//! A stabilizer moves the ZMP off the plan's inside the sole, by up to a margin `m` \[m\] in
+//! the direction of the deviation. With the ZMP held at that margin, `ė = ω (e − m)`, so
 //!
-//! [`touchdown_error`] and [`step_offset`] are the law; the node clamps the result to its reach
-//! limits and sends it through its modification path (eq. 17's check, eq. 18, the shaping).
+//! ```text
+//! e(T_r) − m = (e − m) · e^{ω T_r}:                                   (capture offset)
+//! ```
+//!
+//! a deviation within the margin is captured without a step (it decays), and what exceeds it
+//! grows and must be stepped for: the landing moves by `(e − m) e^{ω T_r}` along the
+//! deviation's direction (the two coordinates together), so that the foot lands where the
+//! stabilizer, again with its margin `m`, can hold the robot. [`capture_offset`] is the law
+//! (the margin applied to the deviation *now*: a small deviation, even a rounding of the
+//! measurement, is never amplified into a step); [`touchdown_error`] is its prediction without
+//! a stabilizer (`m = 0`), and [`step_offset`] the dead band on any vector. The node clamps the
+//! result to its reach limits and sends it through its modification path (eq. 17's check,
+//! eq. 18, the shaping).
 
 use crate::real::Real;
 
@@ -76,6 +85,16 @@ pub fn step_offset<T: Real>(error: [T; 2], dead_band: T) -> [T; 2] {
     }
     let k = T::ONE - d / norm;
     [error[0] * k, error[1] * k]
+}
+
+/// The move of the next landing for the deviation `error` = `ξ_meas − ξ_plan` \[m\] now
+/// (`[x, y]`), a stabilizer margin `margin` \[m\] and the landing `remaining` \[s\] from now:
+/// `(e − m) e^{ω T_r}` along the deviation's direction, zero within the margin (see the module
+/// docs). A negative `remaining` counts as zero.
+pub fn capture_offset<T: Real>(error: [T; 2], margin: T, omega: T, remaining: T) -> [T; 2] {
+    let grow = (omega * remaining.max(T::ZERO)).exp();
+    let o = step_offset(error, margin);
+    [o[0] * grow, o[1] * grow]
 }
 
 #[cfg(test)]
@@ -123,6 +142,35 @@ mod tests {
             let oracle = dcm(meas.0, meas.1, omega) - dcm(plan.0, plan.1, omega);
             assert!((e[0] - oracle).abs() < 1e-9, "{} vs {oracle}", e[0]);
             assert_eq!(e[1], 0.0);
+        }
+    }
+
+    /// The capture offset is what a pendulum whose ZMP is held at the margin in the deviation's
+    /// direction (integrated, RK4) has left beyond the margin at touch-down; a deviation within
+    /// the margin needs no step.
+    #[test]
+    fn the_capture_offset_is_what_the_margin_cannot_hold() {
+        let omega = crate::omega(9.8, 0.814);
+        let mut u = crate::test_uniform(11);
+        for _ in 0..if cfg!(miri) { 2 } else { 30 } {
+            let (t, m) = (0.05 + 0.7 * u(), 0.01 + 0.05 * u());
+            let e = [0.2 * u() - 0.1, 0.2 * u() - 0.1];
+            let o = capture_offset(e, m, omega, t);
+            let n = (e[0] * e[0] + e[1] * e[1]).sqrt();
+            if n <= m {
+                assert_eq!(o, [0.0, 0.0]);
+                continue;
+            }
+            // The deviation's own coordinate along its direction, with the ZMP at the margin
+            // (the plan's ZMP at 0: the deviation is the state).
+            let (x, v) = integrate(n, 0.0, omega, t, |_| m);
+            let beyond = x - m; // ξ = x at v = 0 … the DCM of (x, v)
+            let beyond = beyond + v / omega;
+            let want = [e[0] / n * beyond, e[1] / n * beyond];
+            assert!(
+                (o[0] - want[0]).abs() < 1e-9 && (o[1] - want[1]).abs() < 1e-9,
+                "{o:?} vs {want:?}"
+            );
         }
     }
 

@@ -481,6 +481,11 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         max_growth: {mg},
         sole_gap: {sg},
     }},
+    adjust: ::planner_core::node::AdjustConfig {{
+        max_age: {age},
+        margin: {db},
+        min_change: {mc},
+    }},
     entropy: 0,
 }}",
         omega = p.omega.literal(),
@@ -518,5 +523,8 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         ms = r.max_stride.literal(),
         mg = r.max_growth.literal(),
         sg = r.sole_gap.literal(),
+        age = cfg.adjust.max_age,
+        db = cfg.adjust.margin.literal(),
+        mc = cfg.adjust.min_change.literal(),
     )
 }

@@ -38,6 +38,10 @@
 //! identifies states by that history (with the controller's and the bus's state), which is
 //! what makes the search finite.
 //!
+//! The estimator's measured states (`MEASURED`) have a script of their own: taken only at most
+//! 4 cycles old and newer than every one taken before (besides 1, 2 and 6), never counted as
+//! the controller heard (4).
+//!
 //! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 7 cycles). The front
 //! page's "Headline figures" quote the bounds and each script's states (in millions):
 //! each check asserts that they are the measured ones (at the default bound).
@@ -52,7 +56,9 @@ use common::Bus;
 use planner_core::gait::PREVIEW;
 use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::shaping::{Law, PreviewGains};
-use planner_core::wire::{Ack, Command, ControlOp, RawFrame, Reason, WireModify, WireStep};
+use planner_core::wire::{
+    Ack, Command, ControlOp, Measured, RawFrame, Reason, WireModify, WireStep,
+};
 use stateright::{Checker, Model, Property};
 
 type Gains = PreviewGains<f64, PREVIEW>;
@@ -77,6 +83,8 @@ enum Intent {
         x_mm: i16,
     },
     Estop,
+    /// A measured state against the last reference the node published (the estimator's).
+    Measure,
 }
 
 use Intent::*;
@@ -105,6 +113,10 @@ enum Kind {
         pose: Pose,
     },
     Estop,
+    /// A measured state naming node cycle `at`.
+    Measured {
+        at: u32,
+    },
 }
 
 /// What a search must reach: a name and a condition.
@@ -127,6 +139,8 @@ struct Ctl {
     waiting: Option<u32>,
     /// Per slot: the append (number, fields) and its last version.
     slots: Vec<Option<(WireStepKey, u8)>>,
+    /// The node's cycles so far (the estimator stamps its states with the last one).
+    cycle: u32,
 }
 
 /// `WireStep` with `Hash`.
@@ -341,6 +355,14 @@ impl Protocol {
                 epoch: None,
                 kind: Kind::Estop,
             },
+            Measure => {
+                let m = Measured::from_si(c.cycle, [0.01, -0.02])?;
+                Sent {
+                    frame: m.encode(c.epoch),
+                    epoch,
+                    kind: Kind::Measured { at: c.cycle },
+                }
+            }
         };
         Some((c, sent))
     }
@@ -430,11 +452,26 @@ impl Protocol {
                     }
                 }
                 Kind::Estop => {}
+                Kind::Measured { at } => {
+                    // Fresh: at most the node's 4 cycles old; newer than every one taken.
+                    let age = s.cycles - 1 - at;
+                    if age > 4 {
+                        return Err(format!("a measured state {age} cycles old taken"));
+                    }
+                    if earlier
+                        .clone()
+                        .any(|k| matches!(k, Kind::Measured { at: a } if a >= at))
+                    {
+                        return Err(format!("a measured state of cycle {at} not newer"));
+                    }
+                }
             }
         }
+        // A command proves the controller alive; an emergency stop or a measured state not.
+        let proves = |k: Kind| !matches!(k, Kind::Estop | Kind::Measured { .. });
         for &i in &taken {
             s.accepted.push((s.cycles, i));
-            if s.sent[usize::from(i)].kind != Kind::Estop {
+            if proves(s.sent[usize::from(i)].kind) {
                 s.last_new = s.cycles;
             }
         }
@@ -469,11 +506,7 @@ impl Protocol {
         // 4: heard only by something accepted; a moving robot heard within the timeout.
         let heard =
             s.node.last_heard() == Some(5 * s.cycles) && before.last_heard() != s.node.last_heard();
-        if heard
-            && !taken
-                .iter()
-                .any(|&i| s.sent[usize::from(i)].kind != Kind::Estop)
-        {
+        if heard && !taken.iter().any(|&i| proves(s.sent[usize::from(i)].kind)) {
             return Err("heard without a new command".into());
         }
         let moving = !s.node.gait().is_standing();
@@ -490,6 +523,7 @@ impl Protocol {
             return Err(format!("an ESTOP delivered, the node {:?}", s.node.state()));
         }
         s.pending.clear();
+        s.ctl.cycle = s.cycles;
         // The controller reads SESSION and DIAG: a reset accepted opens its session.
         if let Some(q) = s.ctl.waiting {
             if s.node.session().last_seq == q {
@@ -508,6 +542,7 @@ fn answer_key(s: &Sent) -> u8 {
         Kind::Control { seq } => seq as u8,
         Kind::Append { number, .. } | Kind::Modify { number, .. } => number as u8,
         Kind::Estop => 1,
+        Kind::Measured { at } => at as u8,
     }
 }
 
@@ -543,6 +578,7 @@ impl Model for Protocol {
                 next: node.next_step(),
                 waiting: None,
                 slots: vec![None; slots],
+                cycle: 0,
             },
             node,
             sent: vec![],
@@ -601,10 +637,11 @@ impl Model for Protocol {
     }
 }
 
-/// Checks the model of `script`; `quoted`: what the front page's model-check row must say of
-/// its state count (given the states generated, in millions with one decimal: `9.2 M`),
-/// checked at the default bound (not with `WALK_LONG=1`).
-fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: fn(&str) -> String) {
+/// Checks the model of `script`; `quoted`: what the front page's model-check row and the
+/// book's sentence on the bound (`docs/src/reliability.md`) must say of its state count (given
+/// the states generated in millions with one decimal, `9.2`), checked at the default bound
+/// (not with `WALK_LONG=1`).
+fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: Option<Quoted>) {
     let long = std::env::var("WALK_LONG").as_deref() == Ok("1");
     let names: Vec<&str> = goals.iter().map(|g| g.0).collect();
     let model = Protocol::new(script, goals, long);
@@ -617,19 +654,33 @@ fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: fn(&str) -> 
         checker.max_depth(),
     );
     checker.assert_properties();
-    if !long {
-        // The front page quotes the bounds and the states generated ("9.2 M").
-        let states = format!("{:.1} M", checker.state_count() as f64 / 1e6);
+    if let (false, Some(quoted)) = (long, quoted) {
+        // The front page and the book quote the bounds and the states generated ("9.2 M",
+        // "9.2 million").
+        let millions = format!("{:.1}", checker.state_count() as f64 / 1e6);
         let row = "| protocol model check (";
-        doc_figures::assert_quoted(
-            "README.md",
-            row,
-            &format!("{per} frames a cycle, {cycles} cycles"),
-            COMMAND,
-        );
-        doc_figures::assert_quoted("README.md", row, &quoted(&states), COMMAND);
+        let bounds = format!("{per} frames a cycle, {cycles} cycles");
+        doc_figures::Quotes::new(COMMAND)
+            .line("README.md", row, &bounds)
+            .line("README.md", row, &(quoted.readme)(&millions))
+            .line(BOOK, BOOK_ANCHOR, &bounds)
+            .line(BOOK, BOOK_ANCHOR, &(quoted.book)(&millions))
+            .assert();
     }
 }
+
+/// How the documents quote one model's state count, given in millions with one decimal.
+struct Quoted {
+    /// In the front page's row: `| 9.2 M + `.
+    readme: fn(&str) -> String,
+    /// In the book's sentence: `cycles: 9.2 and `.
+    book: fn(&str) -> String,
+}
+
+/// The book's page that states the model check's bound and its state counts.
+const BOOK: &str = "docs/src/reliability.md";
+/// The line of that page with them.
+const BOOK_ANCHOR: &str = "supervision at 2 cycles), at most";
 
 /// The command that measures this file's figures (the front page names it).
 const COMMAND: &str = "cargo test --release -p planner-core --test model_check -- --nocapture";
@@ -690,8 +741,11 @@ fn across_a_reset_nothing_old_is_taken() {
                     && s.node.counters().by_reason[usize::from(Reason::BadCrc.code())] > 0
             }),
         ],
-        // The first of the front page's two counts.
-        |states| format!("| {states} + "),
+        // The first of the documents' two counts.
+        Some(Quoted {
+            readme: |m| format!("| {m} M + "),
+            book: |m| format!("cycles: {m} and "),
+        }),
     );
 }
 
@@ -738,7 +792,71 @@ fn walking_only_new_commands_keep_it_going_and_an_estop_never_waits() {
                 s.node.state() == NodeState::EmergencyStopped && !s.node.gait().is_standing()
             }),
         ],
-        // The second of the front page's two counts.
-        |states| format!("+ {states} states"),
+        // The second of the documents' two counts.
+        Some(Quoted {
+            readme: |m| format!("+ {m} M states"),
+            book: |m| format!(" and {m} million"),
+        }),
+    );
+}
+
+/// The estimator's measured states across a `Reset`: taken only while fresh (at most 4 cycles
+/// old, newer than the last), only in the session they were stamped in, never twice, and never
+/// as a sign of the controller alive; any delay, loss, repeat or reordering by the bus.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: tests/run-all.sh runs it with --release"
+)]
+fn measured_states_only_fresh_and_of_their_session() {
+    check(
+        "measured states",
+        vec![
+            Control(ControlOp::Reset),
+            Measure,
+            Measure,
+            Control(ControlOp::Reset),
+            Measure,
+        ],
+        vec![
+            ("a measured state taken in the first session", |s| {
+                s.node.session().epoch == ENTROPY + 1
+                    && s.accepted
+                        .iter()
+                        .any(|&(_, i)| matches!(s.sent[usize::from(i)].kind, Kind::Measured { .. }))
+            }),
+            // (Delivered: property 2 says that it is not taken.)
+            ("one of the first session delivered in the second", |s| {
+                s.node.session().epoch == ENTROPY + 2
+                    && s.pending.iter().any(|&i| {
+                        let sent = &s.sent[usize::from(i)];
+                        matches!(sent.kind, Kind::Measured { .. })
+                            && sent.epoch == Some(ENTROPY + 1)
+                    })
+            }),
+            ("a measured state taken in the second session", |s| {
+                s.node.session().epoch == ENTROPY + 2
+                    && s.accepted.iter().any(|&(_, i)| {
+                        matches!(s.sent[usize::from(i)].kind, Kind::Measured { .. })
+                            && s.sent[usize::from(i)].epoch == Some(ENTROPY + 2)
+                    })
+            }),
+            // (Delivered: property 1 says that it is not taken.)
+            ("an older one delivered after a newer one was taken", |s| {
+                let taken =
+                    s.accepted
+                        .iter()
+                        .filter_map(|&(_, i)| match s.sent[usize::from(i)].kind {
+                            Kind::Measured { at } => Some(at),
+                            _ => None,
+                        });
+                let newest = taken.max();
+                s.pending.iter().any(|&i| {
+                    matches!(s.sent[usize::from(i)].kind, Kind::Measured { at }
+                        if newest.is_some_and(|n| at < n))
+                })
+            }),
+        ],
+        None,
     );
 }

@@ -1,7 +1,7 @@
 //! f32 against f64: how much COG the single-precision planner loses, in both homogeneous bases.
 //!
 //! The f64 solve in the exponential basis is the reference (it agrees with the 44-unknown oracle
-//! to 1e-9 m, see `oracle.rs`). Requirement (issue 2): the shipped f32 planner stays within
+//! to 1e-9 m, see `oracle.rs`). Requirement: the shipped f32 planner stays within
 //! 0.1 mm of COG on every test window. The paper's `V cosh + W sinh` basis is measured too, to
 //! show what the better-conditioned basis buys; it is reported, not required.
 //!

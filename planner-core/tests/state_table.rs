@@ -21,15 +21,17 @@ const STATES: [&str; 8] = [
     "e-stopped (moving)",
     "e-stopped (standing)",
 ];
-const COMMANDS: [&str; 9] = [
+const COMMANDS: [&str; 11] = [
     "ESTOP",
     "HEARTBEAT",
     "START",
+    "START_ADJUSTING",
     "STOP",
     "STOP_NOW",
     "RESET",
     "STEP_APPEND",
     "STEP_MODIFY",
+    "MEASURED",
     "silence > 500 ms",
 ];
 
@@ -151,6 +153,8 @@ fn apply(r: &mut Rig, command: &str) -> (Option<u8>, String) {
             code(r.ask(hb))
         }
         "START" => code(r.control(ControlOp::Start)),
+        "START_ADJUSTING" => code(r.control(ControlOp::StartAdjusting)),
+        "MEASURED" => code(r.measure([0.001, -0.002])),
         "STOP" => code(r.control(ControlOp::Stop)),
         "STOP_NOW" => code(r.control(ControlOp::StopNow)),
         "RESET" => code(r.control(ControlOp::Reset)),

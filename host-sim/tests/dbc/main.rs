@@ -24,9 +24,9 @@ use can_dbc::{MessageId, NumericValue, Signal, ValueDescription, ValueType};
 use planner_core::gait::{GaitParams, Phase, Side};
 use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
-    self, ids, signed_range, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Session,
-    Status, Stream, WireModify, WireStep, OFFSET_BITS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS,
-    YAW_UNIT,
+    self, ids, signed_range, Ack, Adjust, Command, ControlOp, Diag, LinkHealth, Measured, RawFrame,
+    Reason, Session, Status, Stream, WireModify, WireStep, DEVIATION_BITS, DEVIATION_UNIT,
+    OFFSET_BITS, STAMPS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
 };
 
 mod ranges;
@@ -88,6 +88,8 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
         ids::ACK,
         ids::STEP_APPEND,
         ids::STEP_MODIFY,
+        ids::MEASURED,
+        ids::ADJUST,
         ids::COG,
         ids::ZMP,
         ids::COG_VEL,

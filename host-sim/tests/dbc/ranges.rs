@@ -107,6 +107,44 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         ],
     ));
 
+    let me = Measured {
+        stamp: if high { STAMPS - 1 } else { 0 },
+        deviation: [pick(signed_range(DEVIATION_BITS)); 2],
+    };
+    out.push((
+        Command::Measured(me).encode(),
+        vec![
+            ("stamp", f64::from(me.stamp)),
+            ("dcm_dx", f64::from(me.deviation[0]) * DEVIATION_UNIT),
+            ("dcm_dy", f64::from(me.deviation[1]) * DEVIATION_UNIT),
+            ("measured_reserved", 0.0), // the encoder writes 0, the decoder refuses 1
+        ],
+    ));
+    let flag = u8::from(high);
+    let ad = Adjust {
+        from: byte,
+        shift: [if high { i16::MAX } else { i16::MIN }; 2],
+        count: byte,
+        flags: if high {
+            Adjust::REACH_LIMITED | Adjust::ZMP_LIMITED | Adjust::FRESH
+        } else {
+            0
+        },
+    };
+    out.push((
+        ad.encode(),
+        vec![
+            ("from_step", b(ad.from)),
+            ("shift_x", ad.shift_si()[0]),
+            ("shift_y", ad.shift_si()[1]),
+            ("count", b(ad.count)),
+            ("reach_limited", b(flag)),
+            ("zmp_limited", b(flag)),
+            ("fresh", b(flag)),
+            ("adjust_reserved", 0.0), // sent as 0
+        ],
+    ));
+
     let codes = commands().map(|(c, _)| c.code());
     let reason = if high {
         Reason::ALL.iter().copied().max_by_key(|r| r.code())
@@ -179,15 +217,16 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         bus_state: if high { 3 } else { 0 },
         reset: if high { 15 } else { 0 },
         bus_offs: word,
-        passive_episodes: word,
+        passive_episodes: if high {
+            LinkHealth::PASSIVE_EPISODES_MAX
+        } else {
+            0
+        },
         missed_slots: byte,
+        backoff: if high { 15 } else { 0 },
+        ram_faults: if high { 3 } else { 0 },
     };
-    // The codec sends the reserved bits as 0; the highest frame sets them (the DBC's range is
-    // the field's width).
-    let mut lf = lk.encode();
-    if high {
-        lf.data[2] |= 0xC0;
-    }
+    let lf = lk.encode();
     assert_eq!(LinkHealth::decode(&lf), Some(lk));
     out.push((
         lf,
@@ -197,9 +236,10 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("rx_passive", b(u8::from(lk.rx_passive))),
             ("bus_state", b(lk.bus_state)),
             ("reset", b(lk.reset)),
-            ("link_reserved", if high { 3.0 } else { 0.0 }),
+            ("ram_faults", b(lk.ram_faults)),
             ("bus_offs", f64::from(lk.bus_offs)),
             ("passive_episodes", f64::from(lk.passive_episodes)),
+            ("backoff", b(lk.backoff)),
             ("missed_slots", b(lk.missed_slots)),
         ],
     ));
@@ -238,7 +278,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         cog_vel: [v; 2],
         zmp: [v; 2],
         phase: if high { PHASES.len() - 1 } else { 0 } as u8,
-        tick: byte,
+        tick: if high { STAMPS - 1 } else { 0 },
         feet: [[v; 4]; 2],
     };
     let frames = stream.encode();
@@ -257,7 +297,7 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("cog_vx", st.cog_vel[0]),
             ("cog_vy", st.cog_vel[1]),
             ("phase", b(st.phase)),
-            ("tick", b(st.tick)),
+            ("tick", f64::from(st.tick)),
         ],
         foot(0),
         foot(1),

@@ -31,6 +31,7 @@ fn every_message_has_its_cycle_time() {
         want.insert(id, 0);
     }
     for id in [
+        ids::MEASURED, // the estimator's, up to every cycle
         ids::COG,
         ids::ZMP,
         ids::COG_VEL,
@@ -39,7 +40,7 @@ fn every_message_has_its_cycle_time() {
     ] {
         want.insert(id, cycle);
     }
-    for id in [ids::STATUS, ids::DIAG, ids::LINK, ids::SESSION] {
+    for id in [ids::STATUS, ids::DIAG, ids::LINK, ids::SESSION, ids::ADJUST] {
         want.insert(id, 20 * cycle);
     }
     let got: BTreeMap<u16, u64> = d
@@ -207,7 +208,8 @@ impl Rig {
                     assert_eq!(s["bus_state"], f64::from(l.bus_state));
                     assert_eq!(s["reset"], f64::from(l.reset));
                     assert_eq!(s["tec"], f64::from(l.tec));
-                    assert_eq!(s["link_reserved"], 0.0);
+                    assert_eq!(s["ram_faults"], f64::from(l.ram_faults));
+                    assert_eq!(s["backoff"], f64::from(l.backoff));
                     note("bus_state", self.name(f.id, "bus_state", s["bus_state"]));
                     note("reset", self.name(f.id, "reset", s["reset"]));
                 }
@@ -300,6 +302,8 @@ fn a_running_node_speaks_the_dbc() {
     let mut r = Rig::new(NodeConfig::hrp2());
     r.link = Some(LinkHealth {
         bus_offs: 3,
+        backoff: 3,
+        ram_faults: 1,
         ..LinkHealth::default()
     });
     // No session first (the state is published), then the handshake.
@@ -356,7 +360,9 @@ fn a_running_node_speaks_the_dbc() {
         let want = cycle_time_ms(&r.dbc, id);
         let Some(cycles) = r.sent.get(&id) else {
             assert!(ids::is_command(id), "{}: never sent", m.name);
-            assert_eq!(want, 0, "{}: a command", m.name);
+            // (the estimator's measured state: up to every cycle)
+            let event = if id == ids::MEASURED { 5 } else { 0 };
+            assert_eq!(want, event, "{}: a command", m.name);
             continue;
         };
         if id == ids::ACK {
@@ -380,6 +386,9 @@ fn a_running_node_speaks_the_dbc() {
                 "{}: not from the session's first cycle",
                 m.name
             );
+        } else if id == ids::ADJUST {
+            // (half-way between the reports)
+            assert_eq!(cycles[0], 11, "{}: not from the 11th cycle", m.name);
         } else {
             assert_eq!(cycles[0], 1, "{}: not from the first cycle", m.name);
         }

@@ -2,12 +2,13 @@
 
 use super::*;
 
-pub(crate) const OPS: [ControlOp; 5] = [
+pub(crate) const OPS: [ControlOp; 6] = [
     ControlOp::Heartbeat,
     ControlOp::Start,
     ControlOp::Stop,
     ControlOp::StopNow,
     ControlOp::Reset,
+    ControlOp::StartAdjusting,
 ];
 
 pub(crate) fn op_position(op: ControlOp) -> usize {
@@ -17,6 +18,7 @@ pub(crate) fn op_position(op: ControlOp) -> usize {
         ControlOp::Stop => 2,
         ControlOp::StopNow => 3,
         ControlOp::Reset => 4,
+        ControlOp::StartAdjusting => 5,
     }
 }
 
@@ -86,7 +88,7 @@ pub(crate) fn next_side_name(s: Option<Side>) -> String {
 }
 
 /// One command of each kind, with its name in `ACK.command`.
-pub(crate) fn commands() -> [(Command, &'static str); 4] {
+pub(crate) fn commands() -> [(Command, &'static str); 5] {
     let step = WireStep::from_si(3, true, 0.2, 0.1, 0.0).unwrap();
     let change = WireModify::from_si(&step, 1, 0.25, 0.1, 0.0).unwrap();
     [
@@ -98,6 +100,7 @@ pub(crate) fn commands() -> [(Command, &'static str); 4] {
         },
         Command::Append(step),
         Command::Modify(change),
+        Command::Measured(Measured::from_si(7, [0.01, -0.02]).unwrap()),
     ]
     .map(|c| {
         let name = match c {
@@ -105,6 +108,7 @@ pub(crate) fn commands() -> [(Command, &'static str); 4] {
             Command::Control { .. } => "control",
             Command::Append(_) => "append",
             Command::Modify(_) => "modify",
+            Command::Measured(_) => "measured",
         };
         (c, name)
     })
@@ -237,6 +241,7 @@ fn ack_command_table_is_the_low_byte_of_the_command_ids() {
         (ids::CONTROL, "control"),
         (ids::STEP_APPEND, "append"),
         (ids::STEP_MODIFY, "modify"),
+        (ids::MEASURED, "measured"),
     ]
     .iter()
     .map(|&(id, name)| (i64::from(id & 0xFF), name.to_string()))

@@ -58,6 +58,7 @@ mod params;
 mod predict;
 mod queue;
 mod reference;
+mod relocate;
 mod shape;
 mod spec;
 mod step;

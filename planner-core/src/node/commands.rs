@@ -88,6 +88,27 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         None
     }
 
+    /// [`Node::reach_broken`] for the queued step `id` and the steps after it all moved by
+    /// `delta` \[m\] (the step adjustment's shift): the moved step against the feet before it,
+    /// and its successor against it; the steps after those keep their places relative to both.
+    pub(super) fn reach_broken_moved(&self, id: u16, delta: [T; 2]) -> Option<Broken<T>> {
+        let moved = |s: Footstep<T>| Footstep::new(s.side, s.x + delta[0], s.y + delta[1], s.yaw);
+        let step = moved(self.gait.queued_step(id)?);
+        let r = &self.cfg.reach;
+        let feet = self.gait.previous_feet(Some(id));
+        let other = Frame::of(&feet[step.side.other().index()]);
+        let same = Frame::like(&feet[step.side.index()], &[&other]);
+        let f = Frame::like(&step, &[&other, &same]);
+        let from_rest = self.gait.position(id) == Some(0) && self.gait.next_swing_from_rest();
+        let soles = Soles::of(&self.cfg.params);
+        if let Some(b) = r.broken_frames(&other, &same, &f, step.side, from_rest, &soles) {
+            return Some(b);
+        }
+        let s1 = moved(self.gait.queued_step(id.wrapping_add(1))?);
+        let f1 = Frame::like(&s1, &[&f, &other]);
+        r.broken_frames(&f, &other, &f1, s1.side, false, &soles)
+    }
+
     /// The footstep of a validated frame in `T`: the wire's integers in SI units (`f64`, as
     /// [`WireStep::si`]), each rounded to the nearest `T` (exact for `f64`).
     pub(super) fn footstep(s: &WireStep) -> Footstep<T> {
@@ -104,7 +125,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.counters.foreign = self.counters.foreign.saturating_add(1);
             return None;
         }
-        let decoded = Command::decode(frame, self.next_step());
+        let decoded = Command::decode(frame, self.expect());
         Some(self.handle_command(frame, decoded, now_ms))
     }
 
@@ -122,6 +143,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     Command::Control { session, seq, op } => self.control(session, seq, op),
                     Command::Append(s) => self.append(frame, &s),
                     Command::Modify(m) => self.modify(frame, &m),
+                    Command::Measured(m) => self.measured(&m),
                 };
                 (cmd.code(), cmd.key(), result)
             }
@@ -130,8 +152,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         match result {
             // Only an accepted command proves the controller alive, and every accepted one is
             // new (a greater sequence number, the next step number, a greater version); an
-            // emergency stop proves nothing.
-            Ok(()) if frame.id != ids::ESTOP => {
+            // emergency stop and a measured state (the estimator's) prove nothing.
+            Ok(()) if frame.id != ids::ESTOP && frame.id != ids::MEASURED => {
                 self.last_heard = Some(now_ms);
                 self.heard_cycle = self.cycle;
             }
@@ -146,6 +168,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             decoded,
             Ok(Command::Append(_)
                 | Command::Modify(_)
+                | Command::Measured(_)
                 | Command::Control {
                     op: ControlOp::Heartbeat,
                     ..
@@ -201,7 +224,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let standing = self.gait.is_standing();
         match op {
             ControlOp::Heartbeat => {}
-            ControlOp::Start => {
+            ControlOp::Start | ControlOp::StartAdjusting => {
                 if self.estopped {
                     return Err(Reason::EmergencyStopped);
                 }
@@ -215,6 +238,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 let started = self.gait.start().map_err(reason_of);
                 self.plans_left = self.plans_left.saturating_sub(1);
                 started?;
+                self.adj.enabled = op == ControlOp::StartAdjusting;
             }
             ControlOp::Reset => {
                 if !standing {
@@ -277,6 +301,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.lost = false;
         self.clock_fault = false;
         self.steps.clear();
+        // No shift and no measured state carry over: the new session's measured states name
+        // cycles from this one on (this cycle's reference is the new session's first).
+        self.adj = Adjusting::ZERO;
+        self.adj.opened_at = self.cycle;
+        self.adj.from = self.next_step();
         Ok(())
     }
 
@@ -314,7 +343,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if s.id != self.next_step() {
             return Err(Reason::SequenceGap);
         }
-        let step = Self::footstep(s);
+        // Walked where commanded, plus the step adjustment's shift in force.
+        let walked = steps::shifted(s, self.adj.shift).ok_or(Reason::OutOfRange)?;
+        let step = Self::footstep(&walked);
         if self.gait.next_side().is_some_and(|side| side != step.side) {
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
@@ -323,6 +354,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
         self.steps.push(Record {
             append: *s,
+            commanded: *s,
             append_frame: *frame,
             version: 0,
             in_force: None,
@@ -349,7 +381,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return Err(Reason::SideOrder);
         }
         let s = m.applied_to(&rec.append).ok_or(Reason::OutOfRange)?;
-        let step = Self::footstep(&s);
+        let walked = steps::shifted(&s, self.adj.shift).ok_or(Reason::OutOfRange)?;
+        let step = Self::footstep(&walked);
         let id = self.gait_id(m.id);
         self.check_reach(&step, Some(id))?;
         // A modification of the next swing target while walking plans (eq. 17).
@@ -365,6 +398,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if let Some(r) = self.steps.queued_at_mut(at, m.id) {
             r.version = m.version;
             r.in_force = Some(*frame);
+            r.commanded = s;
         }
         Ok(())
     }

@@ -150,7 +150,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             let Some(f) = batch.get(i) else {
                 continue;
             };
-            let decoded = Command::decode(f, self.next_step());
+            let decoded = Command::decode(f, self.expect());
             if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
                 self.estop_now = true;
             }
@@ -162,6 +162,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         let refused = act.refused;
         self.estop_now = false;
+        // The step adjustment, on the budget the commands left.
+        self.adjust_step();
         // (`Node::handle` outside a cycle: the budget of one.)
         self.plans_left = self.cfg.max_plans;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
@@ -181,11 +183,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             if let Some(f) = self.tx.pop_front() {
                 if matches!(
                     f.id,
-                    ids::ACK | ids::STATUS | ids::DIAG | ids::LINK | ids::SESSION
+                    ids::ACK | ids::ADJUST | ids::STATUS | ids::DIAG | ids::LINK | ids::SESSION
                 ) {
                     let _ = self.tx.push_back(f);
                 }
             }
+        }
+        // `ADJUST` (before the stream: frames go out in identifier order) when the shift
+        // changed, and every 20 cycles half-way between the reports (the bus load spread:
+        // no cycle carries more than one report frame beyond the stream's and the reports').
+        if (streaming && self.adj.due) || self.cycle % 20 == 11 {
+            self.adj.due = false;
+            let a = self.adjustment().encode();
+            self.enqueue(a);
         }
         if streaming {
             for f in self.stream(&reference).encode() {

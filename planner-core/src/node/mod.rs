@@ -96,6 +96,7 @@
 //! (in place, at the nominal width) keep the sole gap by the configuration's check at
 //! start-up.
 
+mod adjust;
 mod commands;
 mod cycle;
 mod reach;
@@ -106,6 +107,8 @@ use core::borrow::Borrow;
 
 use heapless::Deque;
 
+use adjust::Adjusting;
+pub use adjust::{AdjustConfig, MAX_AGE};
 use cycle::*;
 use reach::Frame;
 pub use reach::{Broken, Limit, Reach, Soles};
@@ -116,8 +119,8 @@ use crate::gait::{Footstep, Gait, GaitError, GaitParams, Phase, Reference, Side,
 use crate::real::Real;
 use crate::shaping::PreviewGains;
 use crate::wire::{
-    ids, Ack, Command, ControlOp, Diag, LinkHealth, RawFrame, Reason, Session, Status, Stream,
-    WireModify, WireStep,
+    ids, Ack, Command, ControlOp, Diag, Expect, LinkHealth, RawFrame, Reason, Session, Status,
+    Stream, WireModify, WireStep,
 };
 
 /// Frames that can wait to be sent.
@@ -169,6 +172,8 @@ pub struct NodeConfig<T = f64> {
     pub max_plans: usize,
     /// Reach limits.
     pub reach: Reach<T>,
+    /// The step adjustment from the measured state (see `adjust`).
+    pub adjust: AdjustConfig<T>,
     /// A value that differs at every start-up (the firmware takes it from its hardware random
     /// number generator): the start-up's session epoch, and (its high half) the number of its
     /// first step. Frames of an earlier start-up are then refused except by chance (2⁻¹⁶ for
@@ -199,6 +204,7 @@ impl NodeConfig {
             max_foreign: 128,
             max_plans: 1,
             reach,
+            adjust: AdjustConfig::DEFAULT,
             entropy: 0,
         }
     }
@@ -238,6 +244,7 @@ impl NodeConfig {
             max_foreign: self.max_foreign,
             max_plans: self.max_plans,
             reach: self.reach.cast(),
+            adjust: self.adjust.cast(),
             entropy: self.entropy,
         }
     }
@@ -352,6 +359,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     cycle: u32,
     /// The firmware's CAN link health, published in `LINK` once set.
     link: Option<LinkHealth>,
+    /// The step adjustment (see `adjust`).
+    adj: Adjusting<T>,
 }
 
 /// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
@@ -433,6 +442,11 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 max_foreign: 0,
                 max_plans: 0,
                 reach: Reach::PARKED,
+                adjust: AdjustConfig {
+                    max_age: 0,
+                    margin: T::ZERO,
+                    min_change: T::ZERO,
+                },
                 entropy: 0,
             },
             gait: Gait::parked(gains),
@@ -456,6 +470,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             counters: Counters::ZERO,
             cycle: 0,
             link: Some(LinkHealth::ZERO),
+            adj: Adjusting::ZERO,
         }
     }
 }
@@ -485,7 +500,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let gap_ok = gap
             .partial_cmp(&cfg.reach.sole_gap)
             .is_some_and(|o| o.is_ge());
-        if !gap_ok || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
+        let age_ok = cfg.adjust.max_age <= MAX_AGE;
+        if !gap_ok || !age_ok || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
             return Err(GaitError::BadParams);
         }
         // Supervision in cycles: the timeout in whole cycles of `dt` (rounded up).
@@ -519,6 +535,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
+        self.adj = Adjusting::ZERO;
         Ok(())
     }
 
@@ -578,6 +595,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.heard_cycle == other.heard_cycle
             && self.window == other.window
             && self.cycle == other.cycle
+            && self.adj == other.adj
     }
 
     /// The session as published in `SESSION`.
@@ -591,6 +609,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The number of the next step to append (published in `DIAG`).
     pub fn next_step(&self) -> u16 {
         self.first.wrapping_add(self.appended as u16)
+    }
+
+    /// What the validation of a frame depends on now ([`Command::decode`]): the next step
+    /// number and the session epoch.
+    pub fn expect(&self) -> Expect {
+        Expect {
+            next_step: self.next_step(),
+            epoch: self.epoch,
+        }
     }
 
     /// Draws the start-up's session from `entropy` (as [`NodeConfig::entropy`] does at

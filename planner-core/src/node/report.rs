@@ -64,7 +64,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             cog_vel: [r.x.cog_vel, r.y.cog_vel],
             zmp: [r.x.zmp, r.y.zmp],
             phase,
-            tick: (self.cycle & 0xFF) as u8,
+            tick: self.cycle & (crate::wire::STAMPS - 1),
             feet: [f(0), f(1)],
         }
     }

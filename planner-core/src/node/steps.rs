@@ -24,6 +24,9 @@ pub const HISTORY: usize = 16;
 pub(super) struct Record {
     /// The accepted append (version 0).
     pub append: WireStep,
+    /// The step as commanded in force: the append moved by the modification in force (the
+    /// node walks it plus the step adjustment's shift).
+    pub commanded: WireStep,
     /// Its frame.
     pub append_frame: RawFrame,
     /// Version in force (0: as appended).
@@ -58,6 +61,13 @@ impl<const Q: usize> Steps<Q> {
         queued: Deque::new(),
         swing: Some(Record {
             append: WireStep {
+                id: 0,
+                left: false,
+                x: 0,
+                y: 0,
+                yaw: 0,
+            },
+            commanded: WireStep {
                 id: 0,
                 left: false,
                 x: 0,
@@ -222,8 +232,35 @@ impl<const Q: usize> Steps<Q> {
             .or_else(|| self.done.iter().rev().find_map(of))
     }
 
+    /// The queued step number `id` as commanded, moved by `shift` \[0.5 mm\]; `None` if it is
+    /// not queued or the result leaves the footstep range.
+    pub fn commanded(&self, id: u16, shift: [i32; 2]) -> Option<WireStep> {
+        let r = match self.queued_guess(id).and_then(|i| self.queued.get(i)) {
+            Some(r) => r,
+            None => self.queued.iter().find(|r| r.append.id == id)?,
+        };
+        shifted(&r.commanded, shift)
+    }
+
+    /// `true` if every queued step, moved by `shift`, stays inside the footstep range.
+    pub fn all_shiftable(&self, shift: [i32; 2]) -> bool {
+        self.queued
+            .iter()
+            .all(|r| shifted(&r.commanded, shift).is_some())
+    }
+
     /// The id of the step being swung, if the node accepted it (padded steps have none).
     pub fn swinging(&self) -> Option<u16> {
         self.swing.map(|r| r.append.id)
     }
+}
+
+/// `s` moved by `shift` \[0.5 mm\]; `None` if it leaves the footstep range.
+pub(super) fn shifted(s: &WireStep, shift: [i32; 2]) -> Option<WireStep> {
+    let m = WireStep {
+        x: s.x.checked_add(shift[0])?,
+        y: s.y.checked_add(shift[1])?,
+        ..*s
+    };
+    m.in_range().then_some(m)
 }

@@ -1,6 +1,7 @@
 //! The commands from the bus, validated once ([`Command::decode`]), and their answer, the
 //! `ACK` ([`Ack`]).
 
+use super::measured::Measured;
 use super::step::{WireModify, WireStep, VERSIONS};
 use super::{crc8, crc_ok, crc_ok_over, ids, RawFrame, Reason};
 
@@ -11,6 +12,27 @@ use super::{crc8, crc_ok, crc_ok_over, ids, RawFrame, Reason};
 pub fn step_number(low: u8, next: u16) -> u16 {
     let d = low.wrapping_sub(next as u8) as i8;
     next.wrapping_add(d as u16)
+}
+
+/// What the validation of a frame depends on in the node's state: the number of its next
+/// append (footstep frames are read by [`step_number`] and their CRC keyed with the number's
+/// [`super::step_key`]) and the session epoch (the key of `MEASURED`). A bare `u16` is the next
+/// step number with epoch 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Expect {
+    /// The number of the node's next append (`DIAG`).
+    pub next_step: u16,
+    /// The session epoch (`SESSION`).
+    pub epoch: u32,
+}
+
+impl From<u16> for Expect {
+    fn from(next_step: u16) -> Self {
+        Self {
+            next_step,
+            epoch: 0,
+        }
+    }
 }
 
 /// Control operations.
@@ -27,6 +49,10 @@ pub enum ControlOp {
     StopNow,
     /// Leave the emergency-stopped state (only when standing).
     Reset,
+    /// Start walking with the queued steps, and let the node move the next landing from the
+    /// measured state for this walk (the node's step adjustment; [`ControlOp::Start`] walks
+    /// the steps where they are commanded).
+    StartAdjusting,
 }
 
 impl ControlOp {
@@ -37,6 +63,7 @@ impl ControlOp {
             ControlOp::Stop => 2,
             ControlOp::StopNow => 3,
             ControlOp::Reset => 4,
+            ControlOp::StartAdjusting => 5,
         }
     }
     fn from_code(c: u8) -> Option<Self> {
@@ -46,6 +73,7 @@ impl ControlOp {
             2 => ControlOp::Stop,
             3 => ControlOp::StopNow,
             4 => ControlOp::Reset,
+            5 => ControlOp::StartAdjusting,
             _ => return None,
         })
     }
@@ -73,15 +101,21 @@ pub enum Command {
     Append(WireStep),
     /// Modify a queued footstep.
     Modify(WireModify),
+    /// The robot's measured state (not a command of the controller: it never proves the
+    /// controller alive).
+    Measured(Measured),
 }
 
 impl Command {
-    /// Validates a frame, for a node whose next append is step number `next` (the footstep
-    /// frames' numbers are read by [`step_number`], and their CRC is keyed with the number's
-    /// [`super::step_key`]). On error, the reason and the low byte of the sequence or step number to
-    /// answer with (0 when the frame is too short to carry one).
+    /// Validates a frame, for a node in the state `expect` says ([`Expect`]; a `u16` is the
+    /// next step number). On error, the reason and the low byte of the sequence, step number
+    /// or stamp to answer with (0 when the frame is too short to carry one).
     #[inline(never)] // (one copy for its callers)
-    pub fn decode(f: &RawFrame, next: u16) -> Result<Self, (Reason, u8)> {
+    pub fn decode(f: &RawFrame, expect: impl Into<Expect>) -> Result<Self, (Reason, u8)> {
+        let Expect {
+            next_step: next,
+            epoch,
+        } = expect.into();
         let b = f.bytes();
         let first = b.first().copied().unwrap_or(0);
         let need = |n: usize, key: u8| {
@@ -107,6 +141,12 @@ impl Command {
                 let op = ControlOp::from_code(b[6]).ok_or((Reason::OutOfRange, low))?;
                 Ok(Command::Control { session, seq, op })
             }
+            ids::MEASURED => {
+                need(8, first)?;
+                Measured::decode(b, epoch)
+                    .map(Command::Measured)
+                    .map_err(|r| (r, first))
+            }
             ids::STEP_APPEND | ids::STEP_MODIFY => {
                 need(8, first)?;
                 let number = step_number(first, next);
@@ -125,8 +165,18 @@ impl Command {
         }
     }
 
-    /// The frame that carries this command.
+    /// The frame that carries this command (a measured state for session epoch 0: see
+    /// [`Command::encode_in`]).
     pub fn encode(&self) -> RawFrame {
+        self.encode_in(0)
+    }
+
+    /// The frame that carries this command in the session `epoch` (only the measured state's
+    /// CRC depends on it).
+    pub fn encode_in(&self, epoch: u32) -> RawFrame {
+        if let Command::Measured(m) = self {
+            return m.encode(epoch);
+        }
         let (id, data, n) = match self {
             Command::EmergencyStop { seq } => (ids::ESTOP, [*seq, 0, 0, 0, 0, 0, 0, 0], 1),
             Command::Control { session, seq, op } => {
@@ -138,6 +188,7 @@ impl Command {
             }
             Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
             Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
+            Command::Measured(m) => (ids::MEASURED, m.encode(0).data, 8),
         };
         RawFrame {
             id,
@@ -167,6 +218,7 @@ impl Command {
             Command::Modify(m) => m.id as u8,
             Command::Control { seq, .. } => *seq as u8,
             Command::EmergencyStop { seq } => *seq,
+            Command::Measured(m) => m.stamp as u8,
         }
     }
 
@@ -177,14 +229,21 @@ impl Command {
             Command::Control { .. } => ids::CONTROL,
             Command::Append(_) => ids::STEP_APPEND,
             Command::Modify(_) => ids::STEP_MODIFY,
+            Command::Measured(_) => ids::MEASURED,
         };
         (id & 0xFF) as u8
     }
 
     /// What the `ACK` to this command echoes: the last byte of its frame (the CRC, except for
-    /// the emergency stop, whose only byte is its sequence number).
+    /// the emergency stop, whose only byte is its sequence number; a measured state's for
+    /// session epoch 0: see [`Command::echo_in`]).
     pub fn echo(&self) -> u8 {
         echo_of(&self.encode())
+    }
+
+    /// [`Command::echo`] in the session `epoch`.
+    pub fn echo_in(&self, epoch: u32) -> u8 {
+        echo_of(&self.encode_in(epoch))
     }
 }
 
@@ -197,8 +256,8 @@ pub fn echo_of(f: &RawFrame) -> u8 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Ack {
-    /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0x00 append,
-    /// 0x01 modify).
+    /// Low byte of the command's identifier (0x10 e-stop, 0x20 control, 0xD8 measured state,
+    /// 0x00 append, 0x01 modify).
     pub command: u8,
     /// The low byte of the command's sequence number or step number.
     pub seq: u8,

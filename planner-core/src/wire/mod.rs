@@ -60,13 +60,18 @@
 //!   frame is [`Reason::Duplicate`], an older version [`Reason::Stale`]. The modification
 //!   carries its position as the offset from the appended position, its heading absolute;
 //!   [`StepBook`] keeps what a controller needs for that.
+//! * **Measured state.** `MEASURED` names the node cycle whose reference it was measured
+//!   against (24 bits: exact for a start-up's first 2²⁴ cycles, 23.3 hours; beyond, refused
+//!   [`Reason::Exhausted`]) and its CRC is keyed with the session: it is taken only if it is
+//!   at most [`crate::node::NodeConfig::measured_max_age`] cycles old, newer than the last
+//!   one taken, and of the open session. It never proves the controller alive.
 //! * **`ESTOP`** belongs to no session on purpose: any frame on its identifier with the right
 //!   length stops the robot, in the cycle it is received (a stop is always safe), and proves
 //!   nothing about the controller.
 //!
 //! # End-to-end protection (CRC-8)
 //! CAN's own CRC-15 catches errors on the wire, not a frame a faulty gateway or controller
-//! corrupts before it is sent. `CONTROL`, `STEP_APPEND`, `STEP_MODIFY` and `ACK` therefore
+//! corrupts before it is sent. `CONTROL`, `STEP_APPEND`, `STEP_MODIFY`, `MEASURED`, `ACK` and `ADJUST` therefore
 //! end with a CRC-8 (AUTOSAR profile: polynomial 0x2F, initial value and final XOR 0xFF; Hamming
 //! distance 4 up to 119 data bits, so every 1-, 2- and 3-bit error of these frames is caught)
 //! computed over the identifier (two bytes, little-endian: a frame moved to another identifier
@@ -93,18 +98,20 @@
 //! | id | name | dir | dlc | layout |
 //! |---|---|---|---|---|
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
-//! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset), crc u8 |
+//! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset, 5 start with step adjustment), crc u8 |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step number's low byte u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
 //! | 0x101 | `STEP_MODIFY` | in | 8 | step number's low byte u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
+//! | 0x0D8 | `MEASURED` | in | 8 | stamp u24 (the node cycle measured against), DCM deviation from that cycle's reference x i15, y i15 (0.1 mm), reserved u2 (0), crc u8 keyed with the session (see `measured.rs`) |
+//! | 0x090 | `ADJUST` | out | 8 | first step number's low byte u8, shift x i16, y i16 (0.5 mm), adjustments u8, flags u8, crc u8 |
 //! | 0x080 | `ACK` | out | 7 | command code u8, seq's or step number's low byte u8, reason u8 (0 = accepted), queue length u8, echo u8, step version in force u8 (0xFF: none), crc u8 |
 //! | 0x200 | `COG` | out | 8 | x i32 µm, y i32 µm |
 //! | 0x201 | `ZMP` | out | 8 | x i32 µm, y i32 µm |
-//! | 0x202 | `COG_VEL` | out | 6 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u8 |
+//! | 0x202 | `COG_VEL` | out | 8 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u24 (the low 24 bits of the node's cycle) |
 //! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
 //! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
 //! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 (shaping u1, re-plan failed u1, tx overflow u1, next side u2, clock fault u1, reserved u2) |
 //! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next step number u16 |
-//! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, reserved u2 (0), bus-offs u16, error-passive episodes u16, missed slots u8 |
+//! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, message RAM faults u2, bus-offs u16, error-passive episodes u12, bus-off back-off u4, missed slots u8 |
 //! | 0x303 | `SESSION` | out | 8 | session epoch u32, last accepted control seq u32 (0: none) |
 //!
 //! `STATUS`, `DIAG`, `SESSION` (and `LINK`) go out in the node's first cycle and every 20
@@ -128,16 +135,20 @@
 //! * `status.rs`: the node's periodic reports [`Status`], [`Diag`], [`LinkHealth`] and
 //!   [`Session`];
 //! * `stream.rs`: the 5 ms reference [`Stream`] and its fixed-point encoding;
+//! * `measured.rs`: the robot's measured state from its estimator ([`Measured`]) and the
+//!   node's step adjustment ([`Adjust`]);
 //! * `tests.rs`: the unit tests of the message set.
 
 mod command;
+mod measured;
 mod status;
 mod step;
 mod stream;
 #[cfg(test)]
 mod tests;
 
-pub use command::{echo_of, step_number, Ack, Command, ControlOp};
+pub use command::{echo_of, step_number, Ack, Command, ControlOp, Expect};
+pub use measured::{Adjust, Measured, DEVIATION_BITS, DEVIATION_UNIT, STAMPS};
 pub use status::{Diag, LinkHealth, Session, Status};
 pub use step::{
     signed_range, StepBook, WireModify, WireStep, FOOT_UNIT, OFFSET_BITS, STEP_BITS, STEP_UNIT,
@@ -157,6 +168,11 @@ pub mod ids {
     pub const STEP_APPEND: u16 = 0x100;
     /// Modify a queued footstep (controller → node).
     pub const STEP_MODIFY: u16 = 0x101;
+    /// The robot's measured state (state estimator → node), up to every 5 ms.
+    pub const MEASURED: u16 = 0x0D8;
+    /// The node's step adjustment: the shift of the steps from a step number on (node →
+    /// controller), when it changes and every 100 ms.
+    pub const ADJUST: u16 = 0x090;
     /// COG position reference, every 5 ms.
     pub const COG: u16 = 0x200;
     /// ZMP reference, every 5 ms.
@@ -177,8 +193,9 @@ pub mod ids {
     /// The session epoch and the last accepted control sequence number, every 100 ms.
     pub const SESSION: u16 = 0x303;
 
-    /// The identifiers the node receives: everything else on the bus is not its business.
-    pub const COMMANDS: [u16; 4] = [ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY];
+    /// The identifiers the node receives (its commands and the measured state): everything
+    /// else on the bus is not its business.
+    pub const COMMANDS: [u16; 5] = [ESTOP, CONTROL, MEASURED, STEP_APPEND, STEP_MODIFY];
 
     /// `true` for one of [`COMMANDS`].
     pub fn is_command(id: u16) -> bool {
@@ -314,19 +331,21 @@ pub enum Reason {
     /// Older than what is in force: a modification whose version is below the step's
     /// version in force (or a newer modification of the same step received in the same cycle
     /// was accepted), a footstep frame that arrived before a `StopNow` carried out in the same
-    /// cycle, a control command whose sequence number is below the last accepted one.
+    /// cycle, a control command whose sequence number is below the last accepted one, a
+    /// measured state older than the node's limit or than the last one taken.
     Stale = 17,
     /// The controller fell silent while the robot walked (or the node's clock stopped):
     /// motion commands are refused until a `Reset` once standing.
     ControllerLost = 18,
     /// The `CONTROL` frame belongs to another session (before the last `Reset`, or another
-    /// start-up of the node).
+    /// start-up of the node); a measured state stamped before the session opened.
     WrongSession = 19,
     /// No session is open (after start-up): only a `Reset` (the handshake) and `ESTOP` are
     /// taken.
     NoSession = 20,
     /// A counter would run out: the start-up's 65,535 step numbers, a step's 127 versions,
-    /// the 2³² sessions or sequence numbers.
+    /// the 2³² sessions or sequence numbers, the 2²⁴ cycles whose measured states a start-up
+    /// takes.
     Exhausted = 21,
     /// The cycle's planning budget is spent (one `Start` or modification of the next swing
     /// target a cycle): send it again.
@@ -380,7 +399,7 @@ pub fn crc8(id: u16, data: &[u8]) -> u8 {
     crc8_over(id, None, data)
 }
 
-/// CRC-8 of a footstep frame: [`crc8`] with `key` ([`step_key`] of the step number, not sent)
+/// CRC-8 of a footstep or measured-state frame: [`crc8`] with `key` ([`step_key`] of the step number, not sent)
 /// between the identifier and the data. A copy that differs from the expected frame only in
 /// the key differs in 8 consecutive bits of the CRC's input, and a CRC with 8 check bits
 /// detects every such error: it never passes.

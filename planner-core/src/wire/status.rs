@@ -129,15 +129,21 @@ pub struct LinkHealth {
     pub bus_state: u8,
     /// Why the board last started: 0 unknown, 1 power-on, 2 pin, 3 brown-out, 4 software,
     /// 5 independent watchdog, 6 window watchdog, 7 fault handler, 8 clock failure,
-    /// 9 low-power.
+    /// 9 low-power, 10 HSE not ready at start-up.
     pub reset: u8,
     /// Bus-off events since start-up (each recovered), saturating.
     pub bus_offs: u16,
-    /// Entries into error-passive since start-up, saturating.
+    /// Entries into error-passive since start-up, saturating (12 bits on the wire: 4,095).
     pub passive_episodes: u16,
     /// 5 ms slots the control loop missed since start-up (an overrun longer than a period),
     /// saturating at 255.
     pub missed_slots: u8,
+    /// The bus-off back-off (4 bits): 0 none (no bus-off since the last error-free stretch
+    /// on the bus); `n` ≥ 1: the last bus-off kept the node off the bus for 2^(n-1) control
+    /// cycles (7: the cap, 64 cycles = 320 ms).
+    pub backoff: u8,
+    /// Message RAM access failures since start-up (each recovered), saturating at 3 (2 bits).
+    pub ram_faults: u8,
 }
 
 impl LinkHealth {
@@ -151,19 +157,26 @@ impl LinkHealth {
         bus_offs: 0,
         passive_episodes: 0,
         missed_slots: 0,
+        backoff: 0,
+        ram_faults: 0,
     };
 
-    /// The frame (fields beyond their widths are cut to them).
+    /// The largest `passive_episodes` on the wire (12 bits).
+    pub const PASSIVE_EPISODES_MAX: u16 = 0x0FFF;
+
+    /// The frame (fields beyond their widths are cut to them; `passive_episodes` and
+    /// `ram_faults` saturate at their widths' maxima).
     pub fn encode(&self) -> RawFrame {
         let [b0, b1] = self.bus_offs.to_le_bytes();
-        let [p0, p1] = self.passive_episodes.to_le_bytes();
+        let passive = self.passive_episodes.min(Self::PASSIVE_EPISODES_MAX);
+        let [p0, p1] = (passive | (u16::from(self.backoff & 0xF) << 12)).to_le_bytes();
         RawFrame {
             id: ids::LINK,
             len: 8,
             data: [
                 self.tec,
                 (self.rec & 0x7F) | (u8::from(self.rx_passive) << 7),
-                (self.bus_state & 0x3) | ((self.reset & 0xF) << 2),
+                (self.bus_state & 0x3) | ((self.reset & 0xF) << 2) | (self.ram_faults.min(3) << 6),
                 b0,
                 b1,
                 p0,
@@ -185,8 +198,10 @@ impl LinkHealth {
             bus_state: d[2] & 0x3,
             reset: (d[2] >> 2) & 0xF,
             bus_offs: u16::from_le_bytes([d[3], d[4]]),
-            passive_episodes: u16::from_le_bytes([d[5], d[6]]),
+            passive_episodes: u16::from_le_bytes([d[5], d[6]]) & Self::PASSIVE_EPISODES_MAX,
             missed_slots: d[7],
+            backoff: d[6] >> 4,
+            ram_faults: d[2] >> 6,
         })
     }
 }

@@ -47,8 +47,8 @@ pub struct Stream<T = f64> {
     pub zmp: [T; 2],
     /// Phase: 0 standing, 1 double support, 2 single support on the left foot, 3 on the right.
     pub phase: u8,
-    /// Low byte of the tick counter.
-    pub tick: u8,
+    /// The low 24 bits of the node's cycle counter (the stamp a measured state names).
+    pub tick: u32,
     /// Left and right foot: x, y, z \[m\], yaw \[rad\].
     pub feet: [[T; 4]; 2],
 }
@@ -86,10 +86,13 @@ impl<T: Real> Stream<T> {
         [
             pos(ids::COG, self.cog),
             pos(ids::ZMP, self.zmp),
-            RawFrame {
-                id: ids::COG_VEL,
-                len: 6,
-                data: [vx[0], vx[1], vy[0], vy[1], self.phase, self.tick, 0, 0],
+            {
+                let [t0, t1, t2, _] = self.tick.to_le_bytes();
+                RawFrame {
+                    id: ids::COG_VEL,
+                    len: 8,
+                    data: [vx[0], vx[1], vy[0], vy[1], self.phase, t0, t1, t2],
+                }
             },
             foot(ids::FOOT_LEFT, self.feet[0]),
             foot(ids::FOOT_RIGHT, self.feet[1]),
@@ -106,13 +109,13 @@ impl Stream<f64> {
         match (f.id, f.len) {
             (ids::COG, 8) => self.cog = [f64::from(i32at(0)) * 1e-6, f64::from(i32at(4)) * 1e-6],
             (ids::ZMP, 8) => self.zmp = [f64::from(i32at(0)) * 1e-6, f64::from(i32at(4)) * 1e-6],
-            (ids::COG_VEL, 6) => {
+            (ids::COG_VEL, 8) => {
                 self.cog_vel = [
                     f64::from(i16::from_le_bytes([d[0], d[1]])) * 1e-4,
                     f64::from(i16::from_le_bytes([d[2], d[3]])) * 1e-4,
                 ];
                 self.phase = d[4];
-                self.tick = d[5];
+                self.tick = u32::from_le_bytes([d[5], d[6], d[7], 0]);
             }
             (ids::FOOT_LEFT | ids::FOOT_RIGHT, 8) => {
                 let bits = u64::from_le_bytes(*d);

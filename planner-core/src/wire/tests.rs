@@ -125,7 +125,7 @@ fn steps_round_trip_at_wire_precision() {
     assert!(WireStep::from_si(0, false, f64::NAN, 0.0, 0.0).is_none());
 }
 
-/// Every heading is representable: ±π, π − half a unit, several turns (issue 10, item 7).
+/// Every heading is representable: ±π, π − half a unit, several turns.
 #[test]
 fn every_finite_heading_is_representable() {
     use core::f64::consts::{PI, TAU};
@@ -141,7 +141,7 @@ fn every_finite_heading_is_representable() {
 }
 
 /// Encoder and decoder agree on every range: the extreme values the decoder accepts are
-/// produced by the encoder, and one unit beyond is refused by it (issue 10, item 7).
+/// produced by the encoder, and one unit beyond is refused by it.
 #[test]
 fn encoder_and_decoder_agree_on_the_ranges() {
     let (min, max) = signed_range(STEP_BITS);
@@ -347,6 +347,12 @@ fn every_one_two_and_three_bit_error_is_caught() {
             seq: 77,
             op: ControlOp::Stop,
         },
+        Command::Measured(Measured::from_si(0x12_3456, [1.5, -0.25]).unwrap()),
+        Command::Control {
+            session: 0x4321,
+            seq: 78,
+            op: ControlOp::StartAdjusting,
+        },
     ] {
         let f = cmd.encode();
         let n = 8 * usize::from(f.len) + 11; // data bits, then the identifier's
@@ -427,12 +433,32 @@ fn acks_status_and_stream_round_trip() {
         bus_state: 3,
         reset: 9,
         bus_offs: 513,
-        passive_episodes: 40_000,
+        passive_episodes: 4_000,
         missed_slots: 255,
+        backoff: 7,
+        ram_faults: 2,
     };
     assert_eq!(LinkHealth::decode(&l.encode()), Some(l));
-    assert_eq!(l.encode().data[2], 3 | 9 << 2);
+    assert_eq!(l.encode().data[2], 3 | 9 << 2 | 2 << 6);
     assert_eq!(l.encode().data[1], 0xFF);
+    // passive_episodes 12 bits, the back-off in the high nibble of byte 6.
+    assert_eq!(l.encode().data[5..7], [0xA0, 0x7F]);
+    // Beyond their widths: passive_episodes and ram_faults saturate, the back-off is cut.
+    let big = LinkHealth {
+        passive_episodes: 40_000,
+        ram_faults: 200,
+        backoff: 0x17,
+        ..l
+    };
+    let back = LinkHealth::decode(&big.encode()).unwrap();
+    assert_eq!(
+        (back.passive_episodes, back.ram_faults, back.backoff),
+        (4095, 3, 7)
+    );
+    // Every frame decodes to values that encode to it again (no reserved bit left).
+    let mut f = l.encode();
+    f.data = [0xFF; 8];
+    assert_eq!(LinkHealth::decode(&f).unwrap().encode(), f);
     let s = Status {
         state: 1,
         queue: 4,
@@ -480,4 +506,67 @@ fn acks_status_and_stream_round_trip() {
     let mut edge = Stream::default();
     assert!(edge.decode_into(&below));
     assert_eq!(edge.feet[0], back.feet[0]);
+}
+
+/// A measured state survives its encoding, its CRC is keyed with the session's low byte
+/// (another session's frame is `BadCrc`), the reserved bits are refused, and out-of-range
+/// values are not encoded.
+#[test]
+fn measured_states_round_trip_and_belong_to_their_session() {
+    for (cycle, dev) in [
+        (0u32, [0.0, 0.0]),
+        (0x00FF_FFFF, [1.6383, -1.6384]),
+        (0x0123_4567, [-0.0001, 0.0004]),
+    ] {
+        let m = Measured::from_si(cycle, dev).unwrap();
+        assert_eq!(m.stamp, cycle & 0xFF_FFFF);
+        for epoch in [0u32, 0x1234_5678, u32::MAX] {
+            let f = m.encode(epoch);
+            let expect = Expect {
+                next_step: 0,
+                epoch,
+            };
+            assert_eq!(Command::decode(&f, expect), Ok(Command::Measured(m)));
+            let other = Expect {
+                next_step: 0,
+                epoch: epoch.wrapping_add(1),
+            };
+            assert_eq!(
+                Command::decode(&f, other),
+                Err((Reason::BadCrc, m.stamp as u8))
+            );
+        }
+        let back = m.deviation_in::<f64>();
+        assert!((dev[0] - back[0]).abs() <= 5e-5 && (dev[1] - back[1]).abs() <= 5e-5);
+    }
+    assert_eq!(Measured::from_si(0, [1.6384, 0.0]), None);
+    assert_eq!(Measured::from_si(0, [f64::NAN, 0.0]), None);
+    // Either reserved bit set (with a right CRC) is refused.
+    for bit in [0x40u8, 0x80] {
+        let mut d = Measured::from_si(5, [0.1, 0.1]).unwrap().encode(0).data;
+        d[6] |= bit;
+        d[7] = crc8_keyed(ids::MEASURED, 0, &d[..7]);
+        let f = RawFrame::new(ids::MEASURED, &d).unwrap();
+        assert_eq!(Command::decode(&f, 0), Err((Reason::OutOfRange, 5)));
+    }
+    let d = Measured::from_si(5, [0.1, 0.1]).unwrap().encode(0).data;
+    let short = RawFrame::new(ids::MEASURED, &d[..7]).unwrap();
+    assert_eq!(Command::decode(&short, 0), Err((Reason::BadLength, 5)));
+}
+
+/// `ADJUST` survives its encoding and its CRC catches a flipped bit.
+#[test]
+fn adjustments_round_trip() {
+    let a = Adjust {
+        from: 0xA5,
+        shift: [-1234, 32767],
+        count: 3,
+        flags: Adjust::REACH_LIMITED | Adjust::FRESH,
+    };
+    let f = a.encode();
+    assert_eq!(Adjust::decode(&f), Some(a));
+    assert!((a.shift_si()[0] + 0.617).abs() < 1e-12);
+    let mut g = f;
+    g.data[3] ^= 0x10;
+    assert_eq!(Adjust::decode(&g), None);
 }

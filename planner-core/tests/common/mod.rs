@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 
 use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::wire::{
-    Ack, Command, ControlOp, Diag, RawFrame, Reason, Session, Status, StepBook, Stream,
+    Ack, Command, ControlOp, Diag, Measured, RawFrame, Reason, Session, Status, StepBook, Stream,
 };
 
 /// The in-memory device.
@@ -185,11 +185,11 @@ impl Rig {
         let epoch = self.session.epoch;
         let mut without = self.n.clone();
         without.poll(self.t + 5, &mut Bus::default());
-        self.bus.rx.push_back(c.encode());
+        self.bus.rx.push_back(c.encode_in(epoch));
         let acks = self.cycle();
         let a = acks
             .iter()
-            .find(|a| a.command == c.code() && a.echo == c.echo())
+            .find(|a| a.command == c.code() && a.echo == c.echo_in(epoch))
             .unwrap_or_else(|| panic!("no answer to {c:?}: {acks:?}"));
         if a.reason.is_some() {
             assert!(
@@ -218,6 +218,12 @@ impl Rig {
     pub fn modify(&mut self, id: u16, x: f64, y: f64) -> Option<Reason> {
         let c = self.book.modify(id, x, y, 0.0).unwrap();
         self.ask(c)
+    }
+    /// A measured state (the DCM's deviation `deviation` from the reference) against the last
+    /// reference published.
+    pub fn measure(&mut self, deviation: [f64; 2]) -> Option<Reason> {
+        let m = Measured::from_si(self.n.cycles(), deviation).expect("representable");
+        self.ask(Command::Measured(m))
     }
     pub fn control(&mut self, op: ControlOp) -> Option<Reason> {
         let c = self.command(op);

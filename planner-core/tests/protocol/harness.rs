@@ -16,6 +16,9 @@ pub(crate) struct Stats {
     pub(crate) demanded: [u64; Reason::CODES],
     pub(crate) appends: u64,
     pub(crate) modifications: u64,
+    pub(crate) measured: u64,
+    /// Cycles in which the node's step adjustment moved its steps.
+    pub(crate) adjusted: u64,
     pub(crate) walked: u64,
     pub(crate) walked_modified: u64,
     pub(crate) padded: u64,
@@ -60,6 +63,8 @@ pub(crate) struct Harness<'a> {
     /// The reference and the swing of the cycle before.
     pub(crate) prev: Reference<f64>,
     pub(crate) prev_swing: Option<u16>,
+    /// The node's step-adjustment shift after the last cycle \[0.5 mm\].
+    pub(crate) shift: [i32; 2],
     /// The side of the padded step being swung.
     pub(crate) padded: Option<Side>,
     pub(crate) stats: &'a mut Stats,
@@ -94,6 +99,7 @@ impl<'a> Harness<'a> {
             estop_seq: 0,
             prev,
             prev_swing: None,
+            shift: [0, 0],
             padded: None,
             stats,
         }
@@ -109,6 +115,7 @@ impl<'a> Harness<'a> {
         let now = self.now.wrapping_add(dt);
         let standing = self.n.gait().is_standing();
         let next_side = self.n.gait().next_side();
+        self.model.cycle = u64::from(self.n.cycles());
         let expect = frame.map(|f| self.model.expect(&f, standing, next_side));
         let without = frame.map(|_| {
             let mut w = self.n.clone();
@@ -147,7 +154,7 @@ impl<'a> Harness<'a> {
                 self.stats.foreign += 1;
             }
             (Some(f), Some(Answer::OneOf(allowed)), Some(without)) => {
-                let cmd = Command::decode(&f, self.model.next);
+                let cmd = Command::decode(&f, self.model.expect_for_decode());
                 ensure!(acks.len() == 1, "{f:?} ({cmd:?}): answers {acks:?}");
                 let a = acks[0];
                 let echo = f.bytes().last().copied().unwrap_or(0);
@@ -182,7 +189,8 @@ impl<'a> Harness<'a> {
                         self.stats.accepted += 1;
                         match c {
                             Command::Control { op, .. } => {
-                                started = op == ControlOp::Start;
+                                started =
+                                    matches!(op, ControlOp::Start | ControlOp::StartAdjusting);
                                 rebased = op == ControlOp::Reset;
                             }
                             Command::Append(s) => {
@@ -194,6 +202,7 @@ impl<'a> Harness<'a> {
                             }
                             Command::Modify(_) => self.stats.modifications += 1,
                             Command::EmergencyStop { .. } => {}
+                            Command::Measured(_) => self.stats.measured += 1,
                         }
                         if rebased {
                             self.book.clear();
@@ -269,7 +278,9 @@ impl<'a> Harness<'a> {
                         "step {a} landed, the model swings {st:?}"
                     );
                     let f = feet[ix(st.side())];
-                    let (x, y, yaw) = st.pose;
+                    // Where it was commanded, moved by the step adjustment's shift that was in
+                    // force when it lifted off.
+                    let (x, y, yaw) = (st.pose.0 + st.shift.0, st.pose.1 + st.shift.1, st.pose.2);
                     ensure!(
                         (f.x - x).abs() <= POSE_TOLERANCE
                             && (f.y - y).abs() <= POSE_TOLERANCE
@@ -329,6 +340,8 @@ impl<'a> Harness<'a> {
                         st.side()
                     );
                     st.fate = Fate::Swinging;
+                    let [sx, sy] = self.n.shift();
+                    st.shift = (f64::from(sx) * 5e-4, f64::from(sy) * 5e-4);
                     self.model.swing = Some(i);
                 }
             }
@@ -338,6 +351,17 @@ impl<'a> Harness<'a> {
             !self.n.gait().replan_failed(),
             "a re-plan failed (the gait dropped its queue and settles)"
         );
+        // Steps move only in a walk the controller started with step adjustment.
+        let shift = self.n.shift();
+        ensure!(
+            shift == self.shift || self.model.adjusting || (rebased && shift == [0, 0]),
+            "the node moved its steps ({:?} to {shift:?}) in a walk started without adjustment",
+            self.shift
+        );
+        if shift != self.shift {
+            self.stats.adjusted += 1;
+        }
+        self.shift = shift;
         ensure!(
             queued == self.model.queue.len(),
             "the gait queues {queued} steps, the model {}",
@@ -678,14 +702,25 @@ impl<'a> Harness<'a> {
                 Some(Command::EmergencyStop { seq }.encode())
             }
             Op::Foreign(i, n, b) => RawFrame::new(FOREIGN_IDS[i], &vec![b; usize::from(n % 9)]),
+            Op::Measure(back, valid, this_session) => {
+                let stamp = self.n.cycles().wrapping_sub(back);
+                let dev = [0.01 * f64::from(back % 7), if valid { -0.02 } else { 0.0 }];
+                let m = Measured::from_si(stamp, dev).ok_or("a measured state out of range")?;
+                let epoch = self.n.session().epoch;
+                Some(m.encode(if this_session {
+                    epoch
+                } else {
+                    epoch.wrapping_sub(1)
+                }))
+            }
             Op::Corrupt(k, bit) => {
                 let protected: Vec<RawFrame> = self
                     .sent
                     .iter()
                     .copied()
                     .filter(|f| {
-                        matches!(f.id, 0x020 | 0x100 | 0x101)
-                            && Command::decode(f, self.model.next).is_ok()
+                        matches!(f.id, 0x020 | 0x0D8 | 0x100 | 0x101)
+                            && Command::decode(f, self.model.expect_for_decode()).is_ok()
                     })
                     .collect();
                 let mut f = protected
@@ -702,7 +737,8 @@ impl<'a> Harness<'a> {
                     .iter()
                     .copied()
                     .filter(|f| {
-                        COMMAND_IDS.contains(&f.id) && Command::decode(f, self.model.next).is_ok()
+                        COMMAND_IDS.contains(&f.id)
+                            && Command::decode(f, self.model.expect_for_decode()).is_ok()
                     })
                     .collect();
                 let f = ours

@@ -70,17 +70,20 @@ use common::{Bus, N};
 use planner_core::gait::{FootPose, Phase, Reference, Side};
 use planner_core::node::{NodeConfig, NodeState, HISTORY};
 use planner_core::wire::{
-    Ack, Command, ControlOp, Diag, RawFrame, Reason, StepBook, WireModify, WireStep,
+    Ack, Command, ControlOp, Diag, Expect, Measured, RawFrame, Reason, StepBook, WireModify,
+    WireStep, STAMPS,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{RngSeed, TestCaseError, TestRunner};
 
-/// The node's command identifiers (README: ESTOP, CONTROL, STEP_APPEND, STEP_MODIFY); every
-/// other frame is not its business and must get no answer.
-const COMMAND_IDS: [u16; 4] = [0x010, 0x020, 0x100, 0x101];
+/// The node's identifiers (ESTOP, CONTROL, MEASURED, STEP_APPEND, STEP_MODIFY); every other
+/// frame is not its business and must get no answer.
+const COMMAND_IDS: [u16; 5] = [0x010, 0x020, 0x0D8, 0x100, 0x101];
 /// Frames on other identifiers: random ones, the node's own output identifiers, neighbours of
 /// its command identifiers.
-const FOREIGN_IDS: [u16; 8] = [0x555, 0x7FF, 0x000, 0x080, 0x201, 0x300, 0x102, 0x011];
+const FOREIGN_IDS: [u16; 9] = [
+    0x555, 0x7FF, 0x000, 0x080, 0x090, 0x201, 0x300, 0x102, 0x011,
+];
 /// The queue capacity of the rig's node.
 const Q: usize = 16;
 /// How far the reference ZMP may be outside the support polygon \[m\]. Measured (release
@@ -154,6 +157,7 @@ fn random_programs_keep_the_protocol() {
         }
         all.appends += s.appends;
         all.modifications += s.modifications;
+        all.measured += s.measured;
         all.walked += s.walked;
         all.walked_modified += s.walked_modified;
         all.padded += s.padded;
@@ -233,6 +237,8 @@ fn random_programs_keep_the_protocol() {
         );
         assert!(s.dropped.iter().all(|&d| d > 0), "{s:#?}");
         assert!(s.lost > 0 && s.resets > 0 && s.foreign > 0, "{s:#?}");
+        // Measured states are taken as well as refused.
+        assert!(s.measured > 0, "no measured state was taken: {s:#?}");
         // Lift-offs close to the supervision bound.
         assert!(s.liftoff_silence > 400, "{s:#?}");
     }

@@ -32,6 +32,8 @@ pub(crate) struct Step {
     /// The pose of the version in force (SI, in the epoch's frame).
     pub(crate) pose: (f64, f64, f64),
     pub(crate) fate: Fate,
+    /// The step adjustment's shift in force when it lifted off \[m\].
+    pub(crate) shift: (f64, f64),
     pub(crate) walked: u32,
     pub(crate) modified: u32,
 }
@@ -106,7 +108,18 @@ pub(crate) struct Model {
     pub(crate) heard_cycle: u64,
     /// Supervision's timeout in cycles.
     pub(crate) timeout_cycles: u64,
+    /// The node's cycles before the frame's (the last reference published names this one).
+    pub(crate) cycle: u64,
+    /// The cycle in which the open session opened, and the cycle the last measured state
+    /// taken names.
+    pub(crate) opened_at: u64,
+    pub(crate) measured: Option<u64>,
+    /// The walk was started with step adjustment.
+    pub(crate) adjusting: bool,
 }
+
+/// The oldest measured state the node takes \[cycles\] (`AdjustConfig::DEFAULT`).
+const MAX_AGE: u64 = 4;
 
 impl Model {
     pub(crate) fn new(timeout: u32) -> Self {
@@ -127,6 +140,18 @@ impl Model {
             last_heard: None,
             heard_cycle: 0,
             timeout_cycles: u64::from(timeout).div_ceil(5),
+            cycle: 0,
+            opened_at: 0,
+            measured: None,
+            adjusting: false,
+        }
+    }
+
+    /// What the node's decoder depends on (the next step number, the session epoch).
+    pub(crate) fn expect_for_decode(&self) -> Expect {
+        Expect {
+            next_step: self.next,
+            epoch: self.session,
         }
     }
 
@@ -186,7 +211,7 @@ impl Model {
         if !COMMAND_IDS.contains(&f.id) {
             return Answer::Ignored;
         }
-        let cmd = match Command::decode(f, self.next) {
+        let cmd = match Command::decode(f, self.expect_for_decode()) {
             Ok(c) => c,
             Err((r, _)) => return must(r),
         };
@@ -223,7 +248,7 @@ impl Model {
                             must(WrongState)
                         }
                     }
-                    ControlOp::Start => {
+                    ControlOp::Start | ControlOp::StartAdjusting => {
                         if self.estopped {
                             must(EmergencyStopped)
                         } else if self.lost {
@@ -257,6 +282,30 @@ impl Model {
                     Answer::OneOf(vec![Some(Reach), Some(Crossing), Some(QueueFull)])
                 } else {
                     Answer::OneOf(vec![None, Some(Reach), Some(Crossing)])
+                }
+            }
+            Command::Measured(m) => {
+                if !self.open {
+                    return must(NoSession);
+                } else if self.estopped {
+                    return must(EmergencyStopped);
+                } else if self.lost {
+                    return must(ControllerLost);
+                }
+                let latest = self.cycle;
+                let age = latest.wrapping_sub(u64::from(m.stamp)) & u64::from(STAMPS - 1);
+                if age > MAX_AGE || age > latest {
+                    return must(Stale);
+                }
+                let at = latest - age;
+                if at < self.opened_at {
+                    must(WrongSession)
+                } else if self.measured == Some(at) {
+                    must(Duplicate)
+                } else if self.measured.is_some_and(|last| last > at) {
+                    must(Stale)
+                } else {
+                    accepted()
                 }
             }
             Command::Modify(m) => {
@@ -298,8 +347,9 @@ impl Model {
         cycle: u64,
         standing: bool,
     ) {
-        // Every accepted command but an emergency stop proves the controller alive.
-        if !matches!(cmd, Command::EmergencyStop { .. }) {
+        // Every accepted command but an emergency stop (and the estimator's measured state)
+        // proves the controller alive.
+        if !matches!(cmd, Command::EmergencyStop { .. } | Command::Measured(_)) {
             self.last_heard = Some(now);
             self.heard_cycle = cycle;
         }
@@ -313,7 +363,10 @@ impl Model {
                 self.last_seq = seq;
                 match op {
                     ControlOp::Heartbeat => {}
-                    ControlOp::Start => self.stopping = false,
+                    ControlOp::Start | ControlOp::StartAdjusting => {
+                        self.stopping = false;
+                        self.adjusting = op == ControlOp::StartAdjusting;
+                    }
                     ControlOp::Stop => self.stopping |= !standing,
                     ControlOp::StopNow => {
                         self.drop_queue(Dropped::StopNow);
@@ -333,6 +386,9 @@ impl Model {
                             self.next = self.next.wrapping_add(256);
                         }
                         self.open = true;
+                        self.measured = None;
+                        self.opened_at = self.cycle + 1;
+                        self.adjusting = false;
                     }
                 }
             }
@@ -345,11 +401,16 @@ impl Model {
                     in_force: None,
                     pose: s.si(),
                     fate: Fate::Queued,
+                    shift: (0.0, 0.0),
                     walked: 0,
                     modified: 0,
                 });
                 self.queue.push_back(self.steps.len() - 1);
                 self.next = self.next.wrapping_add(1);
+            }
+            Command::Measured(m) => {
+                let age = self.cycle.wrapping_sub(u64::from(m.stamp)) & u64::from(STAMPS - 1);
+                self.measured = Some(self.cycle - age);
             }
             Command::Modify(m) => {
                 let i = self.queued(m.id).expect("the model allowed it: queued");

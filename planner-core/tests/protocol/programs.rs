@@ -72,6 +72,10 @@ pub(crate) enum Op {
     Estop(Seq),
     /// A frame on `FOREIGN_IDS[i]` with `len` bytes of `fill`.
     Foreign(usize, u8, u8),
+    /// A `MEASURED` frame against the reference `back` cycles before the last one published
+    /// (fresh up to the node's 4 cycles; a large `back` is old or, wrapped, from the future),
+    /// valid or not, in the node's session (`true`) or the one before.
+    Measure(u32, bool, bool),
     /// A command frame sent before with one data bit flipped (`BadCrc`).
     Corrupt(usize, u8),
     /// A command frame sent before, cut short or lengthened (`BadLength`).
@@ -138,7 +142,8 @@ pub(crate) fn modify() -> BoxedStrategy<Op> {
 
 pub(crate) fn control() -> BoxedStrategy<Op> {
     let op = prop_oneof![
-        5 => Just(ControlOp::Start),
+        4 => Just(ControlOp::Start),
+        1 => Just(ControlOp::StartAdjusting),
         2 => Just(ControlOp::Stop),
         1 => Just(ControlOp::StopNow),
         1 => Just(ControlOp::Reset),
@@ -161,6 +166,12 @@ pub(crate) fn op() -> impl Strategy<Value = Op> {
             other => other,
         }),
         2 => (0..FOREIGN_IDS.len(), 0u8..9, any::<u8>()).prop_map(|(i, n, b)| Op::Foreign(i, n, b)),
+        2 => (
+            prop_oneof![6 => 0u32..=6, 1 => 0u32..=40, 1 => Just(STAMPS - 1), 1 => any::<u32>()],
+            prop_oneof![4 => Just(true), 1 => Just(false)],
+            prop_oneof![6 => Just(true), 1 => Just(false)],
+        )
+            .prop_map(|(b, v, s)| Op::Measure(b, v, s)),
         2 => (any::<usize>(), any::<u8>()).prop_map(|(p, b)| Op::Corrupt(p, b)),
         2 => (any::<usize>(), any::<u8>()).prop_map(|(p, n)| Op::Truncate(p, n)),
         24 => prop_oneof![3 => 1u32..=200, 1 => 200u32..=400].prop_map(Op::Poll),

@@ -1,0 +1,311 @@
+//! Step adjustment from the measured state: the node moves the next landing (and the steps
+//! after it) to capture a measured deviation from the plan, before that foot lifts off.
+//!
+//! # The law
+//! The state estimator sends the deviation of the measured divergent component of motion
+//! `ξ = x + ẋ/ω` from the reference's, `e = ξ_meas(k) − ξ_ref(k)`, against the reference of a
+//! named cycle `k` (`MEASURED`, see [`crate::wire`]): exactly against the reference the robot
+//! was tracking. With `n` ticks from `k` to the touch-down of the next swing target, the
+//! landing moves by `(e − m) e^{ω n dt}` along `e` ([`crate::capture::capture_offset`]): what
+//! the robot's stabilizer cannot hold with the ZMP margin `m` in the sole
+//! ([`AdjustConfig::margin`]) grows at `ω` until the touch-down, and the foot lands where the
+//! stabilizer can hold it again. This is the capture-point step adjustment of Englsberger et
+//! al. (IROS 2011) and Khadiv et al. (Humanoids 2016), with the paper's eq. 18 in place of
+//! their timing adaptation.
+//!
+//! # One shift for the rest of the walk
+//! The move is a shift `s` (in the footstep unit, 0.5 mm) of the next swing target and every
+//! step after it, queued or appended later, so that the walk after the landing is the plan,
+//! moved: every step lands at its commanded position plus the shift in force when it was
+//! queued or moved. The shift a window's adjustments start from is the one in force when the
+//! window was planned (`base`): before the next re-plan the reference has not moved with the
+//! landing, so `e` is measured against the same plan, and the shift in force is
+//! `base + offset(e)`.
+//!
+//! # Limits
+//! * only in a walk started with `StartAdjusting` (a `CONTROL` operation: the controller opts
+//!   in per walk), only while walking or stopping, only with a measured state at most
+//!   [`AdjustConfig::max_age`] cycles old, only
+//!   before the foot lifts off (the next swing target), and only when the shift changes by at
+//!   least [`AdjustConfig::min_change`];
+//! * the reach limits and the sole gap ([`super::Reach`]) hold for the moved step against the
+//!   feet before it and for its successors: a shift that breaks them is cut to the largest
+//!   part of it (to 1/64) that keeps them (`ADJUST` flag *reach limited*);
+//! * eq. 17 checks the moved next swing target as it checks a modification (the ZMP stays in
+//!   the sole): a shift it refuses is put back and the next attempt in this window takes half
+//!   of it (flag *ZMP limited*);
+//! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`])
+//!   after the commands: a cycle whose budget a command spent does not adjust.
+//!
+//! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms), so that
+//! the controller's book of the steps stays true.
+
+use super::*;
+use crate::capture::capture_offset;
+use crate::wire::{Adjust, Measured, STAMPS, STEP_UNIT};
+
+/// The bound of [`AdjustConfig::max_age`] \[cycles\].
+pub const MAX_AGE: u32 = 40;
+
+/// The step adjustment's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdjustConfig<T = f64> {
+    /// The oldest measured state used \[cycles\] (at most [`MAX_AGE`]).
+    pub max_age: u32,
+    /// The ZMP margin `m` the robot's stabilizer has in the support sole \[m\]: a deviation
+    /// within it is the stabilizer's to absorb (no step).
+    pub margin: T,
+    /// The least change of the shift that is carried out \[m\].
+    pub min_change: T,
+}
+
+impl AdjustConfig {
+    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes.
+    pub const DEFAULT: Self = Self {
+        max_age: 4,
+        margin: 0.02,
+        min_change: 0.005,
+    };
+}
+
+impl<T: Real> AdjustConfig<T> {
+    /// This configuration in the scalar `T`.
+    pub fn cast<U: Real>(&self) -> AdjustConfig<U> {
+        AdjustConfig {
+            max_age: self.max_age,
+            margin: U::of(self.margin.f64()),
+            min_change: U::of(self.min_change.f64()),
+        }
+    }
+}
+
+/// What the node keeps for its step adjustment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Adjusting<T> {
+    /// The last measured state taken: the node cycle it names and its DCM's deviation from
+    /// that cycle's reference.
+    pub measured: Option<(u32, [T; 2])>,
+    /// The walk being walked adjusts its steps (it was started with `StartAdjusting`).
+    pub enabled: bool,
+    /// The cycle in which the open session opened (a measured state before it is another
+    /// session's).
+    pub opened_at: u32,
+    /// The shift in force \[0.5 mm\], and the number of the first step it applies to.
+    pub shift: [i32; 2],
+    pub from: u16,
+    /// The shift in force when the window being executed was planned, with the window's count.
+    pub base: [i32; 2],
+    pub base_plans: u32,
+    /// The fraction (a power of ½) of the offset tried after eq. 17 refused one in this window.
+    pub halvings: u8,
+    /// Adjustments since the session opened (saturating), and `ADJUST`'s flags.
+    pub count: u8,
+    pub flags: u8,
+    /// `ADJUST` is due (the shift changed).
+    pub due: bool,
+}
+
+impl<T: Real> Adjusting<T> {
+    /// Nothing measured, no shift (every byte zero).
+    pub const ZERO: Self = Self {
+        measured: None,
+        enabled: false,
+        opened_at: 0,
+        shift: [0; 2],
+        from: 0,
+        base: [0; 2],
+        base_plans: 0,
+        halvings: 0,
+        count: 0,
+        flags: 0,
+        due: false,
+    };
+}
+
+impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
+    /// Takes (or refuses) a measured state (see the module docs of [`crate::wire`] for its
+    /// freshness rules).
+    pub(super) fn measured(&mut self, m: &Measured) -> Result<(), Reason> {
+        if !self.open {
+            return Err(Reason::NoSession);
+        }
+        if self.estopped {
+            return Err(Reason::EmergencyStopped);
+        }
+        if self.lost {
+            return Err(Reason::ControllerLost);
+        }
+        // The last reference published is this cycle's predecessor's.
+        if self.cycle >= STAMPS {
+            return Err(Reason::Exhausted);
+        }
+        let latest = self.cycle.wrapping_sub(1);
+        let age = latest.wrapping_sub(m.stamp) & (STAMPS - 1);
+        if age > self.cfg.adjust.max_age || age > latest {
+            return Err(Reason::Stale);
+        }
+        let at = latest - age;
+        if at < self.adj.opened_at {
+            return Err(Reason::WrongSession);
+        }
+        match self.adj.measured {
+            Some((last, _)) if last == at => return Err(Reason::Duplicate),
+            Some((last, _)) if last > at => return Err(Reason::Stale),
+            _ => {}
+        }
+        self.adj.measured = Some((at, m.deviation_in()));
+        Ok(())
+    }
+
+    /// The measured state's deviation and the cycle it names, if fresh (at most `max_age`
+    /// cycles old).
+    fn fresh_measurement(&self) -> Option<(u32, [T; 2])> {
+        let (at, e) = self.adj.measured?;
+        let age = self.cycle.wrapping_sub(1).wrapping_sub(at);
+        (age <= self.cfg.adjust.max_age).then_some((at, e))
+    }
+
+    /// The shift of the steps from `shift` to `to` \[0.5 mm\] placed in the gait: every queued
+    /// step at its commanded position plus `to`. `false` if a position leaves the footstep
+    /// range (nothing moved then).
+    fn place_shift(&mut self, to: [i32; 2]) -> bool {
+        if !self.steps.all_shiftable(to) {
+            return false;
+        }
+        let (steps, first) = (&self.steps, self.first);
+        self.gait.place_steps(|id| {
+            steps
+                .commanded(id.wrapping_add(first), to)
+                .map(Self::position)
+        });
+        true
+    }
+
+    fn position(s: WireStep) -> [T; 2] {
+        let (x, y, _) = s.si_in::<T>();
+        [x, y]
+    }
+
+    /// The step adjustment of this cycle (see the module docs): after the commands, before the
+    /// supervision and the tick.
+    pub(super) fn adjust_step(&mut self) {
+        let fresh = self.fresh_measurement();
+        self.adj.flags &= !Adjust::FRESH;
+        if fresh.is_some() {
+            self.adj.flags |= Adjust::FRESH;
+        }
+        if !self.adj.enabled || !self.open || self.estopped || self.lost || self.gait.is_standing()
+        {
+            return;
+        }
+        let plans = self.gait.plans();
+        if plans != self.adj.base_plans {
+            self.adj.base = self.adj.shift;
+            self.adj.base_plans = plans;
+            self.adj.halvings = 0;
+        }
+        let Some((at, e)) = fresh else {
+            return;
+        };
+        let Some(front) = self.gait.next_target() else {
+            return;
+        };
+        let number = front.wrapping_add(self.first);
+        if self.plans_left == 0 {
+            return;
+        }
+        let Some(ticks) = self.gait.ticks_to_next_landing() else {
+            return;
+        };
+        let p = &self.cfg.params;
+        let n = ticks.saturating_add(self.cycle.wrapping_sub(1).wrapping_sub(at));
+        let remaining = p.dt * T::of_i32(n.min(1 << 20) as i32);
+        let offset = capture_offset(e, self.cfg.adjust.margin, p.omega, remaining);
+        let unit = T::of(STEP_UNIT);
+        let units = |v: T| {
+            let k = (v / unit).round();
+            // (far beyond any reach: the clamp only keeps the integer conversion exact)
+            k.max(T::of(-1e6)).min(T::of(1e6)).trunc_i32()
+        };
+        let scale = |v: i32| v >> self.adj.halvings.min(8);
+        let wanted = [
+            self.adj.base[0].saturating_add(scale(units(offset[0]))),
+            self.adj.base[1].saturating_add(scale(units(offset[1]))),
+        ];
+        // The shift stays inside `ADJUST`'s 16-bit fields (±16 m: far beyond any reach).
+        let (lo, hi) = (i32::from(i16::MIN), i32::from(i16::MAX));
+        if !wanted.iter().all(|w| (lo..=hi).contains(w)) {
+            return;
+        }
+        let delta = [wanted[0] - self.adj.shift[0], wanted[1] - self.adj.shift[1]];
+        let (dx, dy) = (T::of_i32(delta[0]), T::of_i32(delta[1]));
+        let change = (dx * dx + dy * dy).sqrt() * unit;
+        if change < self.cfg.adjust.min_change {
+            return;
+        }
+        let old = self.adj.shift;
+        let mut flags = self.adj.flags & Adjust::FRESH;
+        // The reach: the whole move if it keeps the limits, else the largest part of it that
+        // does (bisection on k/64 of the move; the limits are checked on the moved step and its
+        // successor, the steps after them keeping their places relative to both).
+        let part = |k: i32| [old[0] + delta[0] * k / 64, old[1] + delta[1] * k / 64];
+        let keeps = |node: &Self, k: i32| {
+            let to = part(k);
+            let d = [
+                T::of_i32(to[0] - old[0]) * unit,
+                T::of_i32(to[1] - old[1]) * unit,
+            ];
+            node.reach_broken_moved(front, d).is_none()
+        };
+        let k = if keeps(self, 64) {
+            64
+        } else {
+            flags |= Adjust::REACH_LIMITED;
+            let (mut lo, mut hi) = (0, 64);
+            while hi - lo > 1 {
+                let mid = (lo + hi) / 2;
+                if keeps(self, mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        let to = part(k);
+        if k == 0 || !self.place_shift(to) {
+            self.adj.flags = flags | Adjust::REACH_LIMITED;
+            return;
+        }
+        // Eq. 17 (plans: the cycle's budget).
+        self.plans_left = self.plans_left.saturating_sub(1);
+        if self.gait.check_next_target().is_err() {
+            let _ = self.place_shift(old);
+            self.adj.halvings = self.adj.halvings.saturating_add(1);
+            self.adj.flags = flags | Adjust::ZMP_LIMITED;
+            return;
+        }
+        self.adj.shift = to;
+        self.adj.from = number;
+        self.adj.count = self.adj.count.saturating_add(1);
+        self.adj.flags = flags;
+        self.adj.due = true;
+    }
+
+    /// The step adjustment as `ADJUST` reports it.
+    pub fn adjustment(&self) -> Adjust {
+        let clamp = |v: i32| v.clamp(i16::MIN.into(), i16::MAX.into()) as i16;
+        Adjust {
+            from: self.adj.from as u8,
+            shift: [clamp(self.adj.shift[0]), clamp(self.adj.shift[1])],
+            count: self.adj.count,
+            flags: self.adj.flags,
+        }
+    }
+
+    /// The shift in force \[0.5 mm\]: every step queued from now on lands at its commanded
+    /// position plus it.
+    pub fn shift(&self) -> [i32; 2] {
+        self.adj.shift
+    }
+}

@@ -1,0 +1,354 @@
+//! The node's step adjustment in closed loop with a robot: a linear inverted pendulum
+//! integrated exactly over each 5 ms tick, kept on the node's reference by a divergent-component
+//! stabilizer whose ZMP is held inside the support polygon, and pushed (a velocity step) in
+//! single support. The robot's state estimator sends the measured DCM deviation (`MEASURED`)
+//! every cycle against the reference it was tracking.
+//!
+//! What holds:
+//! * with `Start` the node never moves a step, whatever is measured;
+//! * with `StartAdjusting` every landing is where its step was commanded plus the shift the
+//!   node published in `ADJUST` (the controller's book stays true), the shift points the way
+//!   the robot was pushed, and every landing keeps the reach limits;
+//! * the largest survivable push (bisection to 1/64 of 1 m/s), pushed at the start of a double
+//!   support or 0.15 s into a single support, forward, backward, outward and inward, is never
+//!   smaller with the adjustment than without it, and larger in some cells (printed with
+//!   `--nocapture`; the book's *Step adjustment* section says where and why not more);
+//! * measured states the node must not use (stale, of another session) move nothing.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use common::{y, Rig};
+use planner_core::gait::{Phase, Side};
+use planner_core::node::NodeConfig;
+use planner_core::wire::{Adjust, ControlOp, Measured};
+
+/// The stabilizer's DCM error gain \[1/s\]: `p = p_ref + (1 + k/ω)(ξ − ξ_ref)`.
+const K_DCM: f64 = 3.0;
+/// A DCM error beyond this is a fall \[m\] (the pendulum has left every sole for good).
+const FALLEN: f64 = 0.35;
+
+/// One pendulum plane.
+#[derive(Clone, Copy, Debug)]
+struct Plane {
+    x: f64,
+    v: f64,
+}
+
+impl Plane {
+    /// Exact over `dt` with the ZMP `p` held.
+    fn step(&mut self, p: f64, w: f64, dt: f64) {
+        let (c, s) = ((w * dt).cosh(), (w * dt).sinh());
+        let x = p + (self.x - p) * c + self.v / w * s;
+        let v = (self.x - p) * w * s + self.v * c;
+        self.x = x;
+        self.v = v;
+    }
+}
+
+/// What a run gives.
+#[derive(Debug, Default)]
+struct Outcome {
+    fallen: bool,
+    worst: f64,
+    /// The node's shift after the run \[0.5 mm\], and every `ADJUST` seen.
+    shift: [i32; 2],
+    adjusts: Vec<Adjust>,
+    /// Landings: (commanded x, y, landed x, y).
+    landings: Vec<(f64, f64, f64, f64)>,
+}
+
+/// A straight walk of `n` steps of `len`, pushed by `dv` (x, y) \[m/s\] `push_at` ticks after
+/// the third lift-off; `adjusting` starts it with `StartAdjusting`; `measure` sends the
+/// estimator's frames (with `stamp_back` cycles of extra age, and for `epoch_off` sessions
+/// before the open one).
+fn walk(rig: &Rig, adjusting: bool, dv: [f64; 2], measure: (bool, u32, u32)) -> Outcome {
+    walk_pushed(rig, adjusting, dv, measure, PUSH_IN_SINGLE)
+}
+
+/// When the push comes: after the `n`-th lift-off (`true`) or landing (`false`), `delay` ticks
+/// later.
+#[derive(Clone, Copy, Debug)]
+struct PushAt {
+    liftoff: bool,
+    n: u32,
+    delay: u32,
+}
+
+/// 0.15 s into the third single support.
+const PUSH_IN_SINGLE: PushAt = PushAt {
+    liftoff: true,
+    n: 3,
+    delay: 30,
+};
+/// At the start of the double support before the third lift-off.
+const PUSH_IN_DOUBLE: PushAt = PushAt {
+    liftoff: false,
+    n: 2,
+    delay: 1,
+};
+
+fn walk_pushed(
+    rig: &Rig,
+    adjusting: bool,
+    dv: [f64; 2],
+    measure: (bool, u32, u32),
+    at: PushAt,
+) -> Outcome {
+    let mut r = rig.fork();
+    let n_steps = 10u16;
+    let len = 0.2;
+    let mut commanded = vec![];
+    for i in 0..n_steps {
+        let left = i % 2 == 1;
+        let x = len * f64::from(i + 1).min(f64::from(n_steps - 1));
+        let id = r.n.next_step();
+        assert_eq!(r.append(id, left, x, y(left)), None, "step {i}");
+        commanded.push((id, x, y(left)));
+    }
+    let op = if adjusting {
+        ControlOp::StartAdjusting
+    } else {
+        ControlOp::Start
+    };
+    assert_eq!(r.control(op), None);
+    let stop = r.command(ControlOp::Stop);
+    r.bus.rx.push_back(stop.encode());
+    let p = *r.n.config();
+    let (w, dt) = (p.params.omega, p.params.dt);
+    let (hl, hw) = (p.params.sole_half_length, p.params.sole_half_width);
+    let last = *r.n.gait().last();
+    let mut robot = [
+        Plane {
+            x: last.x.cog,
+            v: last.x.cog_vel,
+        },
+        Plane {
+            x: last.y.cog,
+            v: last.y.cog_vel,
+        },
+    ];
+    let mut out = Outcome::default();
+    let (mut liftoffs, mut landings, mut pushed_at) = (0, 0, None);
+    let mut swinging = None;
+    for k in 0..2400u32 {
+        let reference = *r.n.gait().last();
+        let stamp = r.n.cycles();
+        // The estimator: the measured DCM less the reference's, against this reference.
+        let refs = [reference.x, reference.y];
+        let e = [0, 1].map(|i| (robot[i].x + robot[i].v / w) - (refs[i].cog + refs[i].cog_vel / w));
+        out.worst = out.worst.max(e[0].hypot(e[1]));
+        if e[0].hypot(e[1]) > FALLEN {
+            out.fallen = true;
+            break;
+        }
+        // The stabilizer: ZMP from the DCM error, inside the support polygon (the support
+        // sole, or the box around both soles in double support).
+        let feet = reference.feet;
+        let (lo, hi) = match reference.phase {
+            Phase::Single(support) => {
+                let f = feet[usize::from(support == Side::Right)];
+                ([f.x - hl, f.y - hw], [f.x + hl, f.y + hw])
+            }
+            _ => (
+                [feet[0].x.min(feet[1].x) - hl, feet[0].y.min(feet[1].y) - hw],
+                [feet[0].x.max(feet[1].x) + hl, feet[0].y.max(feet[1].y) + hw],
+            ),
+        };
+        for i in 0..2 {
+            let zmp = refs[i].zmp + (1.0 + K_DCM / w) * e[i];
+            robot[i].step(zmp.clamp(lo[i], hi[i]), w, dt);
+        }
+        if measure.0 {
+            let m = Measured::from_si(stamp.wrapping_sub(measure.1), e).unwrap();
+            let epoch = r.session.epoch.wrapping_sub(measure.2);
+            r.bus.rx.push_back(m.encode(epoch));
+        }
+        if k % 20 == 0 {
+            let hb = r.heartbeat();
+            r.bus.rx.push_back(hb.encode());
+        }
+        r.t += 5;
+        r.n.poll(r.t, &mut r.bus);
+        for f in r.bus.tx.drain(..) {
+            if let Some(a) = Adjust::decode(&f) {
+                out.adjusts.push(a);
+            }
+        }
+        // A lift-off and a landing.
+        let s = r.n.gait().swinging();
+        if s.is_some() && s != swinging {
+            liftoffs += 1;
+            if at.liftoff && liftoffs == at.n {
+                pushed_at = Some(k + at.delay);
+            }
+        }
+        if let (Some(id), None) = (swinging, s) {
+            landings += 1;
+            if !at.liftoff && landings == at.n {
+                pushed_at = Some(k + at.delay);
+            }
+            let (_, cx, cy) = commanded.iter().find(|c| c.0 == id).copied().unwrap();
+            let side = usize::from(commanded.iter().position(|c| c.0 == id).unwrap() % 2 == 0);
+            let f = r.n.gait().feet()[side];
+            out.landings.push((cx, cy, f.x, f.y));
+        }
+        swinging = s;
+        if pushed_at == Some(k) {
+            robot[0].v += dv[0];
+            robot[1].v += dv[1];
+        }
+        if r.n.gait().is_standing() && k > 100 {
+            break;
+        }
+    }
+    out.shift = r.n.shift();
+    out
+}
+
+/// The largest push (in 0.025 m/s steps up to 1 m/s) along `dir` that does not fell the robot.
+fn largest(rig: &Rig, adjusting: bool, dir: [f64; 2], at: PushAt) -> f64 {
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while hi - lo > 0.025 {
+        let mid = 0.5 * (lo + hi);
+        let o = walk_pushed(
+            rig,
+            adjusting,
+            [dir[0] * mid, dir[1] * mid],
+            (true, 0, 0),
+            at,
+        );
+        if o.fallen {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    lo
+}
+
+#[test]
+fn without_opting_in_nothing_moves() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    let o = walk(&rig, false, [0.3, 0.0], (true, 0, 0));
+    assert_eq!(o.shift, [0, 0]);
+    assert!(o.adjusts.iter().all(|a| a.shift == [0, 0] && a.count == 0));
+    for (cx, cy, x, y) in &o.landings {
+        assert!(
+            (cx - x).abs() < 1e-9 && (cy - y).abs() < 1e-9,
+            "{:?}",
+            o.landings
+        );
+    }
+}
+
+#[test]
+fn an_adjusted_walk_lands_where_adjust_says() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    let push = [0.35, 0.0];
+    let o = walk(&rig, true, push, (true, 0, 0));
+    assert!(!o.fallen, "{o:?}");
+    assert!(
+        o.shift[0] > 0,
+        "a forward push moves the steps forward: {o:?}"
+    );
+    let last = o.adjusts.last().expect("ADJUST frames");
+    assert_eq!(
+        [i32::from(last.shift[0]), i32::from(last.shift[1])],
+        o.shift
+    );
+    assert!(last.count > 0);
+    // Every landing is its commanded position plus a shift the node published.
+    let published: Vec<[f64; 2]> = o.adjusts.iter().map(Adjust::shift_si).collect();
+    for (cx, cy, x, y) in &o.landings {
+        let ok = std::iter::once([0.0, 0.0])
+            .chain(published.iter().copied())
+            .any(|s| (cx + s[0] - x).abs() < 1e-9 && (cy + s[1] - y).abs() < 1e-9);
+        assert!(
+            ok,
+            "landed at ({x}, {y}), commanded ({cx}, {cy}): {published:?}"
+        );
+    }
+}
+
+#[test]
+fn stale_or_foreign_measured_states_move_nothing() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    // Older than the node's limit of 4 cycles.
+    let o = walk(&rig, true, [0.35, 0.0], (true, 5, 0));
+    assert_eq!(o.shift, [0, 0]);
+    // Of the session before this one.
+    let o = walk(&rig, true, [0.35, 0.0], (true, 0, 1));
+    assert_eq!(o.shift, [0, 0]);
+    // None at all.
+    let o = walk(&rig, true, [0.35, 0.0], (false, 0, 0));
+    assert_eq!(o.shift, [0, 0]);
+}
+
+#[test]
+fn the_adjustment_never_lowers_the_survivable_push() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    let mut better = 0;
+    for (phase, at) in [
+        ("double support", PUSH_IN_DOUBLE),
+        ("single support", PUSH_IN_SINGLE),
+    ] {
+        for (name, dir) in [
+            ("forward", [1.0, 0.0]),
+            ("backward", [-1.0, 0.0]),
+            ("outward", [0.0, 1.0]),
+            ("inward", [0.0, -1.0]),
+        ] {
+            let plain = largest(&rig, false, dir, at);
+            let adjusted = largest(&rig, true, dir, at);
+            eprintln!("| {phase} | {name} | {plain:.3} | {adjusted:.3} |");
+            // Never worse (to the bisection's resolution) …
+            assert!(adjusted >= plain, "{phase}, {name}: {plain} → {adjusted}");
+            better += usize::from(adjusted > plain);
+        }
+    }
+    // … and better somewhere.
+    assert!(better > 0);
+}
+
+/// A measured state of the session before a `Reset` is refused `BadCrc` (its CRC is keyed with
+/// the old session); one stamped before the session opened, re-sealed for the new session, is
+/// `WrongSession`; a repeat is `Duplicate`; an older one `Stale`.
+#[test]
+fn measured_states_of_an_old_session_are_refused() {
+    use planner_core::wire::{Command, Reason};
+    let mut r = Rig::new(NodeConfig::hrp2());
+    r.run(3, true);
+    let old = Measured::from_si(r.n.cycles(), [0.01, 0.0]).unwrap();
+    assert_eq!(r.ask(Command::Measured(old)), None);
+    assert_eq!(r.ask(Command::Measured(old)), Some(Reason::Duplicate));
+    let older = Measured::from_si(r.n.cycles() - 3, [0.01, 0.0]).unwrap();
+    assert_eq!(r.ask(Command::Measured(older)), Some(Reason::Stale));
+    let epoch = r.session.epoch;
+    assert_eq!(r.control(ControlOp::Reset), None);
+    assert_eq!(r.session.epoch, epoch + 1);
+    // The old frame as it was sent: another session's key.
+    r.bus.rx.push_back(old.encode(epoch));
+    let acks = r.cycle();
+    assert_eq!(acks[0].reason, Some(Reason::BadCrc), "{acks:?}");
+    // Stamped before the session opened, sealed with the new key.
+    let before = Measured::from_si(r.n.cycles() - 3, [0.01, 0.0]).unwrap();
+    assert_eq!(r.ask(Command::Measured(before)), Some(Reason::WrongSession));
+}
+
+#[test]
+fn dbg_entropy() {
+    use planner_core::wire::{Command, Reason};
+    let mut cfg = NodeConfig::hrp2();
+    cfg.entropy = 0xFFFE_FFFE;
+    let mut r = Rig::new(cfg);
+    let old = Measured::from_si(r.n.cycles(), [0.01, -0.02]).unwrap();
+    let epoch = r.session.epoch;
+    eprintln!("epoch {epoch:#x} node {:#x}", r.n.session().epoch);
+    assert_eq!(r.ask(Command::Measured(old)), None);
+    assert_eq!(r.control(ControlOp::Reset), None);
+    r.bus.rx.push_back(old.encode(epoch));
+    let acks = r.cycle();
+    eprintln!("{acks:?} {:?}", r.n.counters().by_reason);
+    assert_eq!(acks[0].reason, Some(Reason::BadCrc), "{acks:?}");
+}
