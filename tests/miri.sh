@@ -135,7 +135,7 @@ SKIP=(
     # 65,790 footstep frames decoded (every queued number and every alias 256·k older): run by
     # `cargo test`
     wire::tests::step_numbers_alias_never_by_their_high_byte
-    # added with issue 12's solver and encoding (thousands of cases each; not measured under
+    # added with the structured solver and the encoding (thousands of cases each; not measured under
     # Miri, > 60 s by their host times): run by `cargo test`
     timing::tests::random_quartics_match_brute_force
     window::tests::structured_elimination_agrees_with_banded_lu_over_many_timings

@@ -88,7 +88,7 @@ if [ -z "${HOST_SIM_FONT:-}" ] && [ ! -f /usr/share/fonts/truetype/dejavu/DejaVu
 fi
 # --- end host-sim plots ------------------------------------------------------------------
 
-# --- LAPACK for the comparison bench (planner-core/benches/compare: issue 12) ---------------
+# --- LAPACK for the comparison bench (planner-core/benches/compare) -----------------------
 # Debian's reference LAPACK with its link-time library (liblapack-dev): the bench links
 # -llapack, and step 2 builds and runs it in test mode.
 if ! dpkg-query -W -f='${Status}' liblapack-dev 2>/dev/null | grep -q "ok installed"; then

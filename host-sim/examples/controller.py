@@ -26,7 +26,7 @@ Four ways to run it:
       ``host-sim replay ctl.log`` (host-sim/tests/controller.rs does this); the defaults are
       host-sim's node (session 0, steps from 0, no control command before);
   controller.py frame OP --session E --seq S
-      prints one CONTROL frame for ``cansend`` (OP: reset, heartbeat, start, stop, stop_now);
+      prints one CONTROL frame for ``cansend`` (OP: reset, heartbeat, start, stop, stop_now, start_adjusting);
   controller.py check can.log
       checks a log of the bus (host-sim's output; give the same options as to ``plan``):
       every command answered and accepted, the robot standing at the end with its feet where
@@ -42,8 +42,13 @@ import os
 import sys
 import time
 
-import can
-import cantools
+try:
+    import can
+    import cantools
+except ImportError as missing:  # said as a usage error in main(), without a traceback
+    MISSING = missing.name or str(missing)
+else:
+    MISSING = None
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DBC = os.path.join(HERE, "..", "can", "walking.dbc")
@@ -232,9 +237,16 @@ def main():
     a = p.parse_args()
     if a.steps < 1:
         p.error("--steps must be at least 1")
+    if a.mode == "check":
+        if not a.log:
+            p.error("check needs the log")
+        if not os.path.isfile(a.log):
+            p.error(f"{a.log}: no such file (`host-sim replay LOG --out DIR` writes DIR/can.log)")
+    if MISSING:
+        p.error(f"the python module {MISSING} is missing: pip install python-can cantools")
     db = cantools.database.load_file(DBC, strict=True)
     if a.mode == "frame":
-        ops = ["heartbeat", "start", "stop", "stop_now", "reset"]
+        ops = ["heartbeat", "start", "stop", "stop_now", "reset", "start_adjusting"]
         if a.log not in ops:
             p.error(f"frame needs an operation: one of {', '.join(ops)}")
         m = encode(db, "CONTROL", {"session": a.session & 0xFFFF, "seq": a.seq, "op": a.log})
@@ -251,10 +263,6 @@ def main():
         write_log(a.out, frames)
         print(f"{len(frames)} frames ({len(poses)} footsteps) written to {a.out}")
     elif a.mode == "check":
-        if not a.log:
-            p.error("check needs the log")
-        if not os.path.isfile(a.log):
-            p.error(f"{a.log}: no such file (`host-sim replay LOG --out DIR` writes DIR/can.log)")
         problems = check(db, a.log, poses)
         for line in problems:
             print(line)

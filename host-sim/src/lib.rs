@@ -8,10 +8,12 @@
 //! * [`robot`]: the robot file: the planner's robot and host-sim's link model (the multi-body
 //!   description and its kinematics).
 //! * [`sim`]: the closed loop over the virtual CAN link: the bus with its fault layers, the
-//!   node fed a scenario or a recorded log (replay), and the SocketCAN front end.
+//!   node fed a scenario or a recorded log (replay), the report of what became of a scenario's
+//!   commands, and the SocketCAN front end.
 //! * [`eval`]: the evaluation of a walk: the multi-body ZMP, the paper's modification
 //!   experiments (Fig. 4, Tables I and II), the fault sweep.
-//! * [`output`]: what a run writes besides its CSV and JSON: the plots and the MCAP file.
+//! * [`output`]: what a run writes besides its JSON: the trajectory's CSV, the plots and the
+//!   MCAP file.
 //! * [`physics`]: the walk in the MuJoCo physics engine under a stabilizer, with its own
 //!   outputs (`host-sim physics` and its siblings).
 //!

@@ -25,23 +25,21 @@
 
 use std::error::Error;
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use host_sim::eval::multibody::{evaluate, max_zmp_error, MbSample};
-use host_sim::eval::paper;
+use host_sim::eval::multibody::{evaluate, max_zmp_error};
+use host_sim::eval::{max_fluctuation, paper};
+use host_sim::output::csv::write_trajectory;
 use host_sim::output::plot;
 use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
 use host_sim::scenario::file::{Entry, ScenarioFile};
-use host_sim::scenario::Failure;
-use host_sim::scenario::{self, Command, Run, Scenario, BUILT_IN};
+use host_sim::scenario::{self, Run, Scenario, BUILT_IN};
 use host_sim::sim::replay;
-use host_sim::sim::{outcomes, simulate, Outcome, SimConfig};
-use planner_core::gait::{Phase, Side};
-use planner_core::wire::Reason;
+use host_sim::sim::report::{report, Report};
+use host_sim::sim::{outcomes, simulate, SimConfig};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -123,7 +121,8 @@ enum Cmd {
         /// The output directory.
         #[arg(long, value_name = "DIR", default_value = "out/physics_tables")]
         out: PathBuf,
-        /// The cells to run: `all` (98 engine runs) or `row,col;row,col` (indices 0..7).
+        /// The cells to run: `all` (49 cells both ways: 98 runs asked, 89 in the engine, 9 out
+        /// of reach) or `row,col;row,col` (indices 0..7).
         #[arg(long, value_name = "CELLS", default_value = "all")]
         cells: String,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
@@ -324,106 +323,6 @@ fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), String> {
     fs::write(path, contents).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-fn phase_name(p: Phase) -> &'static str {
-    match p {
-        Phase::Standing => "standing",
-        Phase::Double => "double",
-        Phase::Single(planner_core::gait::Side::Left) => "single_left",
-        Phase::Single(planner_core::gait::Side::Right) => "single_right",
-    }
-}
-
-fn write_trajectory(
-    path: &Path,
-    run: &Run,
-    mb: &[MbSample],
-    dt: f64,
-) -> Result<(), Box<dyn Error>> {
-    let named = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
-    let file = fs::File::create(path).map_err(named)?;
-    write_csv(std::io::BufWriter::new(file), run, mb, dt).map_err(|e| named(e).into())
-}
-
-fn write_csv(mut csv: impl Write, run: &Run, mb: &[MbSample], dt: f64) -> std::io::Result<()> {
-    writeln!(
-        csv,
-        "t,cog_x,cog_y,cog_vx,cog_vy,zmp_x,zmp_y,mb_zmp_x,mb_zmp_y,phase,left_x,left_y,left_z,left_yaw,right_x,right_y,right_z,right_yaw"
-    )?;
-    for (k, r) in run.trajectory.iter().enumerate() {
-        let (l, rt) = (&r.feet[0], &r.feet[1]);
-        let (mx, my) = mb
-            .get(k)
-            .map(|m| (format!("{:.6}", m.mb_zmp_x), format!("{:.6}", m.mb_zmp_y)))
-            .unwrap_or_default();
-        writeln!(
-            csv,
-            "{:.3},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{mx},{my},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
-            k as f64 * dt,
-            r.x.cog,
-            r.y.cog,
-            r.x.cog_vel,
-            r.y.cog_vel,
-            r.x.zmp,
-            r.y.zmp,
-            phase_name(r.phase),
-            l.x,
-            l.y,
-            l.z,
-            l.yaw,
-            rt.x,
-            rt.y,
-            rt.z,
-            rt.yaw
-        )?;
-    }
-    csv.flush()?;
-    Ok(())
-}
-
-/// Largest ZMP deviation from the support-foot centre during single support, in the support
-/// foot's frame (along, across) \[m\].
-fn max_fluctuation(run: &Run) -> (f64, f64) {
-    let (mut along, mut across) = (0.0_f64, 0.0_f64);
-    for r in &run.trajectory {
-        if let Phase::Single(side) = r.phase {
-            let f = &r.feet[if side == planner_core::gait::Side::Left {
-                0
-            } else {
-                1
-            }];
-            let (s, c) = f.yaw.sin_cos();
-            let (dx, dy) = (r.x.zmp - f.x, r.y.zmp - f.y);
-            along = along.max((c * dx + s * dy).abs());
-            across = across.max((-s * dx + c * dy).abs());
-        }
-    }
-    (along, across)
-}
-
-/// A command in words: `step 3 (append, left at (0.4000, 0.1000) m)`, `start`.
-fn describe(c: &Command) -> String {
-    let side = |s: Side| if s == Side::Left { "left" } else { "right" };
-    match c {
-        Command::Push(id, f) => format!(
-            "step {id} (append, {} at ({:.4}, {:.4}) m, {:.4} rad)",
-            side(f.side),
-            f.x,
-            f.y,
-            f.yaw
-        ),
-        Command::Modify(id, f) => format!(
-            "step {id} (modify, {} to ({:.4}, {:.4}) m, {:.4} rad)",
-            side(f.side),
-            f.x,
-            f.y,
-            f.yaw
-        ),
-        Command::Start => "start".into(),
-        Command::Stop => "stop".into(),
-        Command::StopNow => "stop_now".into(),
-    }
-}
-
 /// The scenario `name` (built-in, or a file ending in .toml) and the entry behind each of its
 /// commands.
 fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
@@ -446,56 +345,6 @@ fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
         scenario: s,
         entries,
     })
-}
-
-/// One outcome as printed: whether it was as the scenario expected (a refusal that `follows`
-/// from the refused append of that step counts as expected), and the line.
-fn outcome_line(o: &Outcome, entry: &Entry, follows: Option<u64>, dt: f64) -> (bool, String) {
-    let expected = o.failure == entry.expect || follows.is_some();
-    let what = match (o.failure, entry.expect) {
-        _ if follows.is_some() => format!(
-            "{} (follows from the refusal of step {})",
-            o.detail,
-            follows.map_or(String::new(), |k| k.to_string())
-        ),
-        (Some(f), _) if expected => format!("{} (expected {})", o.detail, f.name()),
-        (Some(_), None) => o.detail.clone(),
-        (Some(_), Some(x)) => format!("{} (but expected {})", o.detail, x.name()),
-        (None, Some(x)) if o.detail.is_empty() => {
-            format!("carried out, but expected {}", x.name())
-        }
-        (None, Some(x)) => format!("{}, but expected {}", o.detail, x.name()),
-        (None, None) => o.detail.clone(),
-    };
-    let mark = if expected { "" } else { "UNEXPECTED " };
-    (
-        expected,
-        format!(
-            "  {mark}{:.3} s, {}: {}: {what}",
-            o.tick as f64 * dt,
-            entry.label,
-            describe(&o.command),
-        ),
-    )
-}
-
-/// The step whose refused append `o` follows from, if it does: an append refused
-/// `sequence_gap` after it, or a modification of it or a later step refused `unknown_step`.
-fn consequence_of(o: &Outcome, first_refused: Option<u64>) -> Option<u64> {
-    let k = first_refused?;
-    match (o.command, o.failure) {
-        (Command::Push(id, _), Some(Failure::Refused(Reason::SequenceGap)))
-            if u64::from(id) > k =>
-        {
-            Some(k)
-        }
-        (Command::Modify(id, _), Some(Failure::Refused(Reason::UnknownStep)))
-            if u64::from(id) >= k =>
-        {
-            Some(k)
-        }
-        _ => None,
-    }
 }
 
 fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box<dyn Error>> {
@@ -548,53 +397,12 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     )?;
     let (along, across) = max_fluctuation(run);
     let results = outcomes(&s, &sim);
-    let mut lines = Vec::new();
-    // Notes on commands carried out (steps dropped by the scenario's stop_now), by note.
-    let mut notes: Vec<(String, Vec<String>)> = Vec::new();
-    let mut unexpected = 0;
-    let mut failed = Vec::new();
-    // The first append the node refused: later appends refused `sequence_gap` and
-    // modifications of its step or later ones refused `unknown_step` follow from it.
-    let mut first_refused: Option<u64> = None;
-    for (o, entry) in results.iter().zip(&entries) {
-        let follows = consequence_of(o, first_refused).filter(|_| entry.expect.is_none());
-        if let (Command::Push(id, _), Some(Failure::Refused(_)), None) =
-            (o.command, o.failure, first_refused)
-        {
-            first_refused = Some(u64::from(id));
-        }
-        let (expected, line) = outcome_line(o, entry, follows, dt);
-        unexpected += usize::from(!expected);
-        if o.failure.is_some() || !expected {
-            lines.push(line);
-        } else if !o.detail.is_empty() {
-            let what = match o.command {
-                Command::Push(id, _) | Command::Modify(id, _) => id.to_string(),
-                c => describe(&c),
-            };
-            match notes.iter_mut().find(|(d, _)| *d == o.detail) {
-                Some((_, ids)) => ids.push(what),
-                None => notes.push((o.detail.clone(), vec![what])),
-            }
-        }
-        if o.failure.is_some() || !expected {
-            let step_id = match o.command {
-                Command::Push(id, _) | Command::Modify(id, _) => Some(id),
-                _ => None,
-            };
-            failed.push(json!({
-                "t_s": o.tick as f64 * dt,
-                "command": describe(&o.command),
-                "step_id": step_id,
-                "failure": o.failure.map(|f| f.name()),
-                "error": o.detail,
-                "expected": entry.expect.map(|f| f.name()),
-                "as_expected": expected,
-                "follows_from_step": follows,
-                "entry": entry.label,
-            }));
-        }
-    }
+    let Report {
+        lines,
+        notes,
+        unexpected,
+        failed,
+    } = report(&results, &entries, dt);
     let summary = json!({
         "scenario": name,
         "about": s.about,

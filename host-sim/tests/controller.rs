@@ -145,3 +145,79 @@ fn the_frame_mode_prints_what_the_node_decodes() {
         );
     }
 }
+
+/// `python3` is on the machine (skipped, and said so, without it unless
+/// `WALK_REQUIRE_CAN_TOOLS=1`).
+fn python_present() -> bool {
+    let ok = Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        ok || !required(),
+        "python3 is missing and WALK_REQUIRE_CAN_TOOLS=1"
+    );
+    if !ok {
+        eprintln!("controller: SKIPPED: no python3");
+    }
+    ok
+}
+
+/// The script's stdout and stderr together.
+fn all_output(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr)
+}
+
+/// `controller.py check` of a log that does not exist is a usage error (exit 2) that says
+/// where `host-sim replay` writes the bus log, not a traceback; with or without the python
+/// packages installed.
+#[test]
+fn checking_a_missing_log_names_where_replay_writes_it() {
+    if !python_present() {
+        return;
+    }
+    let o = controller(&["check", "/nonexistent/can.log"]);
+    let text = all_output(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(
+        text.contains("/nonexistent/can.log: no such file"),
+        "{text}"
+    );
+    assert!(
+        text.contains("`host-sim replay LOG --out DIR` writes DIR/can.log"),
+        "{text}"
+    );
+    assert!(!text.contains("Traceback"), "{text}");
+}
+
+/// Without python-can (a `can` package that fails to import stands in for a missing one),
+/// the script says which module is missing and how to install it (exit 2), not a traceback.
+#[test]
+fn a_missing_python_package_is_a_clear_error() {
+    if !python_present() {
+        return;
+    }
+    let d = dir("nocan");
+    std::fs::create_dir_all(d.join("can")).unwrap();
+    std::fs::write(
+        d.join("can/__init__.py"),
+        "raise ImportError(\"No module named 'can'\", name=\"can\")\n",
+    )
+    .unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/controller.py");
+    let o = Command::new("python3")
+        .arg(script)
+        .args(["plan", "--out", d.join("ctl.log").to_str().unwrap()])
+        .env("PYTHONPATH", &d)
+        .output()
+        .expect("python3");
+    let text = all_output(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("the python module can is missing"), "{text}");
+    assert!(text.contains("pip install python-can cantools"), "{text}");
+    assert!(!text.contains("Traceback"), "{text}");
+    assert!(
+        !d.join("ctl.log").exists(),
+        "a plan was written without its packages"
+    );
+}

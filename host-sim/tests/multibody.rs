@@ -500,3 +500,89 @@ fn fig4_multibody_zmp_error() {
     let err = report("fig4", &traj, &mb);
     assert!(err.is_finite() && err < 0.1, "{err}");
 }
+
+/// The command that computes Tables I and II.
+const TABLES_COMMAND: &str = "cargo run --release -p host-sim -- tables --out out/tables";
+
+/// The table rows (`| … |` lines) that follow the line of `text` starting with `title`.
+fn table_rows(text: &str, title: &str) -> Vec<String> {
+    let start = text
+        .lines()
+        .position(|l| l.starts_with(title))
+        .unwrap_or_else(|| panic!("no line starts with {title:?}"));
+    text.lines()
+        .skip(start + 1)
+        .skip_while(|l| l.trim().is_empty())
+        .take_while(|l| l.starts_with('|'))
+        .map(str::to_string)
+        .collect()
+}
+
+/// `host-sim tables`: the book's Tables I and II (`docs/src/host-sim.md`) are the command's
+/// `tables.md`, row by row, and the diagonal figures of the text above them are its cells.
+#[test]
+fn the_book_quotes_tables_one_and_two_as_computed() {
+    let dir = std::env::temp_dir().join(format!("host-sim-tables-{}", std::process::id()));
+    host_sim::eval::paper::tables_command(&dir).expect("host-sim tables");
+    let md = std::fs::read_to_string(dir.join("tables.md")).expect("tables.md");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("tables.json")).expect("json"))
+            .expect("tables.json");
+    let _ = std::fs::remove_dir_all(&dir);
+    let book = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/src/host-sim.md"
+    ))
+    .expect("docs/src/host-sim.md");
+    let mut stale = vec![];
+    for title in [
+        "Table I: maximum ZMP error without any adjustment",
+        "Table II: maximum ZMP error with the proposed method",
+    ] {
+        let ours = table_rows(&md, title);
+        assert_eq!(
+            ours.len(),
+            9,
+            "{title}: header, separator and 7 rows: {ours:#?}"
+        );
+        let quoted = table_rows(&book, title);
+        for (i, row) in ours.iter().enumerate() {
+            if quoted.get(i) != Some(row) {
+                stale.push(format!(
+                    "{title}, line {}: the book has {:?}, the command gives {row:?}",
+                    i + 1,
+                    quoted.get(i).map_or("nothing", String::as_str)
+                ));
+            }
+        }
+        if quoted.len() > ours.len() {
+            stale.push(format!(
+                "{title}: the book has {} lines, the command {}",
+                quoted.len(),
+                ours.len()
+            ));
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "docs/src/host-sim.md does not quote Tables I and II as `{TABLES_COMMAND}` computes them \
+         (copy them from its tables.md):\n{}",
+        stale.join("\n")
+    );
+    // The diagonal, without modification: (+0.0, +0.0) and (+0.1, +0.1), Table I.
+    let cm = |key: &str, i: usize| json[key][i][i].as_f64().expect(key) * 100.0;
+    let diagonal = |i: usize| {
+        format!(
+            "{:.1} / {:.1} cm",
+            cm("max_zmp_error_without_m", i),
+            cm("paper_max_zmp_error_without_m", i)
+        )
+    };
+    doc_figures::Quotes::new(TABLES_COMMAND)
+        .line(
+            "docs/src/host-sim.md",
+            "cm at 0 m, ",
+            &format!("{} at 0 m, {} at 0.1 m", diagonal(3), diagonal(4)),
+        )
+        .assert();
+}

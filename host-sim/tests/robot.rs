@@ -1,4 +1,4 @@
-//! The robot file (issue 13, item 6): the HRP-2 file shipped in the repository is what the code
+//! The robot file: the HRP-2 file shipped in the repository is what the code
 //! and the firmware use; a second robot (`tests/robots/small.toml`) walks with its own
 //! pendulum, timing, soles, reach limits and link table; an inconsistent file is refused with
 //! a message that names the key.

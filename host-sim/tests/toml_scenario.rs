@@ -327,16 +327,20 @@ fn load_names_the_file() {
     assert!(e.contains("unknown field `speed`"), "{e}");
 }
 
-/// The example scenario file in the README is valid and walks as written.
+/// The example scenario file of the book's chapter on scenario files is valid and walks as
+/// written.
 #[test]
-fn the_readme_example_walks() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
-        .expect("README.md");
-    let start = readme
+fn the_book_example_walks() {
+    let book = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/src/scenarios.md"
+    ))
+    .expect("docs/src/scenarios.md");
+    let start = book
         .find("name = \"my-walk\"")
-        .expect("the README's scenario example");
-    let end = start + readme[start..].find("```").expect("end of the example");
-    let file = host_sim::scenario::file::parse_file(&readme[start..end]).expect("valid example");
+        .expect("the book's scenario example");
+    let end = start + book[start..].find("```").expect("end of the example");
+    let file = host_sim::scenario::file::parse_file(&book[start..end]).expect("valid example");
     let sim = host_sim::sim::simulate(&file.scenario, &host_sim::sim::SimConfig::default())
         .expect("runs");
     let outcomes = host_sim::sim::outcomes(&file.scenario, &sim);

@@ -1,8 +1,10 @@
 //! The front page and the book hold together: every relative link of `README.md` and of the
 //! book's chapters names a file that exists, every chapter is in the book's `SUMMARY.md` and
-//! every `SUMMARY.md` entry is a chapter, the front page stays a front page (at most 200
-//! lines, exactly the two set-up commands in its first code block), and every headline figure
-//! of the front page names the command that measures it.
+//! every `SUMMARY.md` entry is a chapter, every chapter has one title, the front page stays a
+//! front page (at most 200 lines, exactly the two set-up commands in its first code block),
+//! and every headline figure of the front page names the command that measures it; and
+//! neither speaks of work history (issue numbers, reviews, what was fixed or how the code was
+//! before).
 
 use std::path::{Path, PathBuf};
 
@@ -81,6 +83,35 @@ fn the_summary_lists_every_chapter() {
     }
 }
 
+/// The level-1 headings (`# …`) of the markdown `text`, outside code blocks.
+fn titles(text: &str) -> Vec<&str> {
+    let mut in_code = false;
+    let mut out = vec![];
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            in_code = !in_code;
+        } else if !in_code && line.starts_with("# ") {
+            out.push(line);
+        }
+    }
+    out
+}
+
+/// Every chapter has one title: a second `# …` heading is a second chapter, to be a file of
+/// its own in `SUMMARY.md`.
+#[test]
+fn every_chapter_has_one_title() {
+    for c in chapters() {
+        let text = std::fs::read_to_string(&c).expect("readable");
+        let t = titles(&text);
+        assert_eq!(t.len(), 1, "{}: titles {t:?}", c.display());
+    }
+    assert_eq!(
+        titles("# A\n```sh\n# a comment\n```\ntext\n# B\n"),
+        ["# A", "# B"]
+    );
+}
+
 #[test]
 fn the_front_page_is_short_and_names_the_two_commands() {
     let text = std::fs::read_to_string(root().join("README.md")).expect("README.md");
@@ -100,6 +131,90 @@ fn the_front_page_is_short_and_names_the_two_commands() {
     assert!(
         !text.to_lowercase().contains("issue "),
         "the front page speaks of the product, not of work items"
+    );
+}
+
+/// Phrases of work history rather than of the product (lower case): an issue or a review, a
+/// defect "now fixed", what the code did "before the change". Product text says what the
+/// product is and does; its history is in git.
+const HISTORY_PHRASES: [&str; 11] = [
+    "next issue",
+    "review item",
+    "now fixed",
+    "fixed now",
+    "(refused now)",
+    "before the change",
+    "history:",
+    "git history",
+    "the former ",
+    "formerly",
+    "previously",
+];
+
+/// The places in `text` that speak of work history: an `issue` followed by a number (`issue
+/// 12`, `issue #12`, `Issue 12's`) or one of [`HISTORY_PHRASES`], each with its line number.
+fn history_words(text: &str) -> Vec<String> {
+    let mut found = vec![];
+    for (n, line) in text.lines().enumerate() {
+        let lower = line.to_lowercase();
+        let mut rest = lower.as_str();
+        while let Some(i) = rest.find("issue") {
+            let before_ok = rest[..i]
+                .chars()
+                .next_back()
+                .is_none_or(|c| !c.is_alphanumeric());
+            let after = rest[i + "issue".len()..].trim_start_matches([' ', '#']);
+            let spaced = rest[i + "issue".len()..].starts_with([' ', '#']);
+            if before_ok && spaced && after.starts_with(|c: char| c.is_ascii_digit()) {
+                found.push(format!("line {}: {}", n + 1, line.trim()));
+            }
+            rest = &rest[i + "issue".len()..];
+        }
+        for phrase in HISTORY_PHRASES {
+            if lower.contains(phrase) {
+                found.push(format!("line {} ({phrase:?}): {}", n + 1, line.trim()));
+            }
+        }
+    }
+    found
+}
+
+/// The front page and every chapter of the book describe the product: no issue numbers,
+/// reviews, defects "now fixed" or what the code did before (firmware/README.md is not
+/// checked here).
+#[test]
+fn product_text_has_no_work_history() {
+    let mut files = vec![root().join("README.md")];
+    files.extend(chapters());
+    let mut stale = vec![];
+    for f in &files {
+        let text = std::fs::read_to_string(f).expect("readable");
+        for w in history_words(&text) {
+            stale.push(format!("{}: {w}", f.display()));
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "work history in product text (say what the product does, not how it came to):\n{}",
+        stale.join("\n")
+    );
+}
+
+/// The check above finds issue numbers and history phrases, and leaves product words alone.
+#[test]
+fn history_words_are_found() {
+    let text = "the gait (next issue)\nIssue 12's target\nsee issue #4\nthe reissue 3\n\
+        it issues two instructions\nboth now fixed\nthe former box\nHistory: none\n\
+        an issue of timing 5 ms\nbefore the change above\nthe step before it";
+    let lines: Vec<String> = history_words(text)
+        .iter()
+        .map(|w| w.split([' ', ':']).nth(1).unwrap_or("").to_string())
+        .collect();
+    assert_eq!(
+        lines,
+        ["1", "2", "3", "6", "7", "8", "10"],
+        "{:#?}",
+        history_words(text)
     );
 }
 

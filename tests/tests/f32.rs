@@ -8,7 +8,7 @@
 //! (`gait_loop::ScriptedBus`). Both nodes are configured from the same `f64` configuration
 //! (`NodeConfig::cast` rounds it for `f32`). Over the whole walks this checks:
 //! * **COG**: the `f32` node's COG (x and y, every tick) is within 0.1 mm of the `f64` node's
-//!   (the bound; the worst difference per scenario is printed);
+//!   (the required bound; the worst difference per scenario is printed);
 //! * **decisions**: both nodes answer every command the same way, in the same cycle (the whole
 //!   `ACK`: command, sequence or step id, reason code, queue length, echo, version in force);
 //! * **adjustment times**: the same single supports are re-planned, in the same ticks, with
@@ -36,7 +36,7 @@ use planner_core::real::Real;
 use planner_core::shaping::PreviewGains;
 use planner_core::wire::{ids, Ack};
 
-/// The bound on the COG of the `f32` node against the `f64` node \[m\].
+/// The required bound on the COG of the `f32` node against the `f64` node \[m\].
 const COG_TOLERANCE: f64 = 1e-4;
 
 /// What one node did over a replay.

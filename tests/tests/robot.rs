@@ -61,12 +61,15 @@ fn the_generated_source_is_the_configuration_it_was_made_from() {
         r.max_stride,
         r.max_growth,
         r.sole_gap,
+        cfg.adjust.margin,
+        cfg.adjust.min_change,
     ];
     assert_eq!(floats, want);
     for int in [
         format!("single_ticks: {},", p.single_ticks),
         format!("adjust_min_ticks: {},", p.adjust_min_ticks),
         format!("heartbeat_timeout_ms: {},", cfg.heartbeat_timeout_ms),
+        format!("max_age: {},", cfg.adjust.max_age),
     ] {
         assert!(src.contains(&int), "{int}");
     }

@@ -1,4 +1,5 @@
-//! Outputs of a run beside its CSV and JSON: the PNG plots ([`plot`]) and the MCAP file for
-//! robotics viewers ([`mcap`]).
+//! Outputs of a run: the trajectory's CSV ([`csv`]), the PNG plots ([`plot`]) and the MCAP
+//! file for robotics viewers ([`mcap`]).
+pub mod csv;
 pub mod mcap;
 pub mod plot;

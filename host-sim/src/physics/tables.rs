@@ -7,7 +7,8 @@
 //! multi-body ZMP error of the same trajectory (the figure of `host-sim tables`) and the
 //! paper's.
 //!
-//! `host-sim physics-tables --out DIR` runs the full grid (98 engine runs) and writes
+//! `host-sim physics-tables --out DIR` runs the full grid (98 runs asked, 89 in the engine: the
+//! legs cannot reach the other 9) and writes
 //! `DIR/physics_tables.json`: `fell_plain` and `fell_proposed` (7 × 7, rows "after", columns
 //! "before", in the order of `tables.json`; `null` for a cell not simulated or whose footsteps
 //! the legs cannot reach) and the per-cell figures; `--cells r,c;r,c` restricts the run to

@@ -25,6 +25,7 @@
 
 pub mod bus;
 pub mod replay;
+pub mod report;
 #[cfg(feature = "socketcan")]
 pub mod socketcan;
 

@@ -86,6 +86,7 @@ pub fn node_sends(id: u16) -> bool {
             | ids::STATUS
             | ids::DIAG
             | ids::SESSION
+            | ids::ADJUST
     )
 }
 

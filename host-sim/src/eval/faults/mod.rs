@@ -115,7 +115,7 @@ pub enum FaultKind {
     Mixed(usize),
 }
 
-/// One of the heavier combinations of faults (issue 10, item 8).
+/// One of the heavier combinations of faults (the last rows of the fault table).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mix {
     /// As printed in the table.

@@ -460,7 +460,7 @@ pub(super) fn play(
                 stream.decode_into(&f);
             }
         }
-        if stream.tick != (node.cycles() & 0xFF) as u8 {
+        if stream.tick != node.cycles() & (planner_core::wire::STAMPS - 1) {
             stream_gaps += 1;
         }
         k += 1;
