@@ -11,9 +11,11 @@
 //! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [PROBE] [--robot FILE]   faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
+//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [PROBE] [--robot FILE]
+//!                                  the push-recovery map in MuJoCo, with and without step adjustment
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //!
-//! PROBE (the same for the four engine commands): [--open-loop] [--stabilizer full|off|weakest|S]
+//! PROBE (the same for the five engine commands): [--open-loop] [--stabilizer full|off|weakest|S]
 //!       [--servo-damping KD]
 //! ```
 //!
@@ -168,6 +170,29 @@ enum Cmd {
         #[command(flatten)]
         probe: ProbeArgs,
     },
+    /// The push-recovery map in MuJoCo: for each phase and direction the largest 0.1 s trunk
+    /// push walked through, with the stabilizer only, with step adjustment and the plain
+    /// re-plan, and with step adjustment and the proposed method; writes DIR/push_map.json,
+    /// push_map.md and a polar plot per phase.
+    PushMap {
+        /// The output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/push_map")]
+        out: PathBuf,
+        /// Two phases, four directions, a coarse bisection (12.5 % of body weight).
+        #[arg(long)]
+        quick: bool,
+        /// The phases, comma-separated: double, single_start, single_middle, single_end.
+        #[arg(long, value_name = "P,P,...")]
+        phases: Option<String>,
+        /// The directions in the walking frame [deg], comma-separated (0 forward, 90 left).
+        #[arg(long, value_name = "D,D,...", allow_hyphen_values = true)]
+        directions: Option<String>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+        #[command(flatten)]
+        probe: ProbeArgs,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -279,6 +304,21 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             before,
             &afters,
             &load_robot(robot.as_deref())?,
+            &probe,
+        ),
+        Some(Cmd::PushMap {
+            out,
+            quick,
+            phases,
+            directions,
+            robot,
+            probe,
+        }) => host_sim::physics::push_map::cli(
+            &out,
+            &load_robot(robot.as_deref())?,
+            quick,
+            phases.as_deref(),
+            directions.as_deref(),
             &probe,
         ),
         Some(Cmd::Node {

@@ -13,7 +13,10 @@
 //! * [`probe`]: the grid with a weakened stabilizer and softer servos (`--stabilizer`,
 //!   `--servo-damping`, `--open-loop`: the options of every engine command);
 //! * [`sequence`]: several consecutive steps modified, plain re-plan and proposed method
-//!   (`physics-sequence`).
+//!   (`physics-sequence`);
+//! * [`closed_loop`]: the node inside the engine's loop, fed the measured state (`MEASURED`),
+//!   adjusting its steps when the walk was started with `StartAdjusting`;
+//! * [`push_map`]: the push-recovery map over phases and directions (`push-map`).
 //!
 //! # A run
 //!
@@ -27,11 +30,13 @@
 //! ([`metrics`]); the run stops at the first fall.
 
 pub mod bridge;
+pub mod closed_loop;
 pub mod fault_sweep;
 pub mod metrics;
 pub mod model;
 pub mod output;
 pub mod probe;
+pub mod push_map;
 pub mod sequence;
 pub mod stabilizer;
 pub mod tables;

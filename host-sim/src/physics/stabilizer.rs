@@ -128,6 +128,9 @@ pub struct Internals {
     pub zmp_measured: [f64; 2],
     /// COG modification \[m\].
     pub dc: [f64; 2],
+    /// The measured DCM less the reference's, `ξ − ξ_ref` (x, y) \[m\]: the sensor-only
+    /// estimate the robot's state estimator sends to the node (`MEASURED`).
+    pub dcm_error: [f64; 2],
 }
 
 /// The stabilizer's state.
@@ -280,10 +283,12 @@ impl Stabilizer {
         let v_ref = [r.x.cog_vel, r.y.cog_vel];
         let p_ref = [r.x.zmp, r.y.zmp];
         let mut p_d = [0.0; 2];
+        let mut dcm_error = [0.0; 2];
         for i in 0..2 {
             let xi = cog[i] + self.cog_vel[i] / w;
             let xi_ref = c_ref[i] + v_ref[i] / w;
-            p_d[i] = p_ref[i] + (1.0 + g.k_dcm / w) * (xi - xi_ref);
+            dcm_error[i] = xi - xi_ref;
+            p_d[i] = p_ref[i] + (1.0 + g.k_dcm / w) * dcm_error[i];
         }
         // 4. Distribution.
         let (a, b) = (soles_ref[0].p, soles_ref[1].p);
@@ -392,6 +397,7 @@ impl Stabilizer {
             zmp_desired: clamped_pd,
             zmp_measured,
             dc: self.dc,
+            dcm_error,
         };
         // 8. Inverse kinematics.
         let yaw = mean_yaw(&r.feet);

@@ -32,6 +32,7 @@
 mod canvas;
 mod curves;
 mod data;
+pub mod polar;
 mod time;
 mod top;
 

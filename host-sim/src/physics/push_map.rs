@@ -1,0 +1,380 @@
+//! The push-recovery map (`host-sim push-map`): for every phase of the walk and direction, the
+//! largest horizontal push on the trunk's centre of mass that does not fell the robot, with the
+//! stabilizer only, with step adjustment and the plain re-plan, and with step adjustment and
+//! the proposed method ([`Stepping`]).
+//!
+//! # Protocol
+//!
+//! The protocol of IHMC's Atlas push-recovery tests: a force `F` for `Δt` = 0.1 s, reported as
+//! the velocity change `Δv = F Δt / m` \[m/s\] (`m` the robot's total mass) and as the fraction
+//! of body weight `F / (m g)`. The walk is [`Walk::default`] (straight, 0.15 m steps); the
+//! push comes in the double support after the second landing, or at the start, in the middle,
+//! or at the end of the third single support ([`PushPhase`]); its direction is in the walking
+//! frame (0° forward, 90° to the left: outward for the left support foot of the third single
+//! support). Each cell is a bisection on the force between 0 and one body weight, down to 2 %
+//! of body weight (`--quick`: 12.5 %); the reported force is the largest one that was walked
+//! through, and `steps_adjusted` the steps that this run landed away from their commanded
+//! positions.
+//!
+//! The engine runs of different cells are independent: they run on every core.
+
+use std::fs;
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use serde_json::{json, Value};
+
+use super::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
+use super::PhysicsConfig;
+use planner_core::node::NodeConfig;
+
+/// The push duration \[s\].
+pub const PUSH_S: f64 = 0.1;
+/// The bisection's resolution as a fraction of body weight.
+pub const RESOLUTION_BW: f64 = 0.02;
+/// The same for `--quick`.
+pub const QUICK_RESOLUTION_BW: f64 = 0.125;
+/// The largest push tried \[fraction of body weight\].
+pub const MAX_BW: f64 = 1.0;
+
+/// The phases of `--quick`.
+pub const QUICK_PHASES: [PushPhase; 2] = [PushPhase::Double, PushPhase::SingleMiddle];
+/// The directions of `--quick` \[deg\].
+pub const QUICK_DIRECTIONS: [f64; 4] = [0.0, 90.0, 180.0, 270.0];
+
+/// IHMC's Atlas push-recovery thresholds \[m/s\] (forward, backward, inward, outward in
+/// transfer), for the tables and plots.
+pub const ATLAS: [(&str, f64); 4] = [
+    ("forward", 0.78),
+    ("backward", 0.49),
+    ("inward", 0.22),
+    ("outward in transfer", 0.25),
+];
+/// iCub's: 150 N for 0.05 s on 33 kg \[m/s\].
+pub const ICUB_DV: f64 = 150.0 * 0.05 / 33.0;
+
+/// One cell of the map.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cell {
+    /// The configuration.
+    pub stepping: Stepping,
+    /// The phase.
+    pub phase: PushPhase,
+    /// The direction \[deg\].
+    pub direction_deg: f64,
+    /// The largest force walked through \[N\].
+    pub max_force_n: f64,
+    /// Its velocity change \[m/s\].
+    pub dv_mps: f64,
+    /// Its fraction of body weight.
+    pub bw_fraction: f64,
+    /// Steps landed away from their commanded positions in that run.
+    pub steps_adjusted: usize,
+    /// Engine runs of the bisection.
+    pub runs: usize,
+}
+
+impl Cell {
+    /// The cell's entry in `push_map.json`.
+    pub fn json(&self) -> Value {
+        json!({
+            "phase": self.phase.name(),
+            "direction_deg": self.direction_deg,
+            "max_force_n": self.max_force_n,
+            "dv_mps": self.dv_mps,
+            "bw_fraction": self.bw_fraction,
+            "steps_adjusted": self.steps_adjusted,
+        })
+    }
+}
+
+/// What to map.
+#[derive(Clone, Debug)]
+pub struct MapSpec {
+    /// The phases.
+    pub phases: Vec<PushPhase>,
+    /// The directions \[deg\].
+    pub directions: Vec<f64>,
+    /// The bisection's resolution \[fraction of body weight\].
+    pub resolution_bw: f64,
+    /// The configurations.
+    pub steppings: Vec<Stepping>,
+    /// Engine runs at once.
+    pub threads: usize,
+}
+
+impl MapSpec {
+    /// The full map (`quick`: two phases, four directions, coarse).
+    pub fn new(quick: bool) -> Self {
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1);
+        if quick {
+            Self {
+                phases: QUICK_PHASES.to_vec(),
+                directions: QUICK_DIRECTIONS.to_vec(),
+                resolution_bw: QUICK_RESOLUTION_BW,
+                steppings: Stepping::ALL.to_vec(),
+                threads,
+            }
+        } else {
+            Self {
+                phases: PushPhase::ALL.to_vec(),
+                directions: (0..8).map(|i| 45.0 * f64::from(i)).collect(),
+                resolution_bw: RESOLUTION_BW,
+                steppings: Stepping::ALL.to_vec(),
+                threads,
+            }
+        }
+    }
+}
+
+/// The bisection of one cell.
+pub fn bisect(
+    node: &NodeConfig,
+    cfg: &PhysicsConfig,
+    stepping: Stepping,
+    phase: PushPhase,
+    direction_deg: f64,
+    resolution_bw: f64,
+) -> Result<Cell, String> {
+    let m = cfg.robot.total_mass();
+    let weight = m * cfg.robot.gravity();
+    let (mut lo, mut hi) = (0.0, MAX_BW);
+    let mut steps_adjusted = 0;
+    let mut runs = 0;
+    while hi - lo > resolution_bw {
+        let mid = 0.5 * (lo + hi);
+        let push = PushSpec {
+            phase,
+            direction_deg,
+            force_n: mid * weight,
+            duration_s: PUSH_S,
+        };
+        let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
+        runs += 1;
+        if !o.pushed && !o.fell {
+            return Err(format!(
+                "the walk never reached the push ({}, {direction_deg}°)",
+                phase.name()
+            ));
+        }
+        if o.fell {
+            hi = mid;
+        } else {
+            lo = mid;
+            steps_adjusted = o.steps_adjusted;
+        }
+    }
+    let f = lo * weight;
+    Ok(Cell {
+        stepping,
+        phase,
+        direction_deg,
+        max_force_n: f,
+        dv_mps: f * PUSH_S / m,
+        bw_fraction: lo,
+        steps_adjusted,
+        runs,
+    })
+}
+
+/// Every cell of `spec`, the bisections spread over `spec.threads` threads (in the order of
+/// `spec`: configuration, phase, direction).
+pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec<Cell>, String> {
+    let mut jobs = Vec::new();
+    for &s in &spec.steppings {
+        for &p in &spec.phases {
+            for &d in &spec.directions {
+                jobs.push((s, p, d));
+            }
+        }
+    }
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<Result<Cell, String>>>> = Mutex::new(vec![None; jobs.len()]);
+    std::thread::scope(|scope| {
+        for _ in 0..spec.threads.max(1).min(jobs.len().max(1)) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&(s, p, d)) = jobs.get(i) else {
+                    break;
+                };
+                let r = bisect(node, cfg, s, p, d, spec.resolution_bw);
+                if let Ok(mut v) = results.lock() {
+                    v[i] = Some(r);
+                }
+            });
+        }
+    });
+    let results = results.into_inner().map_err(|_| "a map thread panicked")?;
+    results
+        .into_iter()
+        .map(|r| r.unwrap_or_else(|| Err("a cell was not run".into())))
+        .collect()
+}
+
+/// `push_map.json`: the robot, its mass, the push duration and each configuration's cells.
+pub fn map_json(robot: &str, mass_kg: f64, spec: &MapSpec, cells: &[Cell]) -> Value {
+    let mut configs = serde_json::Map::new();
+    for s in Stepping::ALL {
+        let list: Vec<Value> = cells
+            .iter()
+            .filter(|c| c.stepping == s)
+            .map(Cell::json)
+            .collect();
+        if spec.steppings.contains(&s) {
+            configs.insert(s.name().into(), Value::Array(list));
+        }
+    }
+    json!({
+        "robot": robot,
+        "mass_kg": mass_kg,
+        "push_duration_s": PUSH_S,
+        "resolution_bw": spec.resolution_bw,
+        "max_bw": MAX_BW,
+        "walk": {"steps": Walk::default().steps, "length_m": Walk::default().length},
+        "engine_runs": cells.iter().map(|c| c.runs).sum::<usize>(),
+        "configs": Value::Object(configs),
+        "references": {
+            "atlas_mps": ATLAS.iter().map(|(k, v)| json!({"direction": k, "dv_mps": v})).collect::<Vec<_>>(),
+            "icub_dv_mps": ICUB_DV,
+        },
+    })
+}
+
+/// The table of `push_map.md`: one row per phase and direction, Δv of each configuration.
+pub fn markdown(spec: &MapSpec, cells: &[Cell]) -> String {
+    let mut s = String::from("| phase | direction [deg] |");
+    for st in &spec.steppings {
+        s += &format!(" {} Δv [m/s] (BW) |", st.name());
+    }
+    s += " steps adjusted (proposed) |\n|---|---|";
+    for _ in &spec.steppings {
+        s += "---|";
+    }
+    s += "---|\n";
+    for &p in &spec.phases {
+        for &d in &spec.directions {
+            s += &format!("| {} | {d:.0} |", p.name());
+            let mut adjusted = String::from("–");
+            for &st in &spec.steppings {
+                match cells
+                    .iter()
+                    .find(|c| c.stepping == st && c.phase == p && c.direction_deg == d)
+                {
+                    Some(c) => {
+                        s += &format!(" {:.3} ({:.2}) |", c.dv_mps, c.bw_fraction);
+                        if st == Stepping::Proposed {
+                            adjusted = c.steps_adjusted.to_string();
+                        }
+                    }
+                    None => s += " – |",
+                }
+            }
+            s += &format!(" {adjusted} |\n");
+        }
+    }
+    s += &format!(
+        "\nReferences: IHMC's Atlas {}; iCub {ICUB_DV:.3} m/s (150 N for 0.05 s, 33 kg).\n",
+        ATLAS
+            .iter()
+            .map(|(k, v)| format!("{k} {v} m/s"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    s
+}
+
+/// Parses `--phases` (comma-separated names).
+pub fn parse_phases(s: &str) -> Result<Vec<PushPhase>, String> {
+    s.split(',')
+        .map(|p| {
+            PushPhase::parse(p.trim()).ok_or_else(|| {
+                format!(
+                    "unknown phase {p:?} (one of {})",
+                    PushPhase::ALL.map(PushPhase::name).join(", ")
+                )
+            })
+        })
+        .collect()
+}
+
+/// Parses `--directions` (comma-separated degrees).
+pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(|d| {
+            d.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{d:?} is not a direction in degrees"))
+        })
+        .collect()
+}
+
+/// The `push-map` command: the map of `robot`, written to `out` (`push_map.json`,
+/// `push_map.md`, a polar plot per phase).
+pub fn cli(
+    out: &Path,
+    robot: &crate::robot::Robot,
+    quick: bool,
+    phases: Option<&str>,
+    directions: Option<&str>,
+    probe: &super::probe::ProbeArgs,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let probe = probe.resolve(robot)?;
+    let cfg = probe.cfg;
+    let mut spec = MapSpec::new(quick);
+    if let Some(p) = phases {
+        spec.phases = parse_phases(p)?;
+    }
+    if let Some(d) = directions {
+        spec.directions = parse_directions(d)?;
+    }
+    fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
+    let node = robot.node_config();
+    let cells = map(&node, &cfg, &spec)?;
+    let mass = cfg.robot.total_mass();
+    let j = map_json(robot.name(), mass, &spec, &cells);
+    let write = |name: &str, text: String| {
+        let path = out.join(name);
+        fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    };
+    write("push_map.json", serde_json::to_string_pretty(&j)?)?;
+    let md = markdown(&spec, &cells);
+    write("push_map.md", md.clone())?;
+    for &p in &spec.phases {
+        let series: Vec<(&str, Vec<(f64, f64)>)> = spec
+            .steppings
+            .iter()
+            .map(|&s| {
+                (
+                    s.name(),
+                    cells
+                        .iter()
+                        .filter(|c| c.stepping == s && c.phase == p)
+                        .map(|c| (c.direction_deg, c.dv_mps))
+                        .collect(),
+                )
+            })
+            .collect();
+        crate::output::plot::polar::write_polar(
+            &out.join(format!("push_map_{}.png", p.name())),
+            &format!(
+                "{}: largest push walked through, {}",
+                robot.name(),
+                p.name()
+            ),
+            &series,
+        )?;
+    }
+    print!("{md}");
+    println!(
+        "{} engine runs; wrote {}",
+        cells.iter().map(|c| c.runs).sum::<usize>(),
+        out.join("push_map.json").display()
+    );
+    Ok(())
+}

@@ -1,0 +1,187 @@
+//! The push-recovery map (`host-sim push-map`, host-sim/src/physics/push_map.rs) and the node
+//! in the engine's loop (host-sim/src/physics/closed_loop.rs).
+//!
+//! * The contract of `push-map --quick`: `push_map.json` with `robot`, `mass_kg`,
+//!   `push_duration_s` and the three configurations, each a list of `{phase, direction_deg,
+//!   max_force_n, dv_mps, bw_fraction, steps_adjusted}` over the quick map's two phases and
+//!   four directions; `Δv = F Δt / m` and `F / (m g)` as stated; the stabilizer-only walks
+//!   never move a step; a polar plot per phase.
+//! * The bisection's claim, checked again for one cell: the reported force is walked through,
+//!   one resolution step more fells the robot.
+//! * The closed loop: without a push no configuration moves a step or falls; with
+//!   `StartAdjusting` and a push, every landing is its commanded position plus the shift the
+//!   node published in `ADJUST` (the controller's book stays true).
+//!
+//! MuJoCo as in tests/physics.rs: skipped with a message when missing, a failure under
+//! `WALK_REQUIRE_MUJOCO=1`.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use host_sim::physics::bridge::{installed_version, python, MUJOCO_VERSION};
+use host_sim::physics::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
+use host_sim::physics::push_map::{bisect, PUSH_S, QUICK_DIRECTIONS, QUICK_PHASES};
+use host_sim::physics::PhysicsConfig;
+use host_sim::robot::Robot;
+use serde_json::Value;
+
+const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
+
+fn engine_here(test: &str) -> bool {
+    let required = std::env::var(REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0");
+    match installed_version(&python()) {
+        Ok(v) => {
+            assert!(
+                !required || v == MUJOCO_VERSION,
+                "MuJoCo {v}, {MUJOCO_VERSION} expected"
+            );
+            true
+        }
+        Err(e) => {
+            assert!(!required, "{e} ({REQUIRE}=1)");
+            eprintln!("push_map: SKIPPED {test}: {e} ({REQUIRE}=1 makes this a failure)");
+            false
+        }
+    }
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("push-map-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn quick_map_keeps_its_contract() {
+    if !engine_here("quick_map_keeps_its_contract") {
+        return;
+    }
+    let out = out_dir("quick");
+    let status = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["push-map", "--quick", "--out"])
+        .arg(&out)
+        .status()
+        .expect("host-sim runs");
+    assert!(status.success());
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("push_map.json")).unwrap()).unwrap();
+    let robot = Robot::hrp2();
+    let model = PhysicsConfig::for_robot(&robot).robot;
+    let (m, g) = (model.total_mass(), model.gravity());
+    assert_eq!(j["robot"].as_str(), Some(robot.name()));
+    assert!((j["mass_kg"].as_f64().unwrap() - m).abs() < 1e-9);
+    assert_eq!(j["push_duration_s"].as_f64(), Some(PUSH_S));
+    for config in ["stabilizer_only", "plain", "proposed"] {
+        let cells = j["configs"][config].as_array().expect(config);
+        assert_eq!(
+            cells.len(),
+            QUICK_PHASES.len() * QUICK_DIRECTIONS.len(),
+            "{config}"
+        );
+        for p in QUICK_PHASES {
+            for d in QUICK_DIRECTIONS {
+                let c = cells
+                    .iter()
+                    .find(|c| c["phase"] == p.name() && c["direction_deg"].as_f64() == Some(d))
+                    .unwrap_or_else(|| panic!("{config}: no cell {} {d}", p.name()));
+                let f = c["max_force_n"].as_f64().unwrap();
+                let dv = c["dv_mps"].as_f64().unwrap();
+                let bw = c["bw_fraction"].as_f64().unwrap();
+                assert!((0.0..=m * g).contains(&f), "{c}");
+                assert!((dv - f * PUSH_S / m).abs() < 1e-9, "{c}");
+                assert!((bw - f / (m * g)).abs() < 1e-9, "{c}");
+                let adjusted = c["steps_adjusted"].as_u64().unwrap();
+                if config == "stabilizer_only" {
+                    assert_eq!(adjusted, 0, "{c}");
+                }
+            }
+        }
+    }
+    for p in QUICK_PHASES {
+        let png = out.join(format!("push_map_{}.png", p.name()));
+        let bytes = std::fs::read(&png).unwrap_or_else(|_| panic!("{}", png.display()));
+        assert_eq!(&bytes[1..4], b"PNG");
+    }
+    assert!(out.join("push_map.md").exists());
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The bisection's answer for one cell holds when run again: its force is walked through and
+/// one resolution step more is not.
+#[test]
+fn a_cells_force_is_walked_through_and_one_step_more_is_not() {
+    if !engine_here("a_cells_force_is_walked_through_and_one_step_more_is_not") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let node = robot.node_config();
+    let res = 0.125;
+    let phase = PushPhase::SingleMiddle;
+    let cell = bisect(&node, &cfg, Stepping::Fixed, phase, 90.0, res).unwrap();
+    let weight = cfg.robot.total_mass() * cfg.robot.gravity();
+    let push = |bw: f64| PushSpec {
+        phase,
+        direction_deg: 90.0,
+        force_n: bw * weight,
+        duration_s: PUSH_S,
+    };
+    let walked = run(
+        &node,
+        &cfg,
+        Walk::default(),
+        Stepping::Fixed,
+        Some(push(cell.bw_fraction)),
+    );
+    assert!(!walked.unwrap().fell, "{cell:?}");
+    // The bisection's upper bound: the midpoint above the answer fell.
+    let above = run(
+        &node,
+        &cfg,
+        Walk::default(),
+        Stepping::Fixed,
+        Some(push(cell.bw_fraction + res)),
+    )
+    .unwrap();
+    assert!(above.fell, "{cell:?}: {above:?}");
+}
+
+/// Without a push nothing moves and nothing falls; with a push and `StartAdjusting` every
+/// landing is the commanded position plus a shift the node published.
+#[test]
+fn the_closed_loop_lands_where_adjust_says() {
+    if !engine_here("the_closed_loop_lands_where_adjust_says") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let node = robot.node_config();
+    for s in Stepping::ALL {
+        let o = run(&node, &cfg, Walk::default(), s, None).unwrap();
+        assert!(!o.fell, "{s:?}: {o:?}");
+        assert_eq!(o.steps_adjusted, 0, "{s:?}");
+        assert_eq!(
+            o.landings.len(),
+            usize::from(Walk::default().steps),
+            "{s:?}"
+        );
+    }
+    let push = PushSpec {
+        phase: PushPhase::SingleMiddle,
+        direction_deg: 0.0,
+        force_n: 0.3 * cfg.robot.total_mass() * cfg.robot.gravity(),
+        duration_s: PUSH_S,
+    };
+    let o = run(&node, &cfg, Walk::default(), Stepping::Plain, Some(push)).unwrap();
+    assert!(o.pushed);
+    assert!(o.steps_adjusted > 0, "{o:?}");
+    for (t, commanded, landed) in &o.landings {
+        let ok = std::iter::once([0.0, 0.0])
+            .chain(o.adjusts.iter().map(|a| a.shift_si()))
+            .any(|s| {
+                (commanded[0] + s[0] - landed[0]).abs() < 1e-9
+                    && (commanded[1] + s[1] - landed[1]).abs() < 1e-9
+            });
+        assert!(ok, "landing at {t} s: {commanded:?} → {landed:?}");
+    }
+}
