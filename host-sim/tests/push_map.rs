@@ -12,6 +12,9 @@
 //!   `StartAdjusting` and a push, every landing is its commanded position plus the shift the
 //!   node published in `ADJUST` (the controller's book stays true).
 //!
+//! * With `WALK_LONG=1`, the full map (576 engine runs) against the book's table and summary
+//!   (docs/src/adjust.md) and the front page's row.
+//!
 //! MuJoCo as in tests/physics.rs: skipped with a message when missing, a failure under
 //! `WALK_REQUIRE_MUJOCO=1`.
 
@@ -20,7 +23,9 @@ use std::process::Command;
 
 use host_sim::physics::bridge::{installed_version, python, MUJOCO_VERSION};
 use host_sim::physics::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
-use host_sim::physics::push_map::{bisect, PUSH_S, QUICK_DIRECTIONS, QUICK_PHASES};
+use host_sim::physics::push_map::{
+    bisect, compare, map, markdown, summary_lines, MapSpec, PUSH_S, QUICK_DIRECTIONS, QUICK_PHASES,
+};
 use host_sim::physics::PhysicsConfig;
 use host_sim::robot::Robot;
 use serde_json::Value;
@@ -184,4 +189,47 @@ fn the_closed_loop_lands_where_adjust_says() {
             });
         assert!(ok, "landing at {t} s: {commanded:?} → {landed:?}");
     }
+}
+
+/// The full map, as the book and the front page quote it (`WALK_LONG=1`; about 9 minutes of a
+/// release build on 2 cores).
+#[test]
+fn the_full_map_is_the_books() {
+    if std::env::var("WALK_LONG").as_deref() != Ok("1") {
+        eprintln!("push_map: the full map runs with WALK_LONG=1");
+        return;
+    }
+    if !engine_here("the_full_map_is_the_books") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let spec = MapSpec::new(false);
+    let cells = map(&robot.node_config(), &cfg, &spec).unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let table = markdown(&spec, &cells);
+    let sums = summary_lines(&spec, &cells);
+    eprintln!("{table}\n{sums}");
+    for line in table.lines().chain(sums.lines()).filter(|l| !l.is_empty()) {
+        assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
+    }
+    // The front page: the mean Δv of the three configurations.
+    let means: Vec<String> = host_sim::physics::push_map::summary(&spec, &cells)
+        .iter()
+        .map(|s| format!("{:.3}", s.mean_dv_mps))
+        .collect();
+    let quoted = format!("mean Δv {} m/s", means.join(" / "));
+    assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
+    let (larger, smaller, _) = compare(&cells, Stepping::Proposed, Stepping::Plain);
+    let quoted = format!("better than the plain re-plan in {larger} cells, worse in {smaller}");
+    assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
+    let raised: Vec<String> = host_sim::physics::push_map::summary(&spec, &cells)
+        .iter()
+        .skip(1)
+        .map(|s| s.raised.to_string())
+        .collect();
+    let quoted = format!("adjustment raises it in {} of 32 cells", raised.join(" / "));
+    assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
 }

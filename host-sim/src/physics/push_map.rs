@@ -214,6 +214,98 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
         .collect()
 }
 
+/// One configuration against the stabilizer only, over the cells both have.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Summary {
+    /// The configuration.
+    pub stepping: Stepping,
+    /// The mean of its cells' Δv \[m/s\].
+    pub mean_dv_mps: f64,
+    /// Cells where it walks through a larger push than the stabilizer only.
+    pub raised: usize,
+    /// Cells where it walks through a smaller one.
+    pub lowered: usize,
+    /// Cells compared.
+    pub cells: usize,
+}
+
+/// Each configuration of `spec` against the stabilizer only.
+pub fn summary(spec: &MapSpec, cells: &[Cell]) -> Vec<Summary> {
+    let base = |c: &Cell| {
+        cells.iter().find(|b| {
+            b.stepping == Stepping::Fixed
+                && b.phase == c.phase
+                && b.direction_deg == c.direction_deg
+        })
+    };
+    spec.steppings
+        .iter()
+        .map(|&s| {
+            let mine: Vec<&Cell> = cells.iter().filter(|c| c.stepping == s).collect();
+            let n = mine.len().max(1) as f64;
+            let mut out = Summary {
+                stepping: s,
+                mean_dv_mps: mine.iter().map(|c| c.dv_mps).sum::<f64>() / n,
+                raised: 0,
+                lowered: 0,
+                cells: 0,
+            };
+            for c in mine {
+                if let Some(b) = base(c) {
+                    out.cells += 1;
+                    out.raised += usize::from(c.max_force_n > b.max_force_n);
+                    out.lowered += usize::from(c.max_force_n < b.max_force_n);
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+/// Cells where `a` walks through a larger push than `b`, and where a smaller one.
+pub fn compare(cells: &[Cell], a: Stepping, b: Stepping) -> (usize, usize, usize) {
+    let (mut larger, mut smaller, mut n) = (0, 0, 0);
+    for c in cells.iter().filter(|c| c.stepping == a) {
+        if let Some(d) = cells
+            .iter()
+            .find(|d| d.stepping == b && d.phase == c.phase && d.direction_deg == c.direction_deg)
+        {
+            n += 1;
+            larger += usize::from(c.max_force_n > d.max_force_n);
+            smaller += usize::from(c.max_force_n < d.max_force_n);
+        }
+    }
+    (larger, smaller, n)
+}
+
+/// The summary lines of `push_map.md` and the command's output.
+pub fn summary_lines(spec: &MapSpec, cells: &[Cell]) -> String {
+    let mut s = summary_of(spec, cells);
+    if spec.steppings.contains(&Stepping::Plain) && spec.steppings.contains(&Stepping::Proposed) {
+        let (larger, smaller, n) = compare(cells, Stepping::Proposed, Stepping::Plain);
+        s += &format!(
+            "proposed against plain: larger in {larger} of {n} cells, smaller in {smaller}\n"
+        );
+    }
+    s
+}
+
+fn summary_of(spec: &MapSpec, cells: &[Cell]) -> String {
+    summary(spec, cells)
+        .iter()
+        .map(|s| {
+            format!(
+                "{}: mean Δv {:.3} m/s; larger than the stabilizer only in {} of {} cells, smaller in {}\n",
+                s.stepping.name(),
+                s.mean_dv_mps,
+                s.raised,
+                s.cells,
+                s.lowered
+            )
+        })
+        .collect()
+}
+
 /// `push_map.json`: the robot, its mass, the push duration and each configuration's cells.
 pub fn map_json(robot: &str, mass_kg: f64, spec: &MapSpec, cells: &[Cell]) -> Value {
     let mut configs = serde_json::Map::new();
@@ -236,6 +328,13 @@ pub fn map_json(robot: &str, mass_kg: f64, spec: &MapSpec, cells: &[Cell]) -> Va
         "walk": {"steps": Walk::default().steps, "length_m": Walk::default().length},
         "engine_runs": cells.iter().map(|c| c.runs).sum::<usize>(),
         "configs": Value::Object(configs),
+        "summary": summary(spec, cells).iter().map(|s| json!({
+            "config": s.stepping.name(),
+            "mean_dv_mps": s.mean_dv_mps,
+            "raised": s.raised,
+            "lowered": s.lowered,
+            "cells": s.cells,
+        })).collect::<Vec<_>>(),
         "references": {
             "atlas_mps": ATLAS.iter().map(|(k, v)| json!({"direction": k, "dv_mps": v})).collect::<Vec<_>>(),
             "icub_dv_mps": ICUB_DV,
@@ -338,12 +437,13 @@ pub fn cli(
     let cells = map(&node, &cfg, &spec)?;
     let mass = cfg.robot.total_mass();
     let j = map_json(robot.name(), mass, &spec, &cells);
+    let sums = summary_lines(&spec, &cells);
     let write = |name: &str, text: String| {
         let path = out.join(name);
         fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
     };
     write("push_map.json", serde_json::to_string_pretty(&j)?)?;
-    let md = markdown(&spec, &cells);
+    let md = format!("{}\n{sums}", markdown(&spec, &cells));
     write("push_map.md", md.clone())?;
     for &p in &spec.phases {
         let series: Vec<(&str, Vec<(f64, f64)>)> = spec
