@@ -214,13 +214,13 @@ bash firmware/size.sh --check
 )
 
 section "the book (docs/): mdbook build, and mdbook test of its Rust code against planner-core"
-# mdbook from crates.io (installed if missing, without its file watcher and web server). Its
+# mdbook from crates.io (installed if missing, without its file watcher, web server and search index). Its
 # Rust code blocks are compiled and run against planner-core, built into a target dir of its
 # own so that rustdoc finds exactly one planner_core library.
 MDBOOK_VERSION=0.5.4
 if [ "$(mdbook --version 2>/dev/null)" != "mdbook v$MDBOOK_VERSION" ]; then
     echo "installing mdbook $MDBOOK_VERSION"
-    cargo install --locked mdbook --version "$MDBOOK_VERSION" --no-default-features --features search
+    cargo install --locked mdbook --version "$MDBOOK_VERSION" --no-default-features
 fi
 cargo build -q -p planner-core --target-dir target/book
 mdbook build docs --dest-dir "$(mktemp -d)"
