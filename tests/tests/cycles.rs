@@ -26,9 +26,11 @@ use std::process::Command;
 use walk_tests::figures::{thousands, Quotes};
 
 /// How far the quoted estimates may be from the measured ones (relative, on every number):
-/// the same sources built in another checkout gave estimates up to 0.8 % apart (re-plan
-/// 37.6–39.9 k against 37.3–39.6 k), the blocks QEMU translated being costed one by one.
-const ESTIMATE_TOLERANCE: f64 = 0.02;
+/// the same sources built in other checkouts gave estimates up to 2.5 % apart (`Start`
+/// 20.1–22.0 k against 19.6–21.5 k; re-plan 37.6–39.9 k against 37.3–39.6 k), the blocks QEMU
+/// translated being costed one by one. An estimate from a model of the core is not better than
+/// that anyway.
+const ESTIMATE_TOLERANCE: f64 = 0.05;
 use walk_tests::report::Record;
 use walk_tests::{build_firmware, build_firmware_with, qemu_available};
 

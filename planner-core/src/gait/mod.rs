@@ -364,6 +364,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// side before it, else the swing target of that side, else where the foot stands. One
     /// pass over the queue for both feet ([`previous_other`](Self::previous_other) is one of
     /// them).
+    #[inline]
     pub fn previous_feet(&self, before: Option<u16>) -> [Footstep<T>; 2] {
         let mut last: [Option<&Footstep<T>>; 2] = [None, None];
         // Backwards from the step before `before`: the queue alternates sides, so two steps

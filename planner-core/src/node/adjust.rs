@@ -37,7 +37,8 @@
 //! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`])
 //!   after the commands: a cycle whose budget a command spent does not adjust.
 //!
-//! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms), so that
+//! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
+//! adjusts or a shift is in force), so that
 //! the controller's book of the steps stays true.
 
 use super::*;

@@ -191,8 +191,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         // `ADJUST` (before the stream: frames go out in identifier order) when the shift
         // changed, and every 20 cycles half-way between the reports (the bus load spread:
-        // no cycle carries more than one report frame beyond the stream's and the reports').
-        if (streaming && self.adj.due) || self.cycle % 20 == 11 {
+        // no cycle carries more than one report frame beyond the stream's and the reports')
+        // while the walk adjusts or a shift is in force.
+        let adjusting = self.adj.enabled || self.adj.shift != [0, 0];
+        if (streaming && self.adj.due) || (adjusting && self.cycle % 20 == 11) {
             self.adj.due = false;
             let a = self.adjustment().encode();
             self.enqueue(a);

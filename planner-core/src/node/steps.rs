@@ -257,6 +257,9 @@ impl<const Q: usize> Steps<Q> {
 
 /// `s` moved by `shift` \[0.5 mm\]; `None` if it leaves the footstep range.
 pub(super) fn shifted(s: &WireStep, shift: [i32; 2]) -> Option<WireStep> {
+    if shift == [0, 0] {
+        return Some(*s); // (a validated step: in range)
+    }
     let m = WireStep {
         x: s.x.checked_add(shift[0])?,
         y: s.y.checked_add(shift[1])?,

@@ -63,7 +63,7 @@
 //! * **Measured state.** `MEASURED` names the node cycle whose reference it was measured
 //!   against (24 bits: exact for a start-up's first 2²⁴ cycles, 23.3 hours; beyond, refused
 //!   [`Reason::Exhausted`]) and its CRC is keyed with the session: it is taken only if it is
-//!   at most [`crate::node::NodeConfig::measured_max_age`] cycles old, newer than the last
+//!   at most [`crate::node::AdjustConfig::max_age`] cycles old, newer than the last
 //!   one taken, and of the open session. It never proves the controller alive.
 //! * **`ESTOP`** belongs to no session on purpose: any frame on its identifier with the right
 //!   length stops the robot, in the cycle it is received (a stop is always safe), and proves
