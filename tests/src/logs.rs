@@ -1,6 +1,8 @@
 //! The host runs that the QEMU images replay (`tests/tests/qemu.rs` for the M7,
 //! `tests/tests/qemu_m4.rs` for the M4F): every built-in scenario and every TOML scenario of
-//! `host-sim/scenarios/` through `sim::simulate`, and one fault-sweep run (fig4, seed 1) per
+//! `host-sim/scenarios/` through `sim::simulate`, a pushed walk with the node's step
+//! adjustment (`sim::pushed`: `start_adjusting` and the estimator's `MEASURED` every cycle),
+//! and one fault-sweep run (fig4, seed 1) per
 //! fault kind that the in-memory device replays as host-sim's bus does (not the flood at
 //! 100 % load: see `tests/tests/qemu.rs`), each with its candump log; [`binary`] encodes one
 //! for the image's `replay.wlog` (a file of such logs, one after the other); [`play`] plays
@@ -15,6 +17,7 @@ use gait_loop::{Fnv, Player};
 
 use host_sim::eval::faults::{run_case_logged, FaultKind, HEAVY};
 use host_sim::scenario::{self, built_in, BUILT_IN};
+use host_sim::sim::pushed::pushed_walk;
 use host_sim::sim::replay;
 use host_sim::sim::{simulate, start_config, SimConfig};
 use planner_core::gait::{Footstep, Reference, PREVIEW};
@@ -28,6 +31,13 @@ use crate::report::QemuRun;
 
 /// The image's `CHECK` period \[cycles\].
 pub const CHECK_EVERY: u64 = 500;
+
+/// The pushed walk's steps, their length \[m\] and the push (a velocity step, x and y \[m/s\]).
+pub const PUSHED_STEPS: u16 = 10;
+/// See [`PUSHED_STEPS`].
+pub const PUSHED_LENGTH_M: f64 = 0.2;
+/// See [`PUSHED_STEPS`].
+pub const PUSHED_DV: [f64; 2] = [0.35, 0.0];
 
 /// One host run to replay on the target.
 pub struct Case {
@@ -95,6 +105,21 @@ pub fn cases() -> Vec<Case> {
             adjusts: true,
         });
     }
+    // The node's step adjustment from the measured state: a walk started with
+    // `start_adjusting`, pushed, with the estimator's `MEASURED` every cycle.
+    let cfg = NodeConfig::hrp2();
+    let pushed = pushed_walk(&cfg, PUSHED_STEPS, PUSHED_LENGTH_M, PUSHED_DV, true)
+        .unwrap_or_else(|e| panic!("pushed: {e}"));
+    assert!(
+        pushed.shift != [0, 0] && !pushed.fallen,
+        "pushed: {pushed:?}"
+    );
+    out.push(Case {
+        name: "pushed-adjusting".to_string(),
+        cfg,
+        log: pushed.can_log,
+        adjusts: false,
+    });
     let fig4 = built_in("fig4").unwrap();
     for (name, kind, rate) in fault_runs() {
         let (_, log) =

@@ -162,6 +162,7 @@ fn m7_cycles_of_every_kind_are_quoted() {
     let steady = "steady cycle (tick, encode and send";
     let replan = "re-plan at the start of single support";
     let adjust = "re-plan with a single-support adjustment";
+    let step_adjust = "the node's step adjustment from the measured state";
     let start = "`Start` (plans the start window)";
     let cycle = "**worst control cycle**";
     let prose = "(the cycle estimate of the worst control cycle)";
@@ -170,6 +171,7 @@ fn m7_cycles_of_every_kind_are_quoted() {
         .cell(T, steady, COLUMN, &range(of(&e, "steady")))
         .cell(T, replan, COLUMN, &range(of(&e, "replan")))
         .cell(T, adjust, COLUMN, &range(of(&e, "adjust")))
+        .cell(T, step_adjust, COLUMN, &range(of(&e, "step-adjust")))
         .cell(T, start, COLUMN, &range(of(&e, "start")))
         .cell(T, cycle, COLUMN, &format!("**{}**", range(worst)))
         .cell(

@@ -7,7 +7,7 @@ use core::borrow::Borrow;
 use planner_core::gait::{Reference, ReplanInfo, PREVIEW};
 use planner_core::node::{Node, NodeState, PollReport};
 use planner_core::shaping::PreviewGains;
-use planner_core::wire::{Command, ControlOp, RawFrame};
+use planner_core::wire::{Command, ControlOp, Expect, RawFrame};
 use planner_core::Real;
 
 use crate::bus::Device;
@@ -80,13 +80,16 @@ const RX_STOP: u8 = 8;
 const RX_HEARTBEAT: u8 = 16;
 /// A reset, an invalid frame, or a frame of another node.
 const RX_OTHER: u8 = 32;
+/// The estimator's measured state (`MEASURED`: up to one every cycle, part of a steady one).
+const RX_MEASURED: u8 = 64;
 
-fn class(f: &RawFrame, next: u16) -> u8 {
-    match Command::decode(f, next) {
+fn class(f: &RawFrame, expect: Expect) -> u8 {
+    match Command::decode(f, expect) {
+        Ok(Command::Measured(_)) => RX_MEASURED,
         Ok(Command::Append(_)) => RX_PUSH,
         Ok(Command::Modify(_)) => RX_MODIFY,
         Ok(Command::Control {
-            op: ControlOp::Start,
+            op: ControlOp::Start | ControlOp::StartAdjusting,
             ..
         }) => RX_START,
         Ok(Command::Control {
@@ -121,6 +124,8 @@ pub struct Pending {
     was_standing: bool,
     plans: u32,
     state: NodeState,
+    /// The node's count of step adjustments worked on.
+    adjustments: u32,
 }
 
 impl Pending {
@@ -131,9 +136,9 @@ impl Pending {
     ) -> Self {
         let mut seen = [0u8; SEEN];
         let (mut acc, mut i) = (0u8, 0usize);
-        let next = node.next_step();
+        let expect = node.expect();
         bus.each_pending(|f| {
-            acc |= class(f, next);
+            acc |= class(f, expect);
             if let Some(s) = seen.get_mut(i) {
                 *s = acc;
             }
@@ -147,6 +152,7 @@ impl Pending {
             was_standing: node.gait().is_standing(),
             plans: node.gait().plans(),
             state: node.state(),
+            adjustments: node.adjustment_attempts(),
         }
     }
 
@@ -180,6 +186,8 @@ impl Pending {
             } else {
                 Kind::Replan
             }
+        } else if node.adjustment_attempts() != self.adjustments {
+            Kind::StepAdjust
         } else if rx & RX_STOP != 0 {
             Kind::StopCommand
         } else if rx & RX_PUSH != 0 {
@@ -190,7 +198,7 @@ impl Pending {
             Kind::Settle
         } else if node.state() != self.state {
             Kind::Transition
-        } else if taken > 1 || rx & RX_OTHER != 0 {
+        } else if taken > 1 + usize::from(rx & RX_MEASURED != 0) || rx & RX_OTHER != 0 {
             Kind::Traffic
         } else {
             Kind::Steady

@@ -26,7 +26,8 @@ pub enum Kind {
     StopCommand,
     /// A cycle standing, no command.
     Standing,
-    /// A walking cycle that planned no window and took no frame but at most one heartbeat.
+    /// A walking cycle that planned no window and took no frame but at most one heartbeat (and
+    /// the estimator's measured state).
     Steady,
     /// A walking cycle whose tick planned a window other than a re-plan at the start of a
     /// single support: the stop window (the robot settles after a `Stop`, a supervision stop
@@ -44,13 +45,17 @@ pub enum Kind {
     /// A cycle whose tick re-plans with a single-support time adjustment
     /// (`adjust_ticks != 0`: eq. 18 solves the target pattern too).
     Adjust,
+    /// A cycle in which the node worked on moving the steps from the measured state (its step
+    /// adjustment: the reach's bisection and eq. 17's check, carried out or not), no command
+    /// planned.
+    StepAdjust,
     /// Every control cycle.
     Cycle,
 }
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 13] = [
+    pub const ALL: [Kind; 14] = [
         Kind::New,
         Kind::Push,
         Kind::Start,
@@ -63,6 +68,7 @@ impl Kind {
         Kind::Traffic,
         Kind::Replan,
         Kind::Adjust,
+        Kind::StepAdjust,
         Kind::Cycle,
     ];
 
@@ -81,6 +87,7 @@ impl Kind {
             Kind::Traffic => "traffic",
             Kind::Replan => "replan",
             Kind::Adjust => "adjust",
+            Kind::StepAdjust => "step-adjust",
             Kind::Cycle => "cycle",
         }
     }

@@ -104,6 +104,9 @@ pub(super) struct Adjusting<T> {
     pub flags: u8,
     /// `ADJUST` is due (the shift changed).
     pub due: bool,
+    /// Moves the node worked on (the reach's bisection, eq. 17's check) since the session
+    /// opened, carried out or not (wrapping): what a cycle's cost is classified by.
+    pub attempts: u32,
 }
 
 impl<T: Real> Adjusting<T> {
@@ -120,6 +123,7 @@ impl<T: Real> Adjusting<T> {
         count: 0,
         flags: 0,
         due: false,
+        attempts: 0,
     };
 }
 
@@ -244,6 +248,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if change < self.cfg.adjust.min_change {
             return;
         }
+        self.adj.attempts = self.adj.attempts.wrapping_add(1);
         let old = self.adj.shift;
         let mut flags = self.adj.flags & Adjust::FRESH;
         // The reach: the whole move if it keeps the limits, else the largest part of it that
@@ -302,6 +307,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             count: self.adj.count,
             flags: self.adj.flags,
         }
+    }
+
+    /// The moves of the steps the node worked on since the session opened (wrapping), carried
+    /// out or not: a cycle that changes it ran the step adjustment's checks (the reach's
+    /// bisection, eq. 17).
+    pub fn adjustment_attempts(&self) -> u32 {
+        self.adj.attempts
     }
 
     /// The shift in force \[0.5 mm\]: every step queued from now on lands at its commanded

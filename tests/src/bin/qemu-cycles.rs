@@ -72,10 +72,11 @@ use walk_tests::report::{self, Record};
 use walk_tests::trace::{self, Symbols};
 
 /// The kinds of cycle estimated by default (the image's names) and how the table calls them.
-const KINDS: [(&str, &str); 5] = [
+const KINDS: [(&str, &str); 6] = [
     ("steady", "steady"),
     ("replan", "re-plan"),
     ("adjust", "adjusted re-plan"),
+    ("step-adjust", "step adjustment"),
     ("start", "Start"),
     ("cycle", "worst"),
 ];
