@@ -18,16 +18,17 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use doc_figures::Quotes;
+mod engine;
 
-use host_sim::physics::bridge::{installed_version, python, Engine, MUJOCO_VERSION};
+use doc_figures::Quotes;
+use engine::engine_here;
+
+use host_sim::physics::bridge::{installed_version, python, Engine};
 use host_sim::physics::metrics::FallCause;
 use host_sim::physics::{run, PhysicsConfig, PhysicsReport, Push};
 use host_sim::robot::Robot;
 use host_sim::scenario::BUILT_IN;
 use host_sim::sim::scenario_trajectory;
-
-const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
 
 /// Bounds the stabilized walks must meet (the 50 ms-filtered CoP against the reference ZMP;
 /// measured: means 7–10 mm, worst 34–42 mm).
@@ -69,27 +70,6 @@ fn yes_no(b: bool) -> &'static str {
 /// its end: the trajectory and the tail) [s]: the settle before it too.
 fn engine_seconds(simulated_s: f64) -> f64 {
     PhysicsConfig::default().settle_s + simulated_s
-}
-
-/// `true` when MuJoCo can be used; otherwise a failure under `WALK_REQUIRE_MUJOCO=1`, else
-/// `false` after saying that the test is skipped.
-fn engine_here(test: &str) -> bool {
-    let required = std::env::var(REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0");
-    match installed_version(&python()) {
-        Ok(v) => {
-            assert!(
-                !required || v == MUJOCO_VERSION,
-                "MuJoCo {v} installed, {MUJOCO_VERSION} expected under {REQUIRE}=1 \
-                 (python3 -m pip install mujoco=={MUJOCO_VERSION})"
-            );
-            true
-        }
-        Err(e) => {
-            assert!(!required, "{e} ({REQUIRE}=1)");
-            eprintln!("physics: SKIPPED {test}: {e} ({REQUIRE}=1 makes this a failure)");
-            false
-        }
-    }
 }
 
 fn report(scenario: &str, cfg: &PhysicsConfig) -> PhysicsReport {

@@ -21,7 +21,9 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use host_sim::physics::bridge::{installed_version, python, MUJOCO_VERSION};
+mod engine;
+
+use engine::engine_here;
 use host_sim::physics::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
 use host_sim::physics::push_map::{
     bisect, compare, map, markdown, summary_lines, MapSpec, PUSH_S, QUICK_DIRECTIONS, QUICK_PHASES,
@@ -29,26 +31,6 @@ use host_sim::physics::push_map::{
 use host_sim::physics::PhysicsConfig;
 use host_sim::robot::Robot;
 use serde_json::Value;
-
-const REQUIRE: &str = "WALK_REQUIRE_MUJOCO";
-
-fn engine_here(test: &str) -> bool {
-    let required = std::env::var(REQUIRE).is_ok_and(|v| !v.is_empty() && v != "0");
-    match installed_version(&python()) {
-        Ok(v) => {
-            assert!(
-                !required || v == MUJOCO_VERSION,
-                "MuJoCo {v}, {MUJOCO_VERSION} expected"
-            );
-            true
-        }
-        Err(e) => {
-            assert!(!required, "{e} ({REQUIRE}=1)");
-            eprintln!("push_map: SKIPPED {test}: {e} ({REQUIRE}=1 makes this a failure)");
-            false
-        }
-    }
-}
 
 fn out_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("push-map-test-{}-{name}", std::process::id()));

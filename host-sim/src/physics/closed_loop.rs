@@ -29,13 +29,13 @@
 use std::collections::VecDeque;
 
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{Adjust, Command, ControlOp, Measured, RawFrame, Session, StepBook};
+use planner_core::wire::{Adjust, ControlOp, Measured, RawFrame, Session, StepBook};
 
 use super::bridge::Engine;
 use super::metrics::fall_check;
 use super::stabilizer::Stabilizer;
-use super::{reference_at, PhysicsConfig, PHYSICS_DT};
-use crate::robot::model::{mean_yaw, Pose};
+use super::{initial_pose, reference_at, PhysicsConfig, PHYSICS_DT};
+use crate::scenario::wire::Controller;
 
 /// How the node may change the steps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -199,24 +199,6 @@ impl embedded_can::nb::Can for Wire {
     }
 }
 
-/// The controller's side of the session.
-struct Controller {
-    epoch: u32,
-    seq: u32,
-}
-
-impl Controller {
-    fn control(&mut self, op: ControlOp) -> RawFrame {
-        self.seq += 1;
-        Command::Control {
-            session: self.epoch as u16,
-            seq: self.seq,
-            op,
-        }
-        .encode()
-    }
-}
-
 /// The control cycle \[ms\].
 const CYCLE_MS: u32 = 5;
 /// Heartbeats every this many cycles (100 ms).
@@ -251,7 +233,7 @@ pub fn run(
         epoch: session.epoch,
         seq: session.last_seq,
     };
-    wire.rx.push_back(ctl.control(ControlOp::Reset));
+    wire.rx.push_back(ctl.control(ControlOp::Reset).encode());
     now += CYCLE_MS;
     node.poll(now, &mut wire);
     wire.tx.clear();
@@ -262,23 +244,7 @@ pub fn run(
     let mut engine = Engine::start(&robot.mjcf())?;
     let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
     let r0 = *node.gait().last();
-    let yaw0 = mean_yaw(&r0.feet);
-    let soles0 = [Pose::sole(&r0.feet[0]), Pose::sole(&r0.feet[1])];
-    let (waist0, q0) = robot.solve_waist(
-        Pose::upright(r0.x.cog, r0.y.cog, robot.waist_height(), yaw0),
-        &soles0,
-        [r0.x.cog, r0.y.cog],
-    )?;
-    let mut qpos = vec![
-        waist0.p[0],
-        waist0.p[1],
-        waist0.p[2],
-        (yaw0 / 2.0).cos(),
-        0.0,
-        0.0,
-        (yaw0 / 2.0).sin(),
-    ];
-    qpos.extend(q0.iter().flatten());
+    let (waist0, qpos) = initial_pose(&robot, &r0)?;
     let mut obs = engine.reset(&qpos)?;
 
     let settle_cycles = (cfg.settle_s / (f64::from(CYCLE_MS) * 1e-3)).round() as u32;
@@ -320,12 +286,13 @@ pub fn run(
                 Stepping::Fixed => ControlOp::Start,
                 Stepping::Plain | Stepping::Proposed => ControlOp::StartAdjusting,
             };
-            wire.rx.push_back(ctl.control(op));
-            wire.rx.push_back(ctl.control(ControlOp::Stop));
+            wire.rx.push_back(ctl.control(op).encode());
+            wire.rx.push_back(ctl.control(ControlOp::Stop).encode());
             walking_since = Some(k);
         }
         if k % HEARTBEAT_CYCLES == 0 {
-            wire.rx.push_back(ctl.control(ControlOp::Heartbeat));
+            wire.rx
+                .push_back(ctl.control(ControlOp::Heartbeat).encode());
         }
         now += CYCLE_MS;
         node.poll(now, &mut wire);

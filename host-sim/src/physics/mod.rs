@@ -233,21 +233,9 @@ fn quat_to_mat(q: [f64; 4]) -> crate::robot::model::Mat3 {
     ]
 }
 
-/// Runs a trajectory of references (period `dt`) in MuJoCo. Errors: the engine could not be
-/// started (the message names what to install), the bridge ended, or the IK failed.
-pub fn run(
-    trajectory: &[Reference<f64>],
-    dt: f64,
-    cfg: &PhysicsConfig,
-) -> Result<PhysicsRun, String> {
-    if trajectory.is_empty() {
-        return Err("empty trajectory".into());
-    }
-    let robot = cfg.robot;
-    let mut engine = Engine::start(&robot.mjcf())?;
-    let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
-    // Initial pose: the first reference through the waist search and the IK.
-    let r0 = &trajectory[0];
+/// The robot at rest in the pose of the reference `r0`: its waist (from the same waist search
+/// and IK the stabilizer uses) and the engine's `qpos` (the floating base, then the joints).
+pub fn initial_pose(robot: &Robot, r0: &Reference<f64>) -> Result<(Pose, Vec<f64>), String> {
     let yaw0 = mean_yaw(&r0.feet);
     let soles0 = [Pose::sole(&r0.feet[0]), Pose::sole(&r0.feet[1])];
     let (waist0, q0) = robot.solve_waist(
@@ -265,6 +253,23 @@ pub fn run(
         (yaw0 / 2.0).sin(),
     ];
     qpos.extend(q0.iter().flatten());
+    Ok((waist0, qpos))
+}
+
+/// Runs a trajectory of references (period `dt`) in MuJoCo. Errors: the engine could not be
+/// started (the message names what to install), the bridge ended, or the IK failed.
+pub fn run(
+    trajectory: &[Reference<f64>],
+    dt: f64,
+    cfg: &PhysicsConfig,
+) -> Result<PhysicsRun, String> {
+    if trajectory.is_empty() {
+        return Err("empty trajectory".into());
+    }
+    let robot = cfg.robot;
+    let mut engine = Engine::start(&robot.mjcf())?;
+    let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
+    let (waist0, qpos) = initial_pose(&robot, &trajectory[0])?;
     let mut obs = engine.reset(&qpos)?;
     let end_t = (trajectory.len() - 1) as f64 * dt;
     let steps = ((cfg.settle_s + end_t + cfg.tail_s) / PHYSICS_DT).round() as usize;
