@@ -4,13 +4,30 @@
 
 use host_sim::eval::multibody::{evaluate, max_zmp_error, MbError, MbSample};
 use host_sim::robot::model::{
-    mean_yaw, rot_x, rot_y, rot_z, Body, IkError, LegAngles, Model, Pose,
+    mean_yaw, rot_x, rot_y, rot_z, Body, ClosedForm, IkError, LegAngles, Model, Pose,
 };
 use host_sim::scenario;
 use planner_core::gait::{FootPose, GaitParams, Phase, Reference, Side};
 use planner_core::Sample;
 
 const DT: f64 = 0.005;
+
+/// Replaces the bodies of HRP-2's link table: the trunk and the waist, and per leg the hip
+/// housing, thigh, shank and foot (given for the left leg; the right one mirrors them).
+fn set_bodies(m: &mut Model, trunk: Body, waist: Body, leg: [Body; 4]) {
+    m.root[0].body = trunk;
+    m.root[1].body = waist;
+    for (k, l) in m.legs.iter_mut().enumerate() {
+        for (i, b) in [1, 2, 3, 5].into_iter().zip(leg) {
+            l.links[i].bodies = vec![if k == 0 { b } else { b.mirrored() }];
+        }
+    }
+}
+
+/// HRP-2's leg shape.
+fn shape(m: &Model) -> ClosedForm {
+    m.closed_form.expect("HRP-2's leg shape")
+}
 
 /// A small deterministic generator (64-bit LCG), uniform in [lo, hi).
 struct Lcg(u64);
@@ -105,7 +122,7 @@ fn ik_fk_round_trip() {
             rng.uniform(-0.5, 0.5),
         ];
         // The IK's branch: the hip above the ankle in the foot frame.
-        if m.thigh_length * (q[3] + q[4]).cos() + m.shank_length * q[4].cos() <= 0.01 {
+        if shape(&m).thigh * (q[3] + q[4]).cos() + shape(&m).shank * q[4].cos() <= 0.01 {
             continue;
         }
         for side in [Side::Left, Side::Right] {
@@ -235,12 +252,8 @@ fn static_stance_zmp_is_cog_projection() {
 fn massless_legs_give_the_lipm_zmp() {
     let mut m = Model::hrp2();
     let z = 0.814;
-    m.trunk = Body::point(30.0, [0.0, 0.0, z - m.waist_height]);
-    m.waist = Body::NONE;
-    m.hip = Body::NONE;
-    m.thigh = Body::NONE;
-    m.shank = Body::NONE;
-    m.foot = Body::NONE;
+    let trunk = Body::point(30.0, [0.0, 0.0, z - m.waist_height]);
+    set_bodies(&mut m, trunk, Body::NONE, [Body::NONE; 4]);
     let g = m.gravity;
     let (ax, wx) = (0.03, 2.0 * std::f64::consts::PI * 1.0);
     let (ay, wy, phy) = (0.05, 2.0 * std::f64::consts::PI * 0.8, 0.4);
@@ -297,12 +310,8 @@ fn massless_legs_give_the_lipm_zmp() {
 #[test]
 fn yawing_trunk_does_not_move_the_zmp() {
     let mut m = Model::hrp2();
-    m.trunk = Body::cuboid(30.0, [0.0, 0.0, 0.8 - m.waist_height], [0.3, 0.5, 0.6]);
-    m.waist = Body::NONE;
-    m.hip = Body::NONE;
-    m.thigh = Body::NONE;
-    m.shank = Body::NONE;
-    m.foot = Body::NONE;
+    let trunk = Body::cuboid(30.0, [0.0, 0.0, 0.8 - m.waist_height], [0.3, 0.5, 0.6]);
+    set_bodies(&mut m, trunk, Body::NONE, [Body::NONE; 4]);
     let traj: Vec<Reference<f64>> = (0..200)
         .map(|k| {
             let yaw = 0.3 * (k as f64 * DT * 3.0).sin();
@@ -329,19 +338,17 @@ fn yawing_trunk_does_not_move_the_zmp() {
 fn swinging_thigh_angular_momentum() {
     let mut m = Model::hrp2();
     let inertia = 0.5;
-    m.trunk = Body::NONE;
-    m.waist = Body::NONE;
-    m.hip = Body::NONE;
-    m.thigh = Body {
-        mass: 4.0,
-        com: [0.0; 3],
-        inertia: [inertia; 3],
-    };
-    m.shank = Body::NONE;
-    m.foot = Body::NONE;
+    let thigh = Body::principal(4.0, [0.0; 3], [inertia; 3]);
+    set_bodies(
+        &mut m,
+        Body::NONE,
+        Body::NONE,
+        [Body::NONE, thigh, Body::NONE, Body::NONE],
+    );
+    let c = shape(&m);
     let total = 8.0;
     let g = m.gravity;
-    let depth = m.waist_height - m.ankle_height - 0.02; // hip to ankle, knee bent
+    let depth = m.waist_height - c.ankle_height - 0.02; // hip to ankle, knee bent
     let (amp, w) = (0.3, 2.0 * std::f64::consts::PI);
     let n = 201;
     let fd = (2.0 * (w * DT).cos() - 2.0) / (DT * DT);
@@ -352,23 +359,23 @@ fn swinging_thigh_angular_momentum() {
                 let ankle = if pitch {
                     [
                         -depth * a.sin(),
-                        m.hip_offset,
+                        c.hip_offset,
                         m.waist_height - depth * a.cos(),
                     ]
                 } else {
                     [
                         0.0,
-                        m.hip_offset + depth * a.sin(),
+                        c.hip_offset + depth * a.sin(),
                         m.waist_height - depth * a.cos(),
                     ]
                 };
                 let left = FootPose {
                     x: ankle[0],
                     y: ankle[1],
-                    z: ankle[2] - m.ankle_height,
+                    z: ankle[2] - c.ankle_height,
                     yaw: 0.0,
                 };
-                reference(0.0, 0.0, [left, foot(0.0, -m.hip_offset, 0.0)])
+                reference(0.0, 0.0, [left, foot(0.0, -c.hip_offset, 0.0)])
             })
             .collect();
         let mb = evaluate(&m, &traj, DT).unwrap();

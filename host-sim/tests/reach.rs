@@ -26,7 +26,7 @@
 //!   only **1.37 mm** (the landing of its 0.3 m step at 4.87 s): no limit that admits fig4 can
 //!   promise 5 mm. [`strict`] refuses exactly fig4's modification.
 
-use host_sim::robot::model::{mean_yaw, Model, Pose};
+use host_sim::robot::model::{mean_yaw, ClosedForm, Model, Pose};
 use host_sim::scenario::{self, Command, Run, Scenario};
 use planner_core::gait::{Footstep, GaitParams, Reference, Side};
 use planner_core::node::{Reach, Soles};
@@ -252,12 +252,18 @@ fn walk(l: &Limits, rels: &[Rel], modify: Option<(usize, &[Rel])>) -> Option<Run
 /// the waist moves a little with the leg masses).
 fn leg_margin(traj: &[Reference<f64>]) -> (f64, usize) {
     let model = Model::hrp2();
-    let long = Model {
-        thigh_length: 0.4,
-        shank_length: 0.4,
-        ..model
-    };
-    let reach = model.thigh_length + model.shank_length;
+    let c = model.closed_form.expect("HRP-2's leg shape");
+    let mut long = model.clone();
+    long.closed_form = Some(ClosedForm {
+        thigh: 0.4,
+        shank: 0.4,
+        ..c
+    });
+    for leg in &mut long.legs {
+        leg.links[3].joint.origin.p[2] = -0.4;
+        leg.links[4].joint.origin.p[2] = -0.4;
+    }
+    let reach = c.thigh + c.shank;
     let mut w = [traj[0].x.cog, traj[0].y.cog];
     let mut worst = (f64::INFINITY, 0);
     for (k, r) in traj.iter().enumerate() {
@@ -275,7 +281,7 @@ fn leg_margin(traj: &[Reference<f64>]) -> (f64, usize) {
         w = [waist.p[0], waist.p[1]];
         for side in [Side::Left, Side::Right] {
             let hip = model.hip_joint(side, &waist);
-            let ankle = soles[index(side)].apply([0.0, 0.0, model.ankle_height]);
+            let ankle = soles[index(side)].apply([0.0, 0.0, c.ankle_height]);
             let d = (0..3)
                 .map(|i| (hip[i] - ankle[i]).powi(2))
                 .sum::<f64>()

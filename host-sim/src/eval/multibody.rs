@@ -54,7 +54,7 @@ use planner_core::gait::Reference;
 
 use crate::robot::model::{
     add, cross, log_so3, mean_yaw, mul_mm, mul_mv, scale, sub, transpose, IkError, LegAngles,
-    Model, Placed, Pose, Vec3, WaistError, BODIES,
+    Model, Placed, Pose, Vec3, WaistError,
 };
 
 /// Why [`evaluate`] failed.
@@ -135,7 +135,7 @@ pub fn evaluate(
     }
     // 1. Kinematics at every tick.
     let mut samples = Vec::with_capacity(n);
-    let mut placed: Vec<[Placed; BODIES]> = Vec::with_capacity(n);
+    let mut placed: Vec<Vec<Placed>> = Vec::with_capacity(n);
     let mut w = [trajectory[0].x.cog, trajectory[0].y.cog];
     for (k, r) in trajectory.iter().enumerate() {
         if !finite(r) {
@@ -169,7 +169,7 @@ pub fn evaluate(
         let mut den = 0.0;
         let mut num_x = 0.0;
         let mut num_y = 0.0;
-        for i in 0..BODIES {
+        for i in 0..placed[k].len() {
             let b = &placed[k][i];
             if b.mass == 0.0 {
                 continue;
@@ -188,12 +188,15 @@ pub fn evaluate(
             );
             let omega = scale(0.5, add(w_next, w_prev));
             let omega_dot = scale(1.0 / dt, sub(w_next, w_prev));
-            // World inertia R diag(I) Rᵀ of the body at tick k.
+            // World inertia R I Rᵀ of the body at tick k.
             let rr = &b.r;
             let mut iw = [[0.0; 3]; 3];
             for (a, row) in iw.iter_mut().enumerate() {
                 for (c, v) in row.iter_mut().enumerate() {
-                    *v = (0..3).map(|j| rr[a][j] * b.inertia[j] * rr[c][j]).sum();
+                    *v = (0..3)
+                        .flat_map(|j| (0..3).map(move |l| (j, l)))
+                        .map(|(j, l)| rr[a][j] * b.inertia[j][l] * rr[c][l])
+                        .sum();
                 }
             }
             let l_dot = add(mul_mv(&iw, omega_dot), cross(omega, mul_mv(&iw, omega)));

@@ -240,9 +240,9 @@ pub fn run(
     ctl.epoch = ctl.epoch.wrapping_add(1);
 
     // The engine in the node's standing pose.
-    let robot = cfg.robot;
+    let robot = cfg.robot.clone();
     let mut engine = Engine::start(&robot.mjcf())?;
-    let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
+    let mut stab = Stabilizer::new(robot.clone(), cfg.gains, PHYSICS_DT, cfg.z_c);
     let r0 = *node.gait().last();
     let (waist0, qpos) = initial_pose(&robot, &r0)?;
     let mut obs = engine.reset(&qpos)?;

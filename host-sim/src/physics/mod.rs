@@ -64,7 +64,7 @@ pub struct Push {
 }
 
 /// How to run the engine.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PhysicsConfig {
     /// The stabilizer's gains (`enabled = false`: open-loop playback).
     pub gains: Gains,
@@ -266,9 +266,9 @@ pub fn run(
     if trajectory.is_empty() {
         return Err("empty trajectory".into());
     }
-    let robot = cfg.robot;
+    let robot = cfg.robot.clone();
     let mut engine = Engine::start(&robot.mjcf())?;
-    let mut stab = Stabilizer::new(robot, cfg.gains, PHYSICS_DT, cfg.z_c);
+    let mut stab = Stabilizer::new(robot.clone(), cfg.gains, PHYSICS_DT, cfg.z_c);
     let (waist0, qpos) = initial_pose(&robot, &trajectory[0])?;
     let mut obs = engine.reset(&qpos)?;
     let end_t = (trajectory.len() - 1) as f64 * dt;

@@ -1,28 +1,26 @@
-//! The MuJoCo model (MJCF) generated from host-sim's HRP-2 link table, and the kinematics the
-//! stabilizer needs from it.
+//! The MuJoCo model (MJCF) generated from a robot's multi-body model
+//! ([`crate::robot::model::Model`]), and the kinematics the stabilizer needs from it.
 //!
-//! This is the **only** place of the physics module that reads the link table
-//! ([`crate::robot::model::Model`] and its [`Body`] fields): the rest goes through [`Robot`].
+//! This is the **only** place of the physics module that reads the link table: the rest goes
+//! through [`Robot`].
 //!
 //! # The MJCF
 //!
-//! One MuJoCo body per body of the link table, with exactly its mass, centre of mass and
-//! principal moments of inertia (an explicit `<inertial>`, so the collision shapes carry no
-//! mass): `waist` (floating, a free joint) with `trunk` welded to it, and per leg `hip` (joints
-//! hip yaw about z then hip roll about x, both at the hip joint centre `(0, ±hip_offset, 0)`),
-//! `thigh` (hip pitch about y), `shank` (knee about y, `thigh_length` below), `foot` (ankle
-//! pitch about y then ankle roll about x, `shank_length` below the knee). MuJoCo composes the
-//! joints of a body in the order written, so the frames are those of
-//! [`crate::eval::multibody`]: `R_w R_z(q1) R_x(q2) R_y(q3) R_y(q4) R_y(q5) R_x(q6)`.
+//! One MuJoCo body per body of the model, with exactly its mass, centre of mass and inertia
+//! tensor (an explicit `<inertial>`, so the collision shapes carry no mass): `waist` (floating,
+//! a free joint) with `trunk` welded to it, and per leg one body per link. A link without
+//! bodies whose next joint sits at the same origin (HRP-2's hip yaw before hip roll, ankle
+//! pitch before ankle roll) is one MuJoCo body with both joints: MuJoCo composes the joints of
+//! a body in the order written, so the frames are those of the model:
+//! `T_i = T_{i−1} O_i Rot(a_i, q_i)`.
 //!
 //! Collision shapes: the **soles** are boxes of the robot file's `[feet]` `sole_length` ×
-//! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or `ankle_height`
-//! if that is less (their bottom face `ankle_height` below the ankle, the sole centre straight
-//! below it);
-//! every other body has the box of equal inertia (`a² = 6 (I_y + I_z − I_x) / m`, and so on),
-//! so that a fall can touch the floor with a knee, a hip or the trunk. Robot geoms collide
-//! with the floor only (`contype 2, conaffinity 1` against the floor's `1, 2`): no self
-//! collision.
+//! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or the ankle's
+//! height above the sole if that is less, their bottom face on the sole centre's plane, in the
+//! ankle's frame; every other body (but the foot) has the box of equal principal moments
+//! (`a² = 6 (I_y + I_z − I_x) / m`, and so on, from the diagonal of its tensor), so that a fall
+//! can touch the floor with a knee, a hip or the trunk. Robot geoms collide with the floor only
+//! (`contype 2, conaffinity 1` against the floor's `1, 2`): no self collision.
 //!
 //! Contact (stated): friction 1.0 (sliding), condim 3, `solref 0.004 1` (a 4 ms time
 //! constant, critically damped), `solimp 0.95 0.99 0.001`: standing, the soles sink about
@@ -33,22 +31,29 @@
 //! Joint servos: a `position` actuator per joint, `τ = kp (q_target − q)` with `kp` =
 //! [`SERVO_KP`] N m/rad, a viscous joint damping `−kd q̇` with `kd` = [`SERVO_KD`] N m s/rad,
 //! and a reflected rotor inertia (`armature`) of [`ARMATURE`] kg m² (stated assumptions of an
-//! HRP-2-class harmonic-drive joint; no torque limit). With `kd` = 150 the ankle mode of the
-//! standing robot (about 4 Hz) is barely damped and the open-loop playback rocks; 600 damps it.
-//! For another robot ([`Robot::of`]) `kp` and `kd` scale with its total mass against HRP-2's
-//! (the gravity torques its joints hold scale with it), the armature stays: with HRP-2's
-//! servos the 17.4 kg test robot (`host-sim/tests/robots/small.toml`) walked but rocked on its
-//! sole edges (CoP error mean 25.6 mm), scaled (× 0.30) 5.7 mm.
+//! HRP-2-class harmonic-drive joint). With `kd` = 150 the ankle mode of the standing robot
+//! (about 4 Hz) is barely damped and the open-loop playback rocks; 600 damps it. For another
+//! robot ([`Robot::of`]) `kp` and `kd` scale with its total mass against HRP-2's (the gravity
+//! torques its joints hold scale with it), the armature stays: with HRP-2's servos the 17.4 kg
+//! test robot (`host-sim/tests/robots/small.toml`) walked but rocked on its sole edges (CoP
+//! error mean 25.6 mm), scaled (× 0.30) 5.7 mm. A joint with a range in the robot file is
+//! limited to it (`range`), and an actuator with an effort limit saturates at it
+//! (`forcerange`); the hand-written HRP-2 table gives neither.
 //!
 //! Sensors (what the real robot measures, nothing else reaches the controller): a trunk IMU
 //! (site `imu` at the waist origin: `framequat` as the attitude estimate, `gyro`,
 //! `accelerometer`), the twelve joint encoders (`jointpos`, `jointvel`), and a 6-axis
-//! force/torque sensor at each ankle (`force`, `torque` at the site at the ankle joint centre,
-//! in the foot frame).
+//! force/torque sensor at each ankle (`force`, `torque` at the site at the ankle frame's
+//! origin, in the ankle frame).
 
-use crate::robot::model::{Body, LegAngles, Model, Pose, Vec3};
-use planner_core::gait::Side;
 use std::fmt::Write;
+use std::sync::Arc;
+
+use crate::robot::model::{
+    mul_mv, norm, side_index, sub, transpose, Body, LegAngles, Link, Mat3, Model, Pose, Vec3,
+    IDENTITY,
+};
+use planner_core::gait::Side;
 
 /// Servo stiffness of every joint \[N m/rad\].
 pub const SERVO_KP: f64 = 20_000.0;
@@ -56,7 +61,7 @@ pub const SERVO_KP: f64 = 20_000.0;
 pub const SERVO_KD: f64 = 600.0;
 /// Reflected rotor inertia per joint \[kg m²\].
 pub const ARMATURE: f64 = 0.3;
-/// Largest hip–ankle distance the IK is asked for, as a fraction of `thigh + shank`.
+/// Largest hip–ankle distance the IK is asked for, as a fraction of the leg's reach.
 pub const REACH_FRACTION: f64 = 0.9995;
 /// Half-extents of HRP-2's sole box \[m\]: 0.24 × 0.14 × 0.08 (the robot of
 /// [`Robot::new`]; [`Robot::of`] takes the robot file's).
@@ -64,8 +69,8 @@ pub const SOLE_HALF: Vec3 = [0.12, 0.07, 0.04];
 /// Height of the sole box \[m\], at most the ankle height.
 pub const SOLE_BOX_HEIGHT: f64 = 0.08;
 
-/// Joint names in actuator (and qpos) order: left leg then right leg, each hip yaw, hip roll,
-/// hip pitch, knee, ankle pitch, ankle roll.
+/// The joints of HRP-2's legs, in actuator (and qpos) order: hip yaw, hip roll, hip pitch,
+/// knee, ankle pitch, ankle roll (`l_` and `r_` prefixed in the MJCF).
 pub const JOINTS: [&str; 6] = [
     "hip_yaw",
     "hip_roll",
@@ -94,9 +99,9 @@ pub mod sensor {
 }
 
 /// The robot as the physics module sees it: the link table and what follows from it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Robot {
-    hrp2: Model,
+    model: Arc<Model>,
     sole_half: Vec3,
     /// Servo stiffness and joint damping.
     servo: [f64; 2],
@@ -122,32 +127,39 @@ fn v3(v: Vec3) -> String {
     format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]))
 }
 
-/// Half-extents of the box with the same principal moments as `b`.
+fn g(v: f64) -> String {
+    format!("{v:.9}")
+}
+
+/// Half-extents of the box with the principal moments of the diagonal of `b`'s tensor.
 fn equivalent_box(b: &Body) -> Vec3 {
-    let [ix, iy, iz] = b.inertia;
+    let [ix, iy, iz] = [b.inertia[0][0], b.inertia[1][1], b.inertia[2][2]];
     let side = |s: f64| (6.0 * s / b.mass).max(1e-6).sqrt() / 2.0;
     [side(iy + iz - ix), side(ix + iz - iy), side(ix + iy - iz)]
 }
 
-fn mirrored(b: &Body, side: Side) -> Body {
-    let mut b = *b;
-    if side == Side::Right {
-        b.com[1] = -b.com[1];
-    }
-    b
-}
-
 fn inertial(b: &Body) -> String {
-    format!(
-        "<inertial pos=\"{}\" mass=\"{}\" diaginertia=\"{}\"/>",
-        v3(b.com),
-        f(b.mass),
-        v3([
-            b.inertia[0].max(1e-6),
-            b.inertia[1].max(1e-6),
-            b.inertia[2].max(1e-6)
-        ])
-    )
+    let i = &b.inertia;
+    if i[0][1] == 0.0 && i[0][2] == 0.0 && i[1][2] == 0.0 {
+        format!(
+            "<inertial pos=\"{}\" mass=\"{}\" diaginertia=\"{}\"/>",
+            v3(b.com),
+            f(b.mass),
+            v3([i[0][0].max(1e-6), i[1][1].max(1e-6), i[2][2].max(1e-6)])
+        )
+    } else {
+        format!(
+            "<inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
+            v3(b.com),
+            f(b.mass),
+            g(i[0][0].max(1e-6)),
+            g(i[1][1].max(1e-6)),
+            g(i[2][2].max(1e-6)),
+            g(i[0][1]),
+            g(i[0][2]),
+            g(i[1][2])
+        )
+    }
 }
 
 fn collision_box(name: &str, b: &Body) -> String {
@@ -158,29 +170,75 @@ fn collision_box(name: &str, b: &Body) -> String {
     )
 }
 
+/// The unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method).
+fn quat(r: &Mat3) -> [f64; 4] {
+    let t = r[0][0] + r[1][1] + r[2][2];
+    if t > 0.0 {
+        let s = 2.0 * (1.0 + t).sqrt();
+        [
+            0.25 * s,
+            (r[2][1] - r[1][2]) / s,
+            (r[0][2] - r[2][0]) / s,
+            (r[1][0] - r[0][1]) / s,
+        ]
+    } else if r[0][0] > r[1][1] && r[0][0] > r[2][2] {
+        let s = 2.0 * (1.0 + r[0][0] - r[1][1] - r[2][2]).sqrt();
+        [
+            (r[2][1] - r[1][2]) / s,
+            0.25 * s,
+            (r[0][1] + r[1][0]) / s,
+            (r[0][2] + r[2][0]) / s,
+        ]
+    } else if r[1][1] > r[2][2] {
+        let s = 2.0 * (1.0 + r[1][1] - r[0][0] - r[2][2]).sqrt();
+        [
+            (r[0][2] - r[2][0]) / s,
+            (r[0][1] + r[1][0]) / s,
+            0.25 * s,
+            (r[1][2] + r[2][1]) / s,
+        ]
+    } else {
+        let s = 2.0 * (1.0 + r[2][2] - r[0][0] - r[1][1]).sqrt();
+        [
+            (r[1][0] - r[0][1]) / s,
+            (r[0][2] + r[2][0]) / s,
+            (r[1][2] + r[2][1]) / s,
+            0.25 * s,
+        ]
+    }
+}
+
+/// The merged body of a link (`None`: massless).
+fn link_body(l: &Link) -> Option<Body> {
+    let mut it = l.bodies.iter();
+    let first = *it.next()?;
+    Some(it.fold(first, |a, b| a.merged(b)))
+}
+
 impl Robot {
     /// The robot of a link table, with HRP-2's soles ([`SOLE_HALF`]).
-    pub fn new(hrp2: Model) -> Self {
+    pub fn new(model: Model) -> Self {
         Self {
-            hrp2,
+            model: Arc::new(model),
             sole_half: SOLE_HALF,
             servo: [SERVO_KP, SERVO_KD],
         }
     }
 
     /// The robot of a robot file: its `[multibody]` link table, its `[feet]` soles
-    /// (`sole_length` × `sole_width`, [`SOLE_BOX_HEIGHT`] high or `ankle_height` if less) and
-    /// servos scaled by its mass (see the module docs).
+    /// (`sole_length` × `sole_width`, [`SOLE_BOX_HEIGHT`] high or the ankle height if less)
+    /// and servos scaled by its mass (see the module docs).
     pub fn of(robot: &crate::robot::Robot) -> Self {
         let p = &robot.planner.params;
         let scale = robot.model.total_mass() / link_table().total_mass();
+        let ankle = -robot.model.legs[0].sole.p[2];
         Self {
             servo: [SERVO_KP * scale, SERVO_KD * scale],
-            hrp2: robot.model,
+            model: Arc::new(robot.model.clone()),
             sole_half: [
                 p.sole_half_length,
                 p.sole_half_width,
-                0.5 * SOLE_BOX_HEIGHT.min(robot.model.ankle_height),
+                0.5 * SOLE_BOX_HEIGHT.min(ankle),
             ],
         }
     }
@@ -203,39 +261,146 @@ impl Robot {
 
     /// The link table.
     pub fn link_table(&self) -> &Model {
-        &self.hrp2
+        &self.model
     }
 
     /// Gravity \[m/s²\].
     pub fn gravity(&self) -> f64 {
-        self.hrp2.gravity
+        self.model.gravity
     }
 
     /// Total mass \[kg\].
     pub fn total_mass(&self) -> f64 {
-        self.hrp2.total_mass()
+        self.model.total_mass()
     }
 
-    /// Mass of one foot \[kg\].
-    pub fn foot_mass(&self) -> f64 {
-        self.hrp2.foot.mass
+    /// Mass below a leg's ankle sensor \[kg\].
+    pub fn foot_mass(&self, side: Side) -> f64 {
+        self.model.foot_mass(side)
     }
 
-    /// Ankle joint centre above the sole \[m\].
+    /// Centre of mass of a foot (below the ankle sensor) in the ankle frame \[m\].
+    pub fn foot_com(&self, side: Side) -> Vec3 {
+        link_body(&self.model.legs[side_index(side)].links[5]).map_or([0.0; 3], |b| b.com)
+    }
+
+    /// The sole centre of a leg in its ankle frame \[m\].
+    pub fn sole_offset(&self, side: Side) -> Vec3 {
+        self.model.legs[side_index(side)].sole.p
+    }
+
+    /// The ankle's pitch and roll joints of a leg: each the index (of the last two) and the
+    /// sign that turns a positive angle into a positive rotation about the ankle frame's y
+    /// (pitch) and x (roll) axis. HRP-2's: `[(4, 1), (5, 1)]`.
+    pub fn ankle_joints(&self, side: Side) -> [(usize, f64); 2] {
+        let links = &self.model.legs[side_index(side)].links;
+        // Link 4's axis in the ankle frame (joint 5 at zero).
+        let a4 = mul_mv(&transpose(&links[5].joint.origin.r), links[4].joint.axis);
+        let a5 = links[5].joint.axis;
+        let sign = |v: f64| if v < 0.0 { -1.0 } else { 1.0 };
+        if a4[1].abs() >= a5[1].abs() {
+            [(4, sign(a4[1])), (5, sign(a5[0]))]
+        } else {
+            [(5, sign(a5[1])), (4, sign(a4[0]))]
+        }
+    }
+
+    /// Ankle (frame origin) above the sole centre \[m\].
     pub fn ankle_height(&self) -> f64 {
-        self.hrp2.ankle_height
+        -self.model.legs[0].sole.p[2]
     }
 
     /// Height of the waist origin in the walking posture \[m\].
     pub fn waist_height(&self) -> f64 {
-        self.hrp2.waist_height
+        self.model.waist_height
+    }
+
+    fn leg_mjcf(&self, x: &mut String, side: Side) {
+        let leg = &self.model.legs[side_index(side)];
+        let p = match side {
+            Side::Left => "l",
+            Side::Right => "r",
+        };
+        let mut depth = 0;
+        let mut i = 0;
+        while i < 6 {
+            // A massless link whose next joint is at its origin shares the next one's body.
+            let start = i;
+            while i < 5
+                && leg.links[i].bodies.is_empty()
+                && leg.links[i + 1].joint.origin == Pose::IDENTITY
+            {
+                i += 1;
+            }
+            let link = &leg.links[i];
+            let o = &leg.links[start].joint.origin;
+            let mut pos = format!(" pos=\"{}\"", v3(o.p));
+            if o.r != IDENTITY {
+                let q = quat(&o.r);
+                let _ = write!(
+                    pos,
+                    " quat=\"{} {} {} {}\"",
+                    g(q[0]),
+                    g(q[1]),
+                    g(q[2]),
+                    g(q[3])
+                );
+            }
+            let indent = "  ".repeat(3 + depth);
+            let _ = write!(x, "{indent}<body name=\"{}\"{pos}>", link.name);
+            for l in &leg.links[start..=i] {
+                let j = &l.joint;
+                let _ = write!(
+                    x,
+                    "<joint name=\"{}\" type=\"hinge\" axis=\"{} {} {}\"",
+                    j.name,
+                    g(j.axis[0]),
+                    g(j.axis[1]),
+                    g(j.axis[2])
+                );
+                if let Some([lo, hi]) = j.range {
+                    let _ = write!(x, " range=\"{} {}\"", g(lo), g(hi));
+                }
+                x.push_str("/>");
+            }
+            if let Some(b) = link_body(link) {
+                x.push_str(&inertial(&b));
+                if i < 5 {
+                    x.push_str(&collision_box(&format!("{}_geom", link.name), &b));
+                }
+            }
+            if i == 5 {
+                let mut c = leg.sole.p;
+                c[2] += self.sole_half[2];
+                let _ = write!(
+                    x,
+                    "<geom name=\"{p}_sole\" type=\"box\" pos=\"{}\" size=\"{}\" class=\"robot\"/>\
+                     <site name=\"{p}_ankle\" pos=\"0 0 0\"/></body>",
+                    v3(c),
+                    v3(self.sole_half)
+                );
+            } else {
+                x.push('\n');
+                depth += 1;
+            }
+            i += 1;
+        }
+        let _ = writeln!(x, "{}", "</body>".repeat(depth));
+    }
+
+    fn joints(&self) -> impl Iterator<Item = &crate::robot::model::Joint> {
+        self.model
+            .legs
+            .iter()
+            .flat_map(|l| l.links.iter().map(|l| &l.joint))
     }
 
     /// The MJCF document.
     pub fn mjcf(&self) -> String {
-        let h = &self.hrp2;
+        let h = &self.model;
         let mut x = String::new();
-        let _ = writeln!(x, "<mujoco model=\"hrp2-host-sim\">");
+        let _ = writeln!(x, "<mujoco model=\"host-sim\">");
+        let _ = writeln!(x, "  <compiler angle=\"radian\"/>");
         let _ = writeln!(
             x,
             "  <option timestep=\"0.001\" integrator=\"implicitfast\" gravity=\"0 0 {}\"/>",
@@ -258,77 +423,43 @@ impl Robot {
              conaffinity=\"2\" condim=\"3\" friction=\"1 0.005 0.0001\" solref=\"0.004 1\" \
              solimp=\"0.95 0.99 0.001\"/>"
         );
-        let _ = writeln!(
-            x,
-            "    <body name=\"waist\" pos=\"0 0 {}\"><freejoint name=\"root\"/>{}{}\
-             <site name=\"imu\" pos=\"0 0 0\"/>",
-            f(h.waist_height),
-            inertial(&h.waist),
-            collision_box("waist_geom", &h.waist)
+        let root = |name: &str| h.root.iter().find(|n| n.name == name).map(|n| n.body);
+        let mut waist = format!(
+            "    <body name=\"waist\" pos=\"0 0 {}\"><freejoint name=\"root\"/>",
+            f(h.waist_height)
         );
-        let _ = writeln!(
-            x,
-            "      <body name=\"trunk\">{}{}</body>",
-            inertial(&h.trunk),
-            collision_box("trunk_geom", &h.trunk)
-        );
-        for side in [Side::Left, Side::Right] {
-            let (p, s) = match side {
-                Side::Left => ("l", 1.0),
-                Side::Right => ("r", -1.0),
-            };
-            let j = |k: usize, axis: &str| {
-                format!(
-                    "<joint name=\"{p}_{}\" type=\"hinge\" axis=\"{axis}\"/>",
-                    JOINTS[k]
-                )
-            };
-            let _ = writeln!(
-                x,
-                "      <body name=\"{p}_hip\" pos=\"0 {} 0\">{}{}{}{}",
-                f(s * h.hip_offset),
-                j(0, "0 0 1"),
-                j(1, "1 0 0"),
-                inertial(&mirrored(&h.hip, side)),
-                collision_box(&format!("{p}_hip_geom"), &mirrored(&h.hip, side))
-            );
-            let _ = writeln!(
-                x,
-                "        <body name=\"{p}_thigh\">{}{}{}",
-                j(2, "0 1 0"),
-                inertial(&mirrored(&h.thigh, side)),
-                collision_box(&format!("{p}_thigh_geom"), &mirrored(&h.thigh, side))
-            );
-            let _ = writeln!(
-                x,
-                "          <body name=\"{p}_shank\" pos=\"0 0 {}\">{}{}{}",
-                f(-h.thigh_length),
-                j(3, "0 1 0"),
-                inertial(&mirrored(&h.shank, side)),
-                collision_box(&format!("{p}_shank_geom"), &mirrored(&h.shank, side))
-            );
-            let _ = writeln!(
-                x,
-                "            <body name=\"{p}_foot\" pos=\"0 0 {}\">{}{}{}\
-                 <geom name=\"{p}_sole\" type=\"box\" pos=\"0 0 {}\" size=\"{}\" class=\"robot\"/>\
-                 <site name=\"{p}_ankle\" pos=\"0 0 0\"/></body>",
-                f(-h.shank_length),
-                j(4, "0 1 0"),
-                j(5, "1 0 0"),
-                inertial(&mirrored(&h.foot, side)),
-                f(-h.ankle_height + self.sole_half[2]),
-                v3(self.sole_half)
-            );
-            let _ = writeln!(x, "          </body></body></body>");
+        if let Some(b) = root("waist").filter(|b| b.mass > 0.0) {
+            waist.push_str(&inertial(&b));
+            waist.push_str(&collision_box("waist_geom", &b));
         }
-        let _ = writeln!(x, "    </body>\n  </worldbody>\n  <actuator>");
-        for p in ["l", "r"] {
-            for name in JOINTS {
+        let _ = writeln!(x, "{waist}<site name=\"imu\" pos=\"0 0 0\"/>");
+        match root("trunk").filter(|b| b.mass > 0.0) {
+            Some(b) => {
                 let _ = writeln!(
                     x,
-                    "    <position name=\"{p}_{name}_servo\" joint=\"{p}_{name}\"/>"
+                    "      <body name=\"trunk\">{}{}</body>",
+                    inertial(&b),
+                    collision_box("trunk_geom", &b)
                 );
             }
+            None => {
+                let _ = writeln!(x, "      <body name=\"trunk\"/>");
+            }
+        }
+        for side in [Side::Left, Side::Right] {
+            self.leg_mjcf(&mut x, side);
+        }
+        let _ = writeln!(x, "    </body>\n  </worldbody>\n  <actuator>");
+        for j in self.joints() {
+            let _ = write!(
+                x,
+                "    <position name=\"{}_servo\" joint=\"{}\"",
+                j.name, j.name
+            );
+            if let Some(e) = j.effort {
+                let _ = write!(x, " forcerange=\"{} {}\"", g(-e), g(e));
+            }
+            let _ = writeln!(x, "/>");
         }
         let _ = writeln!(x, "  </actuator>\n  <sensor>");
         let _ = writeln!(
@@ -338,10 +469,8 @@ impl Robot {
              <accelerometer name=\"imu_acc\" site=\"imu\"/>"
         );
         for kind in ["jointpos", "jointvel"] {
-            for p in ["l", "r"] {
-                for name in JOINTS {
-                    let _ = writeln!(x, "    <{kind} joint=\"{p}_{name}\"/>");
-                }
+            for j in self.joints() {
+                let _ = writeln!(x, "    <{kind} joint=\"{}\"/>", j.name);
             }
         }
         for p in ["l", "r"] {
@@ -356,54 +485,83 @@ impl Robot {
 
     /// Inverse kinematics of one leg (see [`Model::leg_ik`]); a sole beyond the leg's reach
     /// is pulled towards the hip along the hip–ankle line until the ankle is at
-    /// [`REACH_FRACTION`] of the reach (the knee nearly stretched), as a joint-space servo of a
-    /// real robot would saturate, instead of failing.
+    /// [`REACH_FRACTION`] of the reach (the knee nearly stretched; for a leg solved
+    /// numerically, further until it converges), as a joint-space servo of a real robot would
+    /// saturate, instead of failing.
     pub fn leg_ik(&self, side: Side, waist: &Pose, sole: &Pose) -> Result<LegAngles, String> {
-        let h = &self.hrp2;
-        let reach = REACH_FRACTION * (h.thigh_length + h.shank_length);
-        let lift = [sole.r[0][2], sole.r[1][2], sole.r[2][2]];
-        let ankle: Vec3 = core::array::from_fn(|i| sole.p[i] + h.ankle_height * lift[i]);
+        let h = &self.model;
+        let reach = REACH_FRACTION * h.reach(side);
+        let s = h.legs[side_index(side)].sole;
+        let ankle = sole.then(&s.inverse()).p;
         let hip = h.hip_joint(side, waist);
-        let d: Vec3 = core::array::from_fn(|i| ankle[i] - hip[i]);
-        let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let d = sub(ankle, hip);
+        let dist = norm(d);
         let mut target = *sole;
+        let pulled = |k: f64| Pose {
+            p: core::array::from_fn(|i| sole.p[i] - d[i] * (1.0 - k)),
+            r: sole.r,
+        };
         if dist > reach {
-            for i in 0..3 {
-                target.p[i] = hip[i] + d[i] * reach / dist - h.ankle_height * lift[i];
+            if h.closed_form.is_some() {
+                let lift = [sole.r[0][2], sole.r[1][2], sole.r[2][2]];
+                let ah = -s.p[2];
+                for i in 0..3 {
+                    target.p[i] = hip[i] + d[i] * reach / dist - ah * lift[i];
+                }
+            } else {
+                target = pulled(reach / dist);
             }
         }
-        h.leg_ik(side, waist, &target).map_err(|e| e.to_string())
+        match h.leg_ik(side, waist, &target) {
+            Ok(q) => Ok(q),
+            Err(e) if h.closed_form.is_some() => Err(e.to_string()),
+            Err(e) => {
+                // Bisect the pull between the hip and the target for the farthest that converges.
+                let (mut lo, mut hi) = (0.5, (reach / dist).min(1.0));
+                let mut best = h
+                    .leg_ik(side, waist, &pulled(lo))
+                    .map_err(|_| e.to_string())?;
+                for _ in 0..20 {
+                    let mid = 0.5 * (lo + hi);
+                    match h.leg_ik(side, waist, &pulled(mid)) {
+                        Ok(q) => {
+                            best = q;
+                            lo = mid;
+                        }
+                        Err(_) => hi = mid,
+                    }
+                }
+                Ok(best)
+            }
+        }
     }
 
-    /// Forward kinematics: the sole centres and the ankle joint centres (left, right) and the
+    /// Forward kinematics: the sole centres and the ankle frames (left, right) and the
     /// whole-body COG for a waist pose and the joint angles.
     pub fn fk(&self, waist: &Pose, q: &[LegAngles; 2]) -> ([Pose; 2], [Pose; 2], Vec3) {
-        let h = &self.hrp2;
-        let mut m = h.trunk.mass + h.waist.mass;
+        let h = &self.model;
+        let mut m = 0.0;
         let mut s = [0.0; 3];
         let mut acc = |mass: f64, p: Vec3| {
+            m += mass;
             for (a, b) in s.iter_mut().zip(p) {
                 *a += mass * b;
             }
         };
-        acc(h.trunk.mass, waist.apply(h.trunk.com));
-        acc(h.waist.mass, waist.apply(h.waist.com));
+        for n in &h.root {
+            acc(n.body.mass, waist.apply(n.body.com));
+        }
         let mut soles = [*waist; 2];
         let mut ankles = [*waist; 2];
         for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
             let fr = h.leg_fk(side, waist, &q[k]);
-            for (frame, body) in [
-                (&fr.hip, &h.hip),
-                (&fr.thigh, &h.thigh),
-                (&fr.shank, &h.shank),
-                (&fr.foot, &h.foot),
-            ] {
-                let b = mirrored(body, side);
-                acc(b.mass, frame.apply(b.com));
-                m += b.mass;
+            for (frame, link) in fr.links.iter().zip(&h.legs[k].links) {
+                for b in &link.bodies {
+                    acc(b.mass, frame.apply(b.com));
+                }
             }
             soles[k] = fr.sole;
-            ankles[k] = fr.foot;
+            ankles[k] = fr.ankle();
         }
         (soles, ankles, [s[0] / m, s[1] / m, s[2] / m])
     }
@@ -471,7 +629,7 @@ mod tests {
     #[test]
     fn fk_cog_matches_the_multibody_model() {
         let hrp2 = Model::hrp2();
-        let robot = Robot::new(hrp2);
+        let robot = Robot::new(hrp2.clone());
         let soles = [
             Pose::upright(0.0, 0.1, 0.0, 0.0),
             Pose::upright(0.0, -0.1, 0.0, 0.0),
@@ -488,7 +646,7 @@ mod tests {
     #[test]
     fn ik_beyond_reach_saturates() {
         let hrp2 = Model::hrp2();
-        let robot = Robot::new(hrp2);
+        let robot = Robot::new(hrp2.clone());
         let waist = Pose::upright(0.0, 0.0, hrp2.waist_height, 0.0);
         // 0.45 m ahead: beyond the 0.6 m reach at this waist height.
         let far = Pose::upright(0.45, 0.06, 0.0, 0.0);
@@ -497,7 +655,7 @@ mod tests {
         let fk = hrp2.leg_fk(Side::Left, &waist, &q);
         let hip = hrp2.hip_joint(Side::Left, &waist);
         let d = (0..3)
-            .map(|i| (fk.foot.p[i] - hip[i]).powi(2))
+            .map(|i| (fk.ankle().p[i] - hip[i]).powi(2))
             .sum::<f64>()
             .sqrt();
         assert!((d - REACH_FRACTION * 0.6).abs() < 1e-9, "{d}");
@@ -530,7 +688,7 @@ mod tests {
         assert_eq!(x.matches("size=\"0.080000 0.045000 0.030000\"").count(), 2);
         assert!(!x.contains("0.120000 0.070000"));
         // The bottom face 0.06 below the ankle: the box centre 0.03 below it.
-        assert!(x.contains("pos=\"0 0 -0.030000\" size=\"0.080000"));
+        assert!(x.contains("pos=\"0.000000 0.000000 -0.030000\" size=\"0.080000"));
         // Servos scaled by the mass, 17.4 kg against HRP-2's.
         let scale = small.model.total_mass() / link_table().total_mass();
         assert!((small.model.total_mass() - 17.4).abs() < 1e-9);

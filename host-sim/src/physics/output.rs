@@ -220,7 +220,7 @@ pub fn cli(
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let probe = probe.resolve(robot)?;
-    let mut cfg = probe.cfg;
+    let mut cfg = probe.cfg.clone();
     cfg.push = push.map(parse_push).transpose()?;
     let default_out;
     let out = match out {
@@ -282,7 +282,7 @@ pub fn tables_cli(
     let list = parse_cells(cells)?;
     robot.check_hrp2_footsteps("physics-tables")?;
     let probe = probe.resolve(robot)?;
-    let cfg = probe.cfg;
+    let cfg = probe.cfg.clone();
     let mode = probe.mode();
     let mut done = Vec::new();
     for (i, &(r, c)) in list.iter().enumerate() {

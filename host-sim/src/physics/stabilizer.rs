@@ -29,7 +29,7 @@
 //! 3. **Measured ZMP** from the ankle force/torque sensors: for a flat foot with the ground
 //!    force `F` (sensor force less the foot's weight) and moment `M = −τ` about the ankle,
 //!    the local CoP is `r_x = (r_z F_x − M_y) / F_z`, `r_y = (M_x + r_z F_y) / F_z`,
-//!    `r_z = −ankle_height`.
+//!    `r_z` the sole's plane in the ankle frame (less the foot's own weight and moment).
 //! 4. **ZMP distribution** (Kajita 2010): `p_d` is projected onto the segment between the two
 //!    sole centres: the ratio `α` gives the desired vertical forces `α M g`, `(1 − α) M g`;
 //!    what is left over is each foot's desired local CoP `r_d` (clamped into the sole, 1 cm
@@ -47,8 +47,8 @@
 //!    the twelve joint targets, the ankle corrections are added.
 
 use super::model::{sensor, Robot};
-use crate::robot::model::{mean_yaw, rot_z, LegAngles, Mat3, Pose};
-use planner_core::gait::{Phase, Reference};
+use crate::robot::model::{mean_yaw, rot_z, LegAngles, Mat3, Pose, Vec3};
+use planner_core::gait::{Phase, Reference, Side};
 
 /// The stabilizer's gains (every one stated here; `k_dcm` ∈ {0, 1, 2}, `D` ∈ {400, 1000} and
 /// `K_c` ∈ {3, 5, 8} were tried on the `fig4` scenario: every combination walked, the mean CoP
@@ -179,21 +179,35 @@ const SWING_RETURN_S: f64 = 0.05;
 /// Margin inside the sole rectangle of the desired local CoPs \[m\].
 const SOLE_CLAMP_MARGIN_M: f64 = 0.01;
 
-/// The ground's vertical force on a flat foot \[N\] and its centre of pressure in the foot
-/// frame (x, y from below the ankle) \[m\], from the ankle sensor `ft` (force then torque).
+/// The ground's vertical force on a flat foot \[N\] and its centre of pressure in the sole
+/// frame (x, y from the sole centre) \[m\], from the ankle sensor `ft` (force then torque),
+/// the foot's weight `foot_weight` \[N\] and centre of mass `foot_com`, and the sole centre
+/// `sole`, both in the ankle frame \[m\].
 ///
 /// MuJoCo's force/torque sensors give the action of the parent (the shank) on the foot, at the
 /// ankle, in the foot frame. A foot at rest is balanced by the ground: ground force
-/// `F = −f − m_foot g`, ground moment about the ankle `M = −τ` (the foot's centre of mass is
-/// straight below the ankle); the CoP `r` on the sole (`r_z = −ankle_height`) solves
-/// `M = r × F`: `r_x = (r_z F_x − M_y) / F_z`, `r_y = (M_x + r_z F_y) / F_z`. No CoP below
+/// `F = −f + (0, 0, W)`, ground moment about the ankle `M = −τ + c × (0, 0, W)`; the CoP `r`
+/// on the sole plane (`r_z = s_z`) solves `M = r × F`: `r_x = (r_z F_x − M_y) / F_z`,
+/// `r_y = (M_x + r_z F_y) / F_z`, less the sole centre's `s_x`, `s_y`. No CoP below
 /// [`MIN_LOAD_N`].
-pub fn sole_cop(ft: &[f64; 6], foot_weight: f64, ankle_height: f64) -> (f64, Option<[f64; 2]>) {
+pub fn sole_cop(
+    ft: &[f64; 6],
+    foot_weight: f64,
+    foot_com: Vec3,
+    sole: Vec3,
+) -> (f64, Option<[f64; 2]>) {
     let gf = [-ft[0], -ft[1], -ft[2] + foot_weight];
-    let m = [-ft[3], -ft[4]];
-    let rz = -ankle_height;
-    let cop =
-        (gf[2] > MIN_LOAD_N).then(|| [(rz * gf[0] - m[1]) / gf[2], (m[0] + rz * gf[1]) / gf[2]]);
+    let m = [
+        -ft[3] + foot_com[1] * foot_weight,
+        -ft[4] - foot_com[0] * foot_weight,
+    ];
+    let rz = sole[2];
+    let cop = (gf[2] > MIN_LOAD_N).then(|| {
+        [
+            (rz * gf[0] - m[1]) / gf[2] - sole[0],
+            (m[0] + rz * gf[1]) / gf[2] - sole[1],
+        ]
+    });
     (gf[2], cop)
 }
 
@@ -232,10 +246,12 @@ impl Stabilizer {
         for k in 0..2 {
             let o = sensor::FT + 6 * k;
             let ft: [f64; 6] = core::array::from_fn(|i| sensors[o + i]);
+            let side = [Side::Left, Side::Right][k];
             let (f, cop) = sole_cop(
                 &ft,
-                self.robot.foot_mass() * self.robot.gravity(),
-                self.robot.ankle_height(),
+                self.robot.foot_mass(side) * self.robot.gravity(),
+                self.robot.foot_com(side),
+                self.robot.sole_offset(side),
             );
             fz[k] = f;
             if let Some(c) = cop {
@@ -417,8 +433,9 @@ impl Stabilizer {
         let mut out = [0.0; 12];
         for k in 0..2 {
             let mut qk = q[k];
-            qk[4] += self.ankle[k][0];
-            qk[5] += self.ankle[k][1];
+            let [(ip, sp), (ir, sr)] = self.robot.ankle_joints([Side::Left, Side::Right][k]);
+            qk[ip] += sp * self.ankle[k][0];
+            qk[ir] += sr * self.ankle[k][1];
             out[6 * k..6 * k + 6].copy_from_slice(&qk);
         }
         Ok(out)
@@ -430,14 +447,26 @@ mod tests {
     use super::*;
 
     /// The sensor reading of a foot at rest on the ground force `fg` at `r` (from the ankle,
-    /// foot frame), with the foot weight `w` (the inverse of [`sole_cop`]'s balance).
-    fn reading(fg: [f64; 3], r: [f64; 3], w: f64) -> [f64; 6] {
+    /// foot frame), with the foot weight `w` at `c` (the inverse of [`sole_cop`]'s balance).
+    fn reading_at(fg: [f64; 3], r: [f64; 3], w: f64, c: [f64; 3]) -> [f64; 6] {
         let m = [
             r[1] * fg[2] - r[2] * fg[1],
             r[2] * fg[0] - r[0] * fg[2],
             r[0] * fg[1] - r[1] * fg[0],
         ];
-        [-fg[0], -fg[1], -(fg[2] - w), -m[0], -m[1], -m[2]]
+        [
+            -fg[0],
+            -fg[1],
+            -(fg[2] - w),
+            c[1] * w - m[0],
+            -c[0] * w - m[1],
+            -m[2],
+        ]
+    }
+
+    /// [`reading_at`] with the foot's centre of mass below the ankle.
+    fn reading(fg: [f64; 3], r: [f64; 3], w: f64) -> [f64; 6] {
+        reading_at(fg, r, w, [0.0, 0.0, -0.06])
     }
 
     #[test]
@@ -447,16 +476,28 @@ mod tests {
             ([0.0, 0.0, 300.0], [0.03, -0.02, -h]),
             ([25.0, -10.0, 500.0], [-0.08, 0.05, -h]),
         ] {
-            let (fz, cop) = sole_cop(&reading(fg, r, w), w, h);
+            let below = [0.0, 0.0, -0.06];
+            let (fz, cop) = sole_cop(&reading(fg, r, w), w, below, [0.0, 0.0, -h]);
             let cop = cop.expect("loaded");
             assert!((fz - fg[2]).abs() < 1e-9);
             assert!(
                 (cop[0] - r[0]).abs() < 1e-12 && (cop[1] - r[1]).abs() < 1e-12,
                 "{cop:?}"
             );
+            // A sole centre ahead of the ankle and a foot's centre of mass off its axis
+            // (a G1-like foot): the CoP is given from the sole centre.
+            let (sole, c) = ([0.035, 0.01, -0.035], [0.026, 0.0, -0.016]);
+            let at = [r[0], r[1], sole[2]];
+            let (_, cop) = sole_cop(&reading_at(fg, at, w, c), w, c, sole);
+            let cop = cop.expect("loaded");
+            assert!(
+                (cop[0] - (r[0] - sole[0])).abs() < 1e-12
+                    && (cop[1] - (r[1] - sole[1])).abs() < 1e-12,
+                "{cop:?}"
+            );
         }
         // Unloaded (a swing foot: the sensor carries only the foot's weight).
-        let (fz, cop) = sole_cop(&[0.0, 0.0, w, 0.0, 0.0, 0.0], w, h);
+        let (fz, cop) = sole_cop(&[0.0, 0.0, w, 0.0, 0.0, 0.0], w, [0.0; 3], [0.0, 0.0, -h]);
         assert!(fz.abs() < 1e-12 && cop.is_none());
     }
 

@@ -4,20 +4,16 @@
 //! The planner's part of the file (`[pendulum]`, `[timing]`, `[adjustment]`, `[feet]`,
 //! `[reach]`, `[preview]`) is read by [`planner_core::robot`], which the firmware's build
 //! script also uses, so the simulated node and the board's node are configured from one file.
-//! This module reads the `[multibody]` link table into a [`Model`]:
+//! This module reads the `[multibody]` link table into a [`Model`], in one of two forms:
+//! the hand-written table of HRP-2's leg shape (`table.rs`: thigh and shank lengths, hip offset,
+//! ankle height and ten bodies; closed-form inverse kinematics), or the general table that
+//! `host-sim robot import` writes from a URDF (`tree.rs`: each leg's six joints in any order
+//! and about any axes, full inertia tensors, the sole anywhere in the ankle's frame; numerical
+//! inverse kinematics). A `[multibody]` with `left` and `right` link lists is the general form.
 //!
-//! | key | meaning |
-//! |---|---|
-//! | `thigh_length`, `shank_length` | hip joint centre to knee, knee to ankle joint centre \[m\] |
-//! | `hip_offset` | lateral distance of each hip joint centre from the waist origin \[m\] |
-//! | `ankle_height` | ankle joint centre above the sole \[m\] |
-//! | `waist_height` | waist origin above the floor while walking \[m\] |
-//! | `[multibody.<body>]` for trunk, waist, hip, thigh, shank, foot | `mass` \[kg\], `com` \[m\] in the body's link frame (see [`Model`]), and one of `box = [x, y, z]` (sides of a homogeneous box), `cylinder = [radius, length]` (a solid cylinder along z) or `inertia = [Ixx, Iyy, Izz]` (principal moments about the COM) |
-//!
-//! Checks, each naming its key: the reach limits and the swing height within the legs'
-//! reach at the walking height (`check_legs`); the control period the simulator's scenarios and bus run at
-//! ([`TICK_S`], 5 ms); lengths and masses finite and positive (the hip housing may be
-//! massless), inertias non-negative; the stance reachable by the legs; and the stance COG of
+//! Checks, each naming its key: each form's own (in its module); the control period the
+//! simulator's scenarios and bus run at ([`TICK_S`], 5 ms); the stance reachable by the legs;
+//! and the stance COG of
 //! the link table (feet `step_width` apart, waist at `waist_height`) within
 //! [`STANCE_TOLERANCE_M`] of the pendulum's `cog_height`, since the planner's COG is the
 //! multi-body model's COG.
@@ -27,12 +23,15 @@ use std::path::Path;
 
 use planner_core::node::NodeConfig;
 use planner_core::robot::{Robot as PlannerRobot, RobotError};
-use serde::Deserialize;
 
+pub mod frame;
 pub mod model;
+mod table;
+mod tree;
 
 use crate::scenario::TICK_S;
-use model::{Body, Model, Vec3};
+use model::Model;
+use table::invalid;
 
 /// The robot file shipped for HRP-2, compiled into the binary.
 pub const HRP2_TOML: &str = include_str!("../../robots/hrp2.toml");
@@ -67,124 +66,6 @@ impl fmt::Display for LoadError {
 }
 
 impl std::error::Error for LoadError {}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Links {
-    thigh_length: f64,
-    shank_length: f64,
-    hip_offset: f64,
-    ankle_height: f64,
-    waist_height: f64,
-    trunk: BodySpec,
-    waist: BodySpec,
-    hip: BodySpec,
-    thigh: BodySpec,
-    shank: BodySpec,
-    foot: BodySpec,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BodySpec {
-    mass: f64,
-    com: Vec3,
-    #[serde(rename = "box")]
-    cuboid: Option<Vec3>,
-    cylinder: Option<[f64; 2]>,
-    inertia: Option<Vec3>,
-}
-
-fn invalid(key: &'static str, message: String) -> RobotError {
-    RobotError::Invalid { key, message }
-}
-
-fn length(key: &'static str, v: f64) -> Result<f64, RobotError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(invalid(key, format!("{v} m must be finite and > 0")))
-    }
-}
-
-impl BodySpec {
-    fn body(&self, key: &'static str, massless: bool) -> Result<Body, RobotError> {
-        let m = self.mass;
-        if !(m.is_finite() && (m > 0.0 || (massless && m == 0.0))) {
-            return Err(invalid(key, format!("mass {m} kg must be finite and > 0")));
-        }
-        if !self.com.iter().all(|c| c.is_finite()) {
-            return Err(invalid(key, "com must be finite".into()));
-        }
-        let non_negative = |v: &[f64]| v.iter().all(|x| x.is_finite() && *x >= 0.0);
-        match (self.cuboid, self.cylinder, self.inertia) {
-            (Some(size), None, None) if non_negative(&size) => Ok(Body::cuboid(m, self.com, size)),
-            (None, Some([r, l]), None) if non_negative(&[r, l]) => {
-                Ok(Body::cylinder(m, self.com, r, l))
-            }
-            (None, None, Some(i)) if non_negative(&i) => Ok(Body {
-                mass: m,
-                com: self.com,
-                inertia: i,
-            }),
-            (None, None, None) => Err(invalid(key, "give one of box, cylinder or inertia".into())),
-            (a, b, c)
-                if [a.is_some(), b.is_some(), c.is_some()]
-                    .iter()
-                    .filter(|x| **x)
-                    .count()
-                    > 1 =>
-            {
-                Err(invalid(
-                    key,
-                    "give only one of box, cylinder or inertia".into(),
-                ))
-            }
-            _ => Err(invalid(
-                key,
-                "sizes and moments of inertia must be finite and ≥ 0".into(),
-            )),
-        }
-    }
-}
-
-/// What the legs can reach at the walking height: the feet at most
-/// `2 √(L² − h²)` apart (each ankle `√(L² − h²)` from below its hip, `L` the leg length, `h`
-/// the hip-to-ankle height while walking), and a swing height that leaves the knee a tenth of
-/// the leg length before it folds completely (`h − step_height ≥ |thigh − shank| + L/10`).
-fn check_legs(planner: &PlannerRobot, m: &Model) -> Result<(), RobotError> {
-    let leg = m.thigh_length + m.shank_length;
-    let h = m.waist_height - m.ankle_height;
-    if !(h > 0.0 && h < leg) {
-        return Err(invalid(
-            "multibody.waist_height",
-            format!(
-                "{} m puts the ankles {h:.4} m below the hips: the legs ({leg} m) cannot reach",
-                m.waist_height
-            ),
-        ));
-    }
-    let across = 2.0 * (leg * leg - h * h).sqrt();
-    let d = planner.reach.max_feet_distance;
-    if d > across {
-        return Err(invalid(
-            "reach.max_feet_distance",
-            format!(
-                "{d} m: the legs reach feet at most {across:.4} m apart at the walking height \
-                 (multibody.waist_height)"
-            ),
-        ));
-    }
-    let lift = h - (m.thigh_length - m.shank_length).abs() - leg / 10.0;
-    let sh = planner.params.step_height;
-    if sh > lift {
-        return Err(invalid(
-            "feet.step_height",
-            format!("{sh} m: the legs lift the foot at most {lift:.4} m at the walking height"),
-        ));
-    }
-    Ok(())
-}
 
 impl Robot {
     /// HRP-2 from the file shipped in the repository.
@@ -225,24 +106,18 @@ impl Robot {
         let table = planner.multibody.clone().ok_or_else(|| {
             RobotError::Syntax("missing table `[multibody]` (host-sim's link table)".into())
         })?;
-        let links: Links = table
-            .try_into()
-            .map_err(|e: toml::de::Error| RobotError::Syntax(format!("in [multibody]: {e}")))?;
-        let model = Model {
-            thigh_length: length("multibody.thigh_length", links.thigh_length)?,
-            shank_length: length("multibody.shank_length", links.shank_length)?,
-            hip_offset: length("multibody.hip_offset", links.hip_offset)?,
-            ankle_height: length("multibody.ankle_height", links.ankle_height)?,
-            waist_height: length("multibody.waist_height", links.waist_height)?,
-            gravity: planner.params.gravity,
-            trunk: links.trunk.body("multibody.trunk", false)?,
-            waist: links.waist.body("multibody.waist", false)?,
-            hip: links.hip.body("multibody.hip", true)?,
-            thigh: links.thigh.body("multibody.thigh", false)?,
-            shank: links.shank.body("multibody.shank", false)?,
-            foot: links.foot.body("multibody.foot", false)?,
+        let model = if table.contains_key("left") {
+            let tree: tree::Tree = table
+                .try_into()
+                .map_err(|e: toml::de::Error| RobotError::Syntax(format!("in [multibody]: {e}")))?;
+            tree.model(planner.params.gravity, planner.params.step_width)?
+        } else {
+            let links: table::Links = table
+                .try_into()
+                .map_err(|e: toml::de::Error| RobotError::Syntax(format!("in [multibody]: {e}")))?;
+            links.model(planner.params.gravity)?
         };
-        check_legs(&planner, &model)?;
+        table::check_legs(&planner, &model)?;
         let width = planner.params.step_width;
         let z = model.stance_cog_height(width).map_err(|e| {
             invalid(

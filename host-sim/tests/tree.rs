@@ -1,0 +1,213 @@
+//! The general multi-body model: the numerical inverse kinematics against HRP-2's closed form,
+//! and legs of other joint orders (a pitch–roll–yaw hip with tilted axes, a sole centre ahead
+//! of the ankle) round-tripped through forward kinematics.
+
+use host_sim::robot::model::{
+    rot_rpy, rot_x, rot_y, rot_z, Body, Joint, LegAngles, Link, Model, Pose, Vec3,
+};
+use planner_core::gait::Side;
+
+/// A small deterministic generator (64-bit LCG), uniform in [lo, hi).
+struct Lcg(u64);
+
+impl Lcg {
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+fn pose_error(a: &Pose, b: &Pose) -> f64 {
+    let mut e = 0.0f64;
+    for i in 0..3 {
+        e = e.max((a.p[i] - b.p[i]).abs());
+        for j in 0..3 {
+            e = e.max((a.r[i][j] - b.r[i][j]).abs());
+        }
+    }
+    e
+}
+
+/// HRP-2's model with the closed form switched off: the numerical inverse kinematics must
+/// find the closed form's angles (1e-9 rad) for random walking poses, from the standing
+/// posture.
+#[test]
+fn numerical_ik_finds_the_closed_form() {
+    let closed = Model::hrp2();
+    let mut numeric = closed.clone();
+    numeric.closed_form = None;
+    let (waist, soles) = closed.stance_pose(0.2);
+    numeric.stance = [
+        closed.leg_ik(Side::Left, &waist, &soles[0]).unwrap(),
+        closed.leg_ik(Side::Right, &waist, &soles[1]).unwrap(),
+    ];
+    let mut rng = Lcg(7);
+    let mut worst = 0.0f64;
+    for _ in 0..500 {
+        let waist = Pose {
+            p: [
+                rng.uniform(-0.1, 0.1),
+                rng.uniform(-0.08, 0.08),
+                closed.waist_height + rng.uniform(-0.03, 0.02),
+            ],
+            r: rot_z(rng.uniform(-0.3, 0.3)),
+        };
+        for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+            let y = if k == 0 { 0.1 } else { -0.1 };
+            let sole = Pose {
+                p: [
+                    rng.uniform(-0.25, 0.25),
+                    y + rng.uniform(-0.05, 0.05),
+                    rng.uniform(0.0, 0.08),
+                ],
+                r: rot_z(rng.uniform(-0.3, 0.3)),
+            };
+            let Ok(want) = closed.leg_ik(side, &waist, &sole) else {
+                continue;
+            };
+            let got = numeric
+                .leg_ik(side, &waist, &sole)
+                .expect("reachable: the closed form found it");
+            for (a, b) in got.iter().zip(want) {
+                worst = worst.max((a - b).abs());
+            }
+        }
+    }
+    assert!(worst < 1e-9, "{worst:.3e} rad");
+}
+
+/// A G1-like leg: hip pitch, roll, yaw with offsets between the axes and a tilted roll axis,
+/// knee, ankle pitch and roll, the sole centre 35 mm ahead of and below the ankle.
+fn g1_like() -> Model {
+    let leg = |s: f64| {
+        let j = |name: &str, p: Vec3, rpy: Vec3, axis: Vec3| {
+            Joint::new(name, Pose { p, r: rot_rpy(rpy) }, axis)
+        };
+        let link = |name: &str, joint: Joint, mass: f64, com: Vec3| Link {
+            name: name.into(),
+            joint,
+            bodies: vec![Body::cuboid(mass, com, [0.06, 0.06, 0.1])],
+        };
+        host_sim::robot::model::Leg {
+            links: [
+                link(
+                    "hp",
+                    j(
+                        "hip_pitch",
+                        [0.0, s * 0.064, -0.103],
+                        [0.0; 3],
+                        [0.0, 1.0, 0.0],
+                    ),
+                    1.4,
+                    [0.0, s * 0.04, -0.02],
+                ),
+                link(
+                    "hr",
+                    j(
+                        "hip_roll",
+                        [0.0, s * 0.052, -0.030],
+                        [0.0, -0.175, 0.0],
+                        [1.0, 0.0, 0.0],
+                    ),
+                    1.5,
+                    [0.03, 0.0, -0.05],
+                ),
+                link(
+                    "hy",
+                    j("hip_yaw", [0.025, 0.0, -0.124], [0.0; 3], [0.0, 0.0, 1.0]),
+                    1.7,
+                    [-0.05, 0.0, -0.09],
+                ),
+                link(
+                    "kn",
+                    j(
+                        "knee",
+                        [-0.078, s * 0.002, -0.177],
+                        [0.0, 0.175, 0.0],
+                        [0.0, 1.0, 0.0],
+                    ),
+                    2.0,
+                    [0.0, 0.0, -0.14],
+                ),
+                link(
+                    "ap",
+                    j("ankle_pitch", [0.0, 0.0, -0.300], [0.0; 3], [0.0, 1.0, 0.0]),
+                    0.07,
+                    [0.0, 0.0, -0.01],
+                ),
+                link(
+                    "ar",
+                    j("ankle_roll", [0.0, 0.0, -0.018], [0.0; 3], [1.0, 0.0, 0.0]),
+                    0.6,
+                    [0.026, 0.0, -0.016],
+                ),
+            ],
+            sole: Pose {
+                p: [0.035, 0.0, -0.035],
+                r: rot_x(0.0),
+            },
+        }
+    };
+    let mut m = Model::hrp2();
+    m.legs = [leg(1.0), leg(-1.0)];
+    m.closed_form = None;
+    m.waist_height = 0.72;
+    m.stance = [[0.0, 0.0, 0.0, 0.5, 0.0, 0.0]; 2];
+    let (waist, soles) = m.stance_pose(0.2);
+    for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+        let q = m
+            .numerical_ik(side, &waist, &soles[k], m.stance[k])
+            .unwrap();
+        m.stance[k] = q;
+    }
+    m
+}
+
+/// FK(IK(pose)) = pose (1e-10) for random reachable sole poses of the G1-like leg, and the
+/// knee stays bent forward (the branch of the standing posture).
+#[test]
+fn a_pitch_roll_yaw_hip_round_trips() {
+    let m = g1_like();
+    assert!(m.stance[0][3] > 0.1, "{:?}", m.stance[0]);
+    let mut rng = Lcg(11);
+    let mut solved = 0;
+    for _ in 0..400 {
+        let waist = Pose {
+            p: [rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), 0.72],
+            r: rot_z(rng.uniform(-0.2, 0.2)),
+        };
+        let q: LegAngles = [
+            rng.uniform(-0.6, 0.3),
+            rng.uniform(-0.2, 0.2),
+            rng.uniform(-0.2, 0.2),
+            rng.uniform(0.3, 1.2),
+            rng.uniform(-0.5, 0.2),
+            rng.uniform(-0.15, 0.15),
+        ];
+        for side in [Side::Left, Side::Right] {
+            let target = m.leg_fk(side, &waist, &q).sole;
+            let got = m
+                .leg_ik(side, &waist, &target)
+                .expect("an FK pose is reachable");
+            let back = m.leg_fk(side, &waist, &got).sole;
+            assert!(pose_error(&back, &target) < 1e-10, "{q:?} → {got:?}");
+            assert!(got[3] > 0.0, "knee backwards: {got:?}");
+            solved += 1;
+        }
+    }
+    assert_eq!(solved, 800);
+    // Out of reach: 1 m below the hip.
+    let waist = Pose {
+        p: [0.0, 0.0, 0.72],
+        r: rot_y(0.0),
+    };
+    let far = Pose {
+        p: [0.0, 0.1, -0.5],
+        r: rot_z(0.0),
+    };
+    let e = m.leg_ik(Side::Left, &waist, &far).unwrap_err();
+    assert!(e.distance > e.reach, "{e:?}");
+}
