@@ -7,7 +7,8 @@
 #    clippy, rustfmt) if it is missing, QEMU (qemu-system-arm, apt-get), and the CAN tools the
 #    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), the Python
 #    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip), and the
-#    physics engine (MuJoCo 3.2.7, pip), and LAPACK for the comparison bench (liblapack-dev,
+#    physics engine (MuJoCo 3.2.7, pip), the robot descriptions and their oracle
+#    (example-robot-data 6.0.0 and pin 4.1.0, pip), and LAPACK for the comparison bench (liblapack-dev,
 #    apt-get);
 # 2. the host workspace: unit, integration and bench targets, then the doctests (this includes
 #    firmware/board-core, the board's CAN adapter, pacer and reset reason on a mock FDCAN);
@@ -150,6 +151,20 @@ if [ "$(python3 -c 'import mujoco; print(mujoco.__version__)' 2>/dev/null)" != "
 fi
 export WALK_REQUIRE_MUJOCO=1
 # --- end MuJoCo -------------------------------------------------------------------------------
+# --- robots from their packages (host-sim/tests/import.rs) -----------------------------------
+# PyPI's example-robot-data (Talos, Unitree G1 and others: their URDFs, used where pip puts
+# them; none of their files is in this repository) and Pinocchio (`pin`), the oracle of the
+# imported multi-body models. With WALK_REQUIRE_ROBOT_DATA=1 the import tests fail instead of
+# skipping when one is missing.
+ROBOT_DATA_VERSION=6.0.0
+PIN_VERSION=4.1.0
+if [ "$(python3 -c 'import importlib.metadata as m; print(m.version("example-robot-data"))' 2>/dev/null)" != "$ROBOT_DATA_VERSION" ] \
+    || [ "$(python3 -c 'import pinocchio; print(pinocchio.__version__)' 2>/dev/null)" != "$PIN_VERSION" ]; then
+    echo "installing example-robot-data==$ROBOT_DATA_VERSION pin==$PIN_VERSION"
+    python3 -m pip install -q "example-robot-data==$ROBOT_DATA_VERSION" "pin==$PIN_VERSION"
+fi
+export WALK_REQUIRE_ROBOT_DATA=1
+# --- end robots from their packages -----------------------------------------------------------
 
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT

@@ -193,6 +193,11 @@ enum Cmd {
         #[command(flatten)]
         probe: ProbeArgs,
     },
+    /// Robot files: `robot import URDF --out FILE.toml` writes one from a robot description.
+    Robot {
+        #[command(subcommand)]
+        action: RobotCmd,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -204,6 +209,56 @@ enum Cmd {
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
     },
+}
+
+#[derive(Subcommand)]
+enum RobotCmd {
+    /// Write a robot file from a URDF: the multi-body model (every link; the upper body at
+    /// zero joint angles merged into the trunk), the legs' six joints each in any order, the
+    /// soles from the feet's collision geometry, the standing height and the reach limits
+    /// from the legs' workspace (see the book's "your own robot" page).
+    Import {
+        /// The URDF file (`package://` meshes are found in the directory of that name above
+        /// it, or on ROS_PACKAGE_PATH).
+        urdf: PathBuf,
+        /// The feet: the left and the right sole (or foot) link [default: the lowest leaf
+        /// link on each side].
+        #[arg(long, value_name = "LEFT,RIGHT")]
+        sole: Option<String>,
+        /// The robot file to write.
+        #[arg(long, value_name = "FILE.toml")]
+        out: PathBuf,
+    },
+}
+
+fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<dyn Error>> {
+    let soles = match sole {
+        None => None,
+        Some(s) => match s.split_once(',') {
+            Some((l, r)) if !l.is_empty() && !r.is_empty() && !r.contains(',') => Some([l, r]),
+            _ => return Err(format!("--sole {s:?}: give LEFT,RIGHT").into()),
+        },
+    };
+    let imported = host_sim::robot::import::import(urdf, soles)?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    fs::write(out, &imported.toml).map_err(|e| format!("{}: {e}", out.display()))?;
+    let r = &imported.robot;
+    let p = &r.planner.params;
+    println!(
+        "{}: {:.2} kg, COG {:.3} m standing, feet {:.3} m apart, soles {:.3} × {:.3} m, \
+         steps up to {:.3} m forward; wrote {}",
+        r.name(),
+        r.model.total_mass(),
+        p.cog_height,
+        p.step_width,
+        2.0 * p.sole_half_length,
+        2.0 * p.sole_half_width,
+        r.planner.reach.max_forward,
+        out.display()
+    );
+    Ok(())
 }
 
 fn positive_seconds(s: &str) -> Result<f64, String> {
@@ -321,6 +376,9 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             directions.as_deref(),
             &probe,
         ),
+        Some(Cmd::Robot {
+            action: RobotCmd::Import { urdf, sole, out },
+        }) => robot_import(&urdf, sole.as_deref(), &out),
         Some(Cmd::Node {
             interface,
             seconds,
@@ -365,11 +423,11 @@ fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), String> {
 
 /// The scenario `name` (built-in, or a file ending in .toml) and the entry behind each of its
 /// commands.
-fn load_scenario(name: &str) -> Result<ScenarioFile, Box<dyn Error>> {
+fn load_scenario(name: &str, robot: &Robot) -> Result<ScenarioFile, Box<dyn Error>> {
     if name.ends_with(".toml") {
         return Ok(scenario::file::load_file(Path::new(name))?);
     }
-    let s: Scenario = scenario::built_in(name).ok_or_else(|| {
+    let s: Scenario = robot.built_in(name).ok_or_else(|| {
         format!(
             "unknown scenario {name:?}; built-in: {} (or a .toml file)",
             BUILT_IN.join(", ")
@@ -391,10 +449,7 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     let ScenarioFile {
         scenario: s,
         entries,
-    } = load_scenario(name)?;
-    if !name.ends_with(".toml") {
-        robot.check_hrp2_footsteps(name)?;
-    }
+    } = load_scenario(name, robot)?;
     let default_out = PathBuf::from(format!("out/{}", s.name));
     let out = out.unwrap_or(&default_out);
     let name = s.name.as_str();

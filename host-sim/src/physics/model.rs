@@ -38,7 +38,9 @@
 //! test robot (`host-sim/tests/robots/small.toml`) walked but rocked on its sole edges (CoP
 //! error mean 25.6 mm), scaled (× 0.30) 5.7 mm. A joint with a range in the robot file is
 //! limited to it (`range`), and an actuator with an effort limit saturates at it
-//! (`forcerange`); the hand-written HRP-2 table gives neither.
+//! (`forcerange`), its damping then inside the actuator (`kv`, so that the limit bounds the
+//! servo's whole torque `kp (q_target − q) − kd q̇`) instead of on the joint; the hand-written
+//! HRP-2 table gives neither.
 //!
 //! Sensors (what the real robot measures, nothing else reaches the controller): a trunk IMU
 //! (site `imu` at the waist origin: `framequat` as the attitude estimate, `gyro`,
@@ -361,6 +363,10 @@ impl Robot {
                 if let Some([lo, hi]) = j.range {
                     let _ = write!(x, " range=\"{} {}\"", g(lo), g(hi));
                 }
+                if j.effort.is_some() {
+                    // The servo's damping is the motor's: inside the actuator, under its limit.
+                    x.push_str(" damping=\"0\"");
+                }
                 x.push_str("/>");
             }
             if let Some(b) = link_body(link) {
@@ -457,7 +463,13 @@ impl Robot {
                 j.name, j.name
             );
             if let Some(e) = j.effort {
-                let _ = write!(x, " forcerange=\"{} {}\"", g(-e), g(e));
+                let _ = write!(
+                    x,
+                    " kv=\"{}\" forcerange=\"{} {}\"",
+                    f(self.servo[1]),
+                    g(-e),
+                    g(e)
+                );
             }
             let _ = writeln!(x, "/>");
         }

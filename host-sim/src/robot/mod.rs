@@ -25,6 +25,7 @@ use planner_core::node::NodeConfig;
 use planner_core::robot::{Robot as PlannerRobot, RobotError};
 
 pub mod frame;
+pub mod import;
 pub mod model;
 mod table;
 mod tree;
@@ -148,9 +149,20 @@ impl Robot {
         self.planner.node_config()
     }
 
+    /// The proportions the built-in scenarios are drawn in for this robot.
+    pub fn stance(&self) -> crate::scenario::Stance {
+        crate::scenario::Stance::of(&self.planner.params, &self.planner.reach)
+    }
+
+    /// A built-in scenario drawn for this robot ([`crate::scenario::built_in_for`]).
+    pub fn built_in(&self, name: &str) -> Option<crate::scenario::Scenario> {
+        crate::scenario::built_in_for(name, &self.stance())
+    }
+
     /// Whether this robot can walk HRP-2's footsteps (the built-in scenarios, the fault
     /// sweep's and the paper's grid are written for feet `step_width` = 0.2 m apart): an error
-    /// naming `what` and the robot's width if its feet stand otherwise.
+    /// naming `what` and the robot's width if its feet stand otherwise. (The built-in
+    /// scenarios are drawn for every robot, [`Robot::built_in`]; the paper's grids are not.)
     pub fn check_hrp2_footsteps(&self, what: &str) -> Result<(), String> {
         let hrp2_width = Self::hrp2().planner.params.step_width;
         let width = self.planner.params.step_width;

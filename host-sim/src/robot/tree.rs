@@ -136,9 +136,9 @@ fn knee_seed(leg: &[Link; 6]) -> LegAngles {
 }
 
 impl Tree {
-    /// The model of the table (gravity from the planner's part), standing with the feet
-    /// `step_width` apart.
-    pub(super) fn model(&self, gravity: f64, step_width: f64) -> Result<Model, RobotError> {
+    /// The model of the table (gravity from the planner's part), its standing posture not yet
+    /// solved (the knees bent by the seed).
+    pub(super) fn raw_model(&self, gravity: f64) -> Result<Model, RobotError> {
         let waist_height = length("multibody.waist_height", self.waist_height)?;
         let leg = |key: &'static str, specs: &[LinkSpec], sole: Vec3| {
             let links: Vec<Link> = specs
@@ -168,7 +168,7 @@ impl Tree {
             leg(RIGHT, &self.right, self.sole.right)?,
         ];
         let stance = [knee_seed(&legs[0].links), knee_seed(&legs[1].links)];
-        let mut model = Model {
+        Ok(Model {
             gravity,
             waist_height,
             root: vec![
@@ -184,7 +184,13 @@ impl Tree {
             legs,
             closed_form: None,
             stance,
-        };
+        })
+    }
+
+    /// The model of the table (gravity from the planner's part), standing with the feet
+    /// `step_width` apart.
+    pub(super) fn model(&self, gravity: f64, step_width: f64) -> Result<Model, RobotError> {
+        let mut model = self.raw_model(gravity)?;
         let (waist, soles) = model.stance_pose(step_width);
         for side in [Side::Left, Side::Right] {
             let i = side_index(side);

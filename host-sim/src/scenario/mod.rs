@@ -5,12 +5,16 @@
 //! [`crate::sim`] plays a scenario through the virtual CAN link and the node.
 //!
 //! # Rooms
+//! `built_in.rs` draws the built-in scenarios in a robot's proportions ([`Stance`]);
 //! [`file`](mod@file) reads scenario files (TOML); [`expect`] names what may become of a command (a
 //! file's `expect` key); [`wire`] encodes a scenario's commands as the controller sends them.
 
+mod built_in;
 pub mod expect;
 pub mod file;
 pub mod wire;
+
+pub use built_in::{built_in, built_in_for, Stance, BUILT_IN};
 
 pub use expect::Failure;
 pub use wire::{wire_check, WireId, MAX_WIRE_ID};
@@ -168,149 +172,4 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
         adjustments,
         footsteps,
     }
-}
-
-fn foot_y(side: Side, half_width: f64) -> f64 {
-    match side {
-        Side::Left => half_width,
-        Side::Right => -half_width,
-    }
-}
-
-/// Straight steps of `step` m from feet at x = 0, right foot first, `n` steps and a closing
-/// step; ids from 0.
-fn straight_steps(n: u16, step: f64) -> Vec<(u16, Footstep<f64>)> {
-    let mut out = Vec::new();
-    let mut side = Side::Right;
-    for i in 0..n {
-        out.push((
-            i,
-            Footstep::new(side, step * f64::from(i + 1), foot_y(side, 0.1), 0.0),
-        ));
-        side = side.other();
-    }
-    out.push((
-        n,
-        Footstep::new(side, step * f64::from(n), foot_y(side, 0.1), 0.0),
-    ));
-    out
-}
-
-fn pushes(steps: &[(u16, Footstep<f64>)]) -> Vec<(u64, Command)> {
-    steps
-        .iter()
-        .map(|&(i, f)| (0, Command::Push(i, f)))
-        .collect()
-}
-
-/// The names of the built-in scenarios.
-pub const BUILT_IN: [&str; 5] = ["straight", "turn", "stop", "fig4", "lateral"];
-
-/// A built-in scenario by name.
-pub fn built_in(name: &str) -> Option<Scenario> {
-    // The robot's stance: the built-in steps are HRP-2's (feet 0.2 m apart).
-    let feet = None;
-    let s = match name {
-        "straight" => {
-            let mut timeline = pushes(&straight_steps(8, 0.2));
-            timeline.push((20, Command::Start));
-            timeline.push((20, Command::Stop));
-            Scenario {
-                name: name.into(),
-                about: "eight 0.2 m steps and a closing step, then stop".into(),
-                feet,
-                timeline,
-                max_ticks: 4000,
-            }
-        }
-        "turn" => {
-            let mut steps = Vec::new();
-            let mut side = Side::Right;
-            let n = 8u16;
-            for i in 0..=n {
-                let yaw = core::f64::consts::FRAC_PI_2 * f64::from(i.min(n - 1) + 1) / f64::from(n);
-                let radius = if side == Side::Left { 0.9 } else { 1.1 };
-                steps.push((
-                    i,
-                    Footstep::new(side, radius * yaw.sin(), 1.0 - radius * yaw.cos(), yaw),
-                ));
-                side = side.other();
-            }
-            let mut timeline = pushes(&steps);
-            timeline.push((20, Command::Start));
-            timeline.push((20, Command::Stop));
-            Scenario {
-                name: name.into(),
-                about: "a quarter turn to the left on a 1 m radius in nine steps, then stop".into(),
-                feet,
-                timeline,
-                max_ticks: 4000,
-            }
-        }
-        "stop" => {
-            let mut timeline = pushes(&straight_steps(20, 0.2));
-            timeline.push((20, Command::Start));
-            // Stop request in the middle of the walk: the queue is dropped, the robot closes
-            // its feet with a step in place and settles.
-            timeline.push((600, Command::StopNow));
-            Scenario {
-                name: name.into(),
-                about: "walking 0.2 m steps, stop-now command at 3.0 s".into(),
-                feet,
-                timeline,
-                max_ticks: 4000,
-            }
-        }
-        "fig4" => {
-            // The paper's Fig. 4: 0.1 m steps; at the single support that begins at 4.0 s the
-            // landing moves from 0.4 m to 0.6 m, the later steps keep their 0.1 m length.
-            let steps = straight_steps(11, 0.1);
-            let mut timeline = pushes(&steps);
-            timeline.push((160, Command::Start));
-            for &(i, f) in steps.iter().skip(3).rev() {
-                let moved = Footstep::new(f.side, f.x + 0.2, f.y, f.yaw);
-                timeline.push((799, Command::Modify(i, moved)));
-            }
-            timeline.push((800, Command::Stop));
-            Scenario {
-                name: name.into(),
-                about: "paper Fig. 4: next landing 0.4 m -> 0.6 m at the start of the single support at 4.0 s"
-                    .into(),
-                feet,
-                timeline,
-                max_ticks: 4000,
-            }
-        }
-        "lateral" => {
-            // Section V: 0.2 m steps, step cycle 0.8 s; the next landing is moved 0.05 m
-            // inwards, and later 0.05 m outwards, just before lift-off.
-            let steps = straight_steps(12, 0.2);
-            let mut timeline = pushes(&steps);
-            timeline.push((160, Command::Start));
-            // Single supports begin at 1.6 s + k·0.8 s; the one at 4.0 s swings step 3 (left).
-            // Step 5 (left) is moved at 5.0 s, while step 4 swings: the change takes effect
-            // when step 5 lifts off, wherever the first adjustment has put that moment.
-            let (_, s3) = steps[3];
-            timeline.push((
-                799,
-                Command::Modify(3, Footstep::new(s3.side, s3.x, s3.y - 0.05, 0.0)),
-            ));
-            let (_, s5) = steps[5];
-            timeline.push((
-                1000,
-                Command::Modify(5, Footstep::new(s5.side, s5.x, s5.y + 0.05, 0.0)),
-            ));
-            timeline.push((1200, Command::Stop));
-            Scenario {
-                name: name.into(),
-                about: "paper section V: next landing moved 0.05 m inwards at 4.0 s, the one after next outwards"
-                    .into(),
-                feet,
-                timeline,
-                max_ticks: 4000,
-            }
-        }
-        _ => return None,
-    };
-    Some(s)
 }

@@ -476,8 +476,8 @@ pub fn references(run: &SimRun) -> &[Reference<f64>] {
 }
 
 /// The planner's trajectory for a scenario (built-in name or `.toml` file) through the virtual
-/// CAN bus and `robot`'s node, and its tick \[s\]. A built-in scenario needs a robot that
-/// stands as HRP-2 ([`crate::robot::Robot::check_hrp2_footsteps`]).
+/// CAN bus and `robot`'s node, and its tick \[s\]. A built-in scenario is drawn in the
+/// robot's proportions ([`crate::robot::Robot::built_in`]).
 pub fn scenario_trajectory(
     name: &str,
     robot: &crate::robot::Robot,
@@ -485,8 +485,7 @@ pub fn scenario_trajectory(
     let s = if name.ends_with(".toml") {
         crate::scenario::file::load_file(std::path::Path::new(name))?.scenario
     } else {
-        robot.check_hrp2_footsteps(name)?;
-        crate::scenario::built_in(name).ok_or_else(|| {
+        robot.built_in(name).ok_or_else(|| {
             format!(
                 "unknown scenario {name:?}; built-in: {} (or a .toml file)",
                 crate::scenario::BUILT_IN.join(", ")

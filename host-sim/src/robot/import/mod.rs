@@ -1,0 +1,735 @@
+//! `host-sim robot import URDF [--sole LEFT,RIGHT] --out FILE.toml`: a robot file from a
+//! robot description (URDF, read with `urdf-rs`).
+//!
+//! What the import derives, and what it states:
+//!
+//! * **The floating base**: the URDF's root link (the one link that is no joint's child); a
+//!   massless root with a single fixed or floating child (a `world` or footprint frame) gives
+//!   way to that child. It is the waist of the model.
+//! * **The legs**: the two lowest leaf links at zero joint angles, one on each side (or the
+//!   `--sole` links); each leg is the path from the root to its leaf, which must have exactly
+//!   six revolute (or continuous) joints and no other moving joint. Fixed joints on the path
+//!   are folded into the next joint's origin, and the links they carry into the link before.
+//! * **The upper body**: every link off the legs' paths (torso, arms, head, grippers) at zero
+//!   joint angles, merged rigidly into one `trunk` body (its mass in the COM and the ZMP); the
+//!   root link's own body is the `waist`. Links hanging from a leg link are merged into it.
+//! * **Masses and inertias**: each `<inertial>` as given (its `rpy` turned into the link frame,
+//!   the full tensor kept), merged by the parallel-axis theorem ([`Body::merged`]).
+//! * **The soles** ([`sole`]): the collision geometry of the foot (the last leg link and what
+//!   is fixed to it: boxes, cylinders, capsules, spheres, STL meshes with `package://` resolved
+//!   by the directory of that name above the URDF or on `ROS_PACKAGE_PATH`); the sole plane is
+//!   its lowest point, the sole its points within [`sole::CONTACT_BAND_M`] of it; the sole
+//!   centre the leaf's frame if the leaf is a frame fixed below the ankle (Talos's
+//!   `left_sole_link`), the sole's middle otherwise; the sole rectangle the largest one centred
+//!   there inside the contact points' bounds. The sole is flat in the ankle frame.
+//! * **The standing posture**: the feet straight below the hips (`step_width` the distance of
+//!   the sole centres at zero angles), the waist lowered by [`KNEE_DROP`] of the leg length
+//!   (hip to ankle) from the straight-legged height, so that the knees bend as HRP-2's do
+//!   (HRP-2: 8.8 %); the LIPM `cog_height` the whole-body COG height there.
+//! * **The reach limits**: HRP-2's limits scaled by the ratio `k` of the legs' workspace
+//!   radius at the walking height, `r = √((0.97 L)² − h²)` (`L` the leg length, `h` hip to
+//!   ankle height, a 3 % knee margin), to HRP-2's; then shrunk by 10 % steps until the
+//!   numerical inverse kinematics reaches the longest step (forward and backward) and the
+//!   widest stance in double support with the waist midway. The limits that mix lengths
+//!   along and across the walk allow for a stance wider than `k` HRP-2's 0.2 m: the feet
+//!   distance at least `√(max_forward² + step_width²)`, the stride HRP-2's scaled plus the
+//!   excess width.
+//! * **The gait**: HRP-2's timing, preview weights and eq. 18 limits (the built-in scenarios
+//!   are timed for them); the swing height HRP-2's 0.05 m scaled as the reach.
+//!
+//! Refused, with the URDF element named: several or no root links, a massless base, a leg
+//! without six revolute joints (or with a prismatic, planar or floating joint), no pair of
+//! feet, a foot without collision geometry (and no `--sole` frame), a moving link without an
+//! `<inertial>`, a mesh that is not STL, a standing posture the legs cannot reach.
+
+pub mod sole;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use planner_core::gait::Side;
+use urdf_rs::JointType;
+
+use super::model::{norm, rot_rpy, sub, Body, Model, Pose, Vec3};
+use super::Robot;
+
+/// The waist is lowered from the straight-legged height by this fraction of the leg length.
+pub const KNEE_DROP: f64 = 0.088;
+/// Knee margin of the reach limits: the hip–ankle distance at most this fraction of the leg.
+pub const REACH_MARGIN: f64 = 0.97;
+
+/// Why a URDF was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportError(pub String);
+
+impl std::fmt::Display for ImportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+impl std::error::Error for ImportError {}
+
+fn err<T>(m: impl Into<String>) -> Result<T, ImportError> {
+    Err(ImportError(m.into()))
+}
+
+fn pose_of(o: &urdf_rs::Pose) -> Pose {
+    Pose {
+        p: o.xyz.0,
+        r: rot_rpy(o.rpy.0),
+    }
+}
+
+/// A link's `<inertial>` as a body in the link frame (`None`: none, or massless).
+fn inertial(l: &urdf_rs::Link) -> Option<Body> {
+    let i = &l.inertial;
+    let m = i.mass.value;
+    if m.is_nan() || m <= 0.0 {
+        return None;
+    }
+    let t = &i.inertia;
+    let body = Body {
+        mass: m,
+        com: [0.0; 3],
+        inertia: [
+            [t.ixx, t.ixy, t.ixz],
+            [t.ixy, t.iyy, t.iyz],
+            [t.ixz, t.iyz, t.izz],
+        ],
+    };
+    Some(body.moved(&pose_of(&i.origin)))
+}
+
+/// The URDF as a tree.
+pub(crate) struct Tree {
+    pub(crate) urdf: urdf_rs::Robot,
+    pub(crate) dir: PathBuf,
+    links: BTreeMap<String, usize>,
+    /// Joint index by child link.
+    parent: BTreeMap<String, usize>,
+    /// Joint indices by parent link.
+    children: BTreeMap<String, Vec<usize>>,
+}
+
+impl Tree {
+    fn new(urdf: urdf_rs::Robot, dir: PathBuf) -> Result<Self, ImportError> {
+        let links: BTreeMap<String, usize> = urdf
+            .links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.name.clone(), i))
+            .collect();
+        let mut parent = BTreeMap::new();
+        let mut children: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+        for (i, j) in urdf.joints.iter().enumerate() {
+            for l in [&j.parent.link, &j.child.link] {
+                if !links.contains_key(l) {
+                    return err(format!(
+                        "<joint name=\"{}\">: no <link name=\"{l}\">",
+                        j.name
+                    ));
+                }
+            }
+            if parent.insert(j.child.link.clone(), i).is_some() {
+                return err(format!(
+                    "<link name=\"{}\"> is the child of two joints",
+                    j.child.link
+                ));
+            }
+            children.entry(j.parent.link.clone()).or_default().push(i);
+        }
+        Ok(Self {
+            urdf,
+            dir,
+            links,
+            parent,
+            children,
+        })
+    }
+
+    fn link(&self, name: &str) -> &urdf_rs::Link {
+        &self.urdf.links[self.links[name]]
+    }
+
+    fn kids(&self, name: &str) -> &[usize] {
+        self.children.get(name).map_or(&[], |v| v.as_slice())
+    }
+
+    /// The floating base (see the module docs).
+    fn base(&self) -> Result<String, ImportError> {
+        let roots: Vec<&String> = self
+            .links
+            .keys()
+            .filter(|l| !self.parent.contains_key(*l))
+            .collect();
+        let mut base = match roots.as_slice() {
+            [one] => (*one).clone(),
+            [] => return err("no floating-base candidate: every <link> is a joint's child"),
+            many => {
+                return err(format!(
+                    "no floating-base candidate: {} root links ({})",
+                    many.len(),
+                    many.iter()
+                        .map(|s| s.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            }
+        };
+        while inertial(self.link(&base)).is_none() {
+            match self.kids(&base) {
+                [j] if matches!(
+                    self.urdf.joints[*j].joint_type,
+                    JointType::Fixed | JointType::Floating
+                ) =>
+                {
+                    base = self.urdf.joints[*j].child.link.clone();
+                }
+                _ => {
+                    return err(format!(
+                        "no floating-base candidate: the root <link name=\"{base}\"> has no \
+                         <inertial> and more than one child"
+                    ))
+                }
+            }
+        }
+        Ok(base)
+    }
+
+    /// The joints from `base` down to `leaf`.
+    fn path(&self, base: &str, leaf: &str) -> Option<Vec<usize>> {
+        let mut out = Vec::new();
+        let mut at = leaf.to_string();
+        while at != base {
+            let j = *self.parent.get(&at)?;
+            out.push(j);
+            at = self.urdf.joints[j].parent.link.clone();
+        }
+        out.reverse();
+        Some(out)
+    }
+
+    /// Every link's pose in the base frame at zero joint angles.
+    fn zero_poses(&self, base: &str) -> BTreeMap<String, Pose> {
+        let mut out = BTreeMap::new();
+        let mut stack = vec![(base.to_string(), Pose::IDENTITY)];
+        while let Some((l, p)) = stack.pop() {
+            for &j in self.kids(&l) {
+                let joint = &self.urdf.joints[j];
+                stack.push((joint.child.link.clone(), p.then(&pose_of(&joint.origin))));
+            }
+            out.insert(l, p);
+        }
+        out
+    }
+
+    /// The bodies of `link` and of every link below it through joints not in `skip`, in the
+    /// frame of `link` (moved by `at`).
+    fn subtree_body(&self, link: &str, at: &Pose, skip: &BTreeSet<usize>, acc: &mut Body) {
+        if let Some(b) = inertial(self.link(link)) {
+            *acc = acc.merged(&b.moved(at));
+        }
+        for &j in self.kids(link) {
+            if skip.contains(&j) {
+                continue;
+            }
+            let joint = &self.urdf.joints[j];
+            let p = at.then(&pose_of(&joint.origin));
+            self.subtree_body(&joint.child.link, &p, skip, acc);
+        }
+    }
+}
+
+/// One leg as imported: the six joints and links of the model, the ankle link's URDF links.
+struct LegImport {
+    specs: Vec<LinkOut>,
+    /// URDF links rigidly part of the foot, with their poses in the ankle frame.
+    foot: Vec<(String, Pose)>,
+    /// The leaf's pose in the ankle frame, if it is a frame below the ankle.
+    sole_frame: Option<Pose>,
+    /// The links fixed to the base before the first joint, in the base frame.
+    pre: Body,
+}
+
+/// A leg link as written to the robot file.
+struct LinkOut {
+    joint: String,
+    link: String,
+    origin: Pose,
+    axis: Vec3,
+    range: Option<[f64; 2]>,
+    effort: Option<f64>,
+    velocity: Option<f64>,
+    body: Body,
+}
+
+fn leg(
+    t: &Tree,
+    base: &str,
+    leaf: &str,
+    on_legs: &BTreeSet<usize>,
+) -> Result<LegImport, ImportError> {
+    let path = t
+        .path(base, leaf)
+        .ok_or_else(|| ImportError(format!("<link name=\"{leaf}\"> is not below the base")))?;
+    let moving: Vec<usize> = path
+        .iter()
+        .copied()
+        .filter(|&j| t.urdf.joints[j].joint_type != JointType::Fixed)
+        .collect();
+    for &j in &moving {
+        let joint = &t.urdf.joints[j];
+        if !matches!(
+            joint.joint_type,
+            JointType::Revolute | JointType::Continuous
+        ) {
+            return err(format!(
+                "<joint name=\"{}\" type=\"{}\">: a leg's joints must be revolute",
+                joint.name,
+                format!("{:?}", joint.joint_type).to_lowercase()
+            ));
+        }
+    }
+    if moving.len() != 6 {
+        let names: Vec<&str> = moving
+            .iter()
+            .map(|&j| t.urdf.joints[j].name.as_str())
+            .collect();
+        return err(format!(
+            "the leg to <link name=\"{leaf}\"> has {} revolute joints ({}): six are needed, hip \
+             to ankle",
+            moving.len(),
+            names.join(", ")
+        ));
+    }
+    let mut specs: Vec<LinkOut> = Vec::new();
+    let mut at = Pose::IDENTITY; // the current URDF link in the current model link's frame
+    let mut foot = Vec::new();
+    let mut pre = Body::NONE;
+    for &j in &path {
+        let joint = &t.urdf.joints[j];
+        let o = at.then(&pose_of(&joint.origin));
+        let child = &joint.child.link;
+        if joint.joint_type == JointType::Fixed {
+            at = o;
+        } else {
+            let l = &joint.limit;
+            let range = (joint.joint_type == JointType::Revolute
+                && l.lower.is_finite()
+                && l.upper.is_finite()
+                && l.lower < l.upper)
+                .then_some([l.lower, l.upper]);
+            let n = norm(joint.axis.xyz.0);
+            specs.push(LinkOut {
+                joint: joint.name.clone(),
+                link: child.clone(),
+                origin: o,
+                axis: joint.axis.xyz.0.map(|v| v / n),
+                range,
+                effort: (l.effort > 0.0 && l.effort.is_finite()).then_some(l.effort),
+                velocity: (l.velocity > 0.0 && l.velocity.is_finite()).then_some(l.velocity),
+                body: Body::NONE,
+            });
+            at = Pose::IDENTITY;
+        }
+        // The link's own body and everything hanging from it off the legs.
+        let acc = match specs.last_mut() {
+            Some(s) => &mut s.body,
+            None => &mut pre,
+        };
+        t.subtree_body(child, &at, on_legs, acc);
+        if specs.len() == 6 {
+            foot.push((child.clone(), at));
+        }
+    }
+    // Links fixed below the ankle off the path belong to the foot too.
+    let ankle = &t.urdf.joints[moving[5]].child.link;
+    let mut stack = vec![(ankle.clone(), Pose::IDENTITY)];
+    while let Some((l, p)) = stack.pop() {
+        if !foot.iter().any(|(n, _)| *n == l) {
+            foot.push((l.clone(), p));
+        }
+        for &j in t.kids(&l) {
+            let joint = &t.urdf.joints[j];
+            if joint.joint_type == JointType::Fixed {
+                stack.push((joint.child.link.clone(), p.then(&pose_of(&joint.origin))));
+            }
+        }
+    }
+    for (i, s) in specs.iter().enumerate() {
+        let last_or_apart = i == 5 || specs[i + 1].origin.p != [0.0; 3];
+        if s.body.mass <= 0.0 && last_or_apart {
+            return err(format!(
+                "<link name=\"{}\"> (moved by <joint name=\"{}\">) has no <inertial>: the \
+                 engine cannot move a massless body",
+                s.link, s.joint
+            ));
+        }
+    }
+    let sole_frame = (leaf != ankle)
+        .then(|| foot.iter().find(|(n, _)| n == leaf).map(|f| f.1))
+        .flatten();
+    Ok(LegImport {
+        specs,
+        foot,
+        sole_frame,
+        pre,
+    })
+}
+
+/// What an import produced: the robot file's text and the robot read back from it.
+pub struct Imported {
+    /// The robot file.
+    pub toml: String,
+    /// The robot it describes.
+    pub robot: Robot,
+}
+
+/// Finds `package://NAME/…`: the directory `NAME` above `dir`, or on `ROS_PACKAGE_PATH`.
+pub(crate) fn resolve(filename: &str, dir: &Path) -> Result<PathBuf, ImportError> {
+    if let Some(rest) = filename.strip_prefix("package://") {
+        let (pkg, tail) = rest.split_once('/').unwrap_or((rest, ""));
+        let env = std::env::var("ROS_PACKAGE_PATH").unwrap_or_default();
+        let roots = dir
+            .ancestors()
+            .filter(|a| a.file_name().is_some_and(|n| n == pkg))
+            .map(Path::to_path_buf)
+            .chain(
+                env.split(':')
+                    .filter(|s| !s.is_empty())
+                    .map(|s| Path::new(s).join(pkg)),
+            );
+        for r in roots {
+            let p = r.join(tail);
+            if p.exists() {
+                return Ok(p);
+            }
+        }
+        return err(format!(
+            "<mesh filename=\"{filename}\">: package `{pkg}` not found above {} or on \
+             ROS_PACKAGE_PATH",
+            dir.display()
+        ));
+    }
+    let p = Path::new(filename.strip_prefix("file://").unwrap_or(filename));
+    Ok(if p.is_absolute() {
+        p.into()
+    } else {
+        dir.join(p)
+    })
+}
+
+/// Imports a URDF file; `soles`: the left and right foot links, if given.
+pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportError> {
+    let urdf = urdf_rs::read_file(path)
+        .map_err(|e| ImportError(format!("{}: not a readable URDF: {e}", path.display())))?;
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let t = Tree::new(urdf, dir)?;
+    let base = t.base()?;
+    let zero = t.zero_poses(&base);
+    // The feet.
+    let leaves: [String; 2] = match soles {
+        Some(names) => {
+            for n in names {
+                if !zero.contains_key(n) {
+                    return err(format!("--sole: no <link name=\"{n}\"> below the base"));
+                }
+            }
+            names.map(String::from)
+        }
+        None => {
+            let mut leaves: Vec<(&String, &Pose)> =
+                zero.iter().filter(|(l, _)| t.kids(l).is_empty()).collect();
+            leaves.sort_by(|a, b| a.1.p[2].total_cmp(&b.1.p[2]));
+            let left = leaves.iter().find(|(_, p)| p.p[1] > 0.0);
+            let right = leaves.iter().find(|(_, p)| p.p[1] < 0.0);
+            match (left, right) {
+                (Some(l), Some(r)) => [l.0.clone(), r.0.clone()],
+                _ => return err("no pair of feet: no lowest leaf link on each side of the base"),
+            }
+        }
+    };
+    let paths: Vec<Vec<usize>> = leaves
+        .iter()
+        .map(|l| t.path(&base, l).unwrap_or_default())
+        .collect();
+    let on_legs: BTreeSet<usize> = paths.iter().flatten().copied().collect();
+    let legs = [
+        leg(&t, &base, &leaves[0], &on_legs)?,
+        leg(&t, &base, &leaves[1], &on_legs)?,
+    ];
+    // The waist and the upper body.
+    let waist = inertial(t.link(&base)).ok_or_else(|| {
+        ImportError(format!(
+            "<link name=\"{base}\"> (the base) has no <inertial>"
+        ))
+    })?;
+    let mut trunk = Body::NONE;
+    for &j in t.kids(&base) {
+        if on_legs.contains(&j) {
+            continue;
+        }
+        let joint = &t.urdf.joints[j];
+        t.subtree_body(
+            &joint.child.link,
+            &pose_of(&joint.origin),
+            &on_legs,
+            &mut trunk,
+        );
+    }
+    for l in &legs {
+        trunk = trunk.merged(&l.pre);
+    }
+    // Soles.
+    let mut sole_out = [[0.0; 3]; 2];
+    let mut size = [f64::INFINITY; 2];
+    for (k, l) in legs.iter().enumerate() {
+        let s = sole::sole(&t, &l.foot, l.sole_frame)?;
+        sole_out[k] = s.centre;
+        size[0] = size[0].min(s.size[0]);
+        size[1] = size[1].min(s.size[1]);
+    }
+    let parts = Parts {
+        waist,
+        trunk,
+        legs: [&legs[0].specs, &legs[1].specs],
+        soles: sole_out,
+        sole_size: size,
+    };
+    let name = if t.urdf.name.is_empty() {
+        path.file_stem()
+            .map_or("robot".into(), |s| s.to_string_lossy().into())
+    } else {
+        t.urdf.name.clone()
+    };
+    write(&name, path, &parts)
+}
+
+/// The model's parts as imported.
+struct Parts<'a> {
+    waist: Body,
+    trunk: Body,
+    legs: [&'a [LinkOut]; 2],
+    soles: [Vec3; 2],
+    sole_size: [f64; 2],
+}
+
+fn num(v: f64) -> String {
+    let s = format!("{v:.9}");
+    let s = s.trim_end_matches('0');
+    if s.ends_with('.') {
+        format!("{s}0")
+    } else {
+        s.into()
+    }
+}
+
+fn arr(v: &[f64]) -> String {
+    format!(
+        "[{}]",
+        v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ")
+    )
+}
+
+fn body_keys(b: &Body) -> String {
+    let i = &b.inertia;
+    format!(
+        "mass = {}\ncom = {}\ninertia = {}\n",
+        num(b.mass),
+        arr(&b.com),
+        arr(&[i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]])
+    )
+}
+
+/// The `[multibody]` part with the waist at `waist_height`.
+fn multibody(g: &Parts, waist_height: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "[multibody]");
+    let _ = writeln!(s, "waist_height = {}", num(waist_height));
+    let _ = writeln!(
+        s,
+        "\n[multibody.waist]       # the base link's own body, its frame"
+    );
+    s.push_str(&body_keys(&g.waist));
+    let _ = writeln!(
+        s,
+        "\n[multibody.trunk]       # every link off the legs, at zero joint angles, merged"
+    );
+    s.push_str(&body_keys(&g.trunk));
+    let _ = writeln!(
+        s,
+        "\n[multibody.sole]        # sole centres in the ankle frames\nleft = {}\nright = {}",
+        arr(&g.soles[0]),
+        arr(&g.soles[1])
+    );
+    for (side, links) in ["left", "right"].iter().zip(g.legs) {
+        for l in links {
+            let _ = writeln!(s, "\n[[multibody.{side}]]");
+            let _ = writeln!(s, "joint = {:?}\nlink = {:?}", l.joint, l.link);
+            let (r, p, y) = rpy(&l.origin);
+            let _ = writeln!(
+                s,
+                "origin = {}\nrpy = {}\naxis = {}",
+                arr(&l.origin.p),
+                arr(&[r, p, y]),
+                arr(&l.axis)
+            );
+            if let Some(r) = l.range {
+                let _ = writeln!(s, "range = {}", arr(&r));
+            }
+            if let Some(e) = l.effort {
+                let _ = writeln!(s, "effort = {}", num(e));
+            }
+            if let Some(v) = l.velocity {
+                let _ = writeln!(s, "velocity = {}", num(v));
+            }
+            s.push_str(&body_keys(&l.body));
+        }
+    }
+    s
+}
+
+/// The URDF `rpy` of a rotation (`R = R_z(y) R_y(p) R_x(r)`).
+fn rpy(p: &Pose) -> (f64, f64, f64) {
+    let r = &p.r;
+    let pitch = (-r[2][0]).clamp(-1.0, 1.0).asin();
+    let roll = r[2][1].atan2(r[2][2]);
+    let yaw = r[1][0].atan2(r[0][0]);
+    (roll, pitch, yaw)
+}
+
+/// HRP-2's robot file's planner part, with the values of this robot.
+struct Planner {
+    cog_height: f64,
+    gravity: f64,
+    sole: [f64; 2],
+    step_width: f64,
+    step_height: f64,
+    scale: f64,
+}
+
+fn planner_part(name: &str, urdf: &Path, p: &Planner) -> String {
+    let h = super::Robot::hrp2();
+    let r = h.planner.reach;
+    let k = p.scale;
+    let hw = p.step_width;
+    format!(
+        "# {name}: imported from {urdf} by `host-sim robot import`.\n\
+         # The import's derivations and margins: host-sim/src/robot/import/mod.rs. Gait timing,\n\
+         # preview weights and eq. 18 limits are HRP-2's; lengths are this robot's.\n\
+         name = {name:?}\n\n\
+         [pendulum]\ncog_height = {}\ngravity = {}\n\n\
+         [timing]\ncontrol_period = 0.005\nsingle_support = 0.7\ndouble_support = 0.1\nstart = 0.8\n\
+         settle = 0.7\nstand = 0.005\nrest = 0.5\n\n\
+         [adjustment]\nmin = -0.2\nmax = 0.35\n\n\
+         [feet]\nsole_length = {}\nsole_width = {}\nstep_width = {}\nstep_height = {}\n\n\
+         [reach]                 # HRP-2's scaled by {} (the legs' workspace at the walking height)\n\
+         max_forward = {}\nmax_backward = {}\nmin_width = {}\nmax_width = {}\nmax_yaw = {}\n\
+         max_feet_distance = {}\nyaw_cost = {}\nmax_stride = {}\nmax_growth = {}\n\n\
+         [preview]\nqe = 1.0\nr = 1e-6\nshaping = true\n\n",
+        num(p.cog_height),
+        num(p.gravity),
+        num(p.sole[0]),
+        num(p.sole[1]),
+        num(hw),
+        num(p.step_height),
+        num(k),
+        num(round_mm(r.max_forward * k)),
+        num(round_mm(r.max_backward * k)),
+        num(round_mm((hw - (0.2 - r.min_width) * k).max(p.sole[1] + 0.01))),
+        num(round_mm(hw + (r.max_width - 0.2) * k)),
+        num(r.max_yaw),
+        num(round_mm(
+            (r.max_feet_distance * k).max((r.max_forward * k).hypot(hw) + 0.0005)
+        )),
+        num(r.yaw_cost * k),
+        num(round_mm(r.max_stride * k + (hw - 0.2 * k).max(0.0))),
+        num(round_mm(r.max_growth * k)),
+        urdf = urdf.display(),
+    )
+}
+
+fn round_mm(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+/// The workspace radius at the walking height: `√((0.97 L)² − h²)`.
+fn workspace(leg: f64, h: f64) -> f64 {
+    ((REACH_MARGIN * leg).powi(2) - h * h).max(0.0).sqrt()
+}
+
+fn tree_of(multibody: &str) -> Result<super::tree::Tree, ImportError> {
+    let table: toml::Table = multibody.parse().map_err(|e| ImportError(format!("{e}")))?;
+    table
+        .get("multibody")
+        .cloned()
+        .ok_or_else(|| ImportError("no [multibody]".into()))?
+        .try_into()
+        .map_err(|e: toml::de::Error| ImportError(format!("{e}")))
+}
+
+fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
+    let hrp2 = Robot::hrp2();
+    let gravity = hrp2.planner.params.gravity;
+    // Zero angles: the sole centres, the hips and the leg length.
+    let raw = tree_of(&multibody(g, 1.0))?
+        .raw_model(gravity)
+        .map_err(|e| ImportError(e.to_string()))?;
+    let z = raw.leg_fk(Side::Left, &Pose::IDENTITY, &[0.0; 6]);
+    let zr = raw.leg_fk(Side::Right, &Pose::IDENTITY, &[0.0; 6]);
+    let step_width = round_mm(z.sole.p[1] - zr.sole.p[1]);
+    let hip = z.links[0].p;
+    let leg = norm(sub(z.ankle().p, hip));
+    let waist_height = (-z.sole.p[2] - KNEE_DROP * leg).mul_add(1e4, 0.0).round() / 1e4;
+    let mb = multibody(g, waist_height);
+    let model = tree_of(&mb)?
+        .model(gravity, step_width)
+        .map_err(|e| ImportError(format!("the standing posture: {e}")))?;
+    let cog = round_mm(
+        model
+            .stance_cog_height(step_width)
+            .map_err(|e| ImportError(format!("the standing posture: {e}")))?,
+    );
+    // The reach: HRP-2's scaled by the workspace radii, shrunk until the legs reach it.
+    let c = hrp2.model.closed_form.expect("HRP-2's leg shape");
+    let r_hrp2 = workspace(c.thigh + c.shank, hrp2.model.waist_height - c.ankle_height);
+    let h = (waist_height + hip[2]) - (z.ankle().p[2] - z.sole.p[2]);
+    let mut scale = (workspace(leg, h) / r_hrp2 * 100.0).floor() / 100.0;
+    let reach = hrp2.planner.reach;
+    for _ in 0..30 {
+        let fwd = round_mm(reach.max_forward * scale);
+        let back = round_mm(reach.max_backward * scale);
+        let wide = round_mm(step_width + (reach.max_width - 0.2) * scale);
+        if [(fwd, step_width), (-back, step_width), (0.0, wide)]
+            .iter()
+            .all(|&(dx, w)| reaches(&model, dx, w))
+        {
+            break;
+        }
+        scale = (scale * 0.9 * 100.0).floor() / 100.0;
+    }
+    let planner = Planner {
+        cog_height: cog,
+        gravity,
+        sole: g.sole_size.map(|v| (v * 1000.0).floor() / 1000.0),
+        step_width,
+        step_height: round_mm(0.05 * scale),
+        scale,
+    };
+    let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
+    let robot =
+        Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
+    Ok(Imported { toml, robot })
+}
+
+/// Both legs reach feet `dx` apart along x and `w` across, the waist midway at its height.
+fn reaches(m: &Model, dx: f64, w: f64) -> bool {
+    let waist = Pose::upright(0.0, 0.0, m.waist_height, 0.0);
+    let soles = [
+        Pose::upright(dx / 2.0, w / 2.0, 0.0, 0.0),
+        Pose::upright(-dx / 2.0, -w / 2.0, 0.0, 0.0),
+    ];
+    m.cog(&waist, &soles).is_ok()
+}
