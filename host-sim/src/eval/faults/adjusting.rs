@@ -8,11 +8,12 @@
 //! references as the node hands them to the bus; the estimator sends `ξ − ξ_ref` against the
 //! reference of the cycle the robot tracked, every cycle, keyed with the session. The robot is
 //! pushed once, [`PUSH_DELAY_TICKS`] after the third lift-off, by a velocity step drawn from
-//! the seed: 0.15 … 0.25 m/s in any direction (below what the stabilizer alone walks through,
-//! above the node's 20 mm margin: the node adjusts, and a run in which the faults keep it from
-//! adjusting must not fall either). Under [`super::FaultKind::Blind`] the estimator stops
-//! sending 0 … 0.3 s after the push (it has no estimate any more), while the deviation still
-//! grows.
+//! the seed: 0.15 … 0.25 m/s in any direction. That puts the DCM about 43 … 72 mm (Δv/ω) off
+//! the reference's, beyond the node's 20 mm margin, so the node adjusts; and it is small enough
+//! that a run in which the faults keep the node from adjusting need not fall (the sweep's test
+//! asserts that no pendulum falls, adjusted or not). Under [`super::FaultKind::Blind`] the
+//! estimator stops sending 0 … 0.3 s after the push (it has no estimate any more), while the
+//! deviation still grows.
 
 use embedded_can::nb::Can;
 use planner_core::gait::{Footstep, GaitParams, Reference};
