@@ -15,12 +15,13 @@
 //! adjusts without faults, takes no `MEASURED` older than its `max_age` and refuses the
 //! corrupted, late and repeated ones; an estimator that falls silent moves no step after its
 //! last state is `max_age` old; the runs are the same for the same seed; and with the default
-//! seeds the book's table (`docs/src/reliability.md`, between the `adjusting-fault-table`
-//! markers) is the one measured.
+//! seeds the book's tables (`docs/src/reliability.md`: the plain walk's, figure by figure, and
+//! the adjusting walk's, between the `adjusting-fault-table` markers) are the ones measured.
 
+use doc_figures::Quotes;
 use host_sim::eval::faults::{
     markdown, markdown_adjusting, run_case, run_walk, run_walk_logged, sweep, sweep_walk,
-    FaultKind, Walk, SCENARIOS,
+    FaultKind, SweepRow, Walk, SCENARIOS,
 };
 use host_sim::scenario;
 use planner_core::node::NodeConfig;
@@ -55,7 +56,7 @@ fn fault_free_runs_walk_every_step_once_inside_the_polygon() {
 
 #[test]
 fn fault_sweep() {
-    let (seeds, heavy, _) = seeds();
+    let (seeds, heavy, default) = seeds();
     let t = std::time::Instant::now();
     let rows = sweep(seeds, heavy).unwrap();
     println!(
@@ -78,6 +79,65 @@ fn fault_sweep() {
             assert_eq!(r.ticks_without_reference, 0, "{name}: {r:?}");
         }
     }
+    if default {
+        book_quotes_the_plain_sweep(&rows);
+    }
+}
+
+/// The book's table of the plain walk (`docs/src/reliability.md`, "Faults it survives": one
+/// line per fault kind, the rates' figures joined by " / " where they differ) quotes what the
+/// default seeds measure. (The fault-free row is the test above's.)
+fn book_quotes_the_plain_sweep(rows: &[SweepRow]) {
+    const BOOK: &str = "docs/src/reliability.md";
+    let lines = [
+        (FaultKind::Drop, "drop (both directions)"),
+        (FaultKind::Duplicate, "| duplicate | 1 / 5 / 20 %"),
+        (FaultKind::Corrupt, "corrupt (one bit, CAN CRC valid)"),
+        (FaultKind::Delay, "delay 30 ms (overtaken)"),
+        (FaultKind::Silence, "controller silent from a random time"),
+        (FaultKind::Flood, "flood of random frames"),
+        (
+            FaultKind::Burst,
+            "burst of modifications in one single support",
+        ),
+        (
+            FaultKind::Mixed(0),
+            "| delay 600 ms 30 % + drop 30 % + corrupt 30 % | —",
+        ),
+        (
+            FaultKind::Mixed(1),
+            "| burst 60 + drop 20 % + delay 600 ms 20 % | —",
+        ),
+        (FaultKind::Mixed(2), "| corrupt 50 % | —"),
+    ];
+    /// A column of the book's table and its figure in a row.
+    type Column = (&'static str, fn(&SweepRow) -> usize);
+    let columns: [Column; 9] = [
+        ("runs", |r| r.runs),
+        ("falls", |r| r.falls),
+        ("lost", |r| r.lost),
+        ("cancelled by safety stop", |r| r.cancelled),
+        ("unanswered", |r| r.unanswered),
+        ("controller misinformed", |r| r.misinformed),
+        ("retransmissions", |r| r.retransmissions),
+        ("safety stops", |r| r.safety_stops),
+        ("cycles without a reference", |r| r.ticks_without_reference),
+    ];
+    let mut q = Quotes::new("cargo test --release -p host-sim --test faults -- --nocapture");
+    for (kind, anchor) in lines {
+        let of_kind: Vec<&SweepRow> = rows.iter().filter(|r| r.kind == kind).collect();
+        assert!(!of_kind.is_empty(), "{kind:?}");
+        for (column, value) in columns {
+            let v: Vec<String> = of_kind.iter().map(|r| value(r).to_string()).collect();
+            let text = if v.iter().all(|x| *x == v[0]) {
+                v[0].clone()
+            } else {
+                v.join(" / ")
+            };
+            q = q.cell(BOOK, anchor, column, &text);
+        }
+    }
+    q.assert();
 }
 
 /// The adjusting walk without faults: the node adjusts in every run (the push's deviation
