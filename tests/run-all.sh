@@ -27,7 +27,7 @@
 # per heavier mixed row, 2,048 random programs of the protocol property test (each can also be
 # set alone: WALK_FAULT_SEEDS, WALK_FAULT_HEAVY_SEEDS, WALK_PROTOCOL_CASES), and the MuJoCo
 # runs of host-sim/tests/physics.rs that take minutes: the full Tables I/II grid (with the full
-# and with the weakest stabilizer) and every fault-sweep row in the engine.
+# and with the weakest stabilizer) and every fault-sweep row in the engine (both walks).
 set -euo pipefail
 
 if [ "${WALK_LONG:-0}" = 1 ]; then

@@ -8,7 +8,8 @@
 //! host-sim tables [--out DIR]      the paper's Tables I and II recomputed
 //! host-sim physics <scenario|file.toml> [--out DIR] [--push T,FX,FY] [PROBE] [--robot FILE]   MuJoCo run
 //! host-sim physics-tables [--out DIR] [--cells all|r,c;...] [PROBE] [--robot FILE]   Tables I/II in MuJoCo
-//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [PROBE] [--robot FILE]   faults in MuJoCo
+//! host-sim physics-faults [--out DIR] [--rows all|i,j] [--seed N] [--walk plain|adjusting] [PROBE] [--robot FILE]
+//!                                  faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
 //! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [PROBE] [--robot FILE]
@@ -31,6 +32,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use host_sim::eval::faults::Walk;
 use host_sim::eval::multibody::{evaluate, max_zmp_error};
 use host_sim::eval::{max_fluctuation, paper};
 use host_sim::output::csv::write_trajectory;
@@ -145,6 +147,11 @@ enum Cmd {
         /// The seed of every row.
         #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
+        /// The walk: `plain` (the scenarios as written) or `adjusting` (started with
+        /// `start_adjusting`, a pushed robot's estimator sending MEASURED; its rows have the
+        /// silent estimator too).
+        #[arg(long, value_name = "WALK", default_value = "plain", value_parser = walk)]
+        walk: Walk,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
@@ -261,6 +268,14 @@ fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<d
     Ok(())
 }
 
+fn walk(s: &str) -> Result<Walk, String> {
+    match s {
+        "plain" => Ok(Walk::Plain),
+        "adjusting" => Ok(Walk::Adjusting),
+        _ => Err(format!("{s:?} is not a walk: plain or adjusting")),
+    }
+}
+
 fn positive_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
@@ -339,11 +354,13 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             out,
             rows,
             seed,
+            walk,
             robot,
             probe,
         }) => host_sim::physics::output::faults_cli(
             &out,
             &rows,
+            walk,
             seed,
             &load_robot(robot.as_deref())?,
             &probe,

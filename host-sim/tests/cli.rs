@@ -326,6 +326,7 @@ fn usage_errors() {
         (&["run"][..], "SCENARIO"),
         (&["jump"][..], "jump"),
         (&["node", "can0", "--seconds", "-1"][..], "-1"),
+        (&["physics-faults", "--walk", "sideways"][..], "sideways"),
     ] {
         let o = host_sim(args);
         let t = text(&o);

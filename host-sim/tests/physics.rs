@@ -689,6 +689,36 @@ fn physics_faults_heavy_row() {
         .assert();
 }
 
+/// `host-sim physics-faults --walk adjusting --rows 0` (the adjusting walk without a fault,
+/// seed 1, on both sweep scenarios: two engine runs): the node's references of a walk whose
+/// pushed robot's estimator sent `MEASURED` every cycle and whose steps the node moved, in the
+/// engine: the node adjusted in both, and neither falls, kinematically or in the engine.
+#[test]
+fn physics_faults_adjusting_row() {
+    if !engine_here("physics_faults_adjusting_row") {
+        return;
+    }
+    let dir = temp_dir("faults-adjusting");
+    let args = ["physics-faults", "--walk", "adjusting", "--rows", "0"];
+    let j = host_sim_json(&args, &dir, "physics_faults.json");
+    let text = j.to_string();
+    assert_eq!(j["walk"], "adjusting", "{text}");
+    let runs = j["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 2, "{text}");
+    for (r, scenario) in runs.iter().zip(["straight", "fig4"]) {
+        assert_eq!(r["scenario"], scenario, "{text}");
+        assert_eq!(
+            (&r["walk"], &r["fault"]),
+            (&"adjusting".into(), &"none".into())
+        );
+        assert!(r["adjustments"].as_u64().is_some_and(|n| n > 0), "{text}");
+        assert_eq!(r["kinematic_fell"], false, "{text}");
+        assert_eq!(r["fell"], false, "{text}");
+        assert_eq!(r["lost"], 0, "{text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `host-sim physics-faults` takes the probe options of `physics-tables` (one definition):
 /// `--rows 0` (no fault, both sweep scenarios: two engine runs) with the stabilizer × 0.5 and
 /// the servo damping 300 N m s/rad records them in `physics_faults.json` and in the
@@ -1003,6 +1033,46 @@ fn physics_faults_every_row_long() {
             assert_eq!(r["seed"], 1);
             assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
             assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `host-sim physics-faults --walk adjusting` simulates every row of the adjusting walk's
+/// sweep (seed 1, the silent estimator among them) on both sweep scenarios in the engine, and
+/// the engine's verdict agrees with the kinematic one on every run.
+#[test]
+fn physics_faults_adjusting_every_row_long() {
+    use host_sim::eval::faults::Walk;
+    use host_sim::physics::fault_sweep::rows_of;
+    if !long_runs("physics_faults_adjusting_every_row_long") {
+        return;
+    }
+    let dir = temp_dir("faults-adjusting-all");
+    let j = host_sim_json(
+        &["physics-faults", "--walk", "adjusting"],
+        &dir,
+        "physics_faults.json",
+    );
+    let runs = j["runs"].as_array().expect("runs");
+    let scenarios = host_sim::eval::faults::SCENARIOS;
+    let rows = rows_of(Walk::Adjusting);
+    assert_eq!(runs.len(), rows.len() * scenarios.len());
+    for (kind, rate) in rows {
+        for s in scenarios {
+            let hits: Vec<_> = runs
+                .iter()
+                .filter(|r| {
+                    r["fault"] == kind.name()
+                        && r["rate"] == kind.rate_label(rate)
+                        && r["scenario"] == s
+                })
+                .collect();
+            let what = format!("{} {} on {s}", kind.name(), kind.rate_label(rate));
+            assert_eq!(hits.len(), 1, "{what}");
+            let r = hits[0];
+            assert_eq!(r["walk"], "adjusting", "{what}");
+            assert_eq!(r["fell"], r["kinematic_fell"], "{what}: {r}");
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -4,29 +4,34 @@
 //! verdict ([`super::metrics`]) each row keeps the sweep's kinematic one (the multi-body ZMP
 //! more than 20 mm outside the support polygon).
 //!
-//! `host-sim physics-faults --out DIR [--rows all|i,j,...] [--seed N]` (and the probe options
-//! of [`super::probe`]: `--stabilizer`, `--servo-damping`, `--open-loop`) writes
-//! `DIR/physics_faults.json`: an object with the settings (`robot`, `seed`, `stabilizer`,
-//! `stabilizer_scale`, `servo_damping`, for `weakest` also `weakest_ladder`) and `runs`, one
-//! object per row and scenario ([`json()`]: `fault`, `rate`, `scenario`, `seed`,
-//! `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`, `cop_err_mean_m`,
-//! `cop_err_max_m`, `safety_stop`, `lost`); and `DIR/physics_faults.md`.
+//! `host-sim physics-faults --out DIR [--rows all|i,j,...] [--seed N] [--walk plain|adjusting]`
+//! (and the probe options of [`super::probe`]: `--stabilizer`, `--servo-damping`,
+//! `--open-loop`) writes `DIR/physics_faults.json`: an object with the settings (`robot`,
+//! `seed`, `walk`, `stabilizer`, `stabilizer_scale`, `servo_damping`, for `weakest` also
+//! `weakest_ladder`) and `runs`, one object per row and scenario ([`json()`]: `fault`, `rate`,
+//! `scenario`, `walk`, `seed`, `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`,
+//! `cop_err_mean_m`, `cop_err_max_m`, `safety_stop`, `lost`, `adjustments`); and
+//! `DIR/physics_faults.md`. With `--walk adjusting` the rows are the adjusting walk's
+//! ([`rows_of`]): the node's references of a walk started with `start_adjusting` whose pushed
+//! pendulum robot's estimator sent `MEASURED` every cycle, played in the engine (the engine's
+//! robot is not pushed: what it walks is the node's adjusted plan).
 
 use serde_json::{json, Value};
 
 use super::{run, PhysicsConfig, PhysicsReport};
-use crate::eval::faults::{run_case_with, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use crate::eval::faults::{self, run_walk_with, FaultKind, Walk, SCENARIOS};
 use crate::robot::Robot;
 use crate::scenario;
 
-/// Every row of the sweep in its order: the [`SWEEP`] rates, then the [`HEAVY`] mixes.
+/// Every row of the sweep in its order: the [`faults::SWEEP`] rates, then the
+/// [`faults::HEAVY`] mixes.
 pub fn rows() -> Vec<(FaultKind, f64)> {
-    let mut v: Vec<(FaultKind, f64)> = SWEEP
-        .iter()
-        .flat_map(|(k, rates)| rates.iter().map(move |r| (*k, *r)))
-        .collect();
-    v.extend((0..HEAVY.len()).map(|i| (FaultKind::Mixed(i), 0.0)));
-    v
+    rows_of(Walk::Plain)
+}
+
+/// Every row of `walk`'s sweep in its order ([`faults::rows`]).
+pub fn rows_of(walk: Walk) -> Vec<(FaultKind, f64)> {
+    faults::rows(walk)
 }
 
 /// One row and scenario run in the engine.
@@ -38,6 +43,8 @@ pub struct FaultRun {
     pub rate: f64,
     /// The scenario.
     pub scenario: String,
+    /// How it was walked.
+    pub walk: Walk,
     /// The seed.
     pub seed: u64,
     /// The sweep's kinematic verdict.
@@ -46,6 +53,8 @@ pub struct FaultRun {
     pub safety_stop: bool,
     /// Lost commands.
     pub lost: usize,
+    /// Changes of the node's shift (adjusting walks).
+    pub adjustments: usize,
     /// The engine's report.
     pub report: PhysicsReport,
 }
@@ -60,20 +69,35 @@ pub fn fault_run(
     robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<FaultRun, String> {
+    fault_run_walk(scenario_name, Walk::Plain, kind, rate, seed, robot, cfg)
+}
+
+/// [`fault_run`] walked as `walk`.
+pub fn fault_run_walk(
+    scenario_name: &str,
+    walk: Walk,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<FaultRun, String> {
     let s =
         scenario::built_in(scenario_name).ok_or_else(|| format!("no scenario {scenario_name}"))?;
     let node = robot.node_config();
     let dt = node.params.dt;
-    let case = run_case_with(&s, kind, rate, seed, node, &robot.model)?;
+    let case = run_walk_with(&s, walk, kind, rate, seed, node, &robot.model)?;
     let report = run(&case.trajectory, dt, cfg)?.report;
     Ok(FaultRun {
         kind,
         rate,
         scenario: scenario_name.to_string(),
+        walk,
         seed,
         kinematic_fell: case.fell,
         safety_stop: case.safety_stop,
         lost: case.lost,
+        adjustments: case.adjustments,
         report,
     })
 }
@@ -85,7 +109,15 @@ pub const DEFAULT_ROWS: &str = "all";
 /// What [`sweep`] runs for the rows with the given indices (into [`rows`]): each row on every
 /// sweep scenario ([`SCENARIOS`]), in that order. Errors: an index out of range.
 pub fn plan(indices: &[usize]) -> Result<Vec<(FaultKind, f64, &'static str)>, String> {
-    let all = rows();
+    plan_walk(indices, Walk::Plain)
+}
+
+/// [`plan`] for `walk`'s rows (indices into [`rows_of`]).
+pub fn plan_walk(
+    indices: &[usize],
+    walk: Walk,
+) -> Result<Vec<(FaultKind, f64, &'static str)>, String> {
+    let all = rows_of(walk);
     let mut out = Vec::new();
     for &i in indices {
         let (kind, rate) = *all
@@ -103,10 +135,21 @@ pub fn sweep(
     robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<Vec<FaultRun>, String> {
-    plan(indices)?
+    sweep_walk(indices, Walk::Plain, seed, robot, cfg)
+}
+
+/// [`sweep`] of `walk`'s rows (indices into [`rows_of`]).
+pub fn sweep_walk(
+    indices: &[usize],
+    walk: Walk,
+    seed: u64,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<Vec<FaultRun>, String> {
+    plan_walk(indices, walk)?
         .into_iter()
         .map(|(kind, rate, s)| {
-            fault_run(s, kind, rate, seed, robot, cfg)
+            fault_run_walk(s, walk, kind, rate, seed, robot, cfg)
                 .map_err(|e| format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate)))
         })
         .collect()
@@ -121,6 +164,7 @@ pub fn json(runs: &[FaultRun]) -> Value {
                     "fault": r.kind.name(),
                     "rate": r.kind.rate_label(r.rate),
                     "scenario": r.scenario,
+                    "walk": r.walk.name(),
                     "seed": r.seed,
                     "kinematic_fell": r.kinematic_fell,
                     "fell": r.report.fell,
@@ -131,23 +175,28 @@ pub fn json(runs: &[FaultRun]) -> Value {
                     "cop_err_max_m": r.report.cop_err_max_m,
                     "safety_stop": r.safety_stop,
                     "lost": r.lost,
+                    "adjustments": r.adjustments,
                 })
             })
             .collect(),
     )
 }
 
-/// The runs as a Markdown table.
+/// The runs as a Markdown table (the scenario named with its walk when it adjusts).
 pub fn markdown(runs: &[FaultRun]) -> String {
     let mut md = String::from(
         "| fault | rate | scenario | kinematic fall | engine: fell | max tilt (°) | CoP error mean / worst (mm) |\n|---|---|---|---|---|---|---|\n",
     );
     for r in runs {
+        let scenario = match r.walk {
+            Walk::Plain => r.scenario.clone(),
+            Walk::Adjusting => format!("{} (adjusting, {} adjustments)", r.scenario, r.adjustments),
+        };
         md += &format!(
             "| {} | {} | {} | {} | {} | {:.2} | {:.1} / {:.1} |\n",
             r.kind.name(),
             r.kind.rate_label(r.rate),
-            r.scenario,
+            scenario,
             if r.kinematic_fell { "yes" } else { "no" },
             match r.report.fall_time_s {
                 Some(t) => format!("**yes** ({t:.2} s)"),
@@ -163,7 +212,12 @@ pub fn markdown(runs: &[FaultRun]) -> String {
 
 /// Parses `--rows`: `all` or comma-separated indices into [`rows`].
 pub fn parse_rows(s: &str) -> Result<Vec<usize>, String> {
-    let n = rows().len();
+    parse_rows_of(s, Walk::Plain)
+}
+
+/// [`parse_rows`] for `walk`'s rows ([`rows_of`]).
+pub fn parse_rows_of(s: &str, walk: Walk) -> Result<Vec<usize>, String> {
+    let n = rows_of(walk).len();
     if s == "all" {
         return Ok((0..n).collect());
     }
@@ -178,6 +232,7 @@ pub fn parse_rows(s: &str) -> Result<Vec<usize>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::eval::faults::{HEAVY, SWEEP};
 
     #[test]
     fn rows_cover_the_sweep() {
@@ -213,5 +268,20 @@ mod tests {
             }
         }
         assert!(plan(&[rows().len()]).is_err());
+    }
+
+    /// The adjusting walk's rows: the plain ones and the silent estimator, each on every
+    /// sweep scenario; `--rows` indexes them.
+    #[test]
+    fn the_adjusting_walk_has_every_row_and_a_silent_estimator() {
+        let a = rows_of(Walk::Adjusting);
+        assert_eq!(a.len(), rows().len() + 1);
+        for r in rows() {
+            assert!(a.contains(&r), "{r:?}");
+        }
+        assert!(a.contains(&(FaultKind::Blind, 0.0)));
+        let all = parse_rows_of("all", Walk::Adjusting).unwrap();
+        assert_eq!(plan_walk(&all, Walk::Adjusting).unwrap().len(), a.len() * 2);
+        assert!(parse_rows_of(&a.len().to_string(), Walk::Adjusting).is_err());
     }
 }

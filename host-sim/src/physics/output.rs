@@ -347,26 +347,32 @@ pub fn tables_cli(
     Ok(())
 }
 
-/// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) with
-/// `seed` through `robot`'s node and the engine, with the probe options (see
+/// The command line's `physics-faults` subcommand: the sweep rows (`all` or indices) of a walk
+/// with `seed` through `robot`'s node and the engine, with the probe options (see
 /// [`super::probe`]); `DIR/physics_faults.json` (the settings and the runs, see
 /// [`super::fault_sweep`]) and `.md`.
 pub fn faults_cli(
     out: &Path,
     rows: &str,
+    walk: crate::eval::faults::Walk,
     seed: u64,
     robot: &Robot,
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use super::fault_sweep::{json, markdown, parse_rows, sweep};
-    let idx = parse_rows(rows)?;
+    use super::fault_sweep::{json, markdown, parse_rows_of, sweep_walk};
+    let idx = parse_rows_of(rows, walk)?;
     robot.check_hrp2_footsteps("physics-faults")?;
     let probe = probe.resolve(robot)?;
-    let runs = sweep(&idx, seed, robot, &probe.cfg)?;
+    let runs = sweep_walk(&idx, walk, seed, robot, &probe.cfg)?;
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_faults.json");
-    let mut j = serde_json::json!({ "robot": robot.name(), "seed": seed, "runs": json(&runs) });
+    let mut j = serde_json::json!({
+        "robot": robot.name(),
+        "seed": seed,
+        "walk": walk.name(),
+        "runs": json(&runs),
+    });
     probe.record(&mut j);
     fs::write(&path, serde_json::to_string_pretty(&j)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;

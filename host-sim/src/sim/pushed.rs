@@ -12,7 +12,7 @@
 //! 100 ms; the robot is pushed once (a velocity step) [`PUSH_DELAY_TICKS`] after the third
 //! lift-off.
 
-use planner_core::gait::{Phase, Side};
+use planner_core::gait::{GaitParams, Phase, Reference, Side};
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{Adjust, ControlOp, Measured, Session, StepBook};
 
@@ -28,7 +28,7 @@ pub const PUSH_DELAY_TICKS: u64 = 30;
 pub const FALLEN_M: f64 = 0.35;
 
 /// One plane of the pendulum.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Plane {
     x: f64,
     v: f64,
@@ -41,6 +41,64 @@ impl Plane {
         let x = p + (self.x - p) * c + self.v / w * s;
         self.v = (self.x - p) * w * s + self.v * c;
         self.x = x;
+    }
+}
+
+/// The pushed robot of the module docs: a linear inverted pendulum per plane (x, y) whose
+/// stabilizer tracks the node's reference; also the fault sweep's robot
+/// ([`crate::eval::faults`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Pendulum([Plane; 2]);
+
+impl Pendulum {
+    /// At rest at the COG of the reference `r`.
+    pub(crate) fn at(r: &Reference<f64>) -> Self {
+        Pendulum([
+            Plane {
+                x: r.x.cog,
+                v: r.x.cog_vel,
+            },
+            Plane {
+                x: r.y.cog,
+                v: r.y.cog_vel,
+            },
+        ])
+    }
+
+    /// The deviation of its DCM from the reference `r`'s, `ξ − ξ_ref` \[m\] (`w`: ω).
+    pub(crate) fn deviation(&self, r: &Reference<f64>, w: f64) -> [f64; 2] {
+        let refs = [r.x, r.y];
+        [0, 1].map(|i| (self.0[i].x + self.0[i].v / w) - (refs[i].cog + refs[i].cog_vel / w))
+    }
+
+    /// One cycle tracking the reference `r` whose DCM it misses by `e`: the stabilizer's ZMP
+    /// `p_ref + (1 + k/ω) e`, kept inside the support sole (the box around both soles in
+    /// double support).
+    pub(crate) fn track(&mut self, r: &Reference<f64>, e: [f64; 2], p: &GaitParams<f64>) {
+        let (w, dt) = (p.omega, p.dt);
+        let (hl, hw) = (p.sole_half_length, p.sole_half_width);
+        let refs = [r.x, r.y];
+        let feet = r.feet;
+        let (lo, hi) = match r.phase {
+            Phase::Single(support) => {
+                let f = feet[usize::from(support == Side::Right)];
+                ([f.x - hl, f.y - hw], [f.x + hl, f.y + hw])
+            }
+            _ => (
+                [feet[0].x.min(feet[1].x) - hl, feet[0].y.min(feet[1].y) - hw],
+                [feet[0].x.max(feet[1].x) + hl, feet[0].y.max(feet[1].y) + hw],
+            ),
+        };
+        for i in 0..2 {
+            let zmp = refs[i].zmp + (1.0 + K_DCM / w) * e[i];
+            self.0[i].step(zmp.clamp(lo[i], hi[i]), w, dt);
+        }
+    }
+
+    /// A push: a step `dv` (x, y) of its velocity \[m/s\].
+    pub(crate) fn push(&mut self, dv: [f64; 2]) {
+        self.0[0].v += dv[0];
+        self.0[1].v += dv[1];
     }
 }
 
@@ -111,19 +169,7 @@ pub fn pushed_walk(
     };
 
     let p = cfg.params;
-    let (w, dt) = (p.omega, p.dt);
-    let (hl, hw) = (p.sole_half_length, p.sole_half_width);
-    let r0 = *node.gait().last();
-    let mut robot = [
-        Plane {
-            x: r0.x.cog,
-            v: r0.x.cog_vel,
-        },
-        Plane {
-            x: r0.y.cog,
-            v: r0.y.cog_vel,
-        },
-    ];
+    let mut robot = Pendulum::at(node.gait().last());
     let mut out = PushedRun {
         cfg: *cfg,
         can_log: Vec::new(),
@@ -164,26 +210,11 @@ pub fn pushed_walk(
         let reference = report.reference;
         let stamp = node.cycles();
         // The robot over this cycle: the stabilizer's ZMP inside the support polygon.
-        let refs = [reference.x, reference.y];
-        let e = [0, 1].map(|i| (robot[i].x + robot[i].v / w) - (refs[i].cog + refs[i].cog_vel / w));
+        let e = robot.deviation(&reference, p.omega);
         if e[0].hypot(e[1]) > FALLEN_M {
             out.fallen = true;
         }
-        let feet = reference.feet;
-        let (lo, hi) = match reference.phase {
-            Phase::Single(support) => {
-                let f = feet[usize::from(support == Side::Right)];
-                ([f.x - hl, f.y - hw], [f.x + hl, f.y + hw])
-            }
-            _ => (
-                [feet[0].x.min(feet[1].x) - hl, feet[0].y.min(feet[1].y) - hw],
-                [feet[0].x.max(feet[1].x) + hl, feet[0].y.max(feet[1].y) + hw],
-            ),
-        };
-        for i in 0..2 {
-            let zmp = refs[i].zmp + (1.0 + K_DCM / w) * e[i];
-            robot[i].step(zmp.clamp(lo[i], hi[i]), w, dt);
-        }
+        robot.track(&reference, e, &p);
         tracked = Some((stamp, e));
         // The push.
         let s = node.gait().swinging();
@@ -195,8 +226,7 @@ pub fn pushed_walk(
         }
         swinging = s;
         if push_at == Some(k) {
-            robot[0].v += dv[0];
-            robot[1].v += dv[1];
+            robot.push(dv);
         }
         bus.advance(t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {

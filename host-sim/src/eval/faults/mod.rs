@@ -26,7 +26,16 @@
 //!   with command identifiers are commands (a random `ESTOP` stops the robot);
 //! * `burst`: `rate` modifications (each a random change of ±50 mm along, ±30 mm across,
 //!   ±0.1 rad of one of the queued steps after the swinging one) sent during one single support
-//!   chosen at random.
+//!   chosen at random;
+//! * `estimator silent` (adjusting walks only): the state estimator stops sending 0 … 0.3 s
+//!   after the push, while the deviation still grows; no rate.
+//!
+//! **Two walks** ([`Walk`]): the scenario as written (`start`), and the same scenario started
+//! with `start_adjusting`, with a pushed robot whose state estimator sends `MEASURED` every
+//! cycle on a port of its own (see `adjusting.rs`: the pendulum robot of
+//! [`crate::sim::pushed`], tracking the node's references, pushed once by 0.15 … 0.25 m/s in a
+//! direction drawn from the seed). Every fault of a row applies to every frame on the bus, so
+//! to `MEASURED` and `ADJUST` too, at the same rates; `silence` is the controller's.
 //!
 //! What is counted per run ([`CaseResult`]):
 //! * **fall**: the multi-body ZMP ([`crate::eval::multibody::evaluate`] of the node's references)
@@ -41,7 +50,22 @@
 //!   append or modification of that id it saw accepted) was not walked exactly once at that
 //!   pose (±0.5 mm, ±2 mrad), plus landings that match no accepted footstep. Steps left unwalked
 //!   after the node's own safety stop (controller lost, emergency stop) are counted apart as
-//!   **cancelled**, and so is the closing step such a stop adds;
+//!   **cancelled**, and so is the closing step such a stop adds. In an adjusting walk a step
+//!   counts as walked at its accepted pose plus the shift the node had in force when it
+//!   lifted off (the node's own book of its `ADJUST`s: the last shift made before that
+//!   lift-off); a landing at neither is lost;
+//! * **shift unheard** (adjusting walks): a walked step whose shift the controller's book got
+//!   wrong. The controller keeps every `ADJUST` it receives by its count of adjustments (a
+//!   late or repeated copy changes nothing) and lands step `id` at its accepted pose plus the
+//!   newest shift whose first step is at most `id`. The node repeats `ADJUST` every 100 ms
+//!   while a shift is in force, so the book converges to the shift in force; only a shift
+//!   that is overtaken by the next one before any of its copies arrives stays unheard (the
+//!   landing is then recognised by the node's book, and counted here, not as lost);
+//! * **`MEASURED` answered** (adjusting walks, [`MeasuredCount`]): taken, or refused stale,
+//!   duplicate, for a bad CRC, or otherwise (controller lost, emergency stop); a state taken
+//!   older than the node's `max_age` (by its answer's stamp) is counted apart and must not
+//!   happen; **adjustments**: changes of the node's shift; **pendulum fell**: the robot's DCM
+//!   more than [`crate::sim::pushed::FALLEN_M`] from the reference's;
 //! * **reference every tick**: the node handed one reference (five stream frames) to its bus
 //!   port in every cycle, each finite; **stream gaps**: ticks whose reference the controller
 //!   did not receive (a property of the bus, not of the node).
@@ -54,11 +78,14 @@
 //!   and the evaluation of its references and landings;
 //! * `ports.rs`: what the run puts on the bus besides the controller: the node's tap (what it
 //!   hands to its port in a cycle), the babbling port of `flood`, the seeded random numbers;
+//! * `adjusting.rs`: the adjusting walk's robot and estimator, the count of the node's answers
+//!   to `MEASURED`, and the node's and the controller's books of the shift;
 //! * `polygon.rs`: the support polygon (the soles' convex hull) and the distance of a ZMP
 //!   outside it, and the landings of a trajectory;
 //! * `sweep.rs`: the sweep over the rows, scenarios and seeds ([`sweep()`], [`SweepRow`]) and its
 //!   Markdown table.
 
+mod adjusting;
 mod play;
 mod polygon;
 mod ports;
@@ -70,8 +97,9 @@ use planner_core::node::NodeConfig;
 use crate::robot::model::Model;
 use crate::scenario::Scenario;
 
+pub use adjusting::{BLIND_AFTER, PUSH_DV};
 pub use polygon::{landings, support_polygon};
-pub use sweep::{markdown, sweep, sweep_markdown, SweepRow};
+pub use sweep::{markdown, markdown_adjusting, sweep, sweep_markdown, sweep_walk, SweepRow};
 
 /// How far the multi-body ZMP may leave the support polygon before the run counts as a fall
 /// \[m\]. The fault-free runs of the built-in scenarios stay inside (see the test); 20 mm is
@@ -111,6 +139,8 @@ pub enum FaultKind {
     Flood,
     /// Many modifications within one single support.
     Burst,
+    /// The state estimator stops sending after the push (adjusting walks only).
+    Blind,
     /// A combination of faults: the index of its row in [`HEAVY`].
     Mixed(usize),
 }
@@ -172,6 +202,7 @@ impl FaultKind {
             FaultKind::Silence => "silence",
             FaultKind::Flood => "flood",
             FaultKind::Burst => "burst",
+            FaultKind::Blind => "estimator silent",
             FaultKind::Mixed(_) => "mixed",
         }
     }
@@ -179,7 +210,7 @@ impl FaultKind {
     /// The rate as printed.
     pub fn rate_label(self, rate: f64) -> String {
         match self {
-            FaultKind::None | FaultKind::Silence => "—".into(),
+            FaultKind::None | FaultKind::Silence | FaultKind::Blind => "—".into(),
             FaultKind::Flood => format!("{:.0} % load", rate * 100.0),
             FaultKind::Burst => format!("{rate:.0} / support"),
             FaultKind::Mixed(i) => HEAVY.get(i).map_or("?", |m| m.label).into(),
@@ -200,8 +231,71 @@ pub const SWEEP: [(FaultKind, &[f64]); 8] = [
     (FaultKind::Burst, &[5.0, 20.0, 60.0]),
 ];
 
+/// The rows only the adjusting walk has.
+pub const ADJUSTING_ONLY: [(FaultKind, &[f64]); 1] = [(FaultKind::Blind, &[0.0])];
+
 /// The scenarios of the sweep.
 pub const SCENARIOS: [&str; 2] = ["straight", "fig4"];
+
+/// How a scenario of the sweep is walked (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Walk {
+    /// As written: `start`, no estimator.
+    Plain,
+    /// `start_adjusting`, a pushed robot and its estimator's `MEASURED` every cycle.
+    Adjusting,
+}
+
+impl Walk {
+    /// As printed and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Walk::Plain => "plain",
+            Walk::Adjusting => "adjusting",
+        }
+    }
+}
+
+/// Every row of the sweep of `walk` in its order: the [`SWEEP`] rates, then (adjusting)
+/// [`ADJUSTING_ONLY`], then the [`HEAVY`] mixes.
+pub fn rows(walk: Walk) -> Vec<(FaultKind, f64)> {
+    let extra: &[(FaultKind, &[f64])] = match walk {
+        Walk::Plain => &[],
+        Walk::Adjusting => &ADJUSTING_ONLY,
+    };
+    let mut v: Vec<(FaultKind, f64)> = SWEEP
+        .iter()
+        .chain(extra)
+        .flat_map(|(k, rates)| rates.iter().map(move |r| (*k, *r)))
+        .collect();
+    v.extend((0..HEAVY.len()).map(|i| (FaultKind::Mixed(i), 0.0)));
+    v
+}
+
+/// How a run's node answered the estimator's `MEASURED` frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MeasuredCount {
+    /// Taken.
+    pub taken: usize,
+    /// Refused `stale` (older than the node's `max_age`, or not newer than one taken).
+    pub stale: usize,
+    /// Refused `duplicate` (the state taken last, again).
+    pub duplicate: usize,
+    /// Refused `bad_crc` (corrupted, or keyed with another session).
+    pub bad_crc: usize,
+    /// Refused otherwise (controller lost, emergency-stopped, another session's stamp).
+    pub other: usize,
+}
+
+impl std::ops::AddAssign for MeasuredCount {
+    fn add_assign(&mut self, o: Self) {
+        self.taken += o.taken;
+        self.stale += o.stale;
+        self.duplicate += o.duplicate;
+        self.bad_crc += o.bad_crc;
+        self.other += o.other;
+    }
+}
 
 /// One run of the sweep.
 #[derive(Clone, Debug, PartialEq)]
@@ -238,6 +332,24 @@ pub struct CaseResult {
     pub landings: usize,
     /// Fraction of the time the bus was busy.
     pub bus_load: f64,
+    /// The walk.
+    pub walk: Walk,
+    /// The pendulum robot fell (adjusting walks).
+    pub pendulum_fell: bool,
+    /// The node's answers to `MEASURED`.
+    pub measured: MeasuredCount,
+    /// `MEASURED` states taken older than the node's `max_age` (by the answers' stamps).
+    pub measured_too_old: usize,
+    /// Changes of the node's shift.
+    pub adjustments: usize,
+    /// The node cycle of the last change of the shift.
+    pub last_adjustment: Option<u32>,
+    /// Walked steps whose shift the controller's book got wrong.
+    pub shift_unheard: usize,
+    /// Steps walked at a shift other than zero.
+    pub shifted_landings: usize,
+    /// `estimator silent`: the node cycle of the first state the estimator did not send.
+    pub estimator_silent_from: Option<u32>,
     /// The references the node published, one per tick (for the physics engine run).
     pub trajectory: Vec<Reference<f64>>,
 }
@@ -257,7 +369,45 @@ pub fn run_case_with(
     cfg: NodeConfig,
     model: &Model,
 ) -> Result<CaseResult, String> {
-    play::play(s, kind, rate, seed, cfg, model, false).map(|(r, _)| r)
+    run_walk_with(s, Walk::Plain, kind, rate, seed, cfg, model)
+}
+
+/// [`run_case`] walked as `walk`.
+pub fn run_walk(
+    s: &Scenario,
+    walk: Walk,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+) -> Result<CaseResult, String> {
+    run_walk_with(
+        s,
+        walk,
+        kind,
+        rate,
+        seed,
+        NodeConfig::hrp2(),
+        &Model::hrp2(),
+    )
+}
+
+/// [`run_case_with`] walked as `walk`.
+pub fn run_walk_with(
+    s: &Scenario,
+    walk: Walk,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+    cfg: NodeConfig,
+    model: &Model,
+) -> Result<CaseResult, String> {
+    let case = play::Case {
+        walk,
+        kind,
+        rate,
+        seed,
+    };
+    play::play(s, case, cfg, model, false).map(|(r, _)| r)
 }
 
 /// [`run_case`], and the candump log of every frame the bus delivered (the controller's, the
@@ -268,13 +418,22 @@ pub fn run_case_logged(
     rate: f64,
     seed: u64,
 ) -> Result<(CaseResult, Vec<String>), String> {
-    play::play(
-        s,
+    run_walk_logged(s, Walk::Plain, kind, rate, seed)
+}
+
+/// [`run_case_logged`] walked as `walk`.
+pub fn run_walk_logged(
+    s: &Scenario,
+    walk: Walk,
+    kind: FaultKind,
+    rate: f64,
+    seed: u64,
+) -> Result<(CaseResult, Vec<String>), String> {
+    let case = play::Case {
+        walk,
         kind,
         rate,
         seed,
-        NodeConfig::hrp2(),
-        &Model::hrp2(),
-        true,
-    )
+    };
+    play::play(s, case, NodeConfig::hrp2(), &Model::hrp2(), true)
 }

@@ -6,11 +6,15 @@
 use embedded_can::nb::Can;
 use planner_core::gait::{FootPose, Footstep, Phase, Side};
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{ids, Ack, Command, ControlOp, Reason, StepBook, Stream};
+use planner_core::wire::{ids, Ack, Adjust, Command, ControlOp, Reason, StepBook, Stream};
 
+use super::adjusting::{count_measured, shifted, Estimator, Shifts};
 use super::polygon::{landings, outside, support_polygon};
 use super::ports::{Flood, Rng};
-use super::{CaseResult, FaultKind, DELAY_NS, FALL_MARGIN, HEAVY, MAX_RETRIES, RETRY_TICKS};
+use super::{
+    CaseResult, FaultKind, MeasuredCount, Walk, DELAY_NS, FALL_MARGIN, HEAVY, MAX_RETRIES,
+    RETRY_TICKS,
+};
 use crate::eval::multibody::{evaluate, max_zmp_error, MbError};
 use crate::robot::model::Model;
 use crate::scenario::{self, Scenario};
@@ -75,17 +79,31 @@ fn wire_step(
     })
 }
 
-/// Plays `s` with the fault `kind` at `rate` and `seed` through `cfg`'s node, evaluates it with
-/// `model`; with `record`, also the candump log of the bus.
+/// One run's settings: the walk, the fault kind at its rate, the seed.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Case {
+    pub(super) walk: Walk,
+    pub(super) kind: FaultKind,
+    pub(super) rate: f64,
+    pub(super) seed: u64,
+}
+
+/// Plays `s` as the `case` says through `cfg`'s node, evaluates it with `model`; with
+/// `record`, also the candump log of the bus.
 pub(super) fn play(
     s: &Scenario,
-    kind: FaultKind,
-    rate: f64,
-    seed: u64,
+    case: Case,
     cfg: NodeConfig,
     model: &Model,
     record: bool,
 ) -> Result<(CaseResult, Vec<String>), String> {
+    let Case {
+        walk,
+        kind,
+        rate,
+        seed,
+    } = case;
+    let adjusting = walk == Walk::Adjusting;
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up: {e:?}"))?;
     let mut rng = Rng::new(seed ^ 0xFA17);
     let ms = 1_000_000u64;
@@ -110,9 +128,16 @@ pub(super) fn play(
             faults.delay = m.delay;
             faults.delay_ns = m.delay_ns;
         }
-        FaultKind::None | FaultKind::Flood | FaultKind::Burst => {}
+        FaultKind::None | FaultKind::Flood | FaultKind::Burst | FaultKind::Blind => {}
     }
-    let bus = Bus::new(1_000_000, 4, faults, seed.wrapping_mul(2).wrapping_add(1));
+    // Ports: the controller, the node, the babbler and its listener, (adjusting) the estimator.
+    let ports = if adjusting { 5 } else { 4 };
+    let bus = Bus::new(
+        1_000_000,
+        ports,
+        faults,
+        seed.wrapping_mul(2).wrapping_add(1),
+    );
     if record {
         bus.record();
     }
@@ -212,6 +237,18 @@ pub(super) fn play(
         return Err("the handshake did not complete in 10 s".into());
     }
     ctl_state.epoch = ctl_state.epoch.wrapping_add(1);
+    let mut estimator = adjusting.then(|| {
+        Estimator::new(
+            bus.port(4),
+            node.gait().last(),
+            seed,
+            kind == FaultKind::Blind,
+        )
+    });
+    let mut shifts = Shifts::default();
+    let mut measured = MeasuredCount::default();
+    let mut measured_too_old = 0;
+    let max_age = cfg.adjust.max_age;
     let mut next = 0;
     // Commands not sent yet: a control command waits until every earlier command is answered
     // (a `Stop` overtaking a lost `Start` would leave the robot walking in place), and what
@@ -248,6 +285,9 @@ pub(super) fn play(
                         e.1 = f;
                     }
                     issue.push((wire_step(&mut book, false, id, &f)?, Some((id, f)), false));
+                }
+                scenario::Command::Start if adjusting => {
+                    issue.push((control(ControlOp::StartAdjusting), None, false))
                 }
                 scenario::Command::Start => issue.push((control(ControlOp::Start), None, false)),
                 scenario::Command::Stop => issue.push((control(ControlOp::Stop), None, false)),
@@ -356,6 +396,10 @@ pub(super) fn play(
             let hb = ctl_state.control(ControlOp::Heartbeat);
             let _ = ctl.transmit(&hb.encode());
         }
+        // The estimator's state of the last cycle.
+        if let Some(e) = estimator.as_mut() {
+            e.send(k, ctl_state.epoch);
+        }
         // 4. The node's cycle (the babbling port runs with the bus).
         flood.run(&bus, t0, t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
@@ -369,6 +413,18 @@ pub(super) fn play(
                     take(&mut node_accepted, id, f, u);
                 }
             }
+        }
+        for a in tap.frames().filter_map(Ack::decode) {
+            if count_measured(&mut measured, &a, node.cycles(), max_age) {
+                measured_too_old += 1;
+            }
+        }
+        let a = node.adjustment();
+        let from = step_of(&plan, a.from);
+        shifts.note(node.cycles(), (from, a.shift.map(i32::from)));
+        if let Some(e) = estimator.as_mut() {
+            let swinging = node.gait().swinging();
+            e.track(k, node.cycles(), &report.reference, swinging, &cfg.params);
         }
         let stream_ids = [
             ids::COG,
@@ -391,7 +447,10 @@ pub(super) fn play(
         // 5. The controller reads the answers and the stream.
         flood.run(&bus, t0 + 5 * ms / 2, t0 + 5 * ms);
         while let Ok(f) = ctl.receive() {
-            if let Some(a) = Ack::decode(&f) {
+            if let Some(a) = Adjust::decode(&f) {
+                let shift = (step_of(&plan, a.from), a.shift.map(i32::from));
+                shifts.heard.insert(a.count, shift);
+            } else if let Some(a) = Ack::decode(&f) {
                 // Every answer about a footstep tells its version in force, whatever the
                 // answer (a refused newer modification leaves an older one in force).
                 if let (0x00 | 0x01, Some(v)) = (a.command, a.version) {
@@ -506,7 +565,7 @@ pub(super) fn play(
     let accepted = node_accepted;
     let walked = landings(&trajectory);
     let mut used = vec![false; walked.len()];
-    let (mut lost, mut cancelled) = (0, 0);
+    let (mut lost, mut cancelled, mut shift_unheard, mut shifted_landings) = (0, 0, 0, 0);
     let matches = |f: &Footstep<f64>, (side, p): &(Side, FootPose<f64>)| {
         *side == f.side
             && (p.x - f.x).abs() <= 5e-4
@@ -519,12 +578,18 @@ pub(super) fn play(
     // Steps are walked in id order: each accepted step (in id order) is matched to the first
     // unused landing after the previous match, so two steps at the same pose (a multi-step
     // change applied in part) are told apart; a step walked twice leaves a stray landing.
+    // An adjusting walk's step is walked at its accepted pose plus the shift the node had in
+    // force when it lifted off; the controller's book should say the same.
     let mut from = 0;
-    for (_, f, _) in &accepted {
-        match (from..walked.len()).find(|&i| !used[i] && matches(f, &walked[i])) {
+    for (id, f, _) in &accepted {
+        let shift = shifts.of(*id);
+        let f = shifted(f, shift);
+        match (from..walked.len()).find(|&i| !used[i] && matches(&f, &walked[i])) {
             Some(i) => {
                 used[i] = true;
                 from = i + 1;
+                shift_unheard += usize::from(shifts.heard_of(*id) != shift);
+                shifted_landings += usize::from(shift != [0, 0]);
             }
             None if safety_stop => cancelled += 1,
             None => lost += 1,
@@ -583,6 +648,15 @@ pub(super) fn play(
         stream_gaps,
         landings: walked.len(),
         bus_load: bus.load(),
+        walk,
+        pendulum_fell: estimator.as_ref().is_some_and(|e| e.fell),
+        measured,
+        measured_too_old,
+        adjustments: shifts.node.len(),
+        last_adjustment: shifts.node.last().map(|e| e.0),
+        shift_unheard,
+        shifted_landings,
+        estimator_silent_from: estimator.as_ref().and_then(|e| e.silent_from),
         trajectory,
     };
     Ok((result, bus.log()))

@@ -1,9 +1,10 @@
-//! The sweep: every row ([`SWEEP`], then the [`HEAVY`] mixes) over the sweep's scenarios and
-//! seeds, summed per row ([`SweepRow`]), and its Markdown table.
+//! The sweep: every row of a walk ([`super::rows`]: [`super::SWEEP`], the adjusting walk's own rows,
+//! then the [`super::HEAVY`] mixes) over the sweep's scenarios and seeds, summed per row
+//! ([`SweepRow`]), and its Markdown tables.
 
 use std::fmt::Write as _;
 
-use super::{run_case, FaultKind, HEAVY, SCENARIOS, SWEEP};
+use super::{rows, run_walk, FaultKind, MeasuredCount, Walk, SCENARIOS};
 use crate::scenario::{self, Scenario};
 
 /// One row of the table: one fault kind at one rate over scenarios and seeds.
@@ -46,74 +47,102 @@ pub struct SweepRow {
     pub max_bus_load: f64,
     /// Model errors seen.
     pub model_errors: Vec<String>,
+    /// Runs whose pendulum robot fell (adjusting walks).
+    pub pendulum_falls: usize,
+    /// The node's answers to `MEASURED`, summed.
+    pub measured: MeasuredCount,
+    /// `MEASURED` states taken older than the node's `max_age`, summed.
+    pub measured_too_old: usize,
+    /// Changes of the node's shift, summed.
+    pub adjustments: usize,
+    /// Runs in which the node adjusted.
+    pub adjusted_runs: usize,
+    /// Steps walked at a shift other than zero, summed.
+    pub shifted_landings: usize,
+    /// Walked steps whose shift the controller's book got wrong, summed.
+    pub shift_unheard: usize,
 }
 
-/// Runs the sweep over [`SWEEP`] × [`SCENARIOS`] × `seeds` seeds (1 … seeds), then the
-/// [`HEAVY`] rows with `heavy_seeds` seeds.
+/// Runs the sweep over [`super::SWEEP`] × [`SCENARIOS`] × `seeds` seeds (1 … seeds), then the
+/// [`super::HEAVY`] rows with `heavy_seeds` seeds.
 pub fn sweep(seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepRow>, String> {
+    sweep_walk(Walk::Plain, seeds, heavy_seeds)
+}
+
+/// [`sweep`] of `walk`'s rows ([`super::rows`]).
+pub fn sweep_walk(walk: Walk, seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepRow>, String> {
     let scenarios: Vec<Scenario> = SCENARIOS
         .iter()
         .map(|n| scenario::built_in(n).ok_or_else(|| format!("no scenario {n}")))
         .collect::<Result<_, _>>()?;
-    let mut rows = Vec::new();
-    let heavy: Vec<(FaultKind, &[f64])> = (0..HEAVY.len())
-        .map(|i| (FaultKind::Mixed(i), &[0.0][..]))
-        .collect();
-    for (kind, rates) in SWEEP.iter().copied().chain(heavy) {
-        for &rate in rates {
-            let mut row = SweepRow {
-                kind,
-                rate,
-                runs: 0,
-                falls: 0,
-                lost: 0,
-                cancelled: 0,
-                unanswered: 0,
-                misinformed: 0,
-                retransmissions: 0,
-                safety_stops: 0,
-                max_zmp_error: 0.0,
-                max_outside: 0.0,
-                ticks_without_reference: 0,
-                stream_gaps: 0,
-                ticks: 0,
-                out_of_reach: 0,
-                max_bus_load: 0.0,
-                model_errors: Vec::new(),
-            };
-            let seeds_here = match kind {
-                FaultKind::None => 1,
-                FaultKind::Mixed(_) => heavy_seeds,
-                _ => seeds,
-            };
-            for s in &scenarios {
-                for seed in 1..=seeds_here {
-                    let r = run_case(s, kind, rate, seed)?;
-                    row.runs += 1;
-                    row.falls += usize::from(r.fell);
-                    row.lost += r.lost;
-                    row.cancelled += r.cancelled;
-                    row.unanswered += r.unanswered;
-                    row.misinformed += r.misinformed;
-                    row.retransmissions += r.retransmissions;
-                    row.safety_stops += usize::from(r.safety_stop);
-                    row.max_zmp_error = row.max_zmp_error.max(r.max_zmp_error);
-                    row.max_outside = row.max_outside.max(r.max_outside);
-                    row.ticks_without_reference += r.ticks_without_reference;
-                    row.stream_gaps += r.stream_gaps;
-                    row.ticks += r.ticks;
-                    row.out_of_reach += usize::from(r.model_error.is_some());
-                    row.max_bus_load = row.max_bus_load.max(r.bus_load);
-                    if let Some(e) = r.model_error {
-                        row.model_errors
-                            .push(format!("{} seed {seed}: {e}", s.name));
-                    }
+    let mut out = Vec::new();
+    for (kind, rate) in rows(walk) {
+        let mut row = SweepRow {
+            kind,
+            rate,
+            runs: 0,
+            falls: 0,
+            lost: 0,
+            cancelled: 0,
+            unanswered: 0,
+            misinformed: 0,
+            retransmissions: 0,
+            safety_stops: 0,
+            max_zmp_error: 0.0,
+            max_outside: 0.0,
+            ticks_without_reference: 0,
+            stream_gaps: 0,
+            ticks: 0,
+            out_of_reach: 0,
+            max_bus_load: 0.0,
+            model_errors: Vec::new(),
+            pendulum_falls: 0,
+            measured: MeasuredCount::default(),
+            measured_too_old: 0,
+            adjustments: 0,
+            adjusted_runs: 0,
+            shifted_landings: 0,
+            shift_unheard: 0,
+        };
+        let seeds_here = match kind {
+            FaultKind::None => 1,
+            FaultKind::Mixed(_) => heavy_seeds,
+            _ => seeds,
+        };
+        for s in &scenarios {
+            for seed in 1..=seeds_here {
+                let r = run_walk(s, walk, kind, rate, seed)?;
+                row.runs += 1;
+                row.falls += usize::from(r.fell);
+                row.lost += r.lost;
+                row.cancelled += r.cancelled;
+                row.unanswered += r.unanswered;
+                row.misinformed += r.misinformed;
+                row.retransmissions += r.retransmissions;
+                row.safety_stops += usize::from(r.safety_stop);
+                row.max_zmp_error = row.max_zmp_error.max(r.max_zmp_error);
+                row.max_outside = row.max_outside.max(r.max_outside);
+                row.ticks_without_reference += r.ticks_without_reference;
+                row.stream_gaps += r.stream_gaps;
+                row.ticks += r.ticks;
+                row.out_of_reach += usize::from(r.model_error.is_some());
+                row.max_bus_load = row.max_bus_load.max(r.bus_load);
+                row.pendulum_falls += usize::from(r.pendulum_fell);
+                row.measured += r.measured;
+                row.measured_too_old += r.measured_too_old;
+                row.adjustments += r.adjustments;
+                row.adjusted_runs += usize::from(r.adjustments > 0);
+                row.shifted_landings += r.shifted_landings;
+                row.shift_unheard += r.shift_unheard;
+                if let Some(e) = r.model_error {
+                    row.model_errors
+                        .push(format!("{} seed {seed}: {e}", s.name));
                 }
             }
-            rows.push(row);
         }
+        out.push(row);
     }
-    Ok(rows)
+    Ok(out)
 }
 
 /// The table of [`sweep`] rows as Markdown.
@@ -146,6 +175,47 @@ pub fn markdown(rows: &[SweepRow]) -> String {
             r.stream_gaps,
             r.ticks,
             r.max_bus_load * 100.0,
+        );
+    }
+    out
+}
+
+/// The table of an adjusting walk's [`sweep_walk`] rows as Markdown: the falls (the
+/// multi-body ZMP's and the pendulum robot's), the footsteps, and what the node did with the
+/// estimator's `MEASURED` frames.
+pub fn markdown_adjusting(rows: &[SweepRow]) -> String {
+    let mut out = String::from(
+        "| fault | rate | runs | falls | pendulum falls | leg out of reach (runs) | lost | \
+         shift unheard | runs adjusted | adjustments | shifted landings | MEASURED taken | \
+         refused stale | refused duplicate | refused bad CRC | refused otherwise | \
+         taken too old | cancelled by safety stop | safety stops | cycles without reference |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let m = r.measured;
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.kind.name(),
+            r.kind.rate_label(r.rate),
+            r.runs,
+            r.falls,
+            r.pendulum_falls,
+            r.out_of_reach,
+            r.lost,
+            r.shift_unheard,
+            r.adjusted_runs,
+            r.adjustments,
+            r.shifted_landings,
+            m.taken,
+            m.stale,
+            m.duplicate,
+            m.bad_crc,
+            m.other,
+            r.measured_too_old,
+            r.cancelled,
+            r.safety_stops,
+            r.ticks_without_reference,
         );
     }
     out
