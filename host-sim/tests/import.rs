@@ -9,6 +9,7 @@ mod urdf;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use doc_figures::Quotes;
 use engine::engine_here;
 use host_sim::eval::multibody::evaluate;
 use host_sim::robot::import::import;
@@ -16,6 +17,19 @@ use host_sim::robot::Robot;
 use host_sim::scenario::BUILT_IN;
 use host_sim::sim::scenario_trajectory;
 use urdf::{pinocchio_here, pinocchio_script, robot_file, temp_dir, G1, TALOS};
+
+/// The command that measures the figures the book and the front page quote from here.
+const COMMAND: &str = "cargo test --release -p host-sim --test import -- --nocapture";
+/// The book's page.
+const BOOK: &str = "docs/src/robot.md";
+
+/// `f(v)`, and `f` of `v` moved by `±d`: a value on a rounding boundary may round either way
+/// on another CPU.
+fn spellings(f: &dyn Fn(f64) -> String, v: f64, d: f64) -> Vec<String> {
+    let mut out: Vec<String> = [v, v - d, v + d].iter().map(|&x| f(x)).collect();
+    out.dedup();
+    out
+}
 
 /// The sum of every `<mass value="…">` of a URDF, read from its text (not through the
 /// importer's parser).
@@ -72,12 +86,10 @@ fn talos_imports_with_its_masses_limits_and_soles() {
 /// One imported robot's walk through the node and its multi-body model, against Pinocchio
 /// on the full URDF: COM to 1e-9 m, ZMP to 0.1 mm (the second differences of the model and
 /// the manifold differences of the oracle agree to O(dt²)).
-fn against_pinocchio(tail: &str, test: &str) {
-    let Some(urdf) = robot_file(tail, test) else {
-        return;
-    };
+fn against_pinocchio(tail: &str, test: &str) -> Option<f64> {
+    let urdf = robot_file(tail, test)?;
     if !pinocchio_here(test) {
-        return;
+        return None;
     }
     let robot = import(&urdf, None).expect("imports").robot;
     let (_, trajectory, dt) = scenario_trajectory("straight", &robot).expect("walk");
@@ -142,16 +154,41 @@ fn against_pinocchio(tail: &str, test: &str) {
     );
     assert!(com < 1e-9, "COM differs by {com:.3e} m");
     assert!(zmp < 1e-4, "ZMP differs by {zmp:.3e} m");
+    Some(zmp)
 }
 
 #[test]
-fn talos_multibody_zmp_matches_pinocchio() {
-    against_pinocchio(TALOS, "talos_multibody_zmp_matches_pinocchio");
-}
-
-#[test]
-fn g1_multibody_zmp_matches_pinocchio() {
-    against_pinocchio(G1, "g1_multibody_zmp_matches_pinocchio");
+fn multibody_zmp_matches_pinocchio() {
+    let test = "multibody_zmp_matches_pinocchio";
+    let (Some(talos), Some(g1)) = (against_pinocchio(TALOS, test), against_pinocchio(G1, test))
+    else {
+        return;
+    };
+    let um = |x: f64| format!("{:.1} µm", x * 1e6);
+    Quotes::new(COMMAND)
+        .cell_any(
+            BOOK,
+            "| Talos |",
+            "ZMP against Pinocchio",
+            &spellings(&um, talos, 2e-9),
+        )
+        .cell_any(
+            BOOK,
+            "| Unitree G1 |",
+            "ZMP against Pinocchio",
+            &spellings(&um, g1, 2e-9),
+        )
+        .cell_any(
+            "README.md",
+            "robots imported from their URDFs",
+            "figure",
+            &spellings(
+                &|x| format!("multi-body ZMP within {}", um(x)),
+                talos.max(g1),
+                2e-9,
+            ),
+        )
+        .assert();
 }
 
 /// `host-sim robot import URDF --out FILE`, then every built-in scenario in MuJoCo with
@@ -206,9 +243,30 @@ fn walks_every_built_in(tail: &str, name: &str) {
             .collect()
     });
     assert_eq!(results.len(), BUILT_IN.len());
+    let mut q = Quotes::new(COMMAND);
     for (scenario, j) in &results {
         assert_eq!(j["fell"], false, "{name} {scenario}: {j}");
         assert!(j["simulated_s"].as_f64().expect("s") > 5.0, "{j}");
+        let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
+        let row = format!("| {name} | {scenario} |");
+        let around = |v: f64| [v, v - 2e-6, v + 2e-6];
+        let mut pairs = Vec::new();
+        for a in around(num("cop_err_mean_m")) {
+            for b in around(num("cop_err_max_m")) {
+                let p = format!("{:.1} / {:.1} mm", a * 1e3, b * 1e3);
+                if !pairs.contains(&p) {
+                    pairs.push(p);
+                }
+            }
+        }
+        q = q
+            .cell_any(
+                BOOK,
+                &row,
+                "max tilt",
+                &spellings(&|x| format!("{x:.2}°"), num("max_tilt_deg"), 2e-4),
+            )
+            .cell_any(BOOK, &row, "CoP error mean / worst", &pairs);
         println!(
             "{name} {scenario}: tilt {:.2}°, CoP error mean {:.1} mm, worst {:.1} mm",
             j["max_tilt_deg"].as_f64().unwrap_or(f64::NAN),
@@ -216,6 +274,7 @@ fn walks_every_built_in(tail: &str, name: &str) {
             1e3 * j["cop_err_max_m"].as_f64().unwrap_or(f64::NAN)
         );
     }
+    q.assert();
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -20,6 +20,7 @@ pub fn firmware_cargo(dir: &std::path::Path) -> Command {
         "RUSTFLAGS",
         "CARGO_ENCODED_RUSTFLAGS",
         "CARGO_BUILD_RUSTFLAGS",
+        "WALK_ROBOT",
     ] {
         cmd.env_remove(var);
     }
@@ -206,11 +207,27 @@ pub fn build_firmware_with(
     args: &[&str],
     target_dir: &str,
 ) -> std::path::PathBuf {
+    build_firmware_env(dir, bin, rustflags, args, target_dir, &[])
+}
+
+/// [`build_firmware_with`] with environment variables for the build (e.g. `WALK_ROBOT`, the
+/// robot file `firmware/robot` compiles in).
+pub fn build_firmware_env(
+    dir: &str,
+    bin: &str,
+    rustflags: Option<&str>,
+    args: &[&str],
+    target_dir: &str,
+    envs: &[(&str, &std::ffi::OsStr)],
+) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("..")
         .join("firmware")
         .join(dir);
     let mut cmd = firmware_cargo(&dir);
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
     if let Some(flags) = rustflags {
         cmd.env("RUSTFLAGS", flags);
     }

@@ -404,3 +404,31 @@ pub fn compare(q: &QemuRun, case: &Case, want: &Expected) {
         }
     );
 }
+
+/// The log replayed on the host twice: by host-sim (`replay_into::<16>`, its virtual bus) and
+/// by the target's player compiled for the host, reading the binary log through the target's
+/// decoder; both must agree bit for bit (frames with their cycles, references).
+pub fn expected(case: &Case, bytes: &[u8]) -> Expected {
+    let name = &case.name;
+    let sim = SimConfig::default();
+    let text = case.log.join("\n") + "\n";
+    let host = replay::replay_into::<16>(
+        &replay::parse(&text, case.cfg.params.dt).unwrap(),
+        &case.cfg,
+        sim.bitrate,
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+
+    let mut node: Node<16> = Node::new(case.cfg).unwrap();
+    let played = play(name, bytes, &mut node);
+    assert_eq!(played.feet, [case.cfg.left, case.cfg.right], "{name}: feet");
+    let want = &played.expected;
+    assert_eq!(want.fed as usize, host.replayed, "{name}: frames fed");
+    assert_eq!(want.cut, host.cut, "{name}: cut");
+    assert_eq!(
+        played.sent, host.node_frames,
+        "{name}: the node's frames, target player (host build) vs host-sim replay"
+    );
+    assert_eq!(played.trajectory, host.trajectory, "{name}: references");
+    played.expected
+}

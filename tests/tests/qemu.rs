@@ -46,11 +46,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use host_sim::sim::replay;
-use host_sim::sim::SimConfig;
-use planner_core::node::Node;
 use walk_tests::figures::{thousands, Quotes};
-use walk_tests::logs::{self, compare, Case, Expected};
+use walk_tests::logs::{self, compare, expected, Case, Expected};
 use walk_tests::report::{self, tail, QemuRun, Record};
 use walk_tests::{build_firmware, qemu_available};
 
@@ -60,34 +57,6 @@ const BUDGET: u64 = 120_000;
 const MACHINE: &str = "mps2-an500";
 /// `firmware/qemu`'s report: instructions per CMSDK timer tick under `-icount shift=0`.
 const INSTRUCTIONS_PER_TICK: u64 = 40;
-
-/// The log replayed on the host twice: by host-sim (`replay_into::<16>`, its virtual bus) and
-/// by the target's player compiled for the host, reading the binary log through the target's
-/// decoder; both must agree bit for bit (frames with their cycles, references).
-fn expected(case: &Case, bytes: &[u8]) -> Expected {
-    let name = &case.name;
-    let sim = SimConfig::default();
-    let text = case.log.join("\n") + "\n";
-    let host = replay::replay_into::<16>(
-        &replay::parse(&text, case.cfg.params.dt).unwrap(),
-        &case.cfg,
-        sim.bitrate,
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
-
-    let mut node: Node<16> = Node::new(case.cfg).unwrap();
-    let played = logs::play(name, bytes, &mut node);
-    assert_eq!(played.feet, [case.cfg.left, case.cfg.right], "{name}: feet");
-    let want = &played.expected;
-    assert_eq!(want.fed as usize, host.replayed, "{name}: frames fed");
-    assert_eq!(want.cut, host.cut, "{name}: cut");
-    assert_eq!(
-        played.sent, host.node_frames,
-        "{name}: the node's frames, target player (host build) vs host-sim replay"
-    );
-    assert_eq!(played.trajectory, host.trajectory, "{name}: references");
-    played.expected
-}
 
 /// Runs the M7 image in `dir` (which holds its `replay.wlog`): its exit code and output.
 fn qemu(elf: &Path, dir: &Path) -> std::process::Output {
