@@ -246,6 +246,7 @@ pub fn run(
     let r0 = *node.gait().last();
     let (waist0, qpos) = initial_pose(&robot, &r0)?;
     let mut obs = engine.reset(&qpos)?;
+    let mut sensed = super::sensors::Sensors::new(cfg.sensors);
 
     let settle_cycles = (cfg.settle_s / (f64::from(CYCLE_MS) * 1e-3)).round() as u32;
     let tail_cycles = (cfg.tail_s / (f64::from(CYCLE_MS) * 1e-3)).round() as u32;
@@ -356,7 +357,7 @@ pub fn run(
                 f64::from(CYCLE_MS) * 1e-3,
                 (j + 1) as f64 * PHYSICS_DT,
             );
-            let ctrl = stab.step(&r, &obs.sensors)?;
+            let ctrl = stab.step(&r, sensed.read(&obs.sensors))?;
             let mut wrench = [0.0; 6];
             if let (Some(push), Some(t0), Some(t)) = (push, push_start, t_walk) {
                 let t = t + (j as f64) * PHYSICS_DT;

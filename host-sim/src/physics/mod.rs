@@ -37,6 +37,7 @@ pub mod model;
 pub mod output;
 pub mod probe;
 pub mod push_map;
+pub mod sensors;
 pub mod sequence;
 pub mod stabilizer;
 pub mod tables;
@@ -78,6 +79,8 @@ pub struct PhysicsConfig {
     pub z_c: f64,
     /// The robot (its MJCF, kinematics and soles).
     pub robot: Robot,
+    /// The sensors' noise, bias and latency ([`sensors`]; default: ideal).
+    pub sensors: sensors::SensorModel,
 }
 
 impl Default for PhysicsConfig {
@@ -89,6 +92,7 @@ impl Default for PhysicsConfig {
             push: None,
             z_c: planner_core::HRP2_COG_HEIGHT,
             robot: Robot::default(),
+            sensors: sensors::SensorModel::IDEAL,
         }
     }
 }
@@ -271,6 +275,7 @@ pub fn run(
     let mut stab = Stabilizer::new(robot.clone(), cfg.gains, PHYSICS_DT, cfg.z_c);
     let (waist0, qpos) = initial_pose(&robot, &trajectory[0])?;
     let mut obs = engine.reset(&qpos)?;
+    let mut sensed = sensors::Sensors::new(cfg.sensors);
     let end_t = (trajectory.len() - 1) as f64 * dt;
     let steps = ((cfg.settle_s + end_t + cfg.tail_s) / PHYSICS_DT).round() as usize;
     let mut tracking = Tracking::default();
@@ -291,7 +296,7 @@ pub fn run(
     for k in 0..steps {
         let t = k as f64 * PHYSICS_DT - cfg.settle_s;
         let r = reference_at(trajectory, dt, t);
-        let ctrl = stab.step(&r, &obs.sensors)?;
+        let ctrl = stab.step(&r, sensed.read(&obs.sensors))?;
         let mut wrench = [0.0; 6];
         if let Some(p) = cfg.push {
             if t >= p.t_s && t < p.t_s + p.duration_s {

@@ -32,6 +32,7 @@
 
 use serde_json::{json, Value};
 
+use super::sensors::SensorModel;
 use super::stabilizer::Gains;
 use super::{run, PhysicsConfig, PhysicsReport};
 use crate::robot::Robot;
@@ -78,6 +79,35 @@ pub struct ProbeArgs {
     /// The joint damping of every servo [N m s/rad] [default: the robot's].
     #[arg(long, value_name = "KD")]
     pub servo_damping: Option<f64>,
+    /// The sensors: `ideal` (the engine's values) or `realistic` (noise, bias and 2 ms of
+    /// latency of a humanoid of HRP-2's class; see the book's physics page).
+    #[arg(long, value_name = "ideal|realistic", default_value = "ideal", value_parser = super::sensors::parse)]
+    pub sensors: SensorModel,
+    /// The sensors' latency [ms] [default: the `--sensors` model's].
+    #[arg(long, value_name = "MS")]
+    pub latency_ms: Option<usize>,
+    /// Where the stabilizer takes the contact phase from: the reference, or the ankle force
+    /// sensors.
+    #[arg(long, value_name = "reference|sensors", default_value = "reference", value_parser = parse_contact)]
+    pub contact: Contact,
+}
+
+/// Where the stabilizer takes the contact phase from (`--contact`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Contact {
+    /// The reference's phase.
+    Reference,
+    /// The ankle force sensors ([`super::stabilizer::contact_phase`]).
+    Sensors,
+}
+
+/// Parses `--contact`: `reference` or `sensors`.
+pub fn parse_contact(s: &str) -> Result<Contact, String> {
+    match s {
+        "reference" => Ok(Contact::Reference),
+        "sensors" => Ok(Contact::Sensors),
+        _ => Err(format!("--contact {s:?}: expected reference or sensors")),
+    }
 }
 
 impl Default for ProbeArgs {
@@ -87,6 +117,9 @@ impl Default for ProbeArgs {
             open_loop: false,
             stabilizer: Setting::Scale(1.0),
             servo_damping: None,
+            sensors: SensorModel::IDEAL,
+            latency_ms: None,
+            contact: Contact::Reference,
         }
     }
 }
@@ -123,6 +156,11 @@ impl ProbeArgs {
         };
         let mut cfg = weakened(robot, scale, self.servo_damping);
         cfg.gains.enabled = !self.open_loop;
+        cfg.gains.contact_from_sensors = self.contact == Contact::Sensors;
+        cfg.sensors = self.sensors;
+        if let Some(ms) = self.latency_ms {
+            cfg.sensors.latency_ticks = ms;
+        }
         Ok(Probe {
             cfg,
             scale,
@@ -142,11 +180,19 @@ impl Probe {
     /// s/rad` or `open loop, servo damping 600 N m s/rad`.
     pub fn mode(&self) -> String {
         let kd = self.servo_damping();
-        if self.open_loop {
+        let mut m = if self.open_loop {
             format!("open loop, servo damping {kd} N m s/rad")
         } else {
             format!("stabilizer × {}, servo damping {kd} N m s/rad", self.scale)
+        };
+        let s = self.cfg.sensors;
+        if !s.is_ideal() {
+            m += &format!(", noisy sensors {} ms late", s.latency_ticks);
         }
+        if self.cfg.gains.contact_from_sensors {
+            m += ", contact from the force sensors";
+        }
+        m
     }
 
     /// Writes the settings into the JSON object `json`: `stabilizer` (false when open loop),
@@ -156,6 +202,25 @@ impl Probe {
         json["stabilizer"] = Value::Bool(!self.open_loop);
         json["stabilizer_scale"] = self.scale.into();
         json["servo_damping"] = self.servo_damping().into();
+        let m = self.cfg.sensors;
+        json["sensors"] = json!({
+            "ideal": m.is_ideal(),
+            "attitude_rad": m.attitude_rad,
+            "attitude_bias_rad": m.attitude_bias_rad,
+            "gyro_rad_s": m.gyro_rad_s,
+            "accel_m_s2": m.accel_m_s2,
+            "encoder_rad": m.encoder_rad,
+            "encoder_rad_s": m.encoder_rad_s,
+            "force_n": m.force_n,
+            "torque_nm": m.torque_nm,
+            "latency_ms": m.latency_ticks,
+        });
+        json["contact"] = if self.cfg.gains.contact_from_sensors {
+            "sensors"
+        } else {
+            "reference"
+        }
+        .into();
         if let Some(rungs) = &self.ladder {
             json["weakest_ladder"] = rungs
                 .iter()
@@ -284,14 +349,40 @@ mod tests {
             open_loop: false,
             stabilizer: Setting::Scale(0.3),
             servo_damping: Some(150.0),
+            ..ProbeArgs::default()
         };
         let p = args.resolve(&Robot::hrp2()).unwrap();
         assert_eq!(p.cfg, weakened(&Robot::hrp2(), 0.3, Some(150.0)));
         let mut j = json!({});
         p.record(&mut j);
         assert_eq!(
-            j,
-            json!({"stabilizer": true, "stabilizer_scale": 0.3, "servo_damping": 150.0})
+            (
+                &j["stabilizer"],
+                &j["stabilizer_scale"],
+                &j["servo_damping"]
+            ),
+            (&json!(true), &json!(0.3), &json!(150.0))
+        );
+        assert_eq!(
+            (&j["sensors"]["ideal"], &j["contact"]),
+            (&json!(true), &json!("reference"))
+        );
+        // Noisy sensors with their latency replaced, the contact from the force sensors.
+        let args = ProbeArgs {
+            sensors: SensorModel::REALISTIC,
+            latency_ms: Some(7),
+            contact: Contact::Sensors,
+            ..ProbeArgs::default()
+        };
+        let noisy = args.resolve(&Robot::hrp2()).unwrap();
+        assert!(noisy.cfg.gains.contact_from_sensors);
+        assert_eq!(noisy.cfg.sensors.latency_ticks, 7);
+        assert_eq!(noisy.cfg.sensors.force_n, SensorModel::REALISTIC.force_n);
+        let mut j = json!({});
+        noisy.record(&mut j);
+        assert_eq!(
+            (&j["sensors"]["latency_ms"], &j["contact"]),
+            (&json!(7), &json!("sensors"))
         );
         assert_eq!(p.mode(), "stabilizer × 0.3, servo damping 150 N m s/rad");
         let open = ProbeArgs {

@@ -18,6 +18,9 @@
 //!
 //! # Every control tick (1 ms)
 //!
+//! The contact phase (which foot supports) is the reference's, or with
+//! [`Gains::contact_from_sensors`] the ankle force sensors' ([`contact_phase`]).
+//!
 //! 1. **State estimate** (IMU + encoders): the waist attitude `R` from the IMU, the joint
 //!    angles from the encoders; forward kinematics with the waist at the origin in attitude
 //!    `R` gives the COG relative to each sole; anchored at the reference pose of the support
@@ -79,6 +82,9 @@ pub struct Gains {
     pub cog_return_s: f64,
     /// Largest `|Δc|` \[m\].
     pub cog_limit_m: f64,
+    /// Where the contact phase comes from: the reference's phase (`false`), or the ankle
+    /// force sensors (`true`, [`contact_phase`]).
+    pub contact_from_sensors: bool,
 }
 
 impl Default for Gains {
@@ -96,8 +102,38 @@ impl Default for Gains {
             k_cog: 8.0,
             cog_return_s: 1.0,
             cog_limit_m: 0.04,
+            contact_from_sensors: false,
         }
     }
+}
+
+/// A foot is on the ground when its sensor's vertical ground force is above this share of
+/// the robot's weight (and off it below half of it: the hysteresis keeps a touchdown from
+/// chattering).
+pub const CONTACT_SHARE: f64 = 0.1;
+
+/// The contact phase the ankle force sensors say: `Single(k)` when only foot `k` carries
+/// more than [`CONTACT_SHARE`] of the weight `mg` (a foot in contact stays so until its force
+/// falls below half of that), `Double` when both do; with neither (a flight phase the
+/// references never plan), the reference's phase.
+pub fn contact_phase(
+    fz: [f64; 2],
+    mg: f64,
+    before: [bool; 2],
+    reference: Phase,
+) -> (Phase, [bool; 2]) {
+    let on = |k: usize| {
+        let threshold = if before[k] { 0.5 } else { 1.0 } * CONTACT_SHARE * mg;
+        fz[k] > threshold
+    };
+    let contact = [on(0), on(1)];
+    let phase = match contact {
+        [true, true] => Phase::Double,
+        [true, false] => Phase::Single(Side::Left),
+        [false, true] => Phase::Single(Side::Right),
+        [false, false] => reference,
+    };
+    (phase, contact)
 }
 
 impl Gains {
@@ -147,6 +183,8 @@ pub struct Stabilizer {
     dz: f64,
     dc: [f64; 2],
     waist_guess: Option<Pose>,
+    /// The feet in contact by the force sensors (with `contact_from_sensors`).
+    contact: [bool; 2],
     /// The last tick's internals.
     pub internals: Internals,
 }
@@ -228,6 +266,7 @@ impl Stabilizer {
             dz: 0.0,
             dc: [0.0; 2],
             waist_guess: None,
+            contact: [true; 2],
             internals: Internals::default(),
         }
     }
@@ -258,6 +297,14 @@ impl Stabilizer {
                 local[k] = c;
             }
         }
+        let phase = if g.contact_from_sensors {
+            let mg = self.robot.total_mass() * self.robot.gravity();
+            let (phase, contact) = contact_phase(fz, mg, self.contact, r.phase);
+            self.contact = contact;
+            phase
+        } else {
+            r.phase
+        };
         // 1. State estimate.
         let att = quat_to_mat(&sensors[sensor::QUAT..sensor::QUAT + 4]);
         let origin = Pose {
@@ -265,7 +312,7 @@ impl Stabilizer {
             r: att,
         };
         let (soles_rel, _, cog_rel) = self.robot.fk(&origin, &q_meas);
-        let weights = match r.phase {
+        let weights = match phase {
             Phase::Single(s) => {
                 let i = s as usize;
                 let mut w = [0.0; 2];
@@ -308,7 +355,7 @@ impl Stabilizer {
         }
         // 4. Distribution.
         let (a, b) = (soles_ref[0].p, soles_ref[1].p);
-        let (alpha, rest) = match r.phase {
+        let (alpha, rest) = match phase {
             Phase::Single(s) => {
                 let i = s as usize;
                 let sp = soles_ref[i].p;
@@ -367,7 +414,7 @@ impl Stabilizer {
             // 5. Foot damping control.
             for k in 0..2 {
                 let [pitch, roll] = &mut self.ankle[k];
-                let swing = matches!(r.phase, Phase::Single(s) if s as usize != k);
+                let swing = matches!(phase, Phase::Single(s) if s as usize != k);
                 let ret = if swing {
                     SWING_RETURN_S
                 } else {
@@ -388,7 +435,7 @@ impl Stabilizer {
                 *roll = roll.clamp(-g.ankle_limit_rad, g.ankle_limit_rad);
             }
             // 6. Foot force difference control (double support only).
-            let double = !matches!(r.phase, Phase::Single(_));
+            let double = !matches!(phase, Phase::Single(_));
             let mg = self.robot.total_mass() * self.robot.gravity();
             let diff_d = (2.0 * alpha - 1.0) * mg;
             let diff_m = fz[0] - fz[1];

@@ -1,0 +1,129 @@
+//! The engine with noisy, biased, late sensors and with the contact phase from the force
+//! sensors (`--sensors`, `--latency-ms`, `--contact`): HRP-2's `straight` through the command
+//! line, the settings recorded in `physics.json`, and the book's table
+//! (`docs/src/physics.md`, "Sensors and contact") as measured.
+
+mod engine;
+
+use std::process::Command;
+
+use doc_figures::Quotes;
+use engine::engine_here;
+
+const COMMAND: &str = "cargo test --release -p host-sim --test sensors -- --nocapture";
+const BOOK: &str = "docs/src/physics.md";
+
+fn physics(args: &[&str], name: &str) -> serde_json::Value {
+    let dir = std::env::temp_dir().join(format!("host-sim-sensors-{name}-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["physics", "straight"])
+        .args(args)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j = serde_json::from_slice(&std::fs::read(dir.join("physics.json")).expect("json"))
+        .expect("JSON");
+    let _ = std::fs::remove_dir_all(&dir);
+    j
+}
+
+/// `f(v)` and `f(v ± d)`: a value on a rounding boundary may round either way elsewhere.
+fn spell(f: &dyn Fn(f64) -> String, v: f64, d: f64) -> Vec<String> {
+    let mut out: Vec<String> = [v, v - d, v + d].iter().map(|&x| f(x)).collect();
+    out.dedup();
+    out
+}
+
+#[test]
+fn sensors_and_contact_as_the_book_says() {
+    if !engine_here("sensors_and_contact_as_the_book_says") {
+        return;
+    }
+    let rows: [(&str, &[&str]); 4] = [
+        ("ideal, contact from the sensors", &["--contact", "sensors"]),
+        (
+            "realistic without latency",
+            &["--sensors", "realistic", "--latency-ms", "0"],
+        ),
+        ("realistic (2 ms late)", &["--sensors", "realistic"]),
+        ("ideal but 5 ms late", &["--latency-ms", "5"]),
+    ];
+    let ideal = physics(&[], "ideal");
+    assert_eq!(ideal["sensors"]["ideal"], true, "{ideal}");
+    assert_eq!(ideal["contact"], "reference", "{ideal}");
+    let mut q = Quotes::new(COMMAND);
+    let mut mean = Vec::new();
+    for (row, args) in rows {
+        let j = physics(args, &row.replace(' ', "_"));
+        let num = |k: &str| j[k].as_f64().unwrap_or_else(|| panic!("{k}: {j}"));
+        assert_eq!(j["fell"], false, "{row}: {j}");
+        mean.push(num("cop_err_mean_m"));
+        println!(
+            "{row}: tilt {:.2}°, CoP error mean {:.1} / worst {:.1} mm, COG drift {:.1} mm, \
+             foot drift {:.1} mm",
+            num("max_tilt_deg"),
+            1e3 * num("cop_err_mean_m"),
+            1e3 * num("cop_err_max_m"),
+            1e3 * num("cog_drift_max_m"),
+            1e3 * num("foot_drift_max_m")
+        );
+        let anchor = format!("| {row} |");
+        let mut pairs = Vec::new();
+        for a in [0.0, -2e-6, 2e-6] {
+            for b in [0.0, -2e-6, 2e-6] {
+                let p = format!(
+                    "{:.1} / {:.1} mm",
+                    1e3 * (num("cop_err_mean_m") + a),
+                    1e3 * (num("cop_err_max_m") + b)
+                );
+                if !pairs.contains(&p) {
+                    pairs.push(p);
+                }
+            }
+        }
+        let mm = |x: f64| format!("{:.1} mm", 1e3 * x);
+        q = q
+            .cell(BOOK, &anchor, "fell", "no")
+            .cell_any(
+                BOOK,
+                &anchor,
+                "max tilt",
+                &spell(&|x| format!("{x:.2}°"), num("max_tilt_deg"), 2e-4),
+            )
+            .cell_any(BOOK, &anchor, "CoP error mean / worst", &pairs)
+            .cell_any(
+                BOOK,
+                &anchor,
+                "COG drift",
+                &spell(&mm, num("cog_drift_max_m"), 2e-6),
+            )
+            .cell_any(
+                BOOK,
+                &anchor,
+                "foot drift",
+                &spell(&mm, num("foot_drift_max_m"), 2e-6),
+            );
+        // The settings are recorded.
+        let noisy = args.contains(&"realistic") || args.contains(&"--latency-ms");
+        assert_eq!(j["sensors"]["ideal"], !noisy, "{row}: {j}");
+        let from_sensors = args.contains(&"sensors");
+        assert_eq!(
+            j["contact"],
+            if from_sensors { "sensors" } else { "reference" },
+            "{row}"
+        );
+    }
+    // What the book concludes: noise and latency each make the tracking worse, latency most.
+    let base = ideal["cop_err_mean_m"].as_f64().expect("mean");
+    assert!(
+        mean[1] > base && mean[2] > mean[1] && mean[3] > mean[2],
+        "{mean:?} vs {base}"
+    );
+    q.assert();
+}
