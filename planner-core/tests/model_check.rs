@@ -673,7 +673,7 @@ fn check(name: &str, script: Vec<Intent>, goals: Vec<Goal>, quoted: Option<Quote
 struct Quoted {
     /// In the front page's row: `| 9.2 M + `.
     readme: fn(&str) -> String,
-    /// In the book's sentence: `cycles: 9.2 and `.
+    /// In the book's sentence: `cycles: 9.2, `.
     book: fn(&str) -> String,
 }
 
@@ -744,7 +744,7 @@ fn across_a_reset_nothing_old_is_taken() {
         // The first of the documents' two counts.
         Some(Quoted {
             readme: |m| format!("| {m} M + "),
-            book: |m| format!("cycles: {m} and "),
+            book: |m| format!("cycles: {m}, "),
         }),
     );
 }
@@ -794,8 +794,8 @@ fn walking_only_new_commands_keep_it_going_and_an_estop_never_waits() {
         ],
         // The second of the documents' two counts.
         Some(Quoted {
-            readme: |m| format!("+ {m} M states"),
-            book: |m| format!(" and {m} million"),
+            readme: |m| format!("+ {m} M + "),
+            book: |m| format!(", {m} and "),
         }),
     );
 }
@@ -857,6 +857,10 @@ fn measured_states_only_fresh_and_of_their_session() {
                 })
             }),
         ],
-        None,
+        // The third count.
+        Some(Quoted {
+            readme: |m| format!("+ {m} M states"),
+            book: |m| format!(" and {m} million"),
+        }),
     );
 }
