@@ -468,3 +468,35 @@ fn refusals_name_the_urdf_element() {
     assert!(!dir.join("r.toml").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The push-recovery map of Talos (`WALK_LONG=1`; 576 engine runs, about 9 minutes of a
+/// release build on 2 cores), against its summary in the book (`docs/src/adjust.md`).
+#[test]
+fn talos_push_map_is_the_books() {
+    if std::env::var("WALK_LONG").as_deref() != Ok("1") {
+        eprintln!("import: Talos's push map runs with WALK_LONG=1");
+        return;
+    }
+    let test = "talos_push_map_is_the_books";
+    let Some(urdf) = robot_file(TALOS, test) else {
+        return;
+    };
+    if !engine_here(test) {
+        return;
+    }
+    use host_sim::physics::push_map::{map, summary_lines, MapSpec};
+    use host_sim::physics::PhysicsConfig;
+    let robot = import(&urdf, None).expect("imports").robot;
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let spec = MapSpec::new(false);
+    let cells = map(&robot.node_config(), &cfg, &spec).expect("the map");
+    let book = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../docs/src/adjust.md"),
+    )
+    .expect("the book");
+    let sums = summary_lines(&spec, &cells);
+    eprintln!("{sums}");
+    for line in sums.lines().filter(|l| !l.is_empty()) {
+        assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
+    }
+}
