@@ -674,3 +674,49 @@ fn lookups_by_id_match_a_search_of_the_queue() {
         check_lookups(&g, &model, &probe, &format!("{name}, cleared"));
     }
 }
+
+/// The node's own move of the next landing (a capture step, `Gait::place_steps`) is not
+/// slowed down: eq. 18 may shorten its single support but not lengthen it. The same move sent
+/// as a modification (`Gait::modify`) gets eq. 18 as the paper has it: lengthened forward,
+/// shortened backward. Backward, both agree.
+#[test]
+fn a_capture_step_is_shortened_never_lengthened() {
+    // (the adjustment of the re-plan that the move of step 3 by `dx` causes, as a capture
+    // step or as a modification)
+    let replan = |dx: f64, capture: bool| -> i32 {
+        let mut g = standing();
+        push_straight(&mut g, 8, 0.2);
+        g.start().unwrap();
+        // The double support before step 3 swings.
+        let mut guard = 0;
+        while g.next_target() != Some(3) || matches!(g.last().phase, Phase::Single(_)) {
+            g.tick();
+            guard += 1;
+            assert!(guard < 2000, "step 3 never became the next target");
+        }
+        let plans = g.plans();
+        let to = Footstep::new(Side::Left, 0.8 + dx, 0.1, 0.0);
+        if capture {
+            g.place_steps(|id| (id == 3).then_some([to.x, to.y]));
+            g.check_next_target().expect("feasible");
+        } else {
+            g.modify(3, to).expect("feasible");
+        }
+        while g.plans() == plans {
+            g.tick();
+        }
+        g.last_replan().expect("a re-plan").adjust_ticks
+    };
+    let (fwd_mod, fwd_cap) = (replan(0.08, false), replan(0.08, true));
+    let (back_mod, back_cap) = (replan(-0.08, false), replan(-0.08, true));
+    assert!(
+        fwd_mod > 0,
+        "a forward modification is lengthened: {fwd_mod}"
+    );
+    assert_eq!(fwd_cap, 0, "a forward capture step is not: {fwd_cap}");
+    assert!(
+        back_mod < 0,
+        "a backward modification is shortened: {back_mod}"
+    );
+    assert_eq!(back_cap, back_mod);
+}

@@ -44,7 +44,9 @@
 //!   "before 0" column is all zeros);
 //! * `r ≤ 0` (the modification reverses the motion) gives `ΔT_max` as eq. 18 says, except when
 //!   `|d_f|` is itself below the threshold: the target pattern is at rest, `r → 0⁺`, and
-//!   `ln r → −∞` gives `ΔT_min` (Table II's "after 0" row).
+//!   `ln r → −∞` gives `ΔT_min` (Table II's "after 0" row);
+//! * a capture step (the node's own move of the landing, [`Gait::place_steps`]) takes
+//!   `min(ΔT, 0)`: it must come early, so its single support is shortened, never lengthened.
 //!
 //! # Feasibility (eq. 17)
 //! A modification of the next swing target is checked when it arrives: the re-plan it would
@@ -91,6 +93,9 @@ struct Queued<T> {
     step: Footstep<T>,
     /// Modified after the current window was planned.
     modified: bool,
+    /// Its last move was the node's step adjustment (a capture step): eq. 18 may shorten its
+    /// single support, never lengthen it.
+    capture: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -199,6 +204,7 @@ impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
                 id: 0,
                 step: Footstep::PARKED,
                 modified: false,
+                capture: false,
             }),
             landed: Some(Side::Left),
             failed: false,

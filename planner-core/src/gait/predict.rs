@@ -178,6 +178,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         if !pending {
             return Ok((0, T::ONE, 0));
         }
+        // A capture step (the node's own move) is not slowed down.
+        let capture = self.queue.front().is_some_and(|q| q.capture);
         let f = match self.target {
             Some((g, w, a, f)) if g == self.gen && w == self.serial && a == at => f,
             _ => {
@@ -229,6 +231,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                     .min(p.adjust_max_ticks as f64)) as i32
             }
         };
+        let ticks = if capture { ticks.min(0) } else { ticks };
         let r = if di.abs() < eps { T::ONE } else { df / di };
         Ok((ticks, r, plane as u8))
     }

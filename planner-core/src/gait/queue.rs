@@ -82,6 +82,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 id,
                 step,
                 modified: false,
+                capture: false,
             })
             .map_err(|q| (GaitError::QueueFull, q.step))?;
         self.consecutive = consecutive;
@@ -126,6 +127,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.failed = false;
         for q in self.queue.iter_mut() {
             q.modified = false;
+            q.capture = false;
         }
         Ok(())
     }
@@ -177,6 +179,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         if let Some(q) = self.queue.get_mut(pos) {
             q.step = step;
             q.modified = true;
+            q.capture = false;
         }
         self.gen = self.gen.wrapping_add(1);
         if pos == 0 && self.mode == Mode::Walking {

@@ -4,7 +4,10 @@
 //!
 //! A move of the next swing target is a modification in the paper's sense: it is marked
 //! modified, so the re-plan at the next start of single support adjusts the single support by
-//! eq. 18 and shapes the fluctuation, as for a modification from the bus.
+//! eq. 18 and shapes the fluctuation, as for a modification from the bus, with one
+//! difference: a capture step must come early, so eq. 18 may shorten its single support but
+//! not lengthen it (`ΔT ≤ 0`; Khadiv et al., Humanoids 2016, adapt the step time the same
+//! way). A modification from the bus after the move makes it an ordinary modification again.
 
 use super::*;
 
@@ -21,6 +24,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                     q.step.x = x;
                     q.step.y = y;
                     q.modified = true;
+                    q.capture = true;
                     moved = true;
                 }
             }

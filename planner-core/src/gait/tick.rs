@@ -101,6 +101,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                 id: u16::MAX,
                 step: inputs.land[0],
                 modified: false,
+                capture: false,
             },
         };
         // The hint is false whenever the queue is empty (as after every `clear`).
@@ -136,6 +137,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.swing = Some(swing);
         for q in self.queue.iter_mut() {
             q.modified = false;
+            q.capture = false;
         }
         self.info = Some(ReplanInfo {
             tick: self.tick,

@@ -11,7 +11,9 @@
 //! ([`AdjustConfig::margin`]) grows at `ω` until the touch-down, and the foot lands where the
 //! stabilizer can hold it again. This is the capture-point step adjustment of Englsberger et
 //! al. (IROS 2011) and Khadiv et al. (Humanoids 2016), with the paper's eq. 18 in place of
-//! their timing adaptation.
+//! their timing adaptation, held to its direction: the moved step is a capture step
+//! ([`crate::gait::Gait::place_steps`]), whose single support eq. 18 may shorten but not
+//! lengthen.
 //!
 //! # One shift for the rest of the walk
 //! The move is a shift `s` (in the footstep unit, 0.5 mm) of the next swing target and every
