@@ -428,17 +428,17 @@ fn refusals_name_the_urdf_element() {
                     "",
                 )
             }),
-            "(<link name=\"l_link5\">) has no <collision> geometry",
+            "(<link name=\"l_link5\">) has no <collision> or <visual> geometry",
         ),
         (
             "a mesh sole",
             biped(|s| {
                 s.replace(
                     "<box size=\"0.2 0.1 0.05\"/>",
-                    "<mesh filename=\"foot.dae\"/>",
+                    "<mesh filename=\"foot.ply\"/>",
                 )
             }),
-            "<mesh filename=\"foot.dae\">: only STL meshes",
+            "<mesh filename=\"foot.ply\">: the soles are read from STL, COLLADA",
         ),
     ];
     for (name, text, want) in cases {

@@ -17,7 +17,8 @@
 //! Collision shapes: the **soles** are boxes of the robot file's `[feet]` `sole_length` ×
 //! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or the ankle's
 //! height above the sole if that is less, their bottom face on the sole centre's plane, in the
-//! ankle's frame; every other body (but the foot) has the box of equal principal moments
+//! ankle's frame; every other body (but the last two links of a leg, at the ankle) has the box
+//! of equal principal moments
 //! (`a² = 6 (I_y + I_z − I_x) / m`, and so on, from the diagonal of its tensor), so that a fall
 //! can touch the floor with a knee, a hip or the trunk. Robot geoms collide with the floor only
 //! (`contype 2, conaffinity 1` against the floor's `1, 2`): no self collision.
@@ -371,7 +372,8 @@ impl Robot {
             }
             if let Some(b) = link_body(link) {
                 x.push_str(&inertial(&b));
-                if i < 5 {
+                // The links at the ankle (the last two) touch the floor with the sole only.
+                if i < 4 {
                     x.push_str(&collision_box(&format!("{}_geom", link.name), &b));
                 }
             }

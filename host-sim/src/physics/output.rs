@@ -126,6 +126,10 @@ pub fn write_outputs(
     let path = out.join("physics.json");
     fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     write_csv(&out.join("physics.csv"), r)?;
+    if r.samples.is_empty() {
+        // A fall before the first sample (in the settle before the walk): nothing to plot.
+        return Ok(());
+    }
     let mode = mode(cfg);
     let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
     let limit: Vec<(f64, f64)> = r

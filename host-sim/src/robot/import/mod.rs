@@ -16,7 +16,8 @@
 //! * **Masses and inertias**: each `<inertial>` as given (its `rpy` turned into the link frame,
 //!   the full tensor kept), merged by the parallel-axis theorem ([`Body::merged`]).
 //! * **The soles** ([`sole`]): the collision geometry of the foot (the last leg link and what
-//!   is fixed to it: boxes, cylinders, capsules, spheres, STL meshes with `package://` resolved
+//!   is fixed to it, or its visual geometry if it has none: boxes, cylinders, capsules, spheres,
+//!   STL, COLLADA and OBJ meshes with `package://` resolved
 //!   by the directory of that name above the URDF or on `ROS_PACKAGE_PATH`); the sole plane is
 //!   its lowest point, the sole its points within [`sole::CONTACT_BAND_M`] of it; the sole
 //!   centre the leaf's frame if the leaf is a frame fixed below the ankle (Talos's
@@ -39,8 +40,8 @@
 //!
 //! Refused, with the URDF element named: several or no root links, a massless base, a leg
 //! without six revolute joints (or with a prismatic, planar or floating joint), no pair of
-//! feet, a foot without collision geometry (and no `--sole` frame), a moving link without an
-//! `<inertial>`, a mesh that is not STL, a standing posture the legs cannot reach.
+//! feet, a foot without geometry, a moving link without an `<inertial>`, a mesh of another
+//! format, a standing posture the legs cannot reach.
 
 pub mod sole;
 
@@ -423,7 +424,12 @@ pub(crate) fn resolve(filename: &str, dir: &Path) -> Result<PathBuf, ImportError
 
 /// Imports a URDF file; `soles`: the left and right foot links, if given.
 pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportError> {
-    let urdf = urdf_rs::read_file(path)
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| ImportError(format!("{}: {e}", path.display())))?;
+    // An empty `<texture/>` (a material without an image, as some descriptions write it) is
+    // no texture: the reader wants a file name, and the import reads no material.
+    let text = text.replace("<texture />", "").replace("<texture/>", "");
+    let urdf = urdf_rs::read_from_string(&text)
         .map_err(|e| ImportError(format!("{}: not a readable URDF: {e}", path.display())))?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let t = Tree::new(urdf, dir)?;

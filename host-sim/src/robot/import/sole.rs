@@ -1,9 +1,9 @@
 //! The sole of an imported foot, from its collision geometry.
 //!
-//! Every collision shape of the foot's links is turned into points in the ankle frame: a
-//! box's eight corners, a sphere's lowest point, a cylinder's two end circles (32 points
-//! each), a capsule's two end spheres' lowest points and end circles, an STL mesh's vertices
-//! (scaled). The **sole plane** is the lowest point's height `z_s`; the **contact points**
+//! Every collision shape of the foot's links (their visual shapes if they have none) is turned
+//! into points in the ankle frame: a box's eight corners, a sphere's lowest point, a
+//! cylinder's two end circles (32 points each), a capsule's two end spheres' lowest points
+//! and end circles, a mesh's vertices (scaled; STL, COLLADA `.dae` and OBJ). The **sole plane** is the lowest point's height `z_s`; the **contact points**
 //! those within [`CONTACT_BAND_M`] of it. The sole centre is the foot's sole frame where the
 //! URDF gives one (a frame fixed below the ankle), the middle of the contact points' bounds
 //! otherwise; the sole rectangle is the largest one centred there inside those bounds.
@@ -61,32 +61,110 @@ fn points(t: &Tree, g: &Geometry, pose: &Pose, out: &mut Vec<Vec3>) -> Result<()
         }
         Geometry::Mesh { filename, scale } => {
             let path = resolve(filename, &t.dir)?;
-            let is_stl = path
+            let ext = path
                 .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
-            if !is_stl {
-                return err(format!(
-                    "<mesh filename=\"{filename}\">: only STL meshes are read for the soles"
-                ));
-            }
-            let mut f = BufReader::new(
-                File::open(&path)
-                    .map_err(|e| ImportError(format!("<mesh filename=\"{filename}\">: {e}")))?,
-            );
-            let mesh = stl_io::read_stl(&mut f)
-                .map_err(|e| ImportError(format!("<mesh filename=\"{filename}\">: {e}")))?;
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            let named = |e: String| ImportError(format!("<mesh filename=\"{filename}\">: {e}"));
+            let vertices: Vec<Vec3> = match ext.as_str() {
+                "stl" => {
+                    let mut f =
+                        BufReader::new(File::open(&path).map_err(|e| named(e.to_string()))?);
+                    let mesh = stl_io::read_stl(&mut f).map_err(|e| named(e.to_string()))?;
+                    mesh.vertices.iter().map(|v| v.0.map(f64::from)).collect()
+                }
+                "dae" | "obj" => {
+                    let text = std::fs::read_to_string(&path).map_err(|e| named(e.to_string()))?;
+                    let v = if ext == "dae" { dae(&text) } else { obj(&text) };
+                    if v.is_empty() {
+                        return Err(named("no vertex positions found".into()));
+                    }
+                    v
+                }
+                _ => {
+                    return err(format!(
+                        "<mesh filename=\"{filename}\">: the soles are read from STL, COLLADA \
+                         (.dae) and OBJ meshes only"
+                    ))
+                }
+            };
             let s = scale.map_or([1.0; 3], |s| s.0);
-            for v in &mesh.vertices {
-                let p = [
-                    f64::from(v.0[0]) * s[0],
-                    f64::from(v.0[1]) * s[1],
-                    f64::from(v.0[2]) * s[2],
-                ];
-                out.push(pose.apply(p));
+            for v in vertices {
+                out.push(pose.apply([v[0] * s[0], v[1] * s[1], v[2] * s[2]]));
             }
         }
     }
     Ok(())
+}
+
+/// The vertex positions of a COLLADA document: every `<float_array>` of a source whose id
+/// names positions, in metres (`<unit meter>`, and a uniform `<scale>` shared by the scene's
+/// nodes) and z up (`<up_axis>` `Y_UP` turned). Other node transforms are not applied.
+fn dae(text: &str) -> Vec<Vec3> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let at = tag.find(&format!("{name}=\""))? + name.len() + 2;
+        Some(tag[at..at + tag[at..].find('"')?].to_string())
+    };
+    let unit = text
+        .find("<unit")
+        .and_then(|i| attr(&text[i..i + text[i..].find('>').unwrap_or(0)], "meter"))
+        .and_then(|m| m.parse::<f64>().ok())
+        .unwrap_or(1.0);
+    let y_up = text.contains("<up_axis>Y_UP</up_axis>");
+    // The scene's nodes may scale the geometry (a mesh in centimetres under a node scaled by
+    // 0.01): one uniform scale shared by every node applies; other node transforms do not.
+    let scales: Vec<f64> = text
+        .match_indices("<scale")
+        .filter_map(|(i, _)| {
+            let body = &text[i..];
+            let v: Vec<f64> = body[body.find('>')? + 1..body.find("</scale>")?]
+                .split_whitespace()
+                .filter_map(|x| x.parse().ok())
+                .collect();
+            (v.len() == 3 && v[0] == v[1] && v[1] == v[2]).then_some(v[0])
+        })
+        .collect();
+    let node_scale = match scales.first() {
+        Some(&first) if scales.iter().all(|&s| s == first) => first,
+        _ => 1.0,
+    };
+    let unit = unit * node_scale;
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("<float_array") {
+        rest = &rest[i..];
+        let Some(end_tag) = rest.find('>') else { break };
+        let tag = &rest[..end_tag];
+        let body_end = rest.find("</float_array>").unwrap_or(end_tag);
+        let body = &rest[end_tag + 1..body_end.max(end_tag + 1)];
+        let is_position = attr(tag, "id").is_some_and(|id| id.to_lowercase().contains("position"));
+        if is_position {
+            let v: Vec<f64> = body
+                .split_whitespace()
+                .filter_map(|x| x.parse().ok())
+                .collect();
+            for c in v.chunks_exact(3) {
+                let p = [c[0] * unit, c[1] * unit, c[2] * unit];
+                out.push(if y_up { [p[0], -p[2], p[1]] } else { p });
+            }
+        }
+        rest = &rest[end_tag..];
+    }
+    out
+}
+
+/// The vertex positions of an OBJ file (its `v x y z` lines).
+fn obj(text: &str) -> Vec<Vec3> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .filter_map(|l| {
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .filter_map(|x| x.parse().ok())
+                .collect();
+            (v.len() >= 3).then(|| [v[0], v[1], v[2]])
+        })
+        .collect()
 }
 
 /// The sole of a foot made of `links` (each with its pose in the ankle frame), with the
@@ -102,10 +180,19 @@ pub(crate) fn sole(
             points(t, &c.geometry, &pose.then(&pose_of(&c.origin)), &mut pts)?;
         }
     }
+    if pts.is_empty() {
+        // No collision shape: the visual one.
+        for (name, pose) in links {
+            for v in &t.link(name).visual {
+                points(t, &v.geometry, &pose.then(&pose_of(&v.origin)), &mut pts)?;
+            }
+        }
+    }
     let names: Vec<&str> = links.iter().map(|(n, _)| n.as_str()).collect();
     if pts.is_empty() {
         return err(format!(
-            "the foot (<link name=\"{}\">) has no <collision> geometry: its sole cannot be found",
+            "the foot (<link name=\"{}\">) has no <collision> or <visual> geometry: its sole \
+             cannot be found",
             names.join("\">, <link name=\"")
         ));
     }
@@ -135,4 +222,33 @@ pub(crate) fn sole(
         ));
     }
     Ok(Sole { centre, size })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn collada_positions_in_metres_and_z_up() {
+        let doc = r#"<COLLADA><asset><unit meter="0.1" name="decimetre"/><up_axis>Y_UP</up_axis></asset>
+            <library_geometries><geometry><mesh>
+            <source id="a-positions"><float_array id="a-positions-array" count="6">1 2 3 4 5 6</float_array></source>
+            <source id="a-normals"><float_array id="a-normals-array" count="3">0 0 1</float_array></source>
+            </mesh></geometry></library_geometries>
+            <library_visual_scenes><visual_scene><node><scale sid="scale">0.5 0.5 0.5</scale></node></visual_scene></library_visual_scenes>
+            </COLLADA>"#;
+        // × 0.1 (unit) × 0.5 (the nodes' scale), then y up turned to z up: (x, −z, y).
+        let v = dae(doc);
+        let want = [[0.05, -0.15, 0.1], [0.2, -0.3, 0.25]];
+        assert_eq!(v.len(), 2);
+        for (a, b) in v.iter().zip(want) {
+            for i in 0..3 {
+                assert!((a[i] - b[i]).abs() < 1e-12, "{v:?}");
+            }
+        }
+        assert_eq!(
+            obj("# c\nv 1 2 3\nvn 0 0 1\nv 4 5 6 1\n"),
+            vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]
+        );
+    }
 }
