@@ -166,10 +166,26 @@ fn inertial(b: &Body) -> String {
 }
 
 fn collision_box(name: &str, b: &Body) -> String {
+    collision_box_within(name, b, None)
+}
+
+/// [`collision_box`], its extent along the link's z axis kept within `[lo, hi]` (the bone
+/// between a joint and the next, with a margin) when given: a slender link whose mass is
+/// spread unevenly has an equivalent box longer than the link, which would reach the floor.
+fn collision_box_within(name: &str, b: &Body, z: Option<[f64; 2]>) -> String {
+    let mut c = b.com;
+    let mut h = equivalent_box(b);
+    if let Some([lo, hi]) = z {
+        let (a, top) = ((c[2] - h[2]).max(lo), (c[2] + h[2]).min(hi));
+        if top > a {
+            c[2] = 0.5 * (a + top);
+            h[2] = 0.5 * (top - a);
+        }
+    }
     format!(
         "<geom name=\"{name}\" type=\"box\" pos=\"{}\" size=\"{}\" class=\"robot\"/>",
-        v3(b.com),
-        v3(equivalent_box(b))
+        v3(c),
+        v3(h)
     )
 }
 
@@ -374,7 +390,16 @@ impl Robot {
                 x.push_str(&inertial(&b));
                 // The links at the ankle (the last two) touch the floor with the sole only.
                 if i < 4 {
-                    x.push_str(&collision_box(&format!("{}_geom", link.name), &b));
+                    // An imported link's box stays on its bone (HRP-2's boxes are its bones).
+                    let bone = (self.model.closed_form.is_none()).then(|| {
+                        let o = leg.links[i + 1].joint.origin.p[2];
+                        [o.min(0.0) - 0.02, o.max(0.0) + 0.02]
+                    });
+                    x.push_str(&collision_box_within(
+                        &format!("{}_geom", link.name),
+                        &b,
+                        bone,
+                    ));
                 }
             }
             if i == 5 {
