@@ -250,14 +250,16 @@ impl Robot {
     pub fn of(robot: &crate::robot::Robot) -> Self {
         let p = &robot.planner.params;
         let scale = robot.model.total_mass() / link_table().total_mass();
-        let ankle = -robot.model.legs[0].sole.p[2];
+        // The ankle's height above the sole, in the sole's axes (at least a centimetre of box).
+        let sole = &robot.model.legs[0].sole;
+        let ankle = -mul_mv(&transpose(&sole.r), sole.p)[2];
         Self {
             servo: [SERVO_KP * scale, SERVO_KD * scale],
             model: Arc::new(robot.model.clone()),
             sole_half: [
                 p.sole_half_length,
                 p.sole_half_width,
-                0.5 * SOLE_BOX_HEIGHT.min(ankle),
+                0.5 * SOLE_BOX_HEIGHT.min(ankle).max(0.01),
             ],
         }
     }
@@ -308,14 +310,28 @@ impl Robot {
         self.model.legs[side_index(side)].sole.p
     }
 
+    /// A vector given in a leg's ankle frame, in its sole's axes (the same vector where the
+    /// sole is flat in the ankle frame, as HRP-2's).
+    pub fn to_sole(&self, side: Side, v: Vec3) -> Vec3 {
+        let r = &self.model.legs[side_index(side)].sole.r;
+        if *r == IDENTITY {
+            v
+        } else {
+            mul_mv(&transpose(r), v)
+        }
+    }
+
     /// The ankle's pitch and roll joints of a leg: each the index (of the last two) and the
     /// sign that turns a positive angle into a positive rotation about the ankle frame's y
     /// (pitch) and x (roll) axis. HRP-2's: `[(4, 1), (5, 1)]`.
     pub fn ankle_joints(&self, side: Side) -> [(usize, f64); 2] {
         let links = &self.model.legs[side_index(side)].links;
-        // Link 4's axis in the ankle frame (joint 5 at zero).
-        let a4 = mul_mv(&transpose(&links[5].joint.origin.r), links[4].joint.axis);
-        let a5 = links[5].joint.axis;
+        // Link 4's axis in the ankle frame (joint 5 at zero), both in the sole's axes.
+        let a4 = self.to_sole(
+            side,
+            mul_mv(&transpose(&links[5].joint.origin.r), links[4].joint.axis),
+        );
+        let a5 = self.to_sole(side, links[5].joint.axis);
         let sign = |v: f64| if v < 0.0 { -1.0 } else { 1.0 };
         if a4[1].abs() >= a5[1].abs() {
             [(4, sign(a4[1])), (5, sign(a5[0]))]
@@ -326,7 +342,7 @@ impl Robot {
 
     /// Ankle (frame origin) above the sole centre \[m\].
     pub fn ankle_height(&self) -> f64 {
-        -self.model.legs[0].sole.p[2]
+        -self.to_sole(Side::Left, self.model.legs[0].sole.p)[2]
     }
 
     /// Height of the waist origin in the walking posture \[m\].
@@ -404,10 +420,19 @@ impl Robot {
             }
             if i == 5 {
                 let mut c = leg.sole.p;
-                c[2] += self.sole_half[2];
+                let mut turn = String::new();
+                if leg.sole.r == IDENTITY {
+                    c[2] += self.sole_half[2];
+                } else {
+                    // The box's bottom on the sole's plane, in the sole's axes.
+                    let up = mul_mv(&leg.sole.r, [0.0, 0.0, self.sole_half[2]]);
+                    c = [c[0] + up[0], c[1] + up[1], c[2] + up[2]];
+                    let q = quat(&leg.sole.r);
+                    turn = format!(" quat=\"{} {} {} {}\"", g(q[0]), g(q[1]), g(q[2]), g(q[3]));
+                }
                 let _ = write!(
                     x,
-                    "<geom name=\"{p}_sole\" type=\"box\" pos=\"{}\" size=\"{}\" class=\"robot\"/>\
+                    "<geom name=\"{p}_sole\" type=\"box\" pos=\"{}\"{turn} size=\"{}\" class=\"robot\"/>\
                      <site name=\"{p}_ankle\" pos=\"0 0 0\"/></body>",
                     v3(c),
                     v3(self.sole_half)

@@ -284,13 +284,20 @@ impl Stabilizer {
         let mut local = [[f64::NAN; 2]; 2];
         for k in 0..2 {
             let o = sensor::FT + 6 * k;
-            let ft: [f64; 6] = core::array::from_fn(|i| sensors[o + i]);
             let side = [Side::Left, Side::Right][k];
+            // The sensor's force and torque in the sole's axes.
+            let rf = self
+                .robot
+                .to_sole(side, [sensors[o], sensors[o + 1], sensors[o + 2]]);
+            let rt = self
+                .robot
+                .to_sole(side, [sensors[o + 3], sensors[o + 4], sensors[o + 5]]);
+            let ft = [rf[0], rf[1], rf[2], rt[0], rt[1], rt[2]];
             let (f, cop) = sole_cop(
                 &ft,
                 self.robot.foot_mass(side) * self.robot.gravity(),
-                self.robot.foot_com(side),
-                self.robot.sole_offset(side),
+                self.robot.to_sole(side, self.robot.foot_com(side)),
+                self.robot.to_sole(side, self.robot.sole_offset(side)),
             );
             fz[k] = f;
             if let Some(c) = cop {

@@ -8,7 +8,7 @@
 //! | `[multibody.waist]` | the root link's own body, in its frame: `mass`, `com`, `inertia` (as in the hand-written table) |
 //! | `[multibody.trunk]` | the rest of the upper body (torso, arms, head) at its stated pose, merged into one body in the waist frame |
 //! | `[[multibody.left]]`, `[[multibody.right]]` | six entries, hip first: `joint` and `link` (names), `origin` \[m\] and `rpy` \[rad\] of the joint in the previous link's frame (the waist's for the first), its unit `axis`; optional `range` \[rad\], `effort` \[N m\], `velocity` \[rad/s\]; the link's `mass`, `com`, `inertia` (a mass of 0 is allowed) |
-//! | `[multibody.sole]` | `left`, `right`: the sole centre in the last link's frame \[m\] (the sole is flat in that frame) |
+//! | `[multibody.sole]` | `left`, `right`: the sole centre in the last link's frame \[m\]; optional `left_rpy`, `right_rpy`: the sole's orientation in it \[rad\] (default: the sole is flat in that frame) |
 //!
 //! The checks, each naming its key: six entries per leg, unit axes, ranges with
 //! `lower < upper`, positive limits, bodies as in the hand-written table, and the standing
@@ -20,7 +20,7 @@ use planner_core::robot::RobotError;
 use serde::Deserialize;
 
 use super::model::{
-    mul_mv, norm, rot_rpy, side_index, Joint, LegAngles, Link, Model, Named, Pose, Vec3, IDENTITY,
+    mul_mv, norm, rot_rpy, side_index, Joint, LegAngles, Link, Model, Named, Pose, Vec3,
 };
 use super::table::{invalid, length, BodySpec};
 
@@ -41,6 +41,10 @@ pub(super) struct Tree {
 struct Soles {
     left: Vec3,
     right: Vec3,
+    #[serde(default)]
+    left_rpy: Option<Vec3>,
+    #[serde(default)]
+    right_rpy: Option<Vec3>,
 }
 
 /// One leg link as the file gives it.
@@ -140,7 +144,7 @@ impl Tree {
     /// solved (the knees bent by the seed).
     pub(super) fn raw_model(&self, gravity: f64) -> Result<Model, RobotError> {
         let waist_height = length("multibody.waist_height", self.waist_height)?;
-        let leg = |key: &'static str, specs: &[LinkSpec], sole: Vec3| {
+        let leg = |key: &'static str, specs: &[LinkSpec], sole: Vec3, rpy: Option<Vec3>| {
             let links: Vec<Link> = specs
                 .iter()
                 .map(|s| s.link(key))
@@ -152,20 +156,21 @@ impl Tree {
                     format!("{n} joints: a leg has six revolute joints, hip to ankle"),
                 )
             })?;
-            if !sole.iter().all(|v| v.is_finite()) {
+            let rpy = rpy.unwrap_or([0.0; 3]);
+            if !sole.iter().chain(&rpy).all(|v| v.is_finite()) {
                 return Err(invalid("multibody.sole", "must be finite".into()));
             }
             Ok(super::model::Leg {
                 links,
                 sole: Pose {
                     p: sole,
-                    r: IDENTITY,
+                    r: rot_rpy(rpy),
                 },
             })
         };
         let legs = [
-            leg(LEFT, &self.left, self.sole.left)?,
-            leg(RIGHT, &self.right, self.sole.right)?,
+            leg(LEFT, &self.left, self.sole.left, self.sole.left_rpy)?,
+            leg(RIGHT, &self.right, self.sole.right, self.sole.right_rpy)?,
         ];
         let stance = [knee_seed(&legs[0].links), knee_seed(&legs[1].links)];
         Ok(Model {

@@ -52,7 +52,7 @@ use std::path::{Path, PathBuf};
 use planner_core::gait::Side;
 use urdf_rs::JointType;
 
-use super::model::{norm, rot_rpy, sub, Body, Model, Pose, Vec3};
+use super::model::{norm, rot_rpy, sub, Body, Model, Pose, Vec3, IDENTITY};
 use super::Robot;
 
 /// The waist is lowered from the straight-legged height by this fraction of the leg length.
@@ -250,6 +250,8 @@ struct LegImport {
     foot: Vec<(String, Pose)>,
     /// The leaf's pose in the ankle frame, if it is a frame below the ankle.
     sole_frame: Option<Pose>,
+    /// The ankle link (the last moved one).
+    ankle: String,
     /// The links fixed to the base before the first joint, in the base frame.
     pre: Body,
 }
@@ -376,6 +378,7 @@ fn leg(
         specs,
         foot,
         sole_frame,
+        ankle: ankle.clone(),
         pre,
     })
 }
@@ -489,11 +492,15 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
         trunk = trunk.merged(&l.pre);
     }
     // Soles.
-    let mut sole_out = [[0.0; 3]; 2];
+    let mut sole_out = [Pose::IDENTITY; 2];
     let mut size = [f64::INFINITY; 2];
     for (k, l) in legs.iter().enumerate() {
-        let s = sole::sole(&t, &l.foot, l.sole_frame)?;
-        sole_out[k] = s.centre;
+        let level = zero.get(&l.ankle).map_or(IDENTITY, |p| p.r);
+        let s = sole::sole(&t, &l.foot, l.sole_frame, &level)?;
+        sole_out[k] = Pose {
+            p: s.centre,
+            r: s.rotation,
+        };
         size[0] = size[0].min(s.size[0]);
         size[1] = size[1].min(s.size[1]);
     }
@@ -518,7 +525,7 @@ struct Parts<'a> {
     waist: Body,
     trunk: Body,
     legs: [&'a [LinkOut]; 2],
-    soles: [Vec3; 2],
+    soles: [Pose; 2],
     sole_size: [f64; 2],
 }
 
@@ -567,9 +574,15 @@ fn multibody(g: &Parts, waist_height: f64) -> String {
     let _ = writeln!(
         s,
         "\n[multibody.sole]        # sole centres in the ankle frames\nleft = {}\nright = {}",
-        arr(&g.soles[0]),
-        arr(&g.soles[1])
+        arr(&g.soles[0].p),
+        arr(&g.soles[1].p)
     );
+    for (side, sole) in ["left", "right"].iter().zip(&g.soles) {
+        if sole.r != IDENTITY {
+            let (r, p, y) = rpy(sole);
+            let _ = writeln!(s, "{side}_rpy = {}", arr(&[r, p, y]));
+        }
+    }
     for (side, links) in ["left", "right"].iter().zip(g.legs) {
         for l in links {
             let _ = writeln!(s, "\n[[multibody.{side}]]");

@@ -14,7 +14,7 @@ use std::io::BufReader;
 use urdf_rs::Geometry;
 
 use super::{err, pose_of, resolve, ImportError, Tree};
-use crate::robot::model::{Pose, Vec3};
+use crate::robot::model::{mul_mv, transpose, Mat3, Pose, Vec3};
 
 /// Points this close above the lowest one are the sole's \[m\].
 pub const CONTACT_BAND_M: f64 = 0.005;
@@ -24,6 +24,8 @@ pub const CONTACT_BAND_M: f64 = 0.005;
 pub struct Sole {
     /// The sole centre \[m\].
     pub centre: Vec3,
+    /// The sole's orientation: level with the base at zero joint angles.
+    pub rotation: Mat3,
     /// Length (along x) and width (along y) \[m\].
     pub size: [f64; 2],
 }
@@ -168,11 +170,14 @@ fn obj(text: &str) -> Vec<Vec3> {
 }
 
 /// The sole of a foot made of `links` (each with its pose in the ankle frame), with the
-/// URDF's sole frame `frame` if there is one.
+/// URDF's sole frame `frame` if there is one; `level`: the ankle frame's orientation in the
+/// base frame at zero joint angles (the sole is level with the base there, whatever the
+/// ankle frame's axes: the points are taken in base-aligned axes).
 pub(crate) fn sole(
     t: &Tree,
     links: &[(String, Pose)],
     frame: Option<Pose>,
+    level: &Mat3,
 ) -> Result<Sole, ImportError> {
     let mut pts = Vec::new();
     for (name, pose) in links {
@@ -196,6 +201,7 @@ pub(crate) fn sole(
             names.join("\">, <link name=\"")
         ));
     }
+    let pts: Vec<Vec3> = pts.iter().map(|p| mul_mv(level, *p)).collect();
     let zs = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
     let contact: Vec<&Vec3> = pts.iter().filter(|p| p[2] <= zs + CONTACT_BAND_M).collect();
     let lo = |i: usize| contact.iter().map(|p| p[i]).fold(f64::INFINITY, f64::min);
@@ -207,7 +213,7 @@ pub(crate) fn sole(
     };
     let (x0, x1, y0, y1) = (lo(0), hi(0), lo(1), hi(1));
     let centre = match frame {
-        Some(f) => f.p,
+        Some(f) => mul_mv(level, f.p),
         None => [0.5 * (x0 + x1), 0.5 * (y0 + y1), zs],
     };
     let half = |c: f64, a: f64, b: f64| (c - a).min(b - c);
@@ -221,7 +227,12 @@ pub(crate) fn sole(
             size[1]
         ));
     }
-    Ok(Sole { centre, size })
+    let back = transpose(level);
+    Ok(Sole {
+        centre: mul_mv(&back, centre),
+        rotation: back,
+        size,
+    })
 }
 
 #[cfg(test)]
