@@ -170,8 +170,9 @@ pub struct ClosedOutcome {
     pub landings: Vec<(f64, [f64; 2], [f64; 2])>,
     /// Simulated time from the first command \[s\].
     pub simulated_s: f64,
-    /// When the node stood again after the walk, from the first command \[s\] (`None`: it
-    /// did not within the run).
+    /// When the engine reached the node's first standing reference after the walk (the
+    /// reference stops there), from the first command \[s\] (`None`: the node did not stand
+    /// within the run).
     pub stood_s: Option<f64>,
     /// The robot fell later than [`super::metrics::SETTLE_AFTER_S`] after the node stood (not
     /// counted in `fell`).
@@ -420,8 +421,9 @@ pub fn run(
         // The end: standing again for the tail.
         if walking_since.is_some() && liftoffs > 0 && node.gait().is_standing() {
             let since = *standing_since.get_or_insert(k);
+            // The engine reached the first standing reference at the end of this cycle.
             if let Some(t) = t_walk {
-                out.stood_s.get_or_insert(t);
+                out.stood_s.get_or_insert(t + f64::from(CYCLE_MS) * 1e-3);
             }
             if k - since >= tail_cycles {
                 break;
