@@ -945,7 +945,8 @@ fn host_sim_json(args: &[&str], dir: &std::path::Path, file: &str) -> serde_json
 /// stabilizer that walks the built-in scenarios, with servo damping 150 N m s/rad; see
 /// `host_sim::physics::probe`), against `tables.json`: every cell the legs reach in
 /// `tables.json` is simulated, with `tables.json`'s kinematic error, and no cell falls in
-/// either (the book's result).
+/// either (the book's result); every cell's trajectory ends standing and nothing falls after
+/// the end.
 #[test]
 fn physics_tables_full_grid_long() {
     if !long_runs("physics_tables_full_grid_long") {
@@ -991,6 +992,12 @@ fn physics_tables_full_grid_long() {
                         &serde_json::Value::Bool(true),
                         "{args:?} {fell} ({r}, {c})"
                     );
+                    // Each cell's walk is played until standing, and nothing falls after.
+                    let end = |k: &str| &p[format!("{k}_{}", &fell[5..])][r][c];
+                    if reached {
+                        assert_eq!(end("ended_standing"), true, "{args:?} {fell} ({r}, {c})");
+                        assert_eq!(end("fell_after_end"), false, "{args:?} {fell} ({r}, {c})");
+                    }
                 }
             }
         }
@@ -1033,6 +1040,7 @@ fn physics_faults_every_row_long() {
             assert_eq!(r["seed"], 1);
             assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
             assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+            assert_eq!(r["ended_standing"], true, "{r}");
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -1073,6 +1081,7 @@ fn physics_faults_adjusting_every_row_long() {
             let r = hits[0];
             assert_eq!(r["walk"], "adjusting", "{what}");
             assert_eq!(r["fell"], r["kinematic_fell"], "{what}: {r}");
+            assert_eq!(r["ended_standing"], true, "{what}: {r}");
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -146,6 +146,13 @@ fn the_closed_loop_lands_where_adjust_says() {
     for s in Stepping::ALL {
         let o = run(&node, &cfg, Walk::default(), s, None).unwrap();
         assert!(!o.fell, "{s:?}: {o:?}");
+        // The walk is run until the node stands, and the tail after it.
+        let stood = o.stood_s.expect("the node stood again");
+        assert!(!o.fell_after_end, "{s:?}: {o:?}");
+        assert!(
+            (o.simulated_s - stood - cfg.tail_s).abs() < 0.011,
+            "{s:?}: {o:?}"
+        );
         assert_eq!(o.steps_adjusted, 0, "{s:?}");
         assert_eq!(
             o.landings.len(),

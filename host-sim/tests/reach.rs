@@ -588,9 +588,12 @@ fn all_checked() -> Vec<(String, Vec<Checked>)> {
         .collect();
     let m = host_sim::eval::paper::modification(GaitParams::hrp2(), 0.1, 0.3);
     let mut original = m.footsteps.clone();
+    let closing = original.len() - 1;
     for (i, f) in original.iter_mut().enumerate().skip(3) {
         f.x -= 0.2;
-        assert!((f.x - 0.1 * (i + 1) as f64).abs() < 1e-12);
+        // The last step closes the stance, beside the one before it.
+        let along = (i + 1).min(closing);
+        assert!((f.x - 0.1 * along as f64).abs() < 1e-12);
     }
     for (what, steps) in [
         ("paper fig4 before", original),

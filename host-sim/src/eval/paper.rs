@@ -6,7 +6,9 @@
 //! support, so that a single support begins at 4.0 s with the swing target at `4·before`. Just
 //! before that lift-off (one control cycle earlier) the swing target is moved so that this step
 //! has length `after`; the following steps keep the length `before` (the reading of Table II
-//! that the design notes point out). The re-plan at 4.0 s applies eq. 18.
+//! that the design notes point out). The re-plan at 4.0 s applies eq. 18. Right after it the
+//! walk is stopped: the queued steps are walked, then the stop window, and the trajectory
+//! runs until the robot stands (both feet down), so that an engine run of it ends standing.
 
 use planner_core::gait::{Footstep, Gait, GaitParams, Phase, Reference, Side};
 use std::fs;
@@ -54,6 +56,10 @@ pub const PAPER_ERROR_WITH_M: [[f64; 7]; 7] = [
 /// Tick of the single support in which the modification takes effect (4.0 s).
 pub const MODIFICATION_TICK: u64 = 800;
 
+/// The longest the scenario of [`modification`] may take to stand after the stop: 30 s of
+/// ticks.
+pub const STAND_LIMIT_TICKS: u32 = 6000;
+
 /// The outcome of one modification run.
 #[derive(Clone, Debug)]
 pub struct Modification {
@@ -72,7 +78,7 @@ pub struct Modification {
     pub frontal_m: f64,
     /// RMS of the frontal deviation over that single support \[m\].
     pub frontal_rms_m: f64,
-    /// Every reference of the run, one per 5 ms tick.
+    /// Every reference of the run, one per 5 ms tick, to standing at the end.
     pub trajectory: Vec<Reference<f64>>,
     /// The footsteps as walked (after the modification).
     pub footsteps: Vec<Footstep<f64>>,
@@ -90,6 +96,18 @@ fn footsteps(before: f64, shift: f64, n: u16) -> Vec<Footstep<f64>> {
         .collect()
 }
 
+/// [`footsteps`] and a closing step: the foot of step `n` beside the last one (the walk's
+/// end, feet side by side, as the built-in scenarios end theirs).
+fn closed_footsteps(before: f64, shift: f64, n: u16) -> Vec<Footstep<f64>> {
+    let mut steps = footsteps(before, shift, n);
+    if let Some(&last) = steps.last() {
+        let side = last.side.other();
+        let y = if side == Side::Left { 0.1 } else { -0.1 };
+        steps.push(Footstep::new(side, last.x, y, 0.0));
+    }
+    steps
+}
+
 /// Runs the scenario with the given parameters (set `adjust_min_ticks = adjust_max_ticks = 0`
 /// for "without adjustment").
 pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modification {
@@ -100,7 +118,7 @@ pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modific
         Footstep::new(Side::Right, 0.0, -0.1, 0.0),
     )
     .expect("valid gait parameters");
-    for (i, s) in footsteps(before, 0.0, n).into_iter().enumerate() {
+    for (i, s) in closed_footsteps(before, 0.0, n).into_iter().enumerate() {
         g.push(i as u16, s).expect("queue holds the scenario");
     }
     let mut trajectory = vec![*g.last()];
@@ -111,15 +129,18 @@ pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modific
     while g.ticks() < MODIFICATION_TICK - 1 {
         trajectory.push(g.tick());
     }
-    let modified = footsteps(before, after - before, n);
+    let modified = closed_footsteps(before, after - before, n);
     // The later steps first, then the swing target (the one checked by eq. 17).
-    for i in (3..n).rev() {
+    for i in (3..modified.len() as u16).rev() {
         // A refusal (eq. 17) leaves the step as it was; the figures then show that.
         let _ = g.modify(i, modified[usize::from(i)]);
     }
     trajectory.push(g.tick());
     let info = *g.last_replan().expect("a re-plan at 4.0 s");
     assert_eq!(info.tick, MODIFICATION_TICK, "scenario timing");
+    // The queued steps are walked, then the robot stands (a stop after the re-plan leaves the
+    // modified step's plan as it is: the windows see three landings ahead, all queued).
+    g.stop();
     // The swing target is step 3 (left foot); the support is step 2 (right foot).
     let support = (before * 3.0, -0.1);
     let (mut sag, mut fro, mut sq, mut cnt) = (0.0_f64, 0.0_f64, 0.0, 0.0);
@@ -139,7 +160,12 @@ pub fn modification(params: GaitParams<f64>, before: f64, after: f64) -> Modific
         cnt += 1.0;
         trajectory.push(g.tick());
     }
-    for _ in 0..400 {
+    // Until standing (the walk ends within seconds; the bound only keeps a broken gait from
+    // looping: the trajectory then ends walking, which the engine's report says).
+    for _ in 0..STAND_LIMIT_TICKS {
+        if g.is_standing() {
+            break;
+        }
         trajectory.push(g.tick());
     }
     Modification {

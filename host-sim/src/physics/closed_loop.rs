@@ -22,9 +22,13 @@
 //! * [`Stepping::Proposed`]: `StartAdjusting` with the paper's method (eq. 18 and the
 //!   shaping, the robot file's settings).
 //!
-//! A run stands [`PhysicsConfig::settle_s`] before the commands, walks, and counts a fall
-//! ([`super::metrics::fall_check`]) until [`PhysicsConfig::tail_s`] after the node stands
-//! again (the settle time after the reference stops moving).
+//! A run stands [`PhysicsConfig::settle_s`] before the commands, walks until the node stands
+//! again (its reference then stops moving), and goes on [`PhysicsConfig::tail_s`] after that.
+//! A fall ([`super::metrics::fall_check`]) counts until
+//! [`super::metrics::SETTLE_AFTER_S`] after the node stands, as in every engine run
+//! ([`super::metrics::fall_counts`]); a later one (with a tail longer than that) is reported
+//! apart (`fell_after_end`). A walk that does not stand within the run says so (`stood_s`
+//! `None`).
 
 use std::collections::VecDeque;
 
@@ -32,7 +36,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{Adjust, ControlOp, Measured, RawFrame, Session, StepBook};
 
 use super::bridge::Engine;
-use super::metrics::fall_check;
+use super::metrics::{fall_check, fall_counts};
 use super::stabilizer::Stabilizer;
 use super::{initial_pose, reference_at, PhysicsConfig, PHYSICS_DT};
 use crate::scenario::wire::Controller;
@@ -145,7 +149,8 @@ impl Default for Walk {
 /// What a closed-loop run gives.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ClosedOutcome {
-    /// The robot fell (while walking or within the settle time after it).
+    /// The robot fell (while walking or within [`super::metrics::SETTLE_AFTER_S`] after the
+    /// node stood).
     pub fell: bool,
     /// When, from the first command \[s\].
     pub fall_time_s: Option<f64>,
@@ -165,6 +170,15 @@ pub struct ClosedOutcome {
     pub landings: Vec<(f64, [f64; 2], [f64; 2])>,
     /// Simulated time from the first command \[s\].
     pub simulated_s: f64,
+    /// When the engine reached the node's first standing reference after the walk (the
+    /// reference stops there), from the first command \[s\] (`None`: the node did not stand
+    /// within the run).
+    pub stood_s: Option<f64>,
+    /// The robot fell later than [`super::metrics::SETTLE_AFTER_S`] after the node stood (not
+    /// counted in `fell`).
+    pub fell_after_end: bool,
+    /// When, from the first command \[s\].
+    pub fall_after_end_time_s: Option<f64>,
     /// Every control cycle of the walk: time from the first command \[s\], the measured DCM
     /// deviation sent \[m\], and the node's shift \[m\].
     pub trace: Vec<(f64, [f64; 2], [f64; 2])>,
@@ -376,10 +390,19 @@ pub fn run(
                 waist0.p[2],
                 obs.other_contact,
             ) {
-                out.fall_cause = Some(cause.name());
-                out.fell = true;
-                out.fall_time_s = t_walk.map(|t| t + (j + 1) as f64 * PHYSICS_DT);
-                out.simulated_s = out.fall_time_s.unwrap_or(0.0);
+                let t = t_walk.map(|t| t + (j + 1) as f64 * PHYSICS_DT);
+                out.simulated_s = t.unwrap_or(0.0);
+                match (out.stood_s, t) {
+                    (Some(stood), Some(t)) if !fall_counts(t, stood) => {
+                        out.fell_after_end = true;
+                        out.fall_after_end_time_s = Some(t);
+                    }
+                    _ => {
+                        out.fall_cause = Some(cause.name());
+                        out.fell = true;
+                        out.fall_time_s = t;
+                    }
+                }
                 return Ok(out);
             }
         }
@@ -399,11 +422,16 @@ pub fn run(
         // The end: standing again for the tail.
         if walking_since.is_some() && liftoffs > 0 && node.gait().is_standing() {
             let since = *standing_since.get_or_insert(k);
+            // The engine reached the first standing reference at the end of this cycle.
+            if let Some(t) = t_walk {
+                out.stood_s.get_or_insert(t + f64::from(CYCLE_MS) * 1e-3);
+            }
             if k - since >= tail_cycles {
                 break;
             }
         } else {
             standing_since = None;
+            out.stood_s = None;
         }
     }
     Ok(out)

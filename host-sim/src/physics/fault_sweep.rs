@@ -10,7 +10,9 @@
 //! `seed`, `walk`, `stabilizer`, `stabilizer_scale`, `servo_damping`, for `weakest` also
 //! `weakest_ladder`) and `runs`, one object per row and scenario ([`json()`]: `fault`, `rate`,
 //! `scenario`, `walk`, `seed`, `kinematic_fell`, `fell`, `fall_time_s`, `max_tilt_deg`,
-//! `cop_err_mean_m`, `cop_err_max_m`, `safety_stop`, `lost`, `adjustments`); and
+//! `cop_err_mean_m`, `cop_err_max_m`, `safety_stop`, `lost`, `adjustments`, and the end of
+//! the run: [`super::PhysicsReport::end_fields`], `ended_standing` false where the node's walk
+//! was cut at the scenario's end before it stood); and
 //! `DIR/physics_faults.md`. With `--walk adjusting` the rows are the adjusting walk's
 //! ([`rows_of`]): the node's references of a walk started with `start_adjusting` whose pushed
 //! pendulum robot's estimator sent `MEASURED` every cycle, played in the engine (the engine's
@@ -160,7 +162,7 @@ pub fn json(runs: &[FaultRun]) -> Value {
     Value::Array(
         runs.iter()
             .map(|r| {
-                json!({
+                let mut j = json!({
                     "fault": r.kind.name(),
                     "rate": r.kind.rate_label(r.rate),
                     "scenario": r.scenario,
@@ -176,7 +178,9 @@ pub fn json(runs: &[FaultRun]) -> Value {
                     "safety_stop": r.safety_stop,
                     "lost": r.lost,
                     "adjustments": r.adjustments,
-                })
+                });
+                r.report.add_end_fields(&mut j);
+                j
             })
             .collect(),
     )
@@ -198,10 +202,7 @@ pub fn markdown(runs: &[FaultRun]) -> String {
             r.kind.rate_label(r.rate),
             scenario,
             if r.kinematic_fell { "yes" } else { "no" },
-            match r.report.fall_time_s {
-                Some(t) => format!("**yes** ({t:.2} s)"),
-                None => "no".into(),
-            },
+            r.report.fell_text(),
             r.report.max_tilt_deg,
             r.report.cop_err_mean_m * 1e3,
             r.report.cop_err_max_m * 1e3

@@ -10,6 +10,21 @@
 //! * **contact**: a geom other than the two soles touches the floor (a knee, a hip, the trunk);
 //! * **height**: the waist is more than [`FALL_DROP_M`] = 0.15 m below its reference height.
 //!
+//! # When a fall counts
+//!
+//! A fall counts for the walk (`fell`) while the reference moves, and until [`SETTLE_AFTER_S`]
+//! = 1 s after it stops: the reference **stops** at the last tick at which it differs from
+//! the tick before ([`reference_stop_s`]; every engine command's trajectory ends standing,
+//! both feet down and the stop window finished, so that is where the robot stands still).
+//! A fall later than that is reported apart (`fell_after_end`, with its time and cause),
+//! never dropped, and is not the walk's fall: by then the robot has stood on a still reference
+//! for 1 s. Why 1 s: it is 3.5 time constants of the pendulum (`√(z_c/g)` = 0.29 s for
+//! HRP-2's 0.814 m), so a divergent component of motion the walk left uncorrected has grown
+//! e^3.5 ≈ 33-fold and tipped the robot over within it; it is the standing time after the walk
+//! that the engine runs by default ([`super::PhysicsConfig::tail_s`]); and it is the window
+//! the closed-loop runs of the push map use after the node stands ([`super::closed_loop`]).
+//! The same rule ([`fall_counts`]) judges every engine run.
+//!
 //! # Tracking
 //!
 //! The measured **centre of pressure** (CoP) is that of all floor contact forces of the engine
@@ -31,6 +46,25 @@ pub const FALL_TILT_DEG: f64 = 20.0;
 pub const FALL_DROP_M: f64 = 0.15;
 /// Samples (of 1 ms) of the CoP moving average: 50 ms.
 pub const COP_WINDOW: usize = 50;
+/// How long after the reference stops moving a fall still counts as the walk's \[s\] (see
+/// "When a fall counts" above for the reason of the value).
+pub const SETTLE_AFTER_S: f64 = 1.0;
+
+/// The trajectory time at which the references (one every `dt`) stop moving: that of the last
+/// one that differs from the one before it (0 for a trajectory that never moves) \[s\].
+pub fn reference_stop_s<T: PartialEq>(trajectory: &[T], dt: f64) -> f64 {
+    let last_change = (1..trajectory.len())
+        .rev()
+        .find(|&k| trajectory[k] != trajectory[k - 1])
+        .unwrap_or(0);
+    last_change as f64 * dt
+}
+
+/// Whether a fall at trajectory time `fall_s` counts as the walk's when the reference stopped
+/// at `stop_s`: at most [`SETTLE_AFTER_S`] after it (otherwise it is a fall after the end).
+pub fn fall_counts(fall_s: f64, stop_s: f64) -> bool {
+    fall_s <= stop_s + SETTLE_AFTER_S + 1e-9
+}
 
 /// Why the robot was judged fallen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -211,6 +245,24 @@ mod tests {
         assert_eq!(fall_check(up, 0.65, 0.65, true), Some(FallCause::Contact));
         assert_eq!(fall_check(up, 0.51, 0.65, false), None);
         assert_eq!(fall_check(up, 0.49, 0.65, false), Some(FallCause::Height));
+    }
+
+    /// The reference stops at its last change; a fall within 1 s of that counts, a later
+    /// one does not (a synthetic run: a walk that stands still from 2.0 s, held to 5.0 s).
+    #[test]
+    fn a_fall_counts_until_the_settle_time_after_the_reference_stops() {
+        let dt = 0.005;
+        // Moving (a ramp) for 400 ticks, then the same value to the end.
+        let series: Vec<f64> = (0..1000).map(|k| (k.min(400) as f64) * 1e-3).collect();
+        let stop = reference_stop_s(&series, dt);
+        assert!((stop - 2.0).abs() < 1e-12, "{stop}");
+        assert_eq!(reference_stop_s(&[1.0, 1.0, 1.0], dt), 0.0);
+        assert_eq!(reference_stop_s::<f64>(&[], dt), 0.0);
+        assert!(fall_counts(0.5, stop));
+        assert!(fall_counts(2.5, stop));
+        assert!(fall_counts(stop + SETTLE_AFTER_S, stop));
+        assert!(!fall_counts(stop + SETTLE_AFTER_S + 0.001, stop));
+        assert!(!fall_counts(4.9, stop));
     }
 
     #[test]

@@ -27,7 +27,11 @@
 //! plays the trajectory, then stands for [`PhysicsConfig::tail_s`] on the last reference. At
 //! every 1 ms tick the stabilizer reads the sensors and sets the twelve servo targets, the
 //! engine steps once, the evaluation reads the engine's ground truth and checks for a fall
-//! ([`metrics`]); the run stops at the first fall.
+//! ([`metrics`]); the run stops at the first fall. A fall counts (`fell`) until
+//! [`metrics::SETTLE_AFTER_S`] after the reference stops moving, later it is reported as a fall
+//! after the end (`fell_after_end`). Every engine command hands [`run`] a trajectory that ends
+//! standing (both feet on the floor, the stop window finished: [`ends_standing`]); the report
+//! says whether it did (`ended_standing`), for a walk that could not stand.
 
 pub mod bridge;
 pub mod closed_loop;
@@ -46,7 +50,7 @@ use crate::robot::model::{mean_yaw, Pose};
 use bridge::Engine;
 use metrics::{fall_check, tilt_deg, FallCause, Tracking};
 use model::{sensor, Robot};
-use planner_core::gait::{FootPose, Reference};
+use planner_core::gait::{FootPose, Phase, Reference};
 use planner_core::lipm::Sample;
 use stabilizer::{Gains, Stabilizer};
 
@@ -71,7 +75,9 @@ pub struct PhysicsConfig {
     pub gains: Gains,
     /// Standing time before the trajectory \[s\].
     pub settle_s: f64,
-    /// Standing time after it \[s\].
+    /// Standing time after it \[s\]: the engine holds the last reference this long (a fall
+    /// counts until [`metrics::SETTLE_AFTER_S`] after the reference stops, a later one is
+    /// reported as a fall after the end).
     pub tail_s: f64,
     /// An optional push.
     pub push: Option<Push>,
@@ -143,6 +149,17 @@ pub struct PhysicsReport {
     pub fall_time_s: Option<f64>,
     /// Why.
     pub fall_cause: Option<FallCause>,
+    /// The robot fell later than [`metrics::SETTLE_AFTER_S`] after the reference stopped (not
+    /// counted in `fell`).
+    pub fell_after_end: bool,
+    /// When, in trajectory time \[s\].
+    pub fall_after_end_time_s: Option<f64>,
+    /// Why.
+    pub fall_after_end_cause: Option<FallCause>,
+    /// When the reference stopped moving, in trajectory time \[s\] ([`metrics::reference_stop_s`]).
+    pub reference_stop_s: f64,
+    /// The trajectory ended standing ([`ends_standing`]).
+    pub ended_standing: bool,
     /// Largest waist tilt \[deg\].
     pub max_tilt_deg: f64,
     /// Mean 50 ms CoP tracking error \[m\].
@@ -159,6 +176,64 @@ pub struct PhysicsReport {
     pub simulated_s: f64,
     /// The MuJoCo version.
     pub engine: String,
+}
+
+/// The mark of a fall after the end in the tables' verdicts ([`PhysicsReport::verdict`]).
+pub const AFTER_END_MARK: &str = "†";
+
+/// The footnote the tables give [`AFTER_END_MARK`].
+pub const AFTER_END_NOTE: &str =
+    "†: fell more than 1 s (`SETTLE_AFTER_S`) after the reference stopped: not counted as a fall";
+
+impl PhysicsReport {
+    /// The verdict as the tables write it: `**fell**`, `ok`, or `ok†` for a fall after the end.
+    pub fn verdict(&self) -> String {
+        if self.fell {
+            "**fell**".into()
+        } else if self.fell_after_end {
+            format!("ok{AFTER_END_MARK}")
+        } else {
+            "ok".into()
+        }
+    }
+
+    /// "Fell" as the sequence and fault tables write it: `**yes** (6.41 s)`, `no`, or
+    /// `no (fell after the end, 9.80 s)`.
+    pub fn fell_text(&self) -> String {
+        match (self.fall_time_s, self.fall_after_end_time_s) {
+            (Some(t), _) => format!("**yes** ({t:.2} s)"),
+            (None, Some(t)) => format!("no (fell after the end, {t:.2} s)"),
+            (None, None) => "no".into(),
+        }
+    }
+
+    /// The end of the run as every command's JSON gives it: `fell_after_end`,
+    /// `fall_after_end_time_s`, `fall_after_end_cause`, `reference_stop_s`,
+    /// `fall_window_end_s` (until when a fall counts) and `ended_standing`.
+    pub fn end_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
+        use serde_json::json;
+        vec![
+            ("fell_after_end", json!(self.fell_after_end)),
+            ("fall_after_end_time_s", json!(self.fall_after_end_time_s)),
+            (
+                "fall_after_end_cause",
+                json!(self.fall_after_end_cause.map(|c| c.name())),
+            ),
+            ("reference_stop_s", json!(self.reference_stop_s)),
+            (
+                "fall_window_end_s",
+                json!(self.reference_stop_s + metrics::SETTLE_AFTER_S),
+            ),
+            ("ended_standing", json!(self.ended_standing)),
+        ]
+    }
+
+    /// Adds [`Self::end_fields`] to the JSON object `j`.
+    pub fn add_end_fields(&self, j: &mut serde_json::Value) {
+        for (k, v) in self.end_fields() {
+            j[k] = v;
+        }
+    }
 }
 
 /// A run: the report and the log.
@@ -192,6 +267,14 @@ fn lerp_foot(a: &FootPose<f64>, b: &FootPose<f64>, s: f64) -> FootPose<f64> {
     let dy = (b.yaw - a.yaw).sin().atan2((b.yaw - a.yaw).cos());
     f.yaw = a.yaw + dy * s;
     f
+}
+
+/// Whether a trajectory ends standing: its last reference in the phase
+/// [`Phase::Standing`] (the stop window finished) with both feet on the floor.
+pub fn ends_standing(trajectory: &[Reference<f64>]) -> bool {
+    trajectory
+        .last()
+        .is_some_and(|r| r.phase == Phase::Standing && r.feet.iter().all(|f| f.z == 0.0))
 }
 
 /// The reference at trajectory time `t` (held before the start and after the end).
@@ -284,6 +367,11 @@ pub fn run(
         fell: false,
         fall_time_s: None,
         fall_cause: None,
+        fell_after_end: false,
+        fall_after_end_time_s: None,
+        fall_after_end_cause: None,
+        reference_stop_s: metrics::reference_stop_s(trajectory, dt),
+        ended_standing: ends_standing(trajectory),
         max_tilt_deg: 0.0,
         cop_err_mean_m: 0.0,
         cop_err_max_m: 0.0,
@@ -349,9 +437,15 @@ pub fn run(
             waist0.p[2],
             obs.other_contact,
         ) {
-            report.fell = true;
-            report.fall_time_s = Some(t1);
-            report.fall_cause = Some(cause);
+            if metrics::fall_counts(t1, report.reference_stop_s) {
+                report.fell = true;
+                report.fall_time_s = Some(t1);
+                report.fall_cause = Some(cause);
+            } else {
+                report.fell_after_end = true;
+                report.fall_after_end_time_s = Some(t1);
+                report.fall_after_end_cause = Some(cause);
+            }
             break;
         }
     }

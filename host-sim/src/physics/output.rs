@@ -3,7 +3,10 @@
 //! `host-sim physics <scenario|file.toml> --out DIR` writes:
 //!
 //! * `DIR/physics.json`: `fell` (bool), `fall_time_s` (trajectory time, null if none),
-//!   `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
+//!   `fall_cause`, a fall after the end ([`super::metrics::SETTLE_AFTER_S`]) apart:
+//!   `fell_after_end`, `fall_after_end_time_s`, `fall_after_end_cause`, `reference_stop_s`,
+//!   `fall_window_end_s`, `ended_standing` (the trajectory's last reference standing, both
+//!   feet down); `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
 //!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
 //!   `simulated_s`, `stabilizer`, `stabilizer_gains`, `servo_kp_kd`, `engine` (the MuJoCo
 //!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents),
@@ -29,7 +32,7 @@ use crate::sim::scenario_trajectory;
 /// The JSON of a run of `robot` (its name).
 pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun) -> Value {
     let p = &r.report;
-    json!({
+    let mut j = json!({
         "scenario": name,
         "robot": robot,
         "sole_half_m": cfg.robot.sole_half(),
@@ -49,7 +52,9 @@ pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun)
         "engine": format!("MuJoCo {}", p.engine),
         "physics_dt_s": super::PHYSICS_DT,
         "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
-    })
+    });
+    p.add_end_fields(&mut j);
+    j
 }
 
 fn write_csv(path: &Path, r: &PhysicsRun) -> Result<(), String> {
@@ -254,6 +259,12 @@ pub fn cli(
                 num("fall_time_s"),
                 j["fall_cause"].as_str().unwrap_or("?")
             )
+        } else if j["fell_after_end"].as_bool() == Some(true) {
+            format!(
+                "walked through, no fall (fell after the end, at {:.3} s: {})",
+                num("fall_after_end_time_s"),
+                j["fall_after_end_cause"].as_str().unwrap_or("?")
+            )
         } else {
             "walked through, no fall".to_string()
         },
@@ -268,6 +279,9 @@ pub fn cli(
         num("cog_drift_max_m") * 1e3,
         num("foot_drift_max_m") * 1e3
     );
+    if j["ended_standing"].as_bool() == Some(false) {
+        println!("  the scenario's walk did not end standing (cut at its max_time_s?)");
+    }
     println!("  results: {}", out.join("physics.json").display());
     Ok(())
 }
@@ -338,11 +352,18 @@ pub fn tables_cli(
         side_by_side_text,
     );
     md += &probe.ladder_markdown();
+    let late = |r: &Option<super::PhysicsReport>| r.as_ref().is_some_and(|r| r.fell_after_end);
+    let cut = |r: &Option<super::PhysicsReport>| r.as_ref().is_some_and(|r| !r.ended_standing);
     md += &format!(
-        "\n{} cells simulated; falls: plain {}, proposed {}.\n",
+        "\n{} cells simulated; falls: plain {}, proposed {}; falls after the end (not counted): \
+         plain {}, proposed {}; trajectories not ending standing: {}.\n\n{}\n",
         done.len(),
         count(&|c| c.plain.as_ref().is_some_and(|r| r.fell)),
-        count(&|c| c.proposed.as_ref().is_some_and(|r| r.fell))
+        count(&|c| c.proposed.as_ref().is_some_and(|r| r.fell)),
+        count(&|c| late(&c.plain)),
+        count(&|c| late(&c.proposed)),
+        count(&|c| cut(&c.plain)) + count(&|c| cut(&c.proposed)),
+        super::AFTER_END_NOTE
     );
     let mdpath = out.join("physics_tables.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;

@@ -13,7 +13,8 @@
 //! `host-sim physics-sequence --out DIR [--before M] [--afters M,M,...]` (and the probe options
 //! of [`super::probe`]) writes `DIR/physics_sequence.json`: `before_m`, `afters_m`, the probe
 //! settings, and `plain` and `proposed`, each with the engine's `fell`, `fall_time_s`,
-//! `fall_cause`, `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m`, the worst 50 ms CoP error
+//! `fall_cause`, the end of the run ([`super::PhysicsReport::end_fields`]: `fell_after_end`,
+//! `ended_standing`, …), `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m`, the worst 50 ms CoP error
 //! in the modified steps' window (`cop_err_modified_m`, `modified_window_s`), the kinematic
 //! multi-body ZMP error of those single supports (`mb_zmp_error_m`), and per modification
 //! `accepted` (eq. 17), `adjust_s` and the lift-off time; and `DIR/physics_sequence.md`.
@@ -97,7 +98,7 @@ pub fn parse_afters(s: &str) -> Result<Vec<f64>, String> {
 /// The JSON of one run.
 pub fn run_json(r: &SequenceRun) -> Value {
     let p = &r.report;
-    json!({
+    let mut j = json!({
         "fell": p.fell,
         "fall_time_s": p.fall_time_s,
         "fall_cause": p.fall_cause.map(|c| c.name()),
@@ -116,7 +117,9 @@ pub fn run_json(r: &SequenceRun) -> Value {
             "adjust_s": s.adjust_s,
             "ratio": s.ratio,
         })).collect::<Vec<_>>(),
-    })
+    });
+    p.add_end_fields(&mut j);
+    j
 }
 
 /// The two runs as a Markdown table.
@@ -147,10 +150,7 @@ pub fn markdown(before: f64, afters: &[f64], mode: &str, runs: &[(&str, &Sequenc
             .collect();
         md += &format!(
             "| {name} | {} | {:.2} | {:.1} / {:.1} | {:.1} | {} | {} |\n",
-            match p.fall_time_s {
-                Some(t) => format!("**yes** ({t:.2} s)"),
-                None => "no".into(),
-            },
+            p.fell_text(),
             p.max_tilt_deg,
             p.cop_err_mean_m * 1e3,
             p.cop_err_max_m * 1e3,

@@ -11,7 +11,10 @@
 //! legs cannot reach the other 9) and writes
 //! `DIR/physics_tables.json`: `fell_plain` and `fell_proposed` (7 × 7, rows "after", columns
 //! "before", in the order of `tables.json`; `null` for a cell not simulated or whose footsteps
-//! the legs cannot reach) and the per-cell figures; `--cells r,c;r,c` restricts the run to
+//! the legs cannot reach), the falls after the end apart (`fell_after_end_plain`, …, see
+//! [`super::metrics::SETTLE_AFTER_S`]), whether each trajectory ended standing
+//! (`ended_standing_plain`, `ended_standing_proposed`: each cell's walk is played to standing)
+//! and the per-cell figures; `--cells r,c;r,c` restricts the run to
 //! some cells (the test runs a reduced grid). `--stabilizer full|off|weakest|S` and
 //! `--servo-damping KD` weaken the stabilizer and the servos ([`super::probe`]; the JSON then
 //! has `stabilizer_scale`, `servo_damping` and, for `weakest`, `weakest_ladder`), `--robot
@@ -143,6 +146,9 @@ pub fn tables_json(cells: &[Cell]) -> Value {
         })
     };
     let fall_t = |r: &Option<PhysicsReport>| r.as_ref().and_then(|r| r.fall_time_s);
+    let late = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.fell_after_end);
+    let late_t = |r: &Option<PhysicsReport>| r.as_ref().and_then(|r| r.fall_after_end_time_s);
+    let standing = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.ended_standing);
     json!({
         "step_lengths_m": STEP_LENGTHS,
         "rows": "length after the modification",
@@ -152,6 +158,13 @@ pub fn tables_json(cells: &[Cell]) -> Value {
         "fell_proposed": grid(cells, |c| fell(&c.proposed)),
         "fall_time_plain_s": grid(cells, |c| fall_t(&c.plain)),
         "fall_time_proposed_s": grid(cells, |c| fall_t(&c.proposed)),
+        "fell_after_end_plain": grid(cells, |c| late(&c.plain)),
+        "fell_after_end_proposed": grid(cells, |c| late(&c.proposed)),
+        "fall_after_end_time_plain_s": grid(cells, |c| late_t(&c.plain)),
+        "fall_after_end_time_proposed_s": grid(cells, |c| late_t(&c.proposed)),
+        "ended_standing_plain": grid(cells, |c| standing(&c.plain)),
+        "ended_standing_proposed": grid(cells, |c| standing(&c.proposed)),
+        "settle_after_s": super::metrics::SETTLE_AFTER_S,
         "max_tilt_plain_deg": grid(cells, |c| fig(&c.plain, "tilt")),
         "max_tilt_proposed_deg": grid(cells, |c| fig(&c.proposed, "tilt")),
         "cop_err_max_plain_m": grid(cells, |c| fig(&c.plain, "cop")),
@@ -180,16 +193,13 @@ pub fn markdown(title: &str, cells: &[Cell], f: impl Fn(&Cell) -> String) -> Str
     })
 }
 
-/// One cell as text: `fell` or `ok`, the worst CoP error of the modified step and the
+/// One cell as text: `fell` or `ok` (`ok†`: a fall after the end), the worst CoP error of the modified step and the
 /// kinematic multi-body error, in cm: `ok 3.1 / 7.5`.
 pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>) -> String {
     match (r, window, mb) {
-        (Some(r), Some(w), Some(e)) => format!(
-            "{} {:.1} / {:.1}",
-            if r.fell { "**fell**" } else { "ok" },
-            w * 100.0,
-            e * 100.0
-        ),
+        (Some(r), Some(w), Some(e)) => {
+            format!("{} {:.1} / {:.1}", r.verdict(), w * 100.0, e * 100.0)
+        }
         _ => "n/a".into(),
     }
 }
@@ -198,11 +208,7 @@ pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>
 /// their kinematic multi-body errors in cm, the plain one marked `*` above the paper's 0.07 m:
 /// `ok / ok, 9.3* / 5.0`.
 pub fn side_by_side_text(c: &Cell) -> String {
-    let verdict = |r: &Option<PhysicsReport>| match r {
-        Some(r) if r.fell => "**fell**",
-        Some(_) => "ok",
-        None => "n/a",
-    };
+    let verdict = |r: &Option<PhysicsReport>| r.as_ref().map_or("n/a".into(), |r| r.verdict());
     let cm = |e: Option<f64>| e.map_or("n/a".to_string(), |e| format!("{:.1}", e * 100.0));
     let mark = match c.mb_error_plain_m {
         Some(e) if e > PAPER_DIFFICULT_ERROR_M => "*",
