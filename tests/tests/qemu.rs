@@ -502,11 +502,14 @@ fn timing_targets() {
     }
 }
 
-/// How far a quoted instruction count may be from this run's: one tick of the 25 MHz timer
-/// the image reads them from (40 instructions under `-icount shift=0`). The count of a run is
-/// repeatable, but the timer's phase at a cycle's start moves with the emulator's version (a
-/// fresh machine's QEMU read one tick off this one's in several rows).
-const TICK: f64 = 40.0;
+/// How far a quoted instruction count may be from this run's: two ticks of the 25 MHz timer
+/// the image reads them from (40 instructions each under `-icount shift=0`). The count of a
+/// run is repeatable, but the timer's phase at a cycle's start moves with the emulator's
+/// version (a fresh machine's QEMU read one tick off this one's in several rows), and the
+/// image's code moves with the build: the same source built in two clones at different paths
+/// (the crates' metadata hashes, hence the code generation, follow the path) read 18,880 and
+/// 18,960 for the worst adjusted re-plan.
+const TICK: f64 = 80.0;
 
 /// The command that measures this file's figures (the documents name it).
 const COMMAND: &str = "cargo test --release -p walk-tests --test qemu -- --nocapture";
