@@ -197,6 +197,10 @@ enum Cmd {
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
+        /// What the re-plan that lifts a capture step's foot starts from: the measured state
+        /// (the node's default) or the reference's.
+        #[arg(long, value_name = "measured|reference", default_value = "measured", value_parser = ["measured", "reference"])]
+        replan_from: String,
         #[command(flatten)]
         probe: ProbeArgs,
     },
@@ -384,6 +388,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             phases,
             directions,
             robot,
+            replan_from,
             probe,
         }) => host_sim::physics::push_map::cli(
             &out,
@@ -391,6 +396,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             quick,
             phases.as_deref(),
             directions.as_deref(),
+            replan_from == "measured",
             &probe,
         ),
         Some(Cmd::Robot {

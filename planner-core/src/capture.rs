@@ -97,6 +97,31 @@ pub fn capture_offset<T: Real>(error: [T; 2], margin: T, omega: T, remaining: T)
     [o[0] * grow, o[1] * grow]
 }
 
+/// The part of the deviation `error` = `ξ_meas − ξ_plan` \[m\] (`[x, y]`) that a landing
+/// moved by a length `moved` \[m\] captures, with the stabilizer margin `margin` \[m\] and the
+/// landing `remaining` \[s\] from now: along the deviation's direction, of length
+/// `min(|e|, m + |moved| e^{−ω T_r})`. It inverts [`capture_offset`]: a landing moved by the
+/// whole `capture_offset(e)` captures all of `e`, one moved less (the reach cut it) the part
+/// its move accounts for. Zero for a zero deviation (or one that is not a number); a negative
+/// `remaining` counts as zero.
+pub fn captured_deviation<T: Real>(
+    error: [T; 2],
+    moved: T,
+    margin: T,
+    omega: T,
+    remaining: T,
+) -> [T; 2] {
+    let norm = (error[0] * error[0] + error[1] * error[1]).sqrt();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(norm > T::ZERO) {
+        return [T::ZERO; 2];
+    }
+    let shrink = (-(omega * remaining.max(T::ZERO))).exp();
+    let length = (margin.max(T::ZERO) + moved.abs() * shrink).min(norm);
+    let k = length / norm;
+    [error[0] * k, error[1] * k]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -172,6 +197,49 @@ mod tests {
                 "{o:?} vs {want:?}"
             );
         }
+    }
+
+    /// The captured deviation inverts the capture offset (a whole move captures the whole
+    /// deviation); for a shorter move it is the state from which a pendulum with its ZMP held
+    /// at the margin (integrated, RK4) reaches the moved landing at touch-down; it never
+    /// exceeds the deviation, and nothing is captured of no deviation.
+    #[test]
+    fn the_captured_deviation_is_what_the_move_accounts_for() {
+        let omega = crate::omega(9.8, 0.814);
+        let mut u = crate::test_uniform(13);
+        for _ in 0..if cfg!(miri) { 2 } else { 30 } {
+            let (t, m) = (0.05 + 0.7 * u(), 0.01 + 0.05 * u());
+            let e = [0.2 * u() - 0.1, 0.2 * u() - 0.1];
+            let n = (e[0] * e[0] + e[1] * e[1]).sqrt();
+            let o = capture_offset(e, m, omega, t);
+            let whole = (o[0] * o[0] + o[1] * o[1]).sqrt();
+            let c = captured_deviation(e, whole, m, omega, t);
+            if n > m {
+                assert!((c[0] - e[0]).abs() < 1e-12 && (c[1] - e[1]).abs() < 1e-12);
+            }
+            // A move cut to a fraction of the whole (the reach).
+            let moved = whole * u();
+            let c = captured_deviation(e, moved, m, omega, t);
+            let len = (c[0] * c[0] + c[1] * c[1]).sqrt();
+            assert!(len <= n + 1e-15, "{len} > {n}");
+            assert!(
+                (c[0] * e[1] - c[1] * e[0]).abs() < 1e-15,
+                "off the direction"
+            );
+            if len < n {
+                let (x, v) = integrate(len, 0.0, omega, t, |_| m);
+                let beyond = x + v / omega - m;
+                assert!((beyond - moved).abs() < 1e-9, "{beyond} vs {moved}");
+            }
+        }
+        assert_eq!(
+            captured_deviation([0.0; 2], 0.1, 0.02, omega, 0.5),
+            [0.0; 2]
+        );
+        assert_eq!(
+            captured_deviation([f64::NAN, 0.0], 0.1, 0.02, omega, 0.5),
+            [0.0; 2]
+        );
     }
 
     /// No deviation, no move; inside the dead band, no move; outside, the excess along the

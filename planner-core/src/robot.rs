@@ -485,6 +485,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         max_age: {age},
         margin: {db},
         min_change: {mc},
+        from_measured: {fm},
     }},
     entropy: 0,
 }}",
@@ -526,5 +527,6 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         age = cfg.adjust.max_age,
         db = cfg.adjust.margin.literal(),
         mc = cfg.adjust.min_change.literal(),
+        fm = cfg.adjust.from_measured,
     )
 }

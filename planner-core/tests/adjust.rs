@@ -8,7 +8,8 @@
 //! * with `Start` the node never moves a step, whatever is measured;
 //! * with `StartAdjusting` every landing is where its step was commanded plus the shift the
 //!   node published in `ADJUST` (the controller's book stays true), the shift points the way
-//!   the robot was pushed, and every landing keeps the reach limits;
+//!   the robot was pushed, every landing keeps the reach limits, and the capture step's
+//!   window starts from the measured state (never without a fresh one);
 //! * the largest survivable push (bisection to 1/64 of 1 m/s), pushed at the start of a double
 //!   support or 0.15 s into a single support, forward, backward, outward and inward, is never
 //!   smaller with the adjustment than without it, and larger in some cells (printed with
@@ -56,6 +57,8 @@ struct Outcome {
     adjusts: Vec<Adjust>,
     /// Landings: (commanded x, y, landed x, y).
     landings: Vec<(f64, f64, f64, f64)>,
+    /// Re-plans that started from the measured state (capture steps).
+    from_measured: u32,
 }
 
 /// A straight walk of `n` steps of `len`, pushed by `dv` (x, y) \[m/s\] `push_at` ticks after
@@ -169,7 +172,11 @@ fn walk_pushed(
             r.bus.rx.push_back(hb.encode());
         }
         r.t += 5;
+        let plans = r.n.gait().plans();
         r.n.poll(r.t, &mut r.bus);
+        if r.n.gait().plans() != plans && r.n.gait().replanned_from_measured() {
+            out.from_measured += 1;
+        }
         for f in r.bus.tx.drain(..) {
             if let Some(a) = Adjust::decode(&f) {
                 out.adjusts.push(a);
@@ -232,6 +239,7 @@ fn without_opting_in_nothing_moves() {
     let rig = Rig::new(NodeConfig::hrp2());
     let o = walk(&rig, false, [0.3, 0.0], (true, 0, 0));
     assert_eq!(o.shift, [0, 0]);
+    assert_eq!(o.from_measured, 0);
     assert!(o.adjusts.iter().all(|a| a.shift == [0, 0] && a.count == 0));
     for (cx, cy, x, y) in &o.landings {
         assert!(
@@ -242,11 +250,24 @@ fn without_opting_in_nothing_moves() {
     }
 }
 
+/// A node whose capture steps are re-planned from the measured state
+/// (`AdjustConfig::from_measured`).
+fn from_measured() -> NodeConfig {
+    let mut cfg = NodeConfig::hrp2();
+    cfg.adjust.from_measured = true;
+    cfg
+}
+
 #[test]
 fn an_adjusted_walk_lands_where_adjust_says() {
-    let rig = Rig::new(NodeConfig::hrp2());
+    for (cfg, measured) in [(NodeConfig::hrp2(), false), (from_measured(), true)] {
+        adjusted_walk_lands_where_adjust_says(&Rig::new(cfg), measured);
+    }
+}
+
+fn adjusted_walk_lands_where_adjust_says(rig: &Rig, measured: bool) {
     let push = [0.35, 0.0];
-    let o = walk(&rig, true, push, (true, 0, 0));
+    let o = walk(rig, true, push, (true, 0, 0));
     assert!(!o.fallen, "{o:?}");
     assert!(
         o.shift[0] > 0,
@@ -258,6 +279,8 @@ fn an_adjusted_walk_lands_where_adjust_says() {
         o.shift
     );
     assert!(last.count > 0);
+    // The capture step's window started from the measured state, where the node says so.
+    assert_eq!(o.from_measured > 0, measured, "{o:?}");
     // Every landing is its commanded position plus a shift the node published.
     let published: Vec<[f64; 2]> = o.adjusts.iter().map(Adjust::shift_si).collect();
     for (cx, cy, x, y) in &o.landings {
@@ -273,42 +296,65 @@ fn an_adjusted_walk_lands_where_adjust_says() {
 
 #[test]
 fn stale_or_foreign_measured_states_move_nothing() {
-    let rig = Rig::new(NodeConfig::hrp2());
+    let rig = Rig::new(from_measured());
     // Older than the node's limit of 4 cycles.
     let o = walk(&rig, true, [0.35, 0.0], (true, 5, 0));
     assert_eq!(o.shift, [0, 0]);
     // Of the session before this one.
     let o = walk(&rig, true, [0.35, 0.0], (true, 0, 1));
     assert_eq!(o.shift, [0, 0]);
+    assert_eq!(o.from_measured, 0);
     // None at all.
     let o = walk(&rig, true, [0.35, 0.0], (false, 0, 0));
     assert_eq!(o.shift, [0, 0]);
+    assert_eq!(o.from_measured, 0);
 }
 
 #[test]
 fn the_adjustment_never_lowers_the_survivable_push() {
     let rig = Rig::new(NodeConfig::hrp2());
-    let mut better = 0;
+    let measured = Rig::new(from_measured());
+    let (mut better, mut rows) = (0, vec![]);
     for (phase, at) in [
-        ("double support", PUSH_IN_DOUBLE),
-        ("single support", PUSH_IN_SINGLE),
+        ("at the start of a double support", PUSH_IN_DOUBLE),
+        ("0.15 s into a single support", PUSH_IN_SINGLE),
     ] {
-        for (name, dir) in [
+        for (k, (name, dir)) in [
             ("forward", [1.0, 0.0]),
             ("backward", [-1.0, 0.0]),
             ("outward", [0.0, 1.0]),
             ("inward", [0.0, -1.0]),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             let plain = largest(&rig, false, dir, at);
             let adjusted = largest(&rig, true, dir, at);
-            eprintln!("| {phase} | {name} | {plain:.3} | {adjusted:.3} |");
+            let from = largest(&measured, true, dir, at);
+            let first = if k == 0 { phase } else { "" };
+            let row = format!("| {first} | {name} | {plain:.3} | {adjusted:.3} | {from:.3} |");
+            eprintln!("{row}");
+            rows.push(row);
             // Never worse (to the bisection's resolution) …
             assert!(adjusted >= plain, "{phase}, {name}: {plain} → {adjusted}");
+            assert!(from >= plain, "{phase}, {name}: {plain} → {from}");
             better += usize::from(adjusted > plain);
         }
     }
     // … and better somewhere.
     assert!(better > 0);
+    // The book quotes this table.
+    let book = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/src/adjust.md"
+    ))
+    .expect("the book");
+    for row in rows {
+        assert!(
+            book.contains(&row),
+            "docs/src/adjust.md lacks the row (write it there): {row}"
+        );
+    }
 }
 
 /// A measured state of the session before a `Reset` is refused `BadCrc` (its CRC is keyed with

@@ -413,13 +413,15 @@ pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
 }
 
 /// The `push-map` command: the map of `robot`, written to `out` (`push_map.json`,
-/// `push_map.md`, a polar plot per phase).
+/// `push_map.md`, a polar plot per phase); `from_measured`: the node re-plans a capture step
+/// from the measured state (its default) rather than from the reference's.
 pub fn cli(
     out: &Path,
     robot: &crate::robot::Robot,
     quick: bool,
     phases: Option<&str>,
     directions: Option<&str>,
+    from_measured: bool,
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let probe = probe.resolve(robot)?;
@@ -433,7 +435,8 @@ pub fn cli(
     }
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
-    let node = robot.node_config();
+    let mut node = robot.node_config();
+    node.adjust.from_measured = from_measured;
     let cells = map(&node, &cfg, &spec)?;
     let mass = cfg.robot.total_mass();
     let j = map_json(robot.name(), mass, &spec, &cells);

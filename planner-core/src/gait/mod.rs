@@ -146,6 +146,12 @@ pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     /// The worst first-interval excursion (eq. 17) of the predicted plan, for the re-plan
     /// that takes it (valid while `predicted` is `Some`).
     predicted_worst: [T; 2],
+    /// The measured state the next re-plan of a capture step starts from (zero: the
+    /// reference's own state); set every cycle by the node's step adjustment
+    /// ([`Gait::set_measured`]).
+    measured: Deviation<T>,
+    /// The last re-plan started from the measured state.
+    from_measured: bool,
     tick: u64,
     last: Reference<T>,
     info: Option<ReplanInfo<T>>,
@@ -224,6 +230,8 @@ impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
                 zmp: [State::ZERO; 2],
             }),
             predicted_worst: [T::ZERO; 2],
+            measured: Deviation::ZERO,
+            from_measured: false,
             target: None,
             tick: 0,
             last: Reference {
@@ -322,6 +330,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.serial = 0;
         self.predicted = None;
         self.predicted_worst = [T::ZERO; 2];
+        self.measured = Deviation::ZERO;
+        self.from_measured = false;
         self.target = None;
         self.tick = 0;
         self.last = Reference {

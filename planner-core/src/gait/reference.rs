@@ -60,6 +60,29 @@ impl<T: Real> Reference<T> {
     }
 }
 
+/// The measured state as the node's step adjustment gives it to the gait
+/// ([`super::Gait::set_measured`]): what the re-plan that lifts a capture step's foot starts
+/// from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Deviation<T> {
+    /// `e = ξ_meas − ξ_ref` \[m\] (x, y): the measured divergent component's deviation from
+    /// the reference's.
+    pub error: [T; 2],
+    /// How far the capture step's landing was moved for it \[m\] (x, y).
+    pub moved: [T; 2],
+    /// The robot's stabilizer's ZMP margin `m` in the sole \[m\].
+    pub margin: T,
+}
+
+impl<T: Real> Deviation<T> {
+    /// Nothing measured: every re-plan starts from the reference's state.
+    pub const ZERO: Self = Self {
+        error: [T::ZERO; 2],
+        moved: [T::ZERO; 2],
+        margin: T::ZERO,
+    };
+}
+
 /// What the last re-plan did (for reports and tests).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReplanInfo<T> {

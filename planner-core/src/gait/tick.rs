@@ -109,7 +109,19 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         // Planned already by the feasibility check of a modification, with the same inputs
         // from the same state? Then the spare buffer holds this very plan.
         let this = self.prediction(at, inputs, cog, zmp);
-        let planned = self.predicted.take() == Some(this);
+        let cached = self.predicted.take() == Some(this);
+        // A capture step's window starts from the measured state if that plan keeps the ZMP in
+        // the sole (eq. 17), else from the reference's as every other window. The try plans
+        // into the spare buffer: a predicted plan is gone then.
+        let tried = swing.capture && self.measured.error != [T::ZERO; 2];
+        let measured_worst = if tried {
+            self.plan_from_measured(spare, &inputs, cog, zmp)
+        } else {
+            None
+        };
+        let from_measured = measured_worst.is_some();
+        let cached = cached && !tried;
+        let planned = cached || from_measured;
         if !planned
             && self.wins[spare]
                 .plan_into(&self.params, &inputs, cog, zmp)
@@ -126,11 +138,12 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             return self.plan_stop(c, j, cog, zmp);
         }
         self.failed = false;
+        self.from_measured = from_measured;
         // Eq. 17 of this plan: computed already if it is the predicted one.
-        let worst_zmp = if planned {
-            self.predicted_worst
-        } else {
-            self.wins[spare].worst_first()
+        let worst_zmp = match measured_worst {
+            Some(w) => w,
+            None if cached => self.predicted_worst,
+            None => self.wins[spare].worst_first(),
         };
         self.cur = Some(spare);
         self.serial = self.serial.wrapping_add(1);

@@ -39,12 +39,22 @@
 //! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`])
 //!   after the commands: a cycle whose budget a command spent does not adjust.
 //!
+//! # From the measured state (an option)
+//! With [`AdjustConfig::from_measured`] the re-plan that lifts a capture step's foot starts
+//! from the measured state: every cycle the node hands the gait the fresh deviation `e`, the
+//! move this window made for it and the margin ([`crate::gait::Gait::set_measured`]), and
+//! the window starts with the divergent component moved by the part of `e` that the move
+//! captures ([`crate::capture::captured_deviation`]), if eq. 17 holds for it. The
+//! reference's COG velocity then steps at that tick; off by default, where the reference
+//! stays C¹ as the paper keeps it.
+//!
 //! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
 //! adjusts or a shift is in force), so that
 //! the controller's book of the steps stays true.
 
 use super::*;
 use crate::capture::capture_offset;
+use crate::gait::Deviation;
 use crate::wire::{Adjust, Measured, STAMPS, STEP_UNIT};
 
 /// The bound of [`AdjustConfig::max_age`] \[cycles\].
@@ -60,14 +70,22 @@ pub struct AdjustConfig<T = f64> {
     pub margin: T,
     /// The least change of the shift that is carried out \[m\].
     pub min_change: T,
+    /// The re-plan that lifts a capture step's foot starts from the measured state (see
+    /// [`crate::gait::Gait::set_measured`]): the reference's COG velocity then steps by the
+    /// captured deviation times `ω` at that tick (its position, acceleration and ZMP stay
+    /// continuous). `false` (the default): from the reference's state, as every other re-plan,
+    /// and the reference stays C¹.
+    pub from_measured: bool,
 }
 
 impl AdjustConfig {
-    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes.
+    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes, capture steps re-planned from the
+    /// reference's state (the reference stays C¹).
     pub const DEFAULT: Self = Self {
         max_age: 4,
         margin: 0.02,
         min_change: 0.005,
+        from_measured: false,
     };
 }
 
@@ -78,6 +96,7 @@ impl<T: Real> AdjustConfig<T> {
             max_age: self.max_age,
             margin: U::of(self.margin.f64()),
             min_change: U::of(self.min_change.f64()),
+            from_measured: self.from_measured,
         }
     }
 }
@@ -194,17 +213,42 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// The step adjustment of this cycle (see the module docs): after the commands, before the
-    /// supervision and the tick.
+    /// supervision and the tick. Kept out of `poll` (which it would otherwise crowd).
+    #[inline(never)]
     pub(super) fn adjust_step(&mut self) {
         let fresh = self.fresh_measurement();
         self.adj.flags &= !Adjust::FRESH;
         if fresh.is_some() {
             self.adj.flags |= Adjust::FRESH;
         }
-        if !self.adj.enabled || !self.open || self.estopped || self.lost || self.gait.is_standing()
-        {
-            return;
+        let adjusting = self.adj.enabled
+            && self.open
+            && !self.estopped
+            && !self.lost
+            && !self.gait.is_standing();
+        if adjusting {
+            self.move_steps(fresh);
         }
+        // What a re-plan of a capture step starts from: the fresh measurement and the move
+        // this window made for it (nothing without a fresh state or a move).
+        let (shift, base) = (self.adj.shift, self.adj.base);
+        let measured = match fresh {
+            Some((_, e)) if adjusting && self.cfg.adjust.from_measured && shift != base => {
+                let unit = T::of(STEP_UNIT);
+                let moved = |k: usize| T::of_i32(shift[k].saturating_sub(base[k])) * unit;
+                Deviation {
+                    error: e,
+                    moved: [moved(0), moved(1)],
+                    margin: self.cfg.adjust.margin,
+                }
+            }
+            _ => Deviation::ZERO,
+        };
+        self.gait.set_measured(measured);
+    }
+
+    /// The move of the steps for a fresh measured state (see the module docs).
+    fn move_steps(&mut self, fresh: Option<(u32, [T; 2])>) {
         let plans = self.gait.plans();
         if plans != self.adj.base_plans {
             self.adj.base = self.adj.shift;

@@ -446,6 +446,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                     max_age: 0,
                     margin: T::ZERO,
                     min_change: T::ZERO,
+                    from_measured: false,
                 },
                 entropy: 0,
             },

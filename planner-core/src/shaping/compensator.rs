@@ -188,7 +188,7 @@ impl<T: Real, const P: usize> Compensator<T, P> {
     pub fn state(&self) -> [T; 3] {
         self.state
     }
-    /// `Σ e(i)` over the ticks done so far (used by [`Law::Integral`] only).
+    /// `Σ e(i)` over the ticks done so far (used by [`crate::shaping::Law::Integral`] only).
     pub fn error_sum(&self) -> T {
         self.error_sum
     }
