@@ -2,6 +2,8 @@
 //! cases with a known answer, and the multi-body ZMP error of real walks (printed: run with
 //! `--nocapture` to see the figures).
 
+mod pose;
+
 use host_sim::eval::multibody::{evaluate, max_zmp_error, MbError, MbSample};
 use host_sim::robot::model::{
     mean_yaw, rot_x, rot_y, rot_z, Body, ClosedForm, IkError, LegAngles, Model, Pose,
@@ -9,6 +11,7 @@ use host_sim::robot::model::{
 use host_sim::scenario;
 use planner_core::gait::{FootPose, GaitParams, Phase, Reference, Side};
 use planner_core::Sample;
+use pose::{pose_error, Lcg};
 
 const DT: f64 = 0.005;
 
@@ -29,19 +32,6 @@ fn shape(m: &Model) -> ClosedForm {
     m.closed_form.expect("HRP-2's leg shape")
 }
 
-/// A small deterministic generator (64-bit LCG), uniform in [lo, hi).
-struct Lcg(u64);
-
-impl Lcg {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
-
 fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let mut c = [[0.0; 3]; 3];
     for i in 0..3 {
@@ -50,17 +40,6 @@ fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
         }
     }
     c
-}
-
-fn pose_error(a: &Pose, b: &Pose) -> f64 {
-    let mut e = 0.0f64;
-    for i in 0..3 {
-        e = e.max((a.p[i] - b.p[i]).abs());
-        for j in 0..3 {
-            e = e.max((a.r[i][j] - b.r[i][j]).abs());
-        }
-    }
-    e
 }
 
 fn random_pose(rng: &mut Lcg, p: [f64; 3], tilt: f64, yaw: f64) -> Pose {

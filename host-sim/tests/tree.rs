@@ -2,34 +2,13 @@
 //! and legs of other joint orders (a pitch–roll–yaw hip with tilted axes, a sole centre ahead
 //! of the ankle) round-tripped through forward kinematics.
 
+mod pose;
+
 use host_sim::robot::model::{
     rot_rpy, rot_x, rot_y, rot_z, Body, Joint, LegAngles, Link, Model, Pose, Vec3,
 };
 use planner_core::gait::Side;
-
-/// A small deterministic generator (64-bit LCG), uniform in [lo, hi).
-struct Lcg(u64);
-
-impl Lcg {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
-
-fn pose_error(a: &Pose, b: &Pose) -> f64 {
-    let mut e = 0.0f64;
-    for i in 0..3 {
-        e = e.max((a.p[i] - b.p[i]).abs());
-        for j in 0..3 {
-            e = e.max((a.r[i][j] - b.r[i][j]).abs());
-        }
-    }
-    e
-}
+use pose::{pose_error, Lcg};
 
 /// HRP-2's model with the closed form switched off: the numerical inverse kinematics must
 /// find the closed form's angles (1e-9 rad) for random walking poses, from the standing
