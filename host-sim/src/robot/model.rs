@@ -219,6 +219,23 @@ pub struct Named {
     pub body: Body,
 }
 
+impl Named {
+    /// The bodies fixed to the waist frame of every robot file: the trunk (the upper body)
+    /// and the waist (the root link's own body), in that order.
+    pub fn root(trunk: Body, waist: Body) -> Vec<Named> {
+        vec![
+            Named {
+                name: "trunk".into(),
+                body: trunk,
+            },
+            Named {
+                name: "waist".into(),
+                body: waist,
+            },
+        ]
+    }
+}
+
 /// The dimensions of a leg of HRP-2's shape, for the closed-form inverse kinematics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClosedForm {

@@ -270,16 +270,10 @@ impl Links {
         Ok(Model {
             gravity,
             waist_height,
-            root: vec![
-                Named {
-                    name: "trunk".into(),
-                    body: self.trunk.body("multibody.trunk", false)?,
-                },
-                Named {
-                    name: "waist".into(),
-                    body: self.waist.body("multibody.waist", false)?,
-                },
-            ],
+            root: Named::root(
+                self.trunk.body("multibody.trunk", false)?,
+                self.waist.body("multibody.waist", false)?,
+            ),
             legs: [leg("l", 1.0, |b| *b), leg("r", -1.0, Body::mirrored)],
             closed_form: Some(c),
             stance: [[0.0; 6]; 2],

@@ -176,16 +176,10 @@ impl Tree {
         Ok(Model {
             gravity,
             waist_height,
-            root: vec![
-                Named {
-                    name: "trunk".into(),
-                    body: self.trunk.body("multibody.trunk", true)?,
-                },
-                Named {
-                    name: "waist".into(),
-                    body: self.waist.body("multibody.waist", false)?,
-                },
-            ],
+            root: Named::root(
+                self.trunk.body("multibody.trunk", true)?,
+                self.waist.body("multibody.waist", false)?,
+            ),
             legs,
             closed_form: None,
             stance,
