@@ -104,16 +104,27 @@ fn smoothed(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 }
 
 /// How the run was controlled, for the captions: `open loop`, `stabilized`, or `stabilizer
-/// × s` for weakened gains ([`super::probe`]).
+/// × s` for weakened gains ([`super::probe`]); `, contact from the reference` follows when the
+/// stabilizer takes the contact phase from the reference instead of the force sensors.
 fn mode(cfg: &PhysicsConfig) -> String {
     let full = super::stabilizer::Gains::default();
-    if !cfg.gains.enabled {
-        "open loop".into()
-    } else if cfg.gains == full {
-        "stabilized".into()
-    } else {
-        format!("stabilizer × {}", cfg.gains.k_cog / full.k_cog)
+    let g = cfg.gains;
+    if !g.enabled {
+        return "open loop".into();
     }
+    let gains = super::stabilizer::Gains {
+        contact_from_sensors: full.contact_from_sensors,
+        ..g
+    };
+    let mut m = if gains == full {
+        "stabilized".to_string()
+    } else {
+        format!("stabilizer × {}", g.k_cog / full.k_cog)
+    };
+    if !g.contact_from_sensors {
+        m += ", contact from the reference";
+    }
+    m
 }
 
 /// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name).

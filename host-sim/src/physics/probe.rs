@@ -86,9 +86,9 @@ pub struct ProbeArgs {
     /// The sensors' latency [ms] [default: the `--sensors` model's].
     #[arg(long, value_name = "MS")]
     pub latency_ms: Option<usize>,
-    /// Where the stabilizer takes the contact phase from: the reference, or the ankle force
-    /// sensors.
-    #[arg(long, value_name = "reference|sensors", default_value = "reference", value_parser = parse_contact)]
+    /// Where the stabilizer takes the contact phase from: the ankle force sensors, or the
+    /// reference's phase.
+    #[arg(long, value_name = "reference|sensors", default_value = "sensors", value_parser = parse_contact)]
     pub contact: Contact,
 }
 
@@ -111,7 +111,8 @@ pub fn parse_contact(s: &str) -> Result<Contact, String> {
 }
 
 impl Default for ProbeArgs {
-    /// The robot as stated: the full stabilizer, the robot's servos.
+    /// The robot as stated: the full stabilizer, the robot's servos, the contact phase from
+    /// the force sensors.
     fn default() -> Self {
         Self {
             open_loop: false,
@@ -119,7 +120,7 @@ impl Default for ProbeArgs {
             servo_damping: None,
             sensors: SensorModel::IDEAL,
             latency_ms: None,
-            contact: Contact::Reference,
+            contact: Contact::Sensors,
         }
     }
 }
@@ -189,8 +190,8 @@ impl Probe {
         if !s.is_ideal() {
             m += &format!(", noisy sensors {} ms late", s.latency_ticks);
         }
-        if self.cfg.gains.contact_from_sensors {
-            m += ", contact from the force sensors";
+        if !self.cfg.gains.contact_from_sensors {
+            m += ", contact from the reference";
         }
         m
     }
@@ -365,26 +366,32 @@ mod tests {
         );
         assert_eq!(
             (&j["sensors"]["ideal"], &j["contact"]),
-            (&json!(true), &json!("reference"))
+            (&json!(true), &json!("sensors"))
         );
-        // Noisy sensors with their latency replaced, the contact from the force sensors.
+        assert!(p.cfg.gains.contact_from_sensors);
+        // Noisy sensors with their latency replaced, the contact from the reference.
         let args = ProbeArgs {
             sensors: SensorModel::REALISTIC,
             latency_ms: Some(7),
-            contact: Contact::Sensors,
+            contact: Contact::Reference,
             ..ProbeArgs::default()
         };
         let noisy = args.resolve(&Robot::hrp2()).unwrap();
-        assert!(noisy.cfg.gains.contact_from_sensors);
+        assert!(!noisy.cfg.gains.contact_from_sensors);
         assert_eq!(noisy.cfg.sensors.latency_ticks, 7);
         assert_eq!(noisy.cfg.sensors.force_n, SensorModel::REALISTIC.force_n);
         let mut j = json!({});
         noisy.record(&mut j);
         assert_eq!(
             (&j["sensors"]["latency_ms"], &j["contact"]),
-            (&json!(7), &json!("sensors"))
+            (&json!(7), &json!("reference"))
         );
         assert_eq!(p.mode(), "stabilizer × 0.3, servo damping 150 N m s/rad");
+        assert_eq!(
+            noisy.mode(),
+            "stabilizer × 1, servo damping 600 N m s/rad, noisy sensors 7 ms late, \
+             contact from the reference"
+        );
         let open = ProbeArgs {
             open_loop: true,
             ..ProbeArgs::default()

@@ -18,8 +18,8 @@
 //!
 //! # Every control tick (1 ms)
 //!
-//! The contact phase (which foot supports) is the reference's, or with
-//! [`Gains::contact_from_sensors`] the ankle force sensors' ([`contact_phase`]).
+//! The contact phase (which foot supports) is the ankle force sensors' ([`contact_phase`]),
+//! or with [`Gains::contact_from_sensors`] off the reference's.
 //!
 //! 1. **State estimate** (IMU + encoders): the waist attitude `R` from the IMU, the joint
 //!    angles from the encoders; forward kinematics with the waist at the origin in attitude
@@ -54,8 +54,9 @@ use crate::robot::model::{mean_yaw, rot_z, LegAngles, Mat3, Pose, Vec3};
 use planner_core::gait::{Phase, Reference, Side};
 
 /// The stabilizer's gains (every one stated here; `k_dcm` ∈ {0, 1, 2}, `D` ∈ {400, 1000} and
-/// `K_c` ∈ {3, 5, 8} were tried on the `fig4` scenario: every combination walked, the mean CoP
-/// error was 6.7–9.8 mm and the worst 33–51 mm; these gave 8.2 / 33.5 mm).
+/// `K_c` ∈ {3, 5, 8} were tried on the `fig4` scenario with the contact phase from the
+/// reference: every combination walked, the mean CoP error was 6.7–9.8 mm and the worst
+/// 33–51 mm; these gave 8.2 / 33.5 mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gains {
     /// The feedback is on (false: open-loop playback through the IK).
@@ -82,8 +83,8 @@ pub struct Gains {
     pub cog_return_s: f64,
     /// Largest `|Δc|` \[m\].
     pub cog_limit_m: f64,
-    /// Where the contact phase comes from: the reference's phase (`false`), or the ankle
-    /// force sensors (`true`, [`contact_phase`]).
+    /// Where the contact phase comes from: the ankle force sensors (`true`, the default,
+    /// [`contact_phase`]), or the reference's phase (`false`).
     pub contact_from_sensors: bool,
 }
 
@@ -102,7 +103,7 @@ impl Default for Gains {
             k_cog: 8.0,
             cog_return_s: 1.0,
             cog_limit_m: 0.04,
-            contact_from_sensors: false,
+            contact_from_sensors: true,
         }
     }
 }
