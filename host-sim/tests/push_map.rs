@@ -134,7 +134,8 @@ fn a_cells_force_is_walked_through_and_one_step_more_is_not() {
 }
 
 /// Without a push nothing moves and nothing falls; with a push and `StartAdjusting` every
-/// landing is the commanded position plus a shift the node published.
+/// landing is the commanded position plus a shift the node published, whether the capture
+/// step is re-planned from the reference's state (the default) or from the measured one.
 #[test]
 fn the_closed_loop_lands_where_adjust_says() {
     if !engine_here("the_closed_loop_lands_where_adjust_says") {
@@ -166,17 +167,23 @@ fn the_closed_loop_lands_where_adjust_says() {
         force_n: 0.3 * cfg.robot.total_mass() * cfg.robot.gravity(),
         duration_s: PUSH_S,
     };
-    let o = run(&node, &cfg, Walk::default(), Stepping::Plain, Some(push)).unwrap();
-    assert!(o.pushed);
-    assert!(o.steps_adjusted > 0, "{o:?}");
-    for (t, commanded, landed) in &o.landings {
-        let ok = std::iter::once([0.0, 0.0])
-            .chain(o.adjusts.iter().map(|a| a.shift_si()))
-            .any(|s| {
-                (commanded[0] + s[0] - landed[0]).abs() < 1e-9
-                    && (commanded[1] + s[1] - landed[1]).abs() < 1e-9
-            });
-        assert!(ok, "landing at {t} s: {commanded:?} → {landed:?}");
+    // The node's default, and capture steps re-planned from the measured state.
+    let mut measured = node;
+    measured.adjust.from_measured = true;
+    for (node, from_measured) in [(node, false), (measured, true)] {
+        let o = run(&node, &cfg, Walk::default(), Stepping::Plain, Some(push)).unwrap();
+        assert!(o.pushed);
+        assert!(o.steps_adjusted > 0, "{o:?}");
+        assert_eq!(o.replans_from_measured > 0, from_measured, "{o:?}");
+        for (t, commanded, landed) in &o.landings {
+            let ok = std::iter::once([0.0, 0.0])
+                .chain(o.adjusts.iter().map(|a| a.shift_si()))
+                .any(|s| {
+                    (commanded[0] + s[0] - landed[0]).abs() < 1e-9
+                        && (commanded[1] + s[1] - landed[1]).abs() < 1e-9
+                });
+            assert!(ok, "landing at {t} s: {commanded:?} → {landed:?}");
+        }
     }
 }
 

@@ -160,6 +160,9 @@ pub struct ClosedOutcome {
     pub steps_adjusted: usize,
     /// The largest distance between a landing and its commanded position \[m\].
     pub max_shift_m: f64,
+    /// Re-plans that started from the measured state (capture steps, with
+    /// `AdjustConfig::from_measured`).
+    pub replans_from_measured: usize,
     /// Every `ADJUST` the node sent.
     pub adjusts: Vec<Adjust>,
     /// Whether the push was applied (the walk reached its phase).
@@ -310,7 +313,11 @@ pub fn run(
                 .push_back(ctl.control(ControlOp::Heartbeat).encode());
         }
         now += CYCLE_MS;
+        let plans = node.gait().plans();
         node.poll(now, &mut wire);
+        if node.gait().plans() != plans && node.gait().replanned_from_measured() {
+            out.replans_from_measured += 1;
+        }
         for f in wire.tx.drain(..) {
             if let Some(a) = Adjust::decode(&f) {
                 out.adjusts.push(a);
