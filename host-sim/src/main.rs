@@ -197,9 +197,9 @@ enum Cmd {
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
-        /// What the re-plan that lifts a capture step's foot starts from: the measured state
-        /// (the node's default) or the reference's.
-        #[arg(long, value_name = "measured|reference", default_value = "measured", value_parser = ["measured", "reference"])]
+        /// What the re-plan that lifts a capture step's foot starts from: the reference's state
+        /// (the node's default) or the measured one.
+        #[arg(long, value_name = "reference|measured", default_value = "reference", value_parser = ["reference", "measured"])]
         replan_from: String,
         #[command(flatten)]
         probe: ProbeArgs,

@@ -13,7 +13,8 @@
 //!   node published in `ADJUST` (the controller's book stays true).
 //!
 //! * With `WALK_LONG=1`, the full map (576 engine runs) against the book's table and summary
-//!   (docs/src/adjust.md) and the front page's row.
+//!   (docs/src/adjust.md) and the front page's row, and the map with capture steps re-planned
+//!   from the measured state against the book's summary of it and the front page's sentence.
 //!
 //! MuJoCo as in tests/physics.rs: skipped with a message when missing, a failure under
 //! `WALK_REQUIRE_MUJOCO=1`.
@@ -227,5 +228,40 @@ fn the_full_map_is_the_books() {
         .map(|s| s.raised.to_string())
         .collect();
     let quoted = format!("adjustment raises it in {} of 32 cells", raised.join(" / "));
+    assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
+}
+
+/// The full map with capture steps re-planned from the measured state
+/// (`push-map --replan-from measured`, `WALK_LONG=1`; about 9 minutes), against its summary in
+/// the book and the front page's sentence on it.
+#[test]
+fn the_measured_start_map_is_the_books() {
+    if std::env::var("WALK_LONG").as_deref() != Ok("1") {
+        eprintln!("push_map: the measured-start map runs with WALK_LONG=1");
+        return;
+    }
+    if !engine_here("the_measured_start_map_is_the_books") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let spec = MapSpec::new(false);
+    let mut node = robot.node_config();
+    node.adjust.from_measured = true;
+    let cells = map(&node, &cfg, &spec).unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let sums = summary_lines(&spec, &cells);
+    eprintln!("{sums}");
+    for line in sums.lines().filter(|l| !l.is_empty()) {
+        assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
+    }
+    let means: Vec<String> = host_sim::physics::push_map::summary(&spec, &cells)
+        .iter()
+        .skip(1)
+        .map(|s| format!("{:.3}", s.mean_dv_mps))
+        .collect();
+    let quoted = format!("from the measured state, mean Δv {} m/s", means.join(" / "));
     assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
 }

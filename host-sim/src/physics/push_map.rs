@@ -414,7 +414,7 @@ pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
 
 /// The `push-map` command: the map of `robot`, written to `out` (`push_map.json`,
 /// `push_map.md`, a polar plot per phase); `from_measured`: the node re-plans a capture step
-/// from the measured state (its default) rather than from the reference's.
+/// from the measured state rather than from the reference's (its default).
 pub fn cli(
     out: &Path,
     robot: &crate::robot::Robot,
