@@ -98,26 +98,29 @@ pub fn capture_offset<T: Real>(error: [T; 2], margin: T, omega: T, remaining: T)
 }
 
 /// The part of the deviation `error` = `ξ_meas − ξ_plan` \[m\] (`[x, y]`) that a landing
-/// moved by a length `moved` \[m\] captures, with the stabilizer margin `margin` \[m\] and the
-/// landing `remaining` \[s\] from now: along the deviation's direction, of length
-/// `min(|e|, m + |moved| e^{−ω T_r})`. It inverts [`capture_offset`]: a landing moved by the
-/// whole `capture_offset(e)` captures all of `e`, one moved less (the reach cut it) the part
-/// its move accounts for. Zero for a zero deviation (or one that is not a number); a negative
-/// `remaining` counts as zero.
+/// moved by `moved` \[m\] (`[x, y]`) captures, with the stabilizer margin `margin` \[m\] and
+/// the landing `remaining` \[s\] from now: along the deviation's direction `ê`, of length
+/// `min(|e|, m + max(0, moved·ê) e^{−ω T_r})` (only the part of the move along the deviation
+/// captures it). It inverts [`capture_offset`]: a landing moved by the whole
+/// `capture_offset(e)` captures all of `e`, one moved less (the reach cut it) the part its
+/// move accounts for. Zero for a zero deviation, and when an input is not a finite number; a
+/// negative `remaining` counts as zero.
 pub fn captured_deviation<T: Real>(
     error: [T; 2],
-    moved: T,
+    moved: [T; 2],
     margin: T,
     omega: T,
     remaining: T,
 ) -> [T; 2] {
     let norm = (error[0] * error[0] + error[1] * error[1]).sqrt();
+    let along = (moved[0] * error[0] + moved[1] * error[1]) / norm;
+    let finite = norm.is_finite() && along.is_finite() && margin.is_finite();
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(norm > T::ZERO) {
+    if !(norm > T::ZERO) || !finite {
         return [T::ZERO; 2];
     }
     let shrink = (-(omega * remaining.max(T::ZERO))).exp();
-    let length = (margin.max(T::ZERO) + moved.abs() * shrink).min(norm);
+    let length = (margin.max(T::ZERO) + along.max(T::ZERO) * shrink).min(norm);
     let k = length / norm;
     [error[0] * k, error[1] * k]
 }
@@ -213,13 +216,13 @@ mod tests {
             let n = (e[0] * e[0] + e[1] * e[1]).sqrt();
             let o = capture_offset(e, m, omega, t);
             let whole = (o[0] * o[0] + o[1] * o[1]).sqrt();
-            let c = captured_deviation(e, whole, m, omega, t);
+            let c = captured_deviation(e, o, m, omega, t);
             if n > m {
                 assert!((c[0] - e[0]).abs() < 1e-12 && (c[1] - e[1]).abs() < 1e-12);
             }
             // A move cut to a fraction of the whole (the reach).
             let moved = whole * u();
-            let c = captured_deviation(e, moved, m, omega, t);
+            let c = captured_deviation(e, [e[0] / n * moved, e[1] / n * moved], m, omega, t);
             let len = (c[0] * c[0] + c[1] * c[1]).sqrt();
             assert!(len <= n + 1e-15, "{len} > {n}");
             assert!(
@@ -232,14 +235,25 @@ mod tests {
                 assert!((beyond - moved).abs() < 1e-9, "{beyond} vs {moved}");
             }
         }
-        assert_eq!(
-            captured_deviation([0.0; 2], 0.1, 0.02, omega, 0.5),
-            [0.0; 2]
-        );
-        assert_eq!(
-            captured_deviation([f64::NAN, 0.0], 0.1, 0.02, omega, 0.5),
-            [0.0; 2]
-        );
+        // Only the part of the move along the deviation captures it: a move across it, or
+        // against it, captures the margin's part alone.
+        let (e, m, t) = ([0.0, 0.05], 0.02, 0.4);
+        let margin_only = captured_deviation(e, [0.0; 2], m, omega, t);
+        assert!((margin_only[1] - m).abs() < 1e-15 && margin_only[0] == 0.0);
+        for moved in [[0.08, 0.0], [-0.08, 0.0], [0.0, -0.08], [0.05, -0.01]] {
+            assert_eq!(captured_deviation(e, moved, m, omega, t), margin_only);
+        }
+        let part = captured_deviation(e, [0.08, 0.01], m, omega, t);
+        assert!((part[1] - (m + 0.01 * (-omega * t).exp())).abs() < 1e-15);
+        for (e, moved) in [
+            ([0.0; 2], [0.1, 0.0]),
+            ([f64::NAN, 0.0], [0.1, 0.0]),
+            ([f64::INFINITY, 0.0], [0.1, 0.0]),
+            ([0.05, 0.0], [f64::NAN, 0.0]),
+            ([0.05, 0.0], [f64::INFINITY, 0.0]),
+        ] {
+            assert_eq!(captured_deviation(e, moved, 0.02, omega, 0.5), [0.0; 2]);
+        }
     }
 
     /// No deviation, no move; inside the dead band, no move; outside, the excess along the

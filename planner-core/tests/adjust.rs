@@ -15,6 +15,9 @@
 //!   smaller with the adjustment than without it, and larger in some cells (printed with
 //!   `--nocapture`; the book's *Step adjustment* section says where and why not more);
 //! * measured states the node must not use (stale, of another session) move nothing.
+//! * with the capture step re-planned from the measured state, a state measured against a
+//!   reference from before that re-plan is refused `Stale` (one per re-plan with an estimator
+//!   a cycle late), and none is with the re-plan from the reference's state.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -22,7 +25,7 @@ mod common;
 use common::{y, Rig};
 use planner_core::gait::{Phase, Side};
 use planner_core::node::NodeConfig;
-use planner_core::wire::{Adjust, ControlOp, Measured};
+use planner_core::wire::{Ack, Adjust, ControlOp, Measured, Reason};
 
 /// The stabilizer's DCM error gain \[1/s\]: `p = p_ref + (1 + k/ω)(ξ − ξ_ref)`.
 const K_DCM: f64 = 3.0;
@@ -59,6 +62,8 @@ struct Outcome {
     landings: Vec<(f64, f64, f64, f64)>,
     /// Re-plans that started from the measured state (capture steps).
     from_measured: u32,
+    /// Measured states refused `Stale`.
+    stale: u32,
 }
 
 /// A straight walk of `n` steps of `len`, pushed by `dv` (x, y) \[m/s\] `push_at` ticks after
@@ -181,6 +186,10 @@ fn walk_pushed(
             if let Some(a) = Adjust::decode(&f) {
                 out.adjusts.push(a);
             }
+            if let Some(a) = Ack::decode(&f) {
+                let measured = a.command == (planner_core::wire::ids::MEASURED & 0xFF) as u8;
+                out.stale += u32::from(measured && a.reason == Some(Reason::Stale));
+            }
         }
         // A lift-off and a landing.
         let s = r.n.gait().swinging();
@@ -206,6 +215,8 @@ fn walk_pushed(
             robot[1].v += dv[1];
         }
         if r.n.gait().is_standing() && k > 100 {
+            // The stop window is the reference's own: no flag of a capture step outlives it.
+            assert!(!r.n.gait().replanned_from_measured());
             break;
         }
     }
@@ -308,6 +319,26 @@ fn stale_or_foreign_measured_states_move_nothing() {
     let o = walk(&rig, true, [0.35, 0.0], (false, 0, 0));
     assert_eq!(o.shift, [0, 0]);
     assert_eq!(o.from_measured, 0);
+}
+
+/// A state measured against a reference from before the window that re-planned from the
+/// measured state counts a deviation that window took as its own: with an estimator one cycle
+/// late, the one frame of each such re-plan that names the cycle before it is refused `Stale`,
+/// and no other frame is (nor any with the re-plan from the reference's state).
+#[test]
+fn a_state_measured_before_the_reference_stepped_is_stale() {
+    let o = walk(&Rig::new(from_measured()), true, [0.3, 0.0], (true, 1, 0));
+    assert!(!o.fallen, "{o:?}");
+    assert!(o.from_measured > 0, "{o:?}");
+    assert_eq!(o.stale, o.from_measured, "{o:?}");
+    let o = walk(
+        &Rig::new(NodeConfig::hrp2()),
+        true,
+        [0.3, 0.0],
+        (true, 1, 0),
+    );
+    assert!(o.shift != [0, 0] && o.from_measured == 0, "{o:?}");
+    assert_eq!(o.stale, 0, "{o:?}");
 }
 
 #[test]

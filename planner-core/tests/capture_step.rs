@@ -9,6 +9,8 @@
 //!   eq. 18 left it; 1e-9 m), and the plan keeps the ZMP in the sole (eq. 17);
 //! * a measured state whose plan would take the ZMP out of the sole is ignored (the twin's
 //!   reference, bit for bit), as it is for a modification from the bus and with no move.
+//! * the flag of a window planned from the measured state ends with that window: not after
+//!   it, standing, or in a new walk's start window.
 
 use planner_core::capture::captured_deviation;
 use planner_core::gait::{Deviation, Footstep, Gait, GaitParams, Phase, Reference, Side};
@@ -146,7 +148,7 @@ fn a_capture_steps_window_starts_from_the_measured_state() {
             "eq. 18 is taken from the reference's state"
         );
         let single = p.dt * f64::from(p.single_ticks as i32 + adjust);
-        let e_c = captured_deviation(error, dx, margin, p.omega, single);
+        let e_c = captured_deviation(error, [dx, 0.0], margin, p.omega, single);
         for (k, (a, b)) in [(r.x, twin.x), (r.y, twin.y)].into_iter().enumerate() {
             assert!(
                 (a.cog - b.cog).abs() < 1e-12,
@@ -193,4 +195,55 @@ fn the_measured_state_is_ignored_where_it_must_be() {
         assert!(!from_measured);
         assert_eq!(r, twin);
     }
+}
+
+/// The flag of a window planned from the measured state belongs to that window: the stop
+/// window after it, and a new walk's start window, are the reference's own.
+#[test]
+fn the_measured_start_ends_with_its_window() {
+    let dx = 0.05;
+    // Three steps and the closing one (step 3), which the capture moves.
+    let mut g = standing();
+    push_straight(&mut g, 3, 0.2);
+    g.start().unwrap();
+    let mut guard = 0;
+    let mut tick = |g: &mut G| {
+        g.tick();
+        guard += 1;
+        assert!(guard < 4000, "the walk never got there");
+    };
+    while g.next_target() != Some(3) || matches!(g.last().phase, Phase::Single(_)) {
+        tick(&mut g);
+    }
+    g.place_steps(|id| (id == 3).then_some([0.6 + dx, 0.1]));
+    g.check_next_target().expect("feasible");
+    g.set_measured(Deviation {
+        error: [0.03, 0.0],
+        moved: [dx, 0.0],
+        margin: 0.02,
+    });
+    g.stop();
+    let plans = g.plans();
+    while g.plans() == plans {
+        tick(&mut g);
+    }
+    assert!(g.replanned_from_measured(), "the capture step's window");
+    // What follows it (the stop window, or standing at its end) is not.
+    let plans = g.plans();
+    while g.plans() == plans && !g.is_standing() {
+        tick(&mut g);
+    }
+    assert!(
+        !g.replanned_from_measured(),
+        "after the capture step's window"
+    );
+    while !g.is_standing() {
+        tick(&mut g);
+    }
+    assert!(!g.replanned_from_measured(), "standing");
+    // A new walk's start window.
+    g.push(4, Footstep::new(Side::Right, 0.8, -0.1, 0.0))
+        .unwrap();
+    g.start().unwrap();
+    assert!(!g.replanned_from_measured(), "the start window");
 }

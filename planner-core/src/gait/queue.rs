@@ -116,6 +116,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.wins[0].plan_into(&self.params, &inputs, cog, zmp)?;
         self.cur = Some(0);
         self.serial = self.serial.wrapping_add(1);
+        self.from_measured = false;
         self.start_shaping();
         // The reference of this instant becomes the window's tick 0 (the same position, with
         // the velocities the pattern starts with), and the compensators take their tick 0.
@@ -233,6 +234,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             && self.mode == other.mode
             && self.stop_requested == other.stop_requested
             && self.serial == other.serial
+            && self.measured == other.measured
+            && self.from_measured == other.from_measured
             && self.tick == other.tick
             && self.last == other.last
             && self.info == other.info

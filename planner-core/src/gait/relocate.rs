@@ -56,8 +56,9 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.measured = measured;
     }
 
-    /// The last re-plan started from the measured state (a capture step's window whose plan
-    /// kept the ZMP in the sole; see the module docs).
+    /// The window being executed was planned from the measured state (a capture step's window
+    /// whose plan kept the ZMP in the sole; see the module docs); `false` after the start and
+    /// the stop windows.
     pub fn replanned_from_measured(&self) -> bool {
         self.from_measured
     }
@@ -80,7 +81,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         let d = self.measured;
         let e = captured_deviation(
             d.error,
-            (d.moved[0] * d.moved[0] + d.moved[1] * d.moved[1]).sqrt(),
+            d.moved,
             d.margin,
             p.omega,
             p.seconds(inputs.first_ticks),

@@ -41,6 +41,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
             self.last.phase = Phase::Standing;
             self.last.feet = self.ground_poses();
             self.cur = None;
+            self.from_measured = false;
             return self.last;
         }
         let t = self.wins[c].tick.min(end);
@@ -199,6 +200,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         }
         self.cur = Some(spare);
         self.serial = self.serial.wrapping_add(1);
+        self.from_measured = false;
         true
     }
 

@@ -46,7 +46,11 @@
 //! the window starts with the divergent component moved by the part of `e` that the move
 //! captures ([`crate::capture::captured_deviation`]), if eq. 17 holds for it. The
 //! reference's COG velocity then steps at that tick; off by default, where the reference
-//! stays C¹ as the paper keeps it.
+//! stays C¹ as the paper keeps it. A state measured against a reference before that step is
+//! refused as stale (and one taken already is no longer fresh): it counts a deviation that
+//! the window took as its own. Such a re-plan may plan twice in its cycle (the measured try,
+//! then the reference's state if eq. 17 refuses it); the cycle counts of the timing table are
+//! measured with the option off.
 //!
 //! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
 //! adjusts or a shift is in force), so that
@@ -174,6 +178,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if at < self.adj.opened_at {
             return Err(Reason::WrongSession);
         }
+        if self.cfg.adjust.from_measured && at < self.jumped_at() {
+            return Err(Reason::Stale);
+        }
         match self.adj.measured {
             Some((last, _)) if last == at => return Err(Reason::Duplicate),
             Some((last, _)) if last > at => return Err(Reason::Stale),
@@ -188,7 +195,31 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     fn fresh_measurement(&self) -> Option<(u32, [T; 2])> {
         let (at, e) = self.adj.measured?;
         let age = self.cycle.wrapping_sub(1).wrapping_sub(at);
-        (age <= self.cfg.adjust.max_age).then_some((at, e))
+        let before_jump = self.cfg.adjust.from_measured && at < self.jumped_at();
+        (age <= self.cfg.adjust.max_age && !before_jump).then_some((at, e))
+    }
+
+    /// The first cycle whose reference a measured state may be compared with: the cycle of
+    /// the re-plan that started the window being executed from the measured state (the
+    /// reference's divergent component stepped there, so a state measured against an earlier
+    /// reference counts a deviation the window has taken as its own), else 0. Called between
+    /// ticks: the gait ticks once a cycle, so the re-plan's cycle is the last published one
+    /// less the gait's ticks since.
+    /// Out of line: the check costs a cycle without the option one test.
+    #[inline(never)]
+    fn jumped_at(&self) -> u32 {
+        if !self.gait.replanned_from_measured() {
+            return 0;
+        }
+        let Some(info) = self.gait.last_replan() else {
+            return 0;
+        };
+        let since = self
+            .gait
+            .ticks()
+            .saturating_sub(info.tick)
+            .min(u64::from(u32::MAX));
+        self.cycle.wrapping_sub(1).saturating_sub(since as u32)
     }
 
     /// The shift of the steps from `shift` to `to` \[0.5 mm\] placed in the gait: every queued

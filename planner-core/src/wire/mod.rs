@@ -64,7 +64,9 @@
 //!   against (24 bits: exact for a start-up's first 2²⁴ cycles, 23.3 hours; beyond, refused
 //!   [`Reason::Exhausted`]) and its CRC is keyed with the session: it is taken only if it is
 //!   at most [`crate::node::AdjustConfig::max_age`] cycles old, newer than the last
-//!   one taken, and of the open session. It never proves the controller alive.
+//!   one taken, of the open session, and (with [`crate::node::AdjustConfig::from_measured`])
+//!   not from before the reference stepped to the measured state. It never proves the
+//!   controller alive.
 //! * **`ESTOP`** belongs to no session on purpose: any frame on its identifier with the right
 //!   length stops the robot, in the cycle it is received (a stop is always safe), and proves
 //!   nothing about the controller.
@@ -332,7 +334,8 @@ pub enum Reason {
     /// version in force (or a newer modification of the same step received in the same cycle
     /// was accepted), a footstep frame that arrived before a `StopNow` carried out in the same
     /// cycle, a control command whose sequence number is below the last accepted one, a
-    /// measured state older than the node's limit or than the last one taken.
+    /// measured state older than the node's limit or than the last one taken (or measured
+    /// against a reference from before the window re-planned from the measured state).
     Stale = 17,
     /// The controller fell silent while the robot walked (or the node's clock stopped):
     /// motion commands are refused until a `Reset` once standing.
