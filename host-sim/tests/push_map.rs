@@ -205,7 +205,9 @@ fn the_full_map_is_the_books() {
     let cells = map(&robot.node_config(), &cfg, &spec).unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
+    // (its prose wraps anywhere: compared with single spaces)
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
     let table = markdown(&spec, &cells);
     let sums = summary_lines(&spec, &cells);
     eprintln!("{table}\n{sums}");
@@ -251,7 +253,9 @@ fn the_measured_start_map_is_the_books() {
     let cells = map(&node, &cfg, &spec).unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
+    // (its prose wraps anywhere: compared with single spaces)
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
     let sums = summary_lines(&spec, &cells);
     eprintln!("{sums}");
     for line in sums.lines().filter(|l| !l.is_empty()) {
