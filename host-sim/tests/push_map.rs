@@ -27,7 +27,8 @@ mod engine;
 use engine::engine_here;
 use host_sim::physics::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
 use host_sim::physics::push_map::{
-    bisect, compare, map, markdown, summary_lines, MapSpec, PUSH_S, QUICK_DIRECTIONS, QUICK_PHASES,
+    bisect, compare, map, markdown, summary_lines, Cell, MapSpec, PUSH_S, QUICK_DIRECTIONS,
+    QUICK_PHASES,
 };
 use host_sim::physics::PhysicsConfig;
 use host_sim::robot::Robot;
@@ -188,26 +189,37 @@ fn the_closed_loop_lands_where_adjust_says() {
     }
 }
 
-/// The full map, as the book and the front page quote it (`WALK_LONG=1`; about 9 minutes of a
-/// release build on 2 cores).
-#[test]
-fn the_full_map_is_the_books() {
+/// A full map of HRP-2 (`WALK_LONG=1`, the engine here; else `None`, with a message), capture
+/// steps re-planned from the measured state or not, with the book and the front page (its
+/// prose wraps anywhere: its whitespace collapsed to single spaces).
+fn full_map(test: &str, from_measured: bool) -> Option<(MapSpec, Vec<Cell>, String, String)> {
     if std::env::var("WALK_LONG").as_deref() != Ok("1") {
-        eprintln!("push_map: the full map runs with WALK_LONG=1");
-        return;
+        eprintln!("push_map: {test} runs with WALK_LONG=1");
+        return None;
     }
-    if !engine_here("the_full_map_is_the_books") {
-        return;
+    if !engine_here(test) {
+        return None;
     }
     let robot = Robot::hrp2();
     let cfg = PhysicsConfig::for_robot(&robot);
     let spec = MapSpec::new(false);
-    let cells = map(&robot.node_config(), &cfg, &spec).unwrap();
+    let mut node = robot.node_config();
+    node.adjust.from_measured = from_measured;
+    let cells = map(&node, &cfg, &spec).unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
-    // (its prose wraps anywhere: compared with single spaces)
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    Some((spec, cells, book, readme))
+}
+
+/// The full map, as the book and the front page quote it (`WALK_LONG=1`; about 9 minutes of a
+/// release build on 2 cores).
+#[test]
+fn the_full_map_is_the_books() {
+    let Some((spec, cells, book, readme)) = full_map("the_full_map_is_the_books", false) else {
+        return;
+    };
     let table = markdown(&spec, &cells);
     let sums = summary_lines(&spec, &cells);
     eprintln!("{table}\n{sums}");
@@ -238,24 +250,10 @@ fn the_full_map_is_the_books() {
 /// the book and the front page's sentence on it.
 #[test]
 fn the_measured_start_map_is_the_books() {
-    if std::env::var("WALK_LONG").as_deref() != Ok("1") {
-        eprintln!("push_map: the measured-start map runs with WALK_LONG=1");
+    let Some((spec, cells, book, readme)) = full_map("the_measured_start_map_is_the_books", true)
+    else {
         return;
-    }
-    if !engine_here("the_measured_start_map_is_the_books") {
-        return;
-    }
-    let robot = Robot::hrp2();
-    let cfg = PhysicsConfig::for_robot(&robot);
-    let spec = MapSpec::new(false);
-    let mut node = robot.node_config();
-    node.adjust.from_measured = true;
-    let cells = map(&node, &cfg, &spec).unwrap();
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
-    // (its prose wraps anywhere: compared with single spaces)
-    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
-    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    };
     let sums = summary_lines(&spec, &cells);
     eprintln!("{sums}");
     for line in sums.lines().filter(|l| !l.is_empty()) {

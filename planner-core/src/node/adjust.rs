@@ -178,7 +178,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if at < self.adj.opened_at {
             return Err(Reason::WrongSession);
         }
-        if self.cfg.adjust.from_measured && at < self.jumped_at() {
+        if self.before_jump(at) {
             return Err(Reason::Stale);
         }
         match self.adj.measured {
@@ -195,8 +195,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     fn fresh_measurement(&self) -> Option<(u32, [T; 2])> {
         let (at, e) = self.adj.measured?;
         let age = self.cycle.wrapping_sub(1).wrapping_sub(at);
-        let before_jump = self.cfg.adjust.from_measured && at < self.jumped_at();
-        (age <= self.cfg.adjust.max_age && !before_jump).then_some((at, e))
+        (age <= self.cfg.adjust.max_age && !self.before_jump(at)).then_some((at, e))
+    }
+
+    /// A state measured against the reference of cycle `at` predates the step of the
+    /// reference to the measured state ([`AdjustConfig::from_measured`] only; see
+    /// [`Self::jumped_at`]).
+    fn before_jump(&self, at: u32) -> bool {
+        self.cfg.adjust.from_measured && at < self.jumped_at()
     }
 
     /// The first cycle whose reference a measured state may be compared with: the cycle of
@@ -204,8 +210,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// reference's divergent component stepped there, so a state measured against an earlier
     /// reference counts a deviation the window has taken as its own), else 0. Called between
     /// ticks: the gait ticks once a cycle, so the re-plan's cycle is the last published one
-    /// less the gait's ticks since.
-    /// Out of line: the check costs a cycle without the option one test.
+    /// less the gait's ticks since. Out of line, so that a cycle without the option pays for
+    /// one test of it.
     #[inline(never)]
     fn jumped_at(&self) -> u32 {
         if !self.gait.replanned_from_measured() {
