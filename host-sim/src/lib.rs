@@ -22,5 +22,6 @@ pub mod eval;
 pub mod output;
 pub mod physics;
 pub mod robot;
+pub mod ros2;
 pub mod scenario;
 pub mod sim;
