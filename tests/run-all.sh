@@ -8,8 +8,8 @@
 #    can.log test reads with (can-utils, apt-get; python-can and cantools, pip), the Python
 #    MCAP reader the walk.mcap test reads with (mcap, zstandard, jsonschema; pip), and the
 #    physics engine (MuJoCo 3.2.7, pip), the robot descriptions and their oracle
-#    (example-robot-data 6.0.0 and pin 4.1.0, pip), and LAPACK for the comparison bench (liblapack-dev,
-#    apt-get);
+#    (example-robot-data 6.0.0 and pin 4.1.0, pip), the ROS 2 peer of the gateway's tests
+#    (cyclonedds 11.0.1, pip), and LAPACK for the comparison bench (liblapack-dev, apt-get);
 # 2. the host workspace: unit, integration and bench targets, then the doctests (this includes
 #    firmware/board-core, the board's CAN adapter, pacer and reset reason on a mock FDCAN);
 # 3. planner-core cross-compiled for the Cortex-M (no_std, no allocator);
@@ -165,6 +165,17 @@ if [ "$(python3 -c 'import importlib.metadata as m; print(m.version("example-rob
 fi
 export WALK_REQUIRE_ROBOT_DATA=1
 # --- end robots from their packages -----------------------------------------------------------
+
+# --- the ROS 2 peer of the gateway's tests (host-sim/tests/ros2.rs) ---------------------------
+# PyPI's cyclonedds (Eclipse Cyclone DDS with its Python binding): the independent ROS 2 peer
+# that drives `host-sim ros2`. With WALK_REQUIRE_ROS2=1 the tests fail instead of skipping.
+CYCLONEDDS_VERSION=11.0.1
+if [ "$(python3 -c 'import importlib.metadata as m; print(m.version("cyclonedds"))' 2>/dev/null)" != "$CYCLONEDDS_VERSION" ]; then
+    echo "installing cyclonedds==$CYCLONEDDS_VERSION"
+    python3 -m pip install -q "cyclonedds==$CYCLONEDDS_VERSION"
+fi
+export WALK_REQUIRE_ROS2=1
+# --- end ROS 2 peer ---------------------------------------------------------------------------
 
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT

@@ -209,6 +209,33 @@ enum Cmd {
         #[command(subcommand)]
         action: RobotCmd,
     },
+    /// The ROS 2 footstep gateway: IHMC's footstep list, pause and abort in, footstep and
+    /// walking status, refusals and the reference out, driving the node in this process (or a
+    /// real node with --interface); see the book's "From ROS 2".
+    Ros2 {
+        /// The topics' namespace [default: /ihmc/<robot>/humanoid_control].
+        #[arg(long, value_name = "NS")]
+        namespace: Option<String>,
+        /// The DDS domain [default: $ROS_DOMAIN_ID, else 0].
+        #[arg(long, value_name = "N")]
+        domain: Option<u16>,
+        /// Stop after this many seconds (default: run until killed).
+        #[arg(long, value_name = "S", value_parser = positive_seconds, allow_negative_numbers = true)]
+        seconds: Option<f64>,
+        /// Exit after this many walks ended (completed or aborted).
+        #[arg(long, value_name = "N")]
+        walks: Option<usize>,
+        /// Drive a real node on this CAN interface (feature `socketcan`) instead of the node in
+        /// this process.
+        #[arg(long, value_name = "IFACE")]
+        interface: Option<String>,
+        /// Write can.log and gateway.json (what the run measured) here.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
+        #[arg(long, value_name = "FILE")]
+        robot: Option<PathBuf>,
+    },
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -407,6 +434,42 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             seconds,
             robot,
         }) => node(&interface, seconds, &load_robot(robot.as_deref())?),
+        Some(Cmd::Ros2 {
+            namespace,
+            domain,
+            seconds,
+            walks,
+            interface,
+            out,
+            robot,
+        }) => {
+            let robot = load_robot(robot.as_deref())?;
+            let domain = match domain {
+                Some(d) => d,
+                None => match std::env::var("ROS_DOMAIN_ID") {
+                    Ok(v) => v
+                        .parse()
+                        .map_err(|_| format!("ROS_DOMAIN_ID={v} is not a domain id (0 … 232)"))?,
+                    Err(_) => 0,
+                },
+            };
+            let opts = host_sim::ros2::dds::Options {
+                namespace: namespace
+                    .unwrap_or_else(|| host_sim::ros2::dds::default_namespace(robot.name())),
+                domain,
+                seconds,
+                walks,
+                gateway: host_sim::ros2::gateway_config(&robot),
+            };
+            println!(
+                "ROS 2 gateway: topics under {} (domain {}), node: {}",
+                opts.namespace,
+                opts.domain,
+                interface.as_deref().unwrap_or("in this process")
+            );
+            host_sim::ros2::serve(&robot, &opts, interface.as_deref(), out.as_deref())?;
+            Ok(())
+        }
     }
 }
 

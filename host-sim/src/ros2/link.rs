@@ -23,9 +23,10 @@ pub trait NodeLink {
     }
 }
 
-/// The node in this process, on host-sim's virtual CAN bus (1 Mbit/s, no faults), recorded.
+/// The node in this process, on host-sim's virtual CAN bus (1 Mbit/s, no faults), recorded, with
+/// the board's queue of 16 steps.
 pub struct InProcess {
-    node: Node<64>,
+    node: Node<16>,
     bus: Bus,
     ctl: Port,
     port: Port,
@@ -49,7 +50,7 @@ impl InProcess {
     }
 
     /// The node (for tests).
-    pub fn node(&self) -> &Node<64> {
+    pub fn node(&self) -> &Node<16> {
         &self.node
     }
 }
@@ -119,7 +120,7 @@ impl SocketCan {
 #[cfg(feature = "socketcan")]
 impl NodeLink for SocketCan {
     fn cycle(&mut self, frames: &[RawFrame]) -> Vec<RawFrame> {
-        use socketcan::{EmbeddedFrame, Frame, Socket, StandardId};
+        use socketcan::{EmbeddedFrame, Socket, StandardId};
         for f in frames {
             if let Some(frame) =
                 StandardId::new(f.id).and_then(|id| socketcan::CanFrame::new(id, f.bytes()))

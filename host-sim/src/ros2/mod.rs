@@ -15,3 +15,56 @@ pub mod gateway;
 pub mod link;
 pub mod msg;
 pub mod plan;
+
+use std::path::Path;
+
+use crate::robot::Robot;
+use link::NodeLink;
+
+/// Runs the gateway for `robot`: on the node in this process (`interface` `None`) or on a real
+/// node on that CAN interface (feature `socketcan`). With `out`, writes `can.log` (in this
+/// process) and `gateway.json` (what the run measured, [`dds::Stats`]) there.
+pub fn serve(
+    robot: &Robot,
+    opts: &dds::Options,
+    interface: Option<&str>,
+    out: Option<&Path>,
+) -> Result<dds::Stats, String> {
+    let mut link: Box<dyn NodeLink> = match interface {
+        None => Box::new(link::InProcess::new(robot.node_config())?),
+        #[cfg(feature = "socketcan")]
+        Some(i) => Box::new(link::SocketCan::open(i)?),
+        #[cfg(not(feature = "socketcan"))]
+        Some(i) => {
+            return Err(format!(
+                "cannot drive a node on {i}: this host-sim was built without SocketCAN \
+                 (cargo run --release -p host-sim --features socketcan -- ros2 --interface {i})"
+            ))
+        }
+    };
+    let stats = dds::run(link.as_mut(), opts, |_| {})?;
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let log = link.log();
+        if !log.is_empty() {
+            let p = dir.join("can.log");
+            std::fs::write(&p, log.join("\n") + "\n")
+                .map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+        let p = dir.join("gateway.json");
+        let text = serde_json::to_string_pretty(&stats).map_err(|e| e.to_string())?;
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    Ok(stats)
+}
+
+/// The gateway's settings for `robot`: its control period, sole and COG height.
+pub fn gateway_config(robot: &Robot) -> gateway::GatewayConfig {
+    let p = robot.node_config().params;
+    gateway::GatewayConfig {
+        dt: p.dt,
+        sole: [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
+        cog_height: p.cog_height,
+        ..gateway::GatewayConfig::default()
+    }
+}

@@ -399,7 +399,11 @@ pub struct CommandRefusal {
 }
 
 /// One message type: package, name, and its fields as `(type, name)`.
-pub type MsgFields = (&'static str, &'static str, &'static [(&'static str, &'static str)]);
+pub type MsgFields = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
 
 /// Every message type of the gateway as `(package, name, fields)`, each field as
 /// `(type, name)` in the `.msg` syntax of `host-sim/interfaces` (for the types of those

@@ -322,10 +322,10 @@ pub fn plan(
             }
         })
         .collect();
-    // The order the node can follow: lifted, then all unlifted in order, then new.
+    // The order the node can follow: lifted, then all unlifted in queue order, then new.
     let mut stage = 0; // 0 lifted, 1 unlifted, 2 new
-    let mut next_unlifted = 0;
     let mut order_ok = true;
+    let mut positions: Vec<usize> = Vec::new();
     for (d, m) in drafts.iter().zip(&matched) {
         let this = match m {
             Some(k) if k.known == Known::Lifted => 0,
@@ -349,14 +349,15 @@ pub fn plan(
                 ));
             }
             if k.known == Known::Unlifted {
-                if unlifted.get(next_unlifted).map(|u| u.key) != Some(k.key) {
+                let at = unlifted.iter().position(|u| u.key == k.key).unwrap_or(0);
+                if positions.last().is_some_and(|&p| p >= at) {
                     order_ok = false;
                 }
-                next_unlifted += 1;
+                positions.push(at);
             }
         }
     }
-    let covers_queue = order_ok && next_unlifted == unlifted.len();
+    let covers_queue = order_ok && positions.len() == unlifted.len();
     if !covers_queue {
         if standing {
             out.drop_queue = !unlifted.is_empty();

@@ -1,0 +1,433 @@
+//! What the gateway sends for each outbox item, and what it makes of the node's answers
+//! (`ACK`, `SESSION`, `DIAG`, `STATUS`, `ADJUST`).
+
+use super::*;
+
+impl Gateway {
+    /// The command of an outbox item, or why not now.
+    pub(super) fn encode(&mut self, item: Item) -> Encoded {
+        match item {
+            Item::Append(key) => {
+                let s = &self.steps[key];
+                if s.state != State::Pending {
+                    return Encoded::Skip;
+                }
+                if self.failed_lists.contains(&s.list) {
+                    let (list, id, index) = (s.list, s.id, s.index);
+                    self.steps[key].state = State::Refused;
+                    self.refusal(
+                        list,
+                        id,
+                        index,
+                        "step_append",
+                        Err("after_refused_step"),
+                        "not sent: an earlier step of its list was refused".into(),
+                    );
+                    return Encoded::Skip;
+                }
+                let Some(number) = self.next_number else {
+                    return Encoded::Wait;
+                };
+                let p = self.frame.relative(&s.pose);
+                let left = s.side == Side::Left;
+                let Some(c) = self.book.append(number, left, p.x, p.y, p.yaw) else {
+                    let (list, id, index) = (s.list, s.id, s.index);
+                    self.steps[key].state = State::Refused;
+                    self.refusal(
+                        list,
+                        id,
+                        index,
+                        "step_append",
+                        Err("out_of_range"),
+                        "the pose is not representable on the bus".into(),
+                    );
+                    return Encoded::Skip;
+                };
+                self.next_number = number.checked_add(1);
+                let s = &mut self.steps[key];
+                (s.number, s.state) = (Some(number), State::Sent);
+                Encoded::Frame(c)
+            }
+            Item::Modify(key, d, list) => {
+                let s = &self.steps[key];
+                let Some(number) = s.number else {
+                    return Encoded::Skip;
+                };
+                if !s.unlifted() {
+                    self.refusal(
+                        list,
+                        d.id,
+                        d.index,
+                        "step_modify",
+                        Err("lifted_off"),
+                        "the foot lifted off before the change was sent".into(),
+                    );
+                    return Encoded::Skip;
+                }
+                let p = self.frame.relative(&d.pose);
+                match self.book.modify(number, p.x, p.y, p.yaw) {
+                    Some(c) => Encoded::Frame(c),
+                    None => {
+                        self.refusal(
+                            list,
+                            d.id,
+                            d.index,
+                            "step_modify",
+                            Err("out_of_range"),
+                            "the move from the appended pose is beyond the bus's ±4.096 m, or \
+                             the step had its 127 versions"
+                                .into(),
+                        );
+                        Encoded::Skip
+                    }
+                }
+            }
+            Item::Control(op, _) => Encoded::Frame(self.control(op)),
+            Item::Start(list, adjusting) => {
+                let appending = self
+                    .inflight
+                    .iter()
+                    .any(|f| matches!(f.item, Item::Append(_)));
+                if appending {
+                    return Encoded::Wait;
+                }
+                if self.failed_lists.contains(&list) {
+                    // Walk a list whole or not at all from standing: drop what of it the node
+                    // queued.
+                    let dropped: Vec<usize> = (0..self.steps.len())
+                        .filter(|&k| self.steps[k].list == list && self.steps[k].unlifted())
+                        .collect();
+                    for &k in &dropped {
+                        let s = &self.steps[k];
+                        let (id, index) = (s.id, s.index);
+                        self.steps[k].state = State::Dropped;
+                        self.refusal(
+                            list,
+                            id,
+                            index,
+                            "step_append",
+                            Err("list_not_walked"),
+                            "accepted, then dropped: another step of its list was refused".into(),
+                        );
+                    }
+                    if dropped.is_empty() {
+                        return Encoded::Skip;
+                    }
+                    return Encoded::Frame(self.control(ControlOp::StopNow));
+                }
+                if !self.steps.iter().any(|s| s.state == State::Queued) {
+                    return Encoded::Skip;
+                }
+                let op = if adjusting {
+                    ControlOp::StartAdjusting
+                } else {
+                    ControlOp::Start
+                };
+                Encoded::Frame(self.control(op))
+            }
+        }
+    }
+
+    pub(super) fn track(&mut self, c: &Command, item: Item) {
+        self.inflight.push(InFlight {
+            code: c.code(),
+            key: c.key(),
+            echo: c.echo(),
+            item,
+            cycle: self.cycle,
+            silent: false,
+        });
+    }
+
+    /// Commands unanswered for too long.
+    pub(super) fn expire(&mut self) {
+        let limit = self.cfg.answer_cycles;
+        let cycle = self.cycle;
+        let (old, keep): (Vec<InFlight>, Vec<InFlight>) = self
+            .inflight
+            .drain(..)
+            .partition(|f| cycle.saturating_sub(f.cycle) > limit);
+        self.inflight = keep;
+        for f in old {
+            if let Item::Append(key) = f.item {
+                if self.steps[key].state == State::Sent {
+                    self.steps[key].state = State::Refused;
+                }
+                // The node's next number is read again from DIAG.
+                self.next_number = None;
+            }
+            if matches!(f.item, Item::Control(ControlOp::Heartbeat, _)) {
+                continue;
+            }
+            let (list, id, index, what) = self.describe(&f.item);
+            self.refusal(
+                list,
+                id,
+                index,
+                what,
+                Err("no_answer"),
+                format!("no answer from the node within {limit} cycles"),
+            );
+        }
+    }
+
+    pub(super) fn describe(&self, item: &Item) -> (u32, u32, i32, &'static str) {
+        match *item {
+            Item::Append(k) => {
+                let s = &self.steps[k];
+                (s.list, s.id, s.index, "step_append")
+            }
+            Item::Modify(_, d, list) => (list, d.id, d.index, "step_modify"),
+            Item::Start(list, _) => (list, 0, -1, "start"),
+            Item::Control(op, origin) => {
+                let list = match origin {
+                    Origin::Gateway => 0,
+                    Origin::List(i) | Origin::Pause(i) | Origin::Abort(i) => i,
+                };
+                let name = match op {
+                    ControlOp::Heartbeat => "heartbeat",
+                    ControlOp::Start | ControlOp::StartAdjusting => "start",
+                    ControlOp::Stop => "stop",
+                    ControlOp::StopNow => match origin {
+                        Origin::Pause(_) => "pause",
+                        Origin::Abort(_) => "abort",
+                        _ => "stop_now",
+                    },
+                    ControlOp::Reset => "reset",
+                };
+                (list, 0, -1, name)
+            }
+        }
+    }
+
+    /// A frame the node sent.
+    pub fn on_frame(&mut self, f: &RawFrame) {
+        if let Some(a) = Ack::decode(f) {
+            return self.on_ack(a);
+        }
+        if let Some(s) = Session::decode(f) {
+            if self.link == Link::WaitSession {
+                self.epoch = s.epoch;
+                self.session_seen = true;
+            }
+            self.seq = self.seq.max(s.last_seq);
+            return;
+        }
+        if let Some(d) = Diag::decode(f) {
+            let appending = self
+                .inflight
+                .iter()
+                .any(|f| matches!(f.item, Item::Append(_)));
+            if self.link == Link::Open && !appending && !self.resetting {
+                self.next_number = Some(d.next_step);
+            }
+            return;
+        }
+        if let Some(s) = Status::decode(f) {
+            return self.on_status(s);
+        }
+        if let Some(a) = Adjust::decode(f) {
+            self.shift = a.shift_si();
+            return;
+        }
+        if f.id >= ids::COG && f.id <= ids::FOOT_RIGHT && self.stream.decode_into(f) {
+            self.have_stream = true;
+        }
+    }
+
+    pub(super) fn on_status(&mut self, s: Status) {
+        let was = self.node_state;
+        self.node_state = s.state;
+        if (s.state == 2 || s.state == 3) && was != s.state {
+            // The node's safety stopped the walk: nothing not yet lifted off will be walked.
+            let why = if s.state == 2 {
+                Reason::EmergencyStopped
+            } else {
+                Reason::ControllerLost
+            };
+            let dropped: Vec<usize> = (0..self.steps.len())
+                .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
+                .collect();
+            for k in dropped {
+                let s = &self.steps[k];
+                let (list, id, index) = (s.list, s.id, s.index);
+                self.steps[k].state = State::Dropped;
+                self.refusal(
+                    list,
+                    id,
+                    index,
+                    "step_append",
+                    Ok(why),
+                    "dropped: the node stopped the walk".into(),
+                );
+            }
+            self.outbox.clear();
+            self.paused = false;
+            if self.walking.take().is_some() {
+                self.outputs
+                    .push(Output::Walking(WALKING_ABORT_REQUESTED, 0));
+            }
+            self.stopping = false;
+            self.stop_sent = false;
+        }
+    }
+
+    pub(super) fn on_ack(&mut self, a: Ack) {
+        let Some(pos) = self
+            .inflight
+            .iter()
+            .position(|f| f.code == a.command && f.key == a.seq && f.echo == a.echo)
+        else {
+            return;
+        };
+        let f = self.inflight.remove(pos);
+        match f.item {
+            Item::Append(key) => self.on_append_answer(key, a.reason, f.silent),
+            Item::Modify(key, d, list) => match a.reason {
+                None => {
+                    let s = &mut self.steps[key];
+                    (s.pose, s.list, s.index) = (d.pose, list, d.index);
+                }
+                Some(r) => self.refusal(
+                    list,
+                    d.id,
+                    d.index,
+                    "step_modify",
+                    Ok(r),
+                    format!("to ({:.4}, {:.4}) m", d.pose.x, d.pose.y),
+                ),
+            },
+            Item::Start(list, _) => match a.reason {
+                None if self.failed_lists.contains(&list) => self.stopping = true,
+                None => {
+                    self.walking = Some(list);
+                    self.moved = false;
+                    self.stop_sent = false;
+                    self.outputs.push(Output::Walking(WALKING_STARTED, list));
+                }
+                Some(r) => {
+                    self.refusal(list, 0, -1, "start", Ok(r), "the walk did not start".into());
+                    self.drop_unlifted();
+                    if self.steps.iter().any(|s| s.state == State::Dropped) {
+                        self.outbox
+                            .push_back(Item::Control(ControlOp::StopNow, Origin::List(list)));
+                    }
+                }
+            },
+            Item::Control(op, origin) => self.on_control_answer(op, origin, a.reason),
+        }
+    }
+
+    pub(super) fn drop_unlifted(&mut self) {
+        for s in self.steps.iter_mut().filter(|s| s.unlifted()) {
+            s.state = State::Dropped;
+        }
+    }
+
+    pub(super) fn on_append_answer(&mut self, key: usize, reason: Option<Reason>, silent: bool) {
+        match reason {
+            None => self.steps[key].state = State::Queued,
+            Some(r) => {
+                let s = &self.steps[key];
+                let (list, id, index, number, pose) = (s.list, s.id, s.index, s.number, s.pose);
+                self.steps[key].state = State::Refused;
+                if silent {
+                    return;
+                }
+                self.refusal(
+                    list,
+                    id,
+                    index,
+                    "step_append",
+                    Ok(r),
+                    format!("at ({:.4}, {:.4}) m", pose.x, pose.y),
+                );
+                // The rest of its list is not sent; what is on its way is refused as a gap.
+                self.failed_lists.push(list);
+                for f in self.inflight.iter_mut() {
+                    if let Item::Append(k) = f.item {
+                        if self.steps[k].list == list {
+                            f.silent = true;
+                            let s = &self.steps[k];
+                            self.outputs.push(Output::Refusal(CommandRefusal {
+                                footstep_list_sequence_id: list,
+                                footstep_sequence_id: s.id,
+                                footstep_index: s.index,
+                                command: "step_append".into(),
+                                reason_code: 0,
+                                reason: "after_refused_step".into(),
+                                detail: "an earlier step of its list was refused".into(),
+                            }));
+                        }
+                    }
+                }
+                self.next_number = number;
+            }
+        }
+    }
+
+    pub(super) fn on_control_answer(
+        &mut self,
+        op: ControlOp,
+        origin: Origin,
+        reason: Option<Reason>,
+    ) {
+        match (op, reason) {
+            (ControlOp::Reset, None) => {
+                if self.link == Link::Opening {
+                    self.epoch = self.epoch.wrapping_add(1);
+                    self.link = Link::Open;
+                    self.outputs
+                        .push(Output::Log(format!("session {:#x} open", self.epoch)));
+                } else {
+                    // The node re-based its frame on the feet.
+                    self.epoch = self.epoch.wrapping_add(1);
+                    let [l, r] = self.stream.feet;
+                    let yaw = (l[3].sin() + r[3].sin()).atan2(l[3].cos() + r[3].cos());
+                    let base = Pose {
+                        x: 0.5 * (l[0] + r[0]),
+                        y: 0.5 * (l[1] + r[1]),
+                        yaw,
+                    };
+                    self.frame = self.frame.compose(&base);
+                    self.book.clear();
+                    self.next_number = None;
+                    self.node_state = 0;
+                    self.drop_unlifted();
+                    self.outputs.push(Output::Log(format!(
+                        "session {:#x} open again; the node's frame is at ({:.4}, {:.4}, {:.4})",
+                        self.epoch, self.frame.x, self.frame.y, self.frame.yaw
+                    )));
+                }
+                self.resetting = false;
+            }
+            (ControlOp::Reset, Some(r)) => {
+                self.resetting = false;
+                if self.link == Link::Opening {
+                    // Hear the session again and retry.
+                    self.link = Link::WaitSession;
+                    self.session_seen = false;
+                }
+                self.outputs
+                    .push(Output::Log(format!("reset refused: {}", reason_name(r))));
+            }
+            (ControlOp::Stop, None) => self.stopping = true,
+            (ControlOp::StopNow, None) => {
+                self.stopping = true;
+                match origin {
+                    Origin::Abort(id) | Origin::Pause(id) => {
+                        self.outputs
+                            .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
+                    }
+                    _ => {}
+                }
+            }
+            (ControlOp::Heartbeat, None) => {}
+            (_, Some(r)) => {
+                let (list, _, _, what) = self.describe(&Item::Control(op, origin));
+                self.refusal(list, 0, -1, what, Ok(r), String::new());
+            }
+            (_, None) => {}
+        }
+    }
+}
