@@ -234,3 +234,46 @@ fn abort_stops_after_the_swing_and_the_node_stops_a_vanished_peer() {
         3000,
     );
 }
+
+#[test]
+fn a_pause_stops_after_the_swing_and_the_resume_walks_the_rest_where_sent() {
+    let mut rig = Rig::new();
+    let list = forward(1, 1, 8, 0.0);
+    rig.g.on_footstep_list(list.clone());
+    rig.run_until(|r| r.statuses(FOOTSTEP_STATUS_STARTED).len() == 2, 400);
+    rig.g.on_pause(5, true, false);
+    rig.run_until(|r| r.link.node().gait().is_standing(), 1000);
+    let paused_at = rig.statuses(FOOTSTEP_STATUS_COMPLETED).len();
+    assert!(
+        paused_at <= 3,
+        "{paused_at} steps walked before the pause took effect"
+    );
+    for _ in 0..100 {
+        rig.cycle(true);
+    }
+    assert_eq!(rig.statuses(FOOTSTEP_STATUS_COMPLETED).len(), paused_at);
+    rig.g.on_pause(6, false, false);
+    rig.run_until(|r| r.walking().contains(&WALKING_COMPLETED), 3000);
+    let done = rig.statuses(FOOTSTEP_STATUS_COMPLETED);
+    assert_eq!(
+        done.iter().map(|d| d.0).collect::<Vec<_>>(),
+        (1..=8).collect::<Vec<u32>>(),
+        "{:?}",
+        rig.logs()
+    );
+    for (k, (_, _, actual)) in done.iter().enumerate() {
+        let f = &list.footstep_data_list[k].location;
+        assert!((actual[0] - f.x).abs() < 2e-4 && (actual[1] - f.y).abs() < 2e-4);
+    }
+    // The pause's stop was reported, and the walk started again.
+    let w = rig.walking();
+    assert_eq!(
+        w,
+        [
+            WALKING_STARTED,
+            WALKING_ABORT_REQUESTED,
+            WALKING_STARTED,
+            WALKING_COMPLETED
+        ]
+    );
+}

@@ -263,6 +263,7 @@ impl Gateway {
             }
             self.outbox.clear();
             self.paused = false;
+            self.resume = false;
             if self.walking.take().is_some() {
                 self.outputs
                     .push(Output::Walking(WALKING_ABORT_REQUESTED, 0));

@@ -218,6 +218,7 @@ pub struct Gateway {
     peer_alive: bool,
     resetting: bool,
     session_seen: bool,
+    resume: bool,
     outputs: Vec<Output>,
 }
 
@@ -251,6 +252,7 @@ impl Gateway {
             peer_alive: false,
             resetting: false,
             session_seen: false,
+            resume: false,
             outputs: Vec::new(),
         }
     }
@@ -356,6 +358,9 @@ impl Gateway {
     }
 
     fn run_deferred(&mut self) {
+        if self.resume && self.ready() && self.phase == 0 {
+            self.resume_now();
+        }
         while !self.deferred.is_empty() {
             if self.node_state == 3 && self.link == Link::Open && !self.resetting {
                 // The node lost its controller (this gateway): open the session again once
@@ -497,23 +502,31 @@ impl Gateway {
             if !self.paused {
                 return self.refusal(id, 0, -1, "resume", Err("not_paused"), "no pause".into());
             }
-            self.paused = false;
-            let held: Vec<usize> = (0..self.steps.len())
-                .filter(|&k| self.steps[k].state == State::Held)
-                .collect();
-            if held.is_empty() {
-                return;
-            }
-            for &k in &held {
-                let mut s = self.steps[k].clone();
-                self.steps[k].state = State::Dropped;
-                (s.state, s.number) = (State::Pending, None);
-                self.steps.push(s);
-                self.outbox.push_back(Item::Append(self.steps.len() - 1));
-            }
-            let list = self.steps[held[0]].list;
-            self.outbox.push_back(Item::Start(list, false));
+            // Carried out once the robot stands (appends are refused while it stops).
+            self.resume = true;
+            self.run_deferred();
         }
+    }
+
+    /// The steps a pause held, sent again (new step numbers) and walked.
+    fn resume_now(&mut self) {
+        self.resume = false;
+        self.paused = false;
+        let held: Vec<usize> = (0..self.steps.len())
+            .filter(|&k| self.steps[k].state == State::Held)
+            .collect();
+        if held.is_empty() {
+            return;
+        }
+        for &k in &held {
+            let mut s = self.steps[k].clone();
+            self.steps[k].state = State::Dropped;
+            (s.state, s.number) = (State::Pending, None);
+            self.steps.push(s);
+            self.outbox.push_back(Item::Append(self.steps.len() - 1));
+        }
+        let list = self.steps[held[0]].list;
+        self.outbox.push_back(Item::Start(list, false));
     }
 
     /// An abort from the peer: the node drops every step not yet walked (`StopNow`).
@@ -531,6 +544,7 @@ impl Gateway {
         }
         self.deferred.clear();
         self.paused = false;
+        self.resume = false;
         self.outbox
             .retain(|i| !matches!(i, Item::Append(_) | Item::Modify(..) | Item::Start(..)));
         if self.walking.is_some() || had {
