@@ -177,6 +177,16 @@ fi
 export WALK_REQUIRE_ROS2=1
 # --- end ROS 2 peer ---------------------------------------------------------------------------
 
+# --- the live view's test client (host-sim/tests/live.rs) -------------------------------------
+# PyPI's websockets (a client of the Foxglove WebSocket protocol) and jsonschema. With
+# WALK_REQUIRE_LIVE=1 the tests fail instead of skipping.
+if ! python3 -c "import websockets, jsonschema" >/dev/null 2>&1; then
+    echo "installing websockets and jsonschema"
+    python3 -m pip install -q websockets jsonschema
+fi
+export WALK_REQUIRE_LIVE=1
+# --- end live view ----------------------------------------------------------------------------
+
 LOG="$(mktemp)"
 trap 'rm -f "$LOG"' EXIT
 

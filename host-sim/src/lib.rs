@@ -16,6 +16,8 @@
 //!   MCAP file.
 //! * [`physics`]: the walk in the MuJoCo physics engine under a stabilizer, with its own
 //!   outputs (`host-sim physics` and its siblings).
+//! * [`ros2`]: the ROS 2 footstep gateway (`host-sim ros2`): IHMC's footstep messages in, the
+//!   node's commands over the bus (the virtual one, or SocketCAN), IHMC's statuses out.
 //!
 //! The command line (`src/main.rs`) sits on top of all of them.
 pub mod eval;

@@ -81,6 +81,10 @@ enum Cmd {
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
+        /// Serve the walk live to Foxglove on this port (ws://127.0.0.1:PORT) once computed:
+        /// wait up to 60 s for a client, then play it in real time.
+        #[arg(long, value_name = "PORT")]
+        live: Option<u16>,
     },
     /// Replay a candump log of a controller's frames into the node (as canplayer does); print
     /// every refused command, exit 1 if one was refused.
@@ -232,6 +236,9 @@ enum Cmd {
         /// Write can.log and gateway.json (what the run measured) here.
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// Serve the walk live to Foxglove on this port (ws://127.0.0.1:PORT).
+        #[arg(long, value_name = "PORT")]
+        live: Option<u16>,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
         #[arg(long, value_name = "FILE")]
         robot: Option<PathBuf>,
@@ -340,7 +347,12 @@ fn main() -> ExitCode {
 
 fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
     match command {
-        None => run_scenario("straight", Some(Path::new("out/demo")), &Robot::hrp2()),
+        None => run_scenario(
+            "straight",
+            Some(Path::new("out/demo")),
+            &Robot::hrp2(),
+            None,
+        ),
         Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
@@ -352,7 +364,13 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             scenario,
             out,
             robot,
-        }) => run_scenario(&scenario, out.as_deref(), &load_robot(robot.as_deref())?),
+            live,
+        }) => run_scenario(
+            &scenario,
+            out.as_deref(),
+            &load_robot(robot.as_deref())?,
+            live,
+        ),
         Some(Cmd::Replay { log, out, robot }) => {
             replay_log(&log, &out, &load_robot(robot.as_deref())?)
         }
@@ -441,6 +459,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             walks,
             interface,
             out,
+            live,
             robot,
         }) => {
             let robot = load_robot(robot.as_deref())?;
@@ -467,10 +486,39 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 opts.domain,
                 interface.as_deref().unwrap_or("in this process")
             );
-            host_sim::ros2::serve(&robot, &opts, interface.as_deref(), out.as_deref())?;
+            let view = match live {
+                Some(port) => Some(start_live(port, &robot)?),
+                None => None,
+            };
+            host_sim::ros2::serve(
+                &robot,
+                &opts,
+                interface.as_deref(),
+                out.as_deref(),
+                view.as_ref(),
+            )?;
             Ok(())
         }
     }
+}
+
+/// The live view on `port` for `robot`, announced on stdout.
+fn start_live(
+    port: u16,
+    robot: &Robot,
+) -> Result<host_sim::output::live::LiveView, Box<dyn Error>> {
+    let p = robot.node_config().params;
+    let view = host_sim::output::live::LiveView::start(
+        "127.0.0.1",
+        port,
+        p.cog_height,
+        [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
+    )?;
+    println!(
+        "live view: ws://127.0.0.1:{} (Foxglove: Open connection, Foxglove WebSocket)",
+        view.port()
+    );
+    Ok(view)
 }
 
 /// The robot file at `path`, or HRP-2.
@@ -531,7 +579,12 @@ fn load_scenario(name: &str, robot: &Robot) -> Result<ScenarioFile, Box<dyn Erro
     })
 }
 
-fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box<dyn Error>> {
+fn run_scenario(
+    name: &str,
+    out: Option<&Path>,
+    robot: &Robot,
+    live: Option<u16>,
+) -> Result<(), Box<dyn Error>> {
     let ScenarioFile {
         scenario: s,
         entries,
@@ -608,6 +661,24 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
+    if let Some(port) = live {
+        let view = start_live(port, robot)?;
+        if view.wait_for_client(
+            std::time::Duration::from_secs(60),
+            std::time::Duration::from_millis(500),
+        ) {
+            let frames = sim
+                .can_log
+                .iter()
+                .filter(|l| !l.trim().is_empty())
+                .map(|l| host_sim::output::mcap::parse_log_line(l))
+                .collect::<Result<Vec<_>, _>>()?;
+            view.play(&run.trajectory, dt, &mb, &frames);
+            println!("live view: played {name}");
+        } else {
+            println!("live view: no client within 60 s");
+        }
+    }
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
     let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;
     let plots =

@@ -209,11 +209,15 @@ fn pose_schema() -> Value {
 fn can_schema() -> Value {
     object(
         "host_sim.CanFrame",
-        "A CAN frame as delivered on the virtual bus (a line of can.log); decode with \
-         host-sim/can/walk.dbc",
+        "A CAN frame as delivered on the virtual bus (a line of can.log), decoded by name with \
+         host-sim/can/walking.dbc",
         json!({
             "id": { "type": "integer", "minimum": 0, "maximum": 2047,
                     "description": "standard identifier" },
+            "name": { "type": "string",
+                      "description": "the DBC's message name (empty for an identifier it does not name)" },
+            "signals": { "type": "object", "additionalProperties": { "type": "number" },
+                         "description": "every signal of the message in physical units, by name" },
             "id_hex": { "type": "string", "description": "identifier as in can.log" },
             "dlc": { "type": "integer", "minimum": 0, "maximum": 8 },
             "data": { "type": "array", "items": { "type": "integer", "minimum": 0, "maximum": 255 },
@@ -443,15 +447,7 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
         channels: [0; 6],
         seq: [0; 6],
     };
-    let schemas = [
-        reference_schema(),
-        multibody_schema(),
-        pose_schema(),
-        pose_schema(),
-        can_schema(),
-        scene_schema(),
-    ];
-    for (i, (topic, schema)) in TOPICS.iter().zip(&schemas).enumerate() {
+    for (i, (topic, schema)) in TOPICS.iter().zip(&schemas()).enumerate() {
         let name = schema["title"].as_str().unwrap_or("unnamed");
         let data = serde_json::to_vec(schema)?;
         let sid = out
@@ -471,25 +467,9 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
             out.put(CAN, f.unix_us * 1000, &frame_json(f))
                 .map_err(|e| named(&e))?;
         }
-        let v = json!({
-            "t": t,
-            "phase": phase_name(r.phase),
-            "cog": { "x": r.x.cog, "y": r.y.cog, "vx": r.x.cog_vel, "vy": r.y.cog_vel },
-            "zmp": { "x": r.x.zmp, "y": r.y.zmp },
-            "left": foot_json(&r.feet[0]),
-            "right": foot_json(&r.feet[1]),
-        });
-        out.put(REFERENCE, ns, &v).map_err(|e| named(&e))?;
-        if let Some(m) = input.mb.get(k) {
-            let v = json!({ "t": t, "x": m.mb_zmp_x, "y": m.mb_zmp_y });
-            out.put(MULTIBODY, ns, &v).map_err(|e| named(&e))?;
+        for (ch, v) in sample_messages(t, r, input.mb.get(k), input.cog_height, input.sole) {
+            out.put(ch, ns, &v).map_err(|e| named(&e))?;
         }
-        for (ch, foot) in [(LEFT, &r.feet[0]), (RIGHT, &r.feet[1])] {
-            out.put(ch, ns, &pose_json(ns, foot))
-                .map_err(|e| named(&e))?;
-        }
-        let scene = scene_json(ns, r, input.mb.get(k), input.cog_height, input.sole);
-        out.put(SCENE, ns, &scene).map_err(|e| named(&e))?;
     }
     for f in frames {
         out.put(CAN, f.unix_us * 1000, &frame_json(f))
@@ -499,12 +479,64 @@ pub fn write_mcap(path: &Path, input: &McapInput<'_>) -> Result<(), Box<dyn Erro
     Ok(())
 }
 
-const REFERENCE: usize = 0;
-const MULTIBODY: usize = 1;
-const LEFT: usize = 2;
-const RIGHT: usize = 3;
-const CAN: usize = 4;
-const SCENE: usize = 5;
+/// The index of `/reference` in [`TOPICS`].
+pub const REFERENCE: usize = 0;
+/// The index of `/multibody/zmp`.
+pub const MULTIBODY: usize = 1;
+/// The index of `/feet/left`.
+pub const LEFT: usize = 2;
+/// The index of `/feet/right`.
+pub const RIGHT: usize = 3;
+/// The index of `/can`.
+pub const CAN: usize = 4;
+/// The index of `/scene`.
+pub const SCENE: usize = 5;
+
+/// The schema of each of [`TOPICS`] (JSON Schema; its `title` is the schema's name).
+pub fn schemas() -> [Value; 6] {
+    [
+        reference_schema(),
+        multibody_schema(),
+        pose_schema(),
+        pose_schema(),
+        can_schema(),
+        scene_schema(),
+    ]
+}
+
+/// The messages of one trajectory row at time `t` \[s\] (log time [`log_time_ns`]`(t)`):
+/// `/reference`, `/multibody/zmp` (with `mb`), both feet and `/scene`, by channel index.
+pub fn sample_messages(
+    t: f64,
+    r: &Reference<f64>,
+    mb: Option<&MbSample>,
+    cog_height: f64,
+    sole: [f64; 2],
+) -> Vec<(usize, Value)> {
+    let ns = log_time_ns(t);
+    let mut out = vec![(
+        REFERENCE,
+        json!({
+            "t": t,
+            "phase": phase_name(r.phase),
+            "cog": { "x": r.x.cog, "y": r.y.cog, "vx": r.x.cog_vel, "vy": r.y.cog_vel },
+            "zmp": { "x": r.x.zmp, "y": r.y.zmp },
+            "left": foot_json(&r.feet[0]),
+            "right": foot_json(&r.feet[1]),
+        }),
+    )];
+    if let Some(m) = mb {
+        out.push((
+            MULTIBODY,
+            json!({ "t": t, "x": m.mb_zmp_x, "y": m.mb_zmp_y }),
+        ));
+    }
+    for (ch, foot) in [(LEFT, &r.feet[0]), (RIGHT, &r.feet[1])] {
+        out.push((ch, pose_json(ns, foot)));
+    }
+    out.push((SCENE, scene_json(ns, r, mb, cog_height, sole)));
+    out
+}
 
 /// The writer and its channels.
 struct Out<W: std::io::Write + std::io::Seek> {
@@ -528,10 +560,13 @@ impl<W: std::io::Write + std::io::Seek> Out<W> {
     }
 }
 
-fn frame_json(f: &LogFrame) -> Value {
+pub(crate) fn frame_json(f: &LogFrame) -> Value {
     let ns = f.unix_us * 1000;
+    let (name, signals) = super::dbc::decode(f.id, &f.data).unwrap_or_default();
     json!({
         "id": f.id,
+        "name": name,
+        "signals": signals,
         "id_hex": format!("{:03X}", f.id),
         "dlc": f.data.len(),
         "data": f.data,

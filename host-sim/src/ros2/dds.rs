@@ -46,8 +46,10 @@ use super::gateway::{Gateway, GatewayConfig, Output};
 use super::link::NodeLink;
 use super::msg::{
     AbortWalkingMessage, CommandRefusal, FootstepDataListMessage, FootstepStatusMessage, Header,
-    PauseWalkingMessage, PointStamped, Polygon, PolygonStamped, Time, WalkingStatusMessage,
+    PauseWalkingMessage, Point, PointStamped, Polygon, PolygonStamped, Time, WalkingStatusMessage,
 };
+use crate::output::live::LiveView;
+use crate::output::mcap::{log_time_ns, LogFrame};
 
 /// Where the gateway's topics live: `<namespace>/input/…` and `<namespace>/output/…`.
 pub fn default_namespace(robot: &str) -> String {
@@ -261,12 +263,12 @@ where
     }
 }
 
-/// Runs the gateway on `link` until `opts` says stop; `on_output` sees every output as well
-/// (the live view, the log).
+/// Runs the gateway on `link` until `opts` says stop, serving the walk on `live` as well (the
+/// reference and every frame on the bus).
 pub fn run(
     link: &mut dyn NodeLink,
     opts: &Options,
-    mut on_output: impl FnMut(&Output),
+    live: Option<&LiveView>,
 ) -> Result<Stats, String> {
     let ctx = Context::with_options(ContextOptions::new().domain_id(opts.domain))
         .map_err(|e| err("context", e))?;
@@ -359,6 +361,17 @@ pub fn run(
         }
         let answers = link.cycle(&frames);
         let read = Instant::now();
+        let t = stats.cycles as f64 * opts.gateway.dt;
+        if let Some(v) = live {
+            let us = log_time_ns(t) / 1000;
+            for f in frames.iter().chain(&answers) {
+                v.can(&LogFrame {
+                    unix_us: us,
+                    id: f.id,
+                    data: f.bytes().to_vec(),
+                });
+            }
+        }
         for f in &answers {
             gw.on_frame(f);
         }
@@ -366,7 +379,6 @@ pub fn run(
         // Outputs.
         let mut status_published = false;
         for o in gw.take_outputs() {
-            on_output(&o);
             match o {
                 Output::Footstep(s) => {
                     put(&io.footstep_status, s, &mut stats);
@@ -391,8 +403,23 @@ pub fn run(
                     status_published = true;
                 }
                 Output::Reference {
-                    cog, zmp, support, ..
+                    reference: r,
+                    support,
+                    ..
                 } => {
+                    if let Some(v) = live {
+                        v.sample(t, &r, None);
+                    }
+                    let cog = Point {
+                        x: r.x.cog,
+                        y: r.y.cog,
+                        z: opts.gateway.cog_height,
+                    };
+                    let zmp = Point {
+                        x: r.x.zmp,
+                        y: r.y.zmp,
+                        z: 0.0,
+                    };
                     let header = Header {
                         stamp: now_stamp(),
                         frame_id: frame_id.clone(),

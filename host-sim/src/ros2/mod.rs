@@ -22,13 +22,15 @@ use crate::robot::Robot;
 use link::NodeLink;
 
 /// Runs the gateway for `robot`: on the node in this process (`interface` `None`) or on a real
-/// node on that CAN interface (feature `socketcan`). With `out`, writes `can.log` (in this
-/// process) and `gateway.json` (what the run measured, [`dds::Stats`]) there.
+/// node on that CAN interface (feature `socketcan`), served on `live` as well if given. With
+/// `out`, writes `can.log` (in this process) and `gateway.json` (what the run measured,
+/// [`dds::Stats`]) there.
 pub fn serve(
     robot: &Robot,
     opts: &dds::Options,
     interface: Option<&str>,
     out: Option<&Path>,
+    live: Option<&crate::output::live::LiveView>,
 ) -> Result<dds::Stats, String> {
     let mut link: Box<dyn NodeLink> = match interface {
         None => Box::new(link::InProcess::new(robot.node_config())?),
@@ -42,7 +44,7 @@ pub fn serve(
             ))
         }
     };
-    let stats = dds::run(link.as_mut(), opts, |_| {})?;
+    let stats = dds::run(link.as_mut(), opts, live)?;
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let log = link.log();

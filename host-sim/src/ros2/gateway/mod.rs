@@ -97,13 +97,12 @@ pub enum Output {
     Walking(u8, u32),
     /// A command refused by the gateway or by the node.
     Refusal(CommandRefusal),
-    /// The reference of one cycle in the world frame: COG (z its height), ZMP (z 0), support
-    /// polygon (counter-clockwise, z 0), and the cycle.
+    /// The reference of one cycle in the world frame, as the stream carries it (COG, its
+    /// velocity, ZMP, phase, feet; no accelerations), the support polygon (counter-clockwise,
+    /// z 0), and the cycle.
     Reference {
-        /// COG.
-        cog: Point,
-        /// ZMP.
-        zmp: Point,
+        /// The reference (the COG at the robot's COG height when published).
+        reference: planner_core::gait::Reference<f64>,
         /// The support polygon.
         support: Vec<Point32>,
         /// The node's cycle (the stream's 24-bit tick).

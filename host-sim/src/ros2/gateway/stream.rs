@@ -3,6 +3,8 @@
 //! soles on the floor).
 
 use super::*;
+use planner_core::gait::{FootPose, Phase, Reference};
+use planner_core::lipm::Sample;
 
 impl Gateway {
     /// After every frame of the node's cycle: lift-offs and touchdowns, the end of a walk, the
@@ -122,8 +124,22 @@ impl Gateway {
         let w = |x: f64, y: f64| self.frame.compose(&Pose { x, y, yaw: 0.0 });
         let cog = w(st.cog[0], st.cog[1]);
         let zmp = w(st.zmp[0], st.zmp[1]);
+        let (s, c) = self.frame.yaw.sin_cos();
+        let vel = [
+            c * st.cog_vel[0] - s * st.cog_vel[1],
+            s * st.cog_vel[0] + c * st.cog_vel[1],
+        ];
         let mut corners = Vec::with_capacity(8);
+        let mut feet = [FootPose::default(); 2];
         for side in [Side::Left, Side::Right] {
+            let i = usize::from(side == Side::Right);
+            let f = self.foot(side);
+            feet[i] = FootPose {
+                x: f.x,
+                y: f.y,
+                z: st.feet[i][2],
+                yaw: f.yaw,
+            };
             let on_floor = match st.phase {
                 2 => side == Side::Left,
                 3 => side == Side::Right,
@@ -132,7 +148,6 @@ impl Gateway {
             if !on_floor {
                 continue;
             }
-            let f = self.foot(side);
             let (s, c) = f.yaw.sin_cos();
             let (hl, hw) = (self.cfg.sole[0] / 2.0, self.cfg.sole[1] / 2.0);
             for (dx, dy) in [(hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw)] {
@@ -147,16 +162,25 @@ impl Gateway {
                 z: 0.0,
             })
             .collect();
+        let plane = |cog: f64, cog_vel: f64, zmp: f64| Sample {
+            cog,
+            cog_vel,
+            cog_acc: 0.0,
+            zmp,
+            zmp_vel: 0.0,
+        };
+        let phase = match st.phase {
+            0 => Phase::Standing,
+            2 => Phase::Single(Side::Left),
+            3 => Phase::Single(Side::Right),
+            _ => Phase::Double,
+        };
         self.outputs.push(Output::Reference {
-            cog: Point {
-                x: cog.x,
-                y: cog.y,
-                z: self.cfg.cog_height,
-            },
-            zmp: Point {
-                x: zmp.x,
-                y: zmp.y,
-                z: 0.0,
+            reference: Reference {
+                x: plane(cog.x, vel[0], zmp.x),
+                y: plane(cog.y, vel[1], zmp.y),
+                phase,
+                feet,
             },
             support,
             tick: st.tick,
