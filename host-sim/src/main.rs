@@ -35,6 +35,7 @@ use clap::{Parser, Subcommand};
 use host_sim::eval::faults::Walk;
 use host_sim::eval::multibody::{evaluate, max_zmp_error};
 use host_sim::eval::{max_fluctuation, paper};
+use host_sim::outln;
 use host_sim::output::csv::write_trajectory;
 use host_sim::output::plot;
 use host_sim::physics::probe::ProbeArgs;
@@ -257,7 +258,7 @@ fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<d
     fs::write(out, &imported.toml).map_err(|e| format!("{}: {e}", out.display()))?;
     let r = &imported.robot;
     let p = &r.planner.params;
-    println!(
+    outln!(
         "{}: {:.2} kg, COG {:.3} m standing, feet {:.3} m apart, soles {:.3} × {:.3} m, \
          steps up to {:.3} m forward; wrote {}",
         r.name(),
@@ -302,13 +303,23 @@ impl Error for Unexpected {}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match dispatch(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
+    let status = match dispatch(cli.command) {
+        Ok(()) => 0,
         Err(e) => {
             eprintln!("host-sim: {e}");
-            ExitCode::from(if e.is::<Unexpected>() { 1 } else { 2 })
+            if e.is::<Unexpected>() {
+                1
+            } else {
+                2
+            }
         }
+    };
+    // Output a reader closed on purpose (`| head`) is no failure; any other write error is.
+    if let Some(e) = host_sim::console::stdout_failure() {
+        eprintln!("host-sim: cannot write to standard output: {e}");
+        return ExitCode::from(2);
     }
+    ExitCode::from(status)
 }
 
 fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
@@ -317,7 +328,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
-                println!("{name:<10} {}", s.about);
+                outln!("{name:<10} {}", s.about);
             }
             Ok(())
         }
@@ -550,11 +561,11 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
     let plots =
         plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
-        println!("{name}");
+        outln!("{name}");
     } else {
-        println!("{name}: {}", s.about);
+        outln!("{name}: {}", s.about);
     }
-    println!(
+    outln!(
         "  {}: {:.2} s simulated in {} ticks of {} ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
         robot.name(),
         (run.trajectory.len() - 1) as f64 * dt,
@@ -565,7 +576,7 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
         if sim.cut { ", ended by max_time_s" } else { "" }
     );
     for a in &run.adjustments {
-        println!(
+        outln!(
             "  re-plan at {:.3} s: single support adjusted by {:+.3} s (r = {:.3}, plane {})",
             a.tick as f64 * dt,
             a.adjust_s,
@@ -573,29 +584,29 @@ fn run_scenario(name: &str, out: Option<&Path>, robot: &Robot) -> Result<(), Box
             if a.plane == 0 { "x" } else { "y" }
         );
     }
-    println!(
+    outln!(
         "  largest ZMP fluctuation in single support: {:.1} mm along the foot, {:.1} mm across",
         along * 1e3,
         across * 1e3
     );
-    println!(
+    outln!(
         "  largest multi-body ZMP error ({} model): {:.1} mm",
         robot.name(),
         mb_error * 1e3
     );
-    println!(
+    outln!(
         "  results: {}, summary.json, can.log, walk.mcap and {} plots in {}",
         traj.display(),
         plots.len(),
         out.display()
     );
     for (note, ids) in &notes {
-        println!("  steps {}: {note}", ids.join(", "));
+        outln!("  steps {}: {note}", ids.join(", "));
     }
     if !lines.is_empty() {
-        println!("  commands that failed (time sent, entry: command: what happened):");
+        outln!("  commands that failed (time sent, entry: command: what happened):");
         for l in &lines {
-            println!("{l}");
+            outln!("{l}");
         }
     }
     if let Some(e) = mb_failure {
@@ -631,7 +642,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         footsteps: Vec::new(),
     };
     let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_else(|e| {
-        println!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
+        outln!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
         Vec::new()
     });
     create_dir(out)?;
@@ -664,7 +675,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    println!(
+    outln!(
         "{}: {} frames replayed into the {} node, {} answers, {:.2} s{}; results in {}",
         log.display(),
         r.replayed,
@@ -679,7 +690,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         out.display()
     );
     for v in &refused {
-        println!(
+        outln!(
             "  refused at {:.3} s: command {} seq/id {}: {}",
             v["t_s"].as_f64().unwrap_or(f64::NAN),
             v["command"].as_str().unwrap_or(""),
@@ -688,7 +699,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         );
     }
     if r.lost > 0 {
-        println!("  {} frames lost: a receive FIFO was full", r.lost);
+        outln!("  {} frames lost: a receive FIFO was full", r.lost);
     }
     if !refused.is_empty() || r.cut || r.lost > 0 {
         return Err(Unexpected(format!(

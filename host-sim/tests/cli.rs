@@ -448,3 +448,111 @@ fn the_consequences_of_a_refusal_are_grouped_under_it() {
         "{s}"
     );
 }
+
+/// `host-sim ARGS` with its standard output a socket whose reader has gone away (as `| head`
+/// leaves it once it has read enough): every write to it fails with a broken pipe.
+#[cfg(unix)]
+fn with_closed_stdout(args: &[&str]) -> Output {
+    use std::os::fd::OwnedFd;
+    use std::os::unix::net::UnixStream;
+    let (writer, reader) = UnixStream::pair().expect("a socket pair");
+    drop(reader);
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .stdout(std::process::Stdio::from(OwnedFd::from(writer)))
+        .output()
+        .expect("run host-sim")
+}
+
+/// A reader that stops reading (`host-sim … | head`) ends the printing, not the command: no
+/// panic, the command's own exit status, its files written.
+#[cfg(unix)]
+#[test]
+fn a_closed_standard_output_is_no_crash() {
+    let dir = temp_dir("closed-stdout");
+    let out = dir.join("fig4");
+    let cases: [(&[&str], i32); 3] = [
+        (&["list"], 0),
+        (
+            &["run", "fig4", "--out", out.to_str().expect("UTF-8 path")],
+            0,
+        ),
+        (&["run", "nonsense"], 2),
+    ];
+    for (args, status) in cases {
+        let o = with_closed_stdout(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(status), "{args:?}: {err}");
+    }
+    assert!(out.join("summary.json").is_file(), "run wrote its results");
+}
+
+/// No line of the command line is printed with `println!`/`print!` (which panic when the
+/// reader has gone away): every one goes through `host_sim::console`.
+#[test]
+fn every_printed_line_survives_a_closed_pipe() {
+    fn walk(dir: &Path, found: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).expect("host-sim/src") {
+            let p = e.expect("an entry").path();
+            if p.is_dir() {
+                walk(&p, found);
+            } else if p.extension().is_some_and(|x| x == "rs") && !p.ends_with("console.rs") {
+                let text = std::fs::read_to_string(&p).expect("a source file");
+                for (i, line) in text.lines().enumerate() {
+                    let code = line.split("//").next().unwrap_or("");
+                    let bare = |m: &str| {
+                        code.match_indices(m).any(|(at, _)| {
+                            !code[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_')
+                        })
+                    };
+                    if bare("println!") || bare("print!") {
+                        found.push(format!("{}:{}: {line}", p.display(), i + 1));
+                    }
+                }
+            }
+        }
+    }
+    let mut found = Vec::new();
+    walk(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
+        &mut found,
+    );
+    assert!(
+        found.is_empty(),
+        "print with host_sim::outln!:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The long engine commands draw their progress on standard error only when it is a
+/// terminal: piped, it carries nothing but their one-line error (here: no Python to run the
+/// engine).
+#[test]
+fn progress_is_not_written_to_a_pipe() {
+    let dir = temp_dir("progress");
+    let cases: [&[&str]; 3] = [
+        &["physics-tables", "--cells", "0,0"],
+        &["physics-faults", "--rows", "0"],
+        &[
+            "push-map",
+            "--quick",
+            "--phases",
+            "double",
+            "--directions",
+            "0",
+        ],
+    ];
+    for args in cases {
+        let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(args)
+            .args(["--out", dir.to_str().expect("UTF-8 path")])
+            .env("HOST_SIM_PYTHON", dir.join("no-python"))
+            .output()
+            .expect("run host-sim");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(!err.contains('\r'), "{args:?}: {err:?}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err:?}");
+    }
+}

@@ -582,8 +582,8 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
     }
     md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
     write_file(&out.join("tables.md"), &md)?;
-    println!("{md}");
-    println!(
+    crate::outln!("{md}");
+    crate::outln!(
         "results: {} and {}",
         out.join("tables.json").display(),
         out.join("tables.md").display()

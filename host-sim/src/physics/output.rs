@@ -260,7 +260,7 @@ pub fn cli(
     fs::write(&path, serde_json::to_string_pretty(&j)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
-    println!(
+    crate::outln!(
         "{} ({}): {} in MuJoCo ({}), {:.2} s simulated",
         j["scenario"].as_str().unwrap_or(name),
         robot.name(),
@@ -282,7 +282,7 @@ pub fn cli(
         mode(&cfg),
         num("simulated_s")
     );
-    println!(
+    crate::outln!(
         "  max tilt {:.2} deg; CoP vs reference ZMP (50 ms): mean {:.1} mm, worst {:.1} mm; COG drift {:.1} mm, foot drift {:.1} mm",
         num("max_tilt_deg"),
         num("cop_err_mean_m") * 1e3,
@@ -291,9 +291,9 @@ pub fn cli(
         num("foot_drift_max_m") * 1e3
     );
     if j["ended_standing"].as_bool() == Some(false) {
-        println!("  the scenario's walk did not end standing (cut at its max_time_s?)");
+        crate::outln!("  the scenario's walk did not end standing (cut at its max_time_s?)");
     }
-    println!("  results: {}", out.join("physics.json").display());
+    crate::outln!("  results: {}", out.join("physics.json").display());
     Ok(())
 }
 
@@ -314,13 +314,15 @@ pub fn tables_cli(
     let cfg = probe.cfg.clone();
     let mode = probe.mode();
     let mut done = Vec::new();
-    for (i, &(r, c)) in list.iter().enumerate() {
-        eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
+    let bar = crate::console::Progress::new("physics-tables", list.len() as u64);
+    for &(r, c) in &list {
+        bar.message(format!("cell ({r}, {c})"));
         done.push(
             cell(r, c, &robot.planner.params, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?,
         );
+        bar.inc(format!("cell ({r}, {c})"));
     }
-    eprintln!();
+    drop(bar);
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_tables.json");
@@ -378,8 +380,8 @@ pub fn tables_cli(
     );
     let mdpath = out.join("physics_tables.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
-    println!("{md}");
-    println!("results: {} and {}", path.display(), mdpath.display());
+    crate::outln!("{md}");
+    crate::outln!("results: {} and {}", path.display(), mdpath.display());
     Ok(())
 }
 
@@ -420,9 +422,9 @@ pub fn faults_cli(
     );
     let mdpath = out.join("physics_faults.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
-    println!("{md}");
+    crate::outln!("{md}");
     let falls = runs.iter().filter(|r| r.report.fell).count();
-    println!(
+    crate::outln!(
         "{} runs, {falls} fell in the engine; results: {} and {}",
         runs.len(),
         path.display(),
