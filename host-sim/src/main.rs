@@ -633,8 +633,16 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         fs::read_to_string(log).map_err(|e| format!("cannot read {}: {e}", log.display()))?;
     let cfg = robot.node_config();
     let dt = cfg.params.dt;
-    let frames = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
-    let r = replay::replay(&frames, &cfg, SimConfig::default().bitrate)?;
+    let parsed = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
+    if parsed.frames.is_empty() {
+        return Err(format!(
+            "{}: nothing to replay: no frame for the node in the log ({} other frames skipped)",
+            log.display(),
+            parsed.skipped
+        )
+        .into());
+    }
+    let r = replay::replay(&parsed.frames, &cfg, SimConfig::default().bitrate)?;
     let run = Run {
         trajectory: r.trajectory,
         events: Vec::new(),
@@ -665,6 +673,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         "log": log.display().to_string(),
         "robot": robot.name(),
         "frames_replayed": r.replayed,
+        "frames_skipped": parsed.skipped,
         "frames_lost": r.lost,
         "answers": r.acks.len(),
         "refused": refused,
@@ -689,6 +698,13 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         },
         out.display()
     );
+    if parsed.skipped > 0 {
+        outln!(
+            "  {} frames skipped: extended, remote or CAN FD frames (other nodes' traffic; the \
+             node never receives them)",
+            parsed.skipped
+        );
+    }
     for v in &refused {
         outln!(
             "  refused at {:.3} s: command {} seq/id {}: {}",

@@ -556,3 +556,54 @@ fn progress_is_not_written_to_a_pipe() {
         assert_eq!(err.lines().count(), 1, "{args:?}: {err:?}");
     }
 }
+
+/// A log recorded on a robot's bus, with other nodes' extended and remote frames among the
+/// node's: `replay` skips them, says how many, and answers as without them; a log with
+/// nothing for the node is refused, naming why.
+#[test]
+fn replay_skips_other_nodes_frames_and_refuses_an_empty_log() {
+    let dir = temp_dir("replay-foreign");
+    let run = dir.join("run");
+    let o = host_sim(&["run", "fig4", "--out", run.to_str().expect("UTF-8 path")]);
+    assert!(o.status.success(), "{}", text(&o));
+    let log = std::fs::read_to_string(run.join("can.log")).expect("can.log");
+    let mut mixed = String::new();
+    let mut skipped = 0;
+    for (i, line) in log.lines().enumerate() {
+        mixed += line;
+        mixed += "\n";
+        if i % 100 == 7 {
+            let time = line.split_whitespace().next().expect("a time");
+            mixed += &format!("{time} can0 18FF0A01#0102\n{time} can0 123#R\n");
+            skipped += 2;
+        }
+    }
+    assert!(skipped > 2);
+    let replay = |name: &str, text: &str| {
+        let file = dir.join(name);
+        std::fs::write(&file, text).expect("a log");
+        let out = dir.join(format!("{name}.out"));
+        let o = host_sim(&[
+            "replay",
+            file.to_str().expect("UTF-8 path"),
+            "--out",
+            out.to_str().expect("UTF-8 path"),
+        ]);
+        (o, out)
+    };
+    let (plain, plain_out) = replay("plain.log", &log);
+    let (o, out) = replay("mixed.log", &mixed);
+    let t = text(&o);
+    assert_eq!(o.status.code(), plain.status.code(), "{t}");
+    assert_has(&t, &[&format!("{skipped} frames skipped")]);
+    let (a, b) = (summary(&plain_out), summary(&out));
+    assert_eq!(b["frames_skipped"], skipped, "{b}");
+    assert_eq!(a["frames_replayed"], b["frames_replayed"]);
+    assert_eq!(a["refused"], b["refused"]);
+    for empty in ["", "\n\n", "(1767225600.000000) can0 18FF0A01#01\n"] {
+        let (o, _) = replay("empty.log", empty);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{empty:?}: {t}");
+        assert_has(&t, &["nothing to replay"]);
+    }
+}
