@@ -607,3 +607,55 @@ fn replay_skips_other_nodes_frames_and_refuses_an_empty_log() {
         assert_has(&t, &["nothing to replay"]);
     }
 }
+
+/// An append numbered 128 or more past the node's next step number cannot be read by the node
+/// (a frame carries the number's low byte) and is answered `bad_crc`; `run`, which numbered
+/// it, names the cause: the number is not the next one. Within the window the node answers
+/// `sequence_gap` itself.
+#[test]
+fn a_step_number_out_of_the_nodes_window_is_named_as_such() {
+    for (id, read_as) in [(256, 0), (200, 65480)] {
+        let toml = format!(
+            "name = \"gap\"\n{}{}{START_STOP}",
+            step(0, "right", 0.2, -0.1, ""),
+            step(id, "left", 0.4, 0.1, ""),
+        );
+        let (_, t, _) = run_toml(&format!("gap-{id}"), &toml);
+        assert_has(
+            &t,
+            &[
+                "refused: bad_crc (code 16)",
+                &format!("step {id} is not the node's next step number (1)"),
+                &format!("(here as step {read_as})"),
+            ],
+        );
+    }
+    let toml = format!(
+        "name = \"gap\"\n{}{}{START_STOP}",
+        step(0, "right", 0.2, -0.1, ""),
+        step(128, "left", 0.4, 0.1, ""),
+    );
+    let (_, t, _) = run_toml("gap-128", &toml);
+    assert_has(&t, &["refused: sequence_gap (code 10)"]);
+    assert!(!t.contains("bad_crc"), "{t}");
+}
+
+/// A `start` refused `wrong_state` because the only step was refused follows from that
+/// refusal: not marked UNEXPECTED, and the run exits 0 when the scenario expects the first.
+#[test]
+fn a_start_after_a_refused_first_step_follows_from_it() {
+    let toml = format!(
+        "name = \"first\"\n{}{}[[command]]\nat_s = 0.1\nkind = \"start\"\n",
+        step(0, "right", 1.2, -0.1, "expect = \"reach\""),
+        step(1, "left", 0.2, 0.1, ""),
+    );
+    let (o, t, out) = run_toml("first-refused", &toml);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert_has(
+        &t,
+        &["start: refused: wrong_state (code 9) (follows from the refusal of step 0)"],
+    );
+    assert!(!t.contains("UNEXPECTED"), "{t}");
+    let s = summary(&out);
+    assert_eq!(s["unexpected_outcomes"], 0, "{s}");
+}
