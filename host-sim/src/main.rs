@@ -192,7 +192,8 @@ enum Cmd {
         /// The phases, comma-separated: double, single_start, single_middle, single_end.
         #[arg(long, value_name = "P,P,...")]
         phases: Option<String>,
-        /// The directions in the walking frame [deg], comma-separated (0 forward, 90 left).
+        /// The directions in the walking frame [deg], comma-separated (0 forward, 90 left;
+        /// -180 … 360).
         #[arg(long, value_name = "D,D,...", allow_hyphen_values = true)]
         directions: Option<String>,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].

@@ -659,3 +659,21 @@ fn a_start_after_a_refused_first_step_follows_from_it() {
     let s = summary(&out);
     assert_eq!(s["unexpected_outcomes"], 0, "{s}");
 }
+
+/// `push-map --directions` takes directions in degrees, -180 … 360: anything else is a usage
+/// error naming the value, before any engine run.
+#[test]
+fn push_map_refuses_directions_out_of_range() {
+    let dir = temp_dir("directions");
+    for bad in ["400", "-200", "nan", "inf", "x", "0,361"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(["push-map", "--directions", bad, "--out"])
+            .arg(&dir)
+            .env("HOST_SIM_PYTHON", dir.join("no-python"))
+            .output()
+            .expect("run host-sim");
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {t}");
+        assert_has(&t, &["is not a direction in degrees (-180 … 360"]);
+    }
+}

@@ -127,14 +127,15 @@ fn mode(cfg: &PhysicsConfig) -> String {
     m
 }
 
-/// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name).
+/// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name); returns
+/// the names of the files written, in that order.
 pub fn write_outputs(
     out: &Path,
     name: &str,
     robot: &str,
     cfg: &PhysicsConfig,
     r: &PhysicsRun,
-) -> Result<(), String> {
+) -> Result<Vec<String>, String> {
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let json = serde_json::to_string_pretty(&report_json(name, robot, cfg, r))
@@ -142,9 +143,10 @@ pub fn write_outputs(
     let path = out.join("physics.json");
     fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     write_csv(&out.join("physics.csv"), r)?;
+    let mut written = vec!["physics.json".to_string(), "physics.csv".to_string()];
     if r.samples.is_empty() {
         // A fall before the first sample (in the settle before the walk): nothing to plot.
-        return Ok(());
+        return Ok(written);
     }
     let mode = mode(cfg);
     let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
@@ -154,9 +156,11 @@ pub fn write_outputs(
         .map(|s| (s.t, super::metrics::FALL_TILT_DEG))
         .step_by(20)
         .collect();
-    let plot = |file: &str, caption: String, axis: &str, curves: &[Curve]| {
+    let mut plot = |file: &str, caption: String, axis: &str, curves: &[Curve]| {
         let p = out.join(file);
-        write_time_plot(&p, &caption, axis, curves).map_err(|e| format!("{}: {e}", p.display()))
+        write_time_plot(&p, &caption, axis, curves).map_err(|e| format!("{}: {e}", p.display()))?;
+        written.push(file.to_string());
+        Ok::<(), String>(())
     };
     plot(
         "physics_tilt.png",
@@ -192,21 +196,27 @@ pub fn write_outputs(
             ],
         )?;
     }
-    Ok(())
+    Ok(written)
 }
 
 /// The `physics` command: runs the scenario with `robot` (`cfg.robot` should be
-/// [`super::model::Robot::of`] it), writes the files, returns the JSON.
+/// [`super::model::Robot::of`] it), writes the files, returns the JSON and the names of the
+/// files written.
 pub fn physics_command(
     name: &str,
     out: &Path,
     robot: &Robot,
     cfg: &PhysicsConfig,
-) -> Result<Value, String> {
+) -> Result<(Value, Vec<String>), String> {
     let (sname, trajectory, dt) = scenario_trajectory(name, robot)?;
     let r = run(&trajectory, dt, cfg).map_err(|e| format!("{sname} in MuJoCo: {e}"))?;
-    write_outputs(out, &sname, robot.name(), cfg, &r)?;
-    Ok(report_json(&sname, robot.name(), cfg, &r))
+    let written = write_outputs(out, &sname, robot.name(), cfg, &r)?;
+    Ok((report_json(&sname, robot.name(), cfg, &r), written))
+}
+
+/// The line that names the files a `physics` run wrote into `out`.
+pub fn results_line(out: &Path, written: &[String]) -> String {
+    format!("  results in {}: {}", out.display(), written.join(", "))
 }
 
 /// Parses `--push T,FX,FY`: a push of 0.1 s starting at `T` (trajectory time) \[s\] with the
@@ -254,7 +264,7 @@ pub fn cli(
             &default_out
         }
     };
-    let mut j = physics_command(name, out, robot, &cfg)?;
+    let (mut j, written) = physics_command(name, out, robot, &cfg)?;
     probe.record(&mut j);
     let path = out.join("physics.json");
     fs::write(&path, serde_json::to_string_pretty(&j)?)
@@ -293,7 +303,7 @@ pub fn cli(
     if j["ended_standing"].as_bool() == Some(false) {
         crate::outln!("  the scenario's walk did not end standing (cut at its max_time_s?)");
     }
-    crate::outln!("  results: {}", out.join("physics.json").display());
+    crate::outln!("{}", results_line(out, &written));
     Ok(())
 }
 

@@ -408,8 +408,10 @@ pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
             d.trim()
                 .parse::<f64>()
                 .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{d:?} is not a direction in degrees"))
+                .filter(|v| (-180.0..=360.0).contains(v))
+                .ok_or_else(|| {
+                    format!("{d:?} is not a direction in degrees (-180 … 360, 0 forward, 90 left)")
+                })
         })
         .collect()
 }

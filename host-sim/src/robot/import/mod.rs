@@ -425,6 +425,55 @@ pub(crate) fn resolve(filename: &str, dir: &Path) -> Result<PathBuf, ImportError
     })
 }
 
+/// What makes `text` not well-formed XML, with its line (an element left open at the end,
+/// as in a file cut short, names the element and the line it opened on); `None` if it is.
+pub fn xml_problem(text: &str) -> Option<String> {
+    use quick_xml::events::Event;
+    let line = |at: u64| {
+        let at = usize::try_from(at).unwrap_or(usize::MAX).min(text.len());
+        1 + text.as_bytes()[..at]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+    };
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut open: Vec<(String, usize)> = Vec::new();
+    let mut elements = 0;
+    loop {
+        let at = reader.buffer_position();
+        match reader.read_event() {
+            Err(e) => return Some(format!("line {}: {e}", line(reader.error_position()))),
+            Ok(Event::Start(e)) => {
+                elements += 1;
+                open.push((
+                    String::from_utf8_lossy(e.name().as_ref()).into_owned(),
+                    line(at),
+                ));
+            }
+            Ok(Event::Empty(_)) => elements += 1,
+            Ok(Event::End(_)) => {
+                open.pop();
+            }
+            Ok(Event::Eof) if elements == 0 => {
+                return Some(format!(
+                    "no XML element in its {} lines (an empty file?)",
+                    line(text.len() as u64)
+                ));
+            }
+            Ok(Event::Eof) => {
+                return open.last().map(|(name, from)| {
+                    format!(
+                        "the file ends at line {} inside <{name}> (opened on line {from}): is it \
+                         cut short?",
+                        line(text.trim_end().len() as u64)
+                    )
+                });
+            }
+            Ok(_) => {}
+        }
+    }
+}
+
 /// Imports a URDF file; `soles`: the left and right foot links, if given.
 pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportError> {
     let text = std::fs::read_to_string(path)
@@ -432,6 +481,12 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     // An empty `<texture/>` (a material without an image, as some descriptions write it) is
     // no texture: the reader wants a file name, and the import reads no material.
     let text = text.replace("<texture />", "").replace("<texture/>", "");
+    if let Some(problem) = xml_problem(&text) {
+        return Err(ImportError(format!(
+            "{}: not a readable URDF: {problem}",
+            path.display()
+        )));
+    }
     let urdf = urdf_rs::read_from_string(&text)
         .map_err(|e| ImportError(format!("{}: not a readable URDF: {e}", path.display())))?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
