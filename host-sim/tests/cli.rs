@@ -297,11 +297,35 @@ fn help_lists_every_subcommand() {
         "physics-tables",
         "physics-faults",
         "physics-sequence",
+        "push-map",
+        "robot",
         "node",
     ] {
         assert!(
             t.lines().any(|l| l.trim_start().starts_with(sub)),
             "--help does not list {sub}:\n{t}"
+        );
+    }
+    // The book's sentence on `--help` names every subcommand `--help` lists.
+    let listed: Vec<&str> = t
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(listed.len() >= 11, "{t}");
+    let book = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/src/host-sim.md"),
+    )
+    .expect("the book's host-sim chapter");
+    let from = book.find("lists the subcommands").expect("the sentence");
+    let sentence = &book[from..from + book[from..].find("exit status").expect("its end")];
+    for c in &listed {
+        assert!(
+            sentence.contains(&format!("`{c}`")),
+            "docs/src/host-sim.md does not list `{c}`: {sentence}"
         );
     }
     // The exit status of every command that can fail its run.

@@ -235,6 +235,15 @@ fn straight_walks_through_the_command_line_contract() {
             b.straight_files
         );
     }
+    // It prints the seconds the book's run-time table quotes (with the settle) beside the
+    // walk's own.
+    let engine = engine_seconds(num("simulated_s"));
+    assert!(
+        b.straight_stdout
+            .contains(&format!("{engine:.2} s in the engine with the 1 s settle")),
+        "{}",
+        b.straight_stdout
+    );
     // It names every file it wrote.
     let results = b
         .straight_stdout

@@ -271,7 +271,8 @@ pub fn cli(
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
     crate::outln!(
-        "{} ({}): {} in MuJoCo ({}), {:.2} s simulated",
+        "{} ({}): {} in MuJoCo ({}), {:.2} s simulated (walk and tail; {:.2} s in the engine \
+         with the {} s settle before it)",
         j["scenario"].as_str().unwrap_or(name),
         robot.name(),
         if j["fell"].as_bool() == Some(true) {
@@ -290,7 +291,9 @@ pub fn cli(
             "walked through, no fall".to_string()
         },
         mode(&cfg),
-        num("simulated_s")
+        num("simulated_s"),
+        cfg.settle_s + num("simulated_s"),
+        cfg.settle_s
     );
     crate::outln!(
         "  max tilt {:.2} deg; CoP vs reference ZMP (50 ms): mean {:.1} mm, worst {:.1} mm; COG drift {:.1} mm, foot drift {:.1} mm",
