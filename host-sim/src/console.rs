@@ -5,7 +5,8 @@
 //!   [`out!`]): a write that fails (the reader went away, `host-sim … | head`) ends the
 //!   printing quietly instead of panicking, the command still writes its files and exits with
 //!   its own status, and an error other than a closed pipe is kept for [`stdout_failure`]
-//!   (the command line reports it).
+//!   (the command line reports it). Messages on standard error go through [`errln!`], which
+//!   drops what it cannot write.
 //! * **Progress.** [`Progress`] is an `indicatif` bar on standard error, drawn only when
 //!   standard error is a terminal: piped or redirected, nothing of it is written.
 
@@ -36,6 +37,20 @@ macro_rules! out {
     ($($arg:tt)*) => {
         $crate::console::print(format_args!($($arg)*))
     };
+}
+
+/// Prints a line on standard error, as `eprintln!` does, without panicking when standard error
+/// is closed (`2>&1 | head`): a message that cannot be written is dropped.
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::console::print_err(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// Writes `args` to standard error (the body of [`errln!`]); a failed write is dropped.
+pub fn print_err(args: fmt::Arguments<'_>) {
+    let _ = io::stderr().lock().write_fmt(args);
 }
 
 /// Whether a write to standard output has failed (nothing more is printed).

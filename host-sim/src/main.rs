@@ -35,7 +35,6 @@ use clap::{Parser, Subcommand};
 use host_sim::eval::faults::Walk;
 use host_sim::eval::multibody::{evaluate, max_zmp_error};
 use host_sim::eval::{max_fluctuation, paper};
-use host_sim::outln;
 use host_sim::output::csv::write_trajectory;
 use host_sim::output::plot;
 use host_sim::physics::probe::ProbeArgs;
@@ -45,6 +44,7 @@ use host_sim::scenario::{self, Run, Scenario, BUILT_IN};
 use host_sim::sim::replay;
 use host_sim::sim::report::{report, Report};
 use host_sim::sim::{outcomes, simulate, SimConfig};
+use host_sim::{errln, outln};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -307,7 +307,7 @@ fn main() -> ExitCode {
     let status = match dispatch(cli.command) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("host-sim: {e}");
+            errln!("host-sim: {e}");
             if e.is::<Unexpected>() {
                 1
             } else {
@@ -317,7 +317,7 @@ fn main() -> ExitCode {
     };
     // Output a reader closed on purpose (`| head`) is no failure; any other write error is.
     if let Some(e) = host_sim::console::stdout_failure() {
-        eprintln!("host-sim: cannot write to standard output: {e}");
+        errln!("host-sim: cannot write to standard output: {e}");
         return ExitCode::from(2);
     }
     ExitCode::from(status)

@@ -488,6 +488,23 @@ fn with_closed_stdout(args: &[&str]) -> Output {
         .expect("run host-sim")
 }
 
+/// The same with standard error into the same closed socket (`2>&1 | head`): its exit status.
+#[cfg(unix)]
+fn with_closed_stdout_and_stderr(args: &[&str]) -> Option<i32> {
+    use std::os::fd::OwnedFd;
+    use std::os::unix::net::UnixStream;
+    let (writer, reader) = UnixStream::pair().expect("a socket pair");
+    drop(reader);
+    let err = writer.try_clone().expect("a second handle");
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .stdout(std::process::Stdio::from(OwnedFd::from(writer)))
+        .stderr(std::process::Stdio::from(OwnedFd::from(err)))
+        .status()
+        .expect("run host-sim")
+        .code()
+}
+
 /// A reader that stops reading (`host-sim … | head`) ends the printing, not the command: no
 /// panic, the command's own exit status, its files written.
 #[cfg(unix)]
@@ -510,10 +527,13 @@ fn a_closed_standard_output_is_no_crash() {
         assert_eq!(o.status.code(), Some(status), "{args:?}: {err}");
     }
     assert!(out.join("summary.json").is_file(), "run wrote its results");
+    // Its error message into a closed pipe too: still its own status, no panic (101).
+    assert_eq!(with_closed_stdout_and_stderr(&["run", "nonsense"]), Some(2));
+    assert_eq!(with_closed_stdout_and_stderr(&["list"]), Some(0));
 }
 
-/// No line of the command line is printed with `println!`/`print!` (which panic when the
-/// reader has gone away): every one goes through `host_sim::console`.
+/// No line of the command line is printed with `println!`, `print!`, `eprintln!` or `eprint!`
+/// (which panic when the reader has gone away): every one goes through `host_sim::console`.
 #[test]
 fn every_printed_line_survives_a_closed_pipe() {
     fn walk(dir: &Path, found: &mut Vec<String>) {
@@ -530,7 +550,10 @@ fn every_printed_line_survives_a_closed_pipe() {
                             !code[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_')
                         })
                     };
-                    if bare("println!") || bare("print!") {
+                    if ["println!", "print!", "eprintln!", "eprint!"]
+                        .iter()
+                        .any(|m| bare(m))
+                    {
                         found.push(format!("{}:{}: {line}", p.display(), i + 1));
                     }
                 }
