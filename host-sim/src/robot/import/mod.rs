@@ -38,12 +38,14 @@
 //! * **The gait**: HRP-2's timing, preview weights and eq. 18 limits (the built-in scenarios
 //!   are timed for them); the swing height HRP-2's 0.05 m scaled as the reach.
 //!
-//! Refused, with the URDF element named: several or no root links, a massless base, a leg
-//! without six revolute joints (or with a prismatic, planar or floating joint), no pair of
-//! feet, a foot without geometry, a moving link without an `<inertial>`, a mesh of another
-//! format, a standing posture the legs cannot reach.
+//! Refused, with the file and line named: XML that is not well-formed (a file cut short: where
+//! it ends and which element is open; [`xml`]). Refused, with the URDF element named: several
+//! or no root links, a massless base, a leg without six revolute joints (or with a prismatic,
+//! planar or floating joint), no pair of feet, a foot without geometry, a moving link without
+//! an `<inertial>`, a mesh of another format, a standing posture the legs cannot reach.
 
 pub mod sole;
+pub mod xml;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
@@ -425,55 +427,6 @@ pub(crate) fn resolve(filename: &str, dir: &Path) -> Result<PathBuf, ImportError
     })
 }
 
-/// What makes `text` not well-formed XML, with its line (an element left open at the end,
-/// as in a file cut short, names the element and the line it opened on); `None` if it is.
-pub fn xml_problem(text: &str) -> Option<String> {
-    use quick_xml::events::Event;
-    let line = |at: u64| {
-        let at = usize::try_from(at).unwrap_or(usize::MAX).min(text.len());
-        1 + text.as_bytes()[..at]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-    };
-    let mut reader = quick_xml::Reader::from_str(text);
-    let mut open: Vec<(String, usize)> = Vec::new();
-    let mut elements = 0;
-    loop {
-        let at = reader.buffer_position();
-        match reader.read_event() {
-            Err(e) => return Some(format!("line {}: {e}", line(reader.error_position()))),
-            Ok(Event::Start(e)) => {
-                elements += 1;
-                open.push((
-                    String::from_utf8_lossy(e.name().as_ref()).into_owned(),
-                    line(at),
-                ));
-            }
-            Ok(Event::Empty(_)) => elements += 1,
-            Ok(Event::End(_)) => {
-                open.pop();
-            }
-            Ok(Event::Eof) if elements == 0 => {
-                return Some(format!(
-                    "no XML element in its {} lines (an empty file?)",
-                    line(text.len() as u64)
-                ));
-            }
-            Ok(Event::Eof) => {
-                return open.last().map(|(name, from)| {
-                    format!(
-                        "the file ends at line {} inside <{name}> (opened on line {from}): is it \
-                         cut short?",
-                        line(text.trim_end().len() as u64)
-                    )
-                });
-            }
-            Ok(_) => {}
-        }
-    }
-}
-
 /// Imports a URDF file; `soles`: the left and right foot links, if given.
 pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportError> {
     let text = std::fs::read_to_string(path)
@@ -481,7 +434,7 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     // An empty `<texture/>` (a material without an image, as some descriptions write it) is
     // no texture: the reader wants a file name, and the import reads no material.
     let text = text.replace("<texture />", "").replace("<texture/>", "");
-    if let Some(problem) = xml_problem(&text) {
+    if let Some(problem) = xml::xml_problem(&text) {
         return Err(ImportError(format!(
             "{}: not a readable URDF: {problem}",
             path.display()
