@@ -1,11 +1,11 @@
 //! What the commands tell the person at the terminal: results on standard output that a
 //! closed reader cannot turn into a crash, and progress bars on standard error.
 //!
-//! * **Standard output.** Every line the commands print goes through [`outln!`] (or
-//!   [`out!`]): a write that fails (the reader went away, `host-sim … | head`) ends the
+//! * **Standard output.** Every line the commands print goes through [`outln!`](crate::outln) (or
+//!   [`out!`](crate::out)): a write that fails (the reader went away, `host-sim … | head`) ends the
 //!   printing quietly instead of panicking, the command still writes its files and exits with
 //!   its own status, and an error other than a closed pipe is kept for [`stdout_failure`]
-//!   (the command line reports it). Messages on standard error go through [`errln!`], which
+//!   (the command line reports it). Messages on standard error go through [`errln!`](crate::errln), which
 //!   drops what it cannot write.
 //! * **Progress.** [`Progress`] is an `indicatif` bar on standard error, drawn only when
 //!   standard error is a terminal: piped or redirected, nothing of it is written.
@@ -48,7 +48,7 @@ macro_rules! errln {
     };
 }
 
-/// Writes `args` to standard error (the body of [`errln!`]); a failed write is dropped.
+/// Writes `args` to standard error (the body of [`errln!`](crate::errln)); a failed write is dropped.
 pub fn print_err(args: fmt::Arguments<'_>) {
     let _ = io::stderr().lock().write_fmt(args);
 }
@@ -59,7 +59,7 @@ static CLOSED: AtomicBool = AtomicBool::new(false);
 /// The first failure that was not a closed pipe.
 static FAILURE: Mutex<Option<String>> = Mutex::new(None);
 
-/// Writes `args` to standard output (the body of [`outln!`] and [`out!`]).
+/// Writes `args` to standard output (the body of [`outln!`](crate::outln) and [`out!`](crate::out)).
 pub fn print(args: fmt::Arguments<'_>) {
     if CLOSED.load(Ordering::Relaxed) {
         return;
