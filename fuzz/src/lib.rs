@@ -718,7 +718,8 @@ pub fn text_one(data: &[u8]) {
             "{line:?}"
         );
     }
-    if let Ok(frames) = host_sim::sim::replay::parse(&text, 0.005) {
+    if let Ok(parsed) = host_sim::sim::replay::parse(&text, 0.005) {
+        let frames = &parsed.frames;
         assert!(frames.windows(2).all(|w| w[0].tick <= w[1].tick));
         assert!(frames
             .iter()

@@ -19,11 +19,11 @@ Four ways to run it:
 
   controller.py live --channel can0 [--interface socketcan]
       waits for the node's SESSION and DIAG, then sends the plan in real time on a CAN bus
-      through python-can, printing the node's answers (needs a CAN interface: not available
-      on the test machine, so not tested here);
-  controller.py plan --out ctl.log [--session E --first-step N --last-seq S]
+      through python-can, printing the node's answers (needs a CAN interface that is up: see
+      the book's real-bus chapter; without one it says what is missing in one line, exit 2);
+  controller.py plan --out out/ctl.log [--session E --first-step N --last-seq S]
       the plan written as a candump -l log (times from host-sim's epoch), for
-      ``host-sim replay ctl.log`` (host-sim/tests/controller.rs does this); the defaults are
+      ``host-sim replay out/ctl.log`` (host-sim/tests/controller.rs does this); the defaults are
       host-sim's node (session 0, steps from 0, no control command before);
   controller.py frame OP --session E --seq S
       prints one CONTROL frame for ``cansend`` (OP: reset, heartbeat, start, stop, stop_now, start_adjusting);
@@ -136,6 +136,7 @@ def plan(db, steps, length, width, seconds, session=0, first_step=0, last_seq=0)
 
 
 def write_log(path, frames):
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
     with open(path, "w") as f:
         for t, m in frames:
             us = EPOCH_S * 1_000_000 + round(t * 1e6)
@@ -200,8 +201,28 @@ def session_of(db, bus, timeout=2.0):
     return int(session["epoch"]), int(diag["next_step"]), int(session["last_seq"])
 
 
+def bus_or_exit(args):
+    """The CAN bus on args.channel, or a one-line error that says what is missing (exit 2)."""
+    try:
+        return can.Bus(channel=args.channel, interface=args.interface)
+    except (OSError, can.CanError, ValueError, ImportError) as e:
+        code = getattr(e, "errno", None)
+        if code == 97:  # EAFNOSUPPORT: the kernel has no SocketCAN
+            hint = ("this kernel has no SocketCAN: load it (sudo modprobe can can_raw; "
+                    "vcan for a virtual bus) or use a kernel with CAN")
+        elif code == 19:  # ENODEV: no such interface
+            hint = (f"there is no interface {args.channel}: bring one up (sudo ip link set "
+                    f"{args.channel} type can bitrate 1000000 && sudo ip link set "
+                    f"{args.channel} up), or a virtual one (see the book's real-bus chapter)")
+        else:
+            hint = "see the book's real-bus chapter, \"Setting up a CAN interface\""
+        print(f"controller.py: CAN interface {args.channel} ({args.interface}): {e}; {hint}",
+              file=sys.stderr)
+        sys.exit(2)
+
+
 def live(db, args):
-    bus = can.Bus(channel=args.channel, interface=args.interface)
+    bus = bus_or_exit(args)
     epoch, first, last = session_of(db, bus)
     print(f"session {epoch}, next step {first}, last sequence number {last}")
     frames, _ = plan(db, args.steps, args.length, args.width, args.seconds, epoch, first, last)

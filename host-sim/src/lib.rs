@@ -2,6 +2,7 @@
 //!
 //! The crate is in rooms by role; a room uses only the rooms listed before it:
 //!
+//! * [`console`]: standard output that a closed reader cannot crash, and progress bars.
 //! * [`scenario`]: what is played: timelines of footstep commands, the built-in scenarios,
 //!   scenario files (TOML), the names of what may become of a command, and the encoding of a
 //!   scenario's commands for the bus.
@@ -20,6 +21,7 @@
 //!   node's commands over the bus (the virtual one, or SocketCAN), IHMC's statuses out.
 //!
 //! The command line (`src/main.rs`) sits on top of all of them.
+pub mod console;
 pub mod eval;
 pub mod output;
 pub mod physics;

@@ -44,6 +44,7 @@ use host_sim::scenario::{self, Run, Scenario, BUILT_IN};
 use host_sim::sim::replay;
 use host_sim::sim::report::{report, Report};
 use host_sim::sim::{outcomes, simulate, SimConfig};
+use host_sim::{errln, outln};
 use serde_json::json;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
@@ -195,7 +196,8 @@ enum Cmd {
         /// The phases, comma-separated: double, single_start, single_middle, single_end.
         #[arg(long, value_name = "P,P,...")]
         phases: Option<String>,
-        /// The directions in the walking frame [deg], comma-separated (0 forward, 90 left).
+        /// The directions in the walking frame [deg], comma-separated (0 forward, 90 left;
+        /// -180 … 360).
         #[arg(long, value_name = "D,D,...", allow_hyphen_values = true)]
         directions: Option<String>,
         /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
@@ -291,7 +293,7 @@ fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<d
     fs::write(out, &imported.toml).map_err(|e| format!("{}: {e}", out.display()))?;
     let r = &imported.robot;
     let p = &r.planner.params;
-    println!(
+    outln!(
         "{}: {:.2} kg, COG {:.3} m standing, feet {:.3} m apart, soles {:.3} × {:.3} m, \
          steps up to {:.3} m forward; wrote {}",
         r.name(),
@@ -336,13 +338,23 @@ impl Error for Unexpected {}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match dispatch(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
+    let status = match dispatch(cli.command) {
+        Ok(()) => 0,
         Err(e) => {
-            eprintln!("host-sim: {e}");
-            ExitCode::from(if e.is::<Unexpected>() { 1 } else { 2 })
+            errln!("host-sim: {e}");
+            if e.is::<Unexpected>() {
+                1
+            } else {
+                2
+            }
         }
+    };
+    // Output a reader closed on purpose (`| head`) is no failure; any other write error is.
+    if let Some(e) = host_sim::console::stdout_failure() {
+        errln!("host-sim: cannot write to standard output: {e}");
+        return ExitCode::from(2);
     }
+    ExitCode::from(status)
 }
 
 fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
@@ -356,7 +368,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         Some(Cmd::List) => {
             for name in BUILT_IN {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
-                println!("{name:<10} {}", s.about);
+                outln!("{name:<10} {}", s.about);
             }
             Ok(())
         }
@@ -480,7 +492,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 walks,
                 gateway: host_sim::ros2::gateway_config(&robot),
             };
-            println!(
+            outln!(
                 "ROS 2 gateway: topics under {} (domain {}), node: {}",
                 opts.namespace,
                 opts.domain,
@@ -514,7 +526,7 @@ fn start_live(
         p.cog_height,
         [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
     )?;
-    println!(
+    outln!(
         "live view: ws://127.0.0.1:{} (Foxglove: Open connection, Foxglove WebSocket)",
         view.port()
     );
@@ -674,9 +686,9 @@ fn run_scenario(
                 .map(|l| host_sim::output::mcap::parse_log_line(l))
                 .collect::<Result<Vec<_>, _>>()?;
             view.play(&run.trajectory, dt, &mb, &frames);
-            println!("live view: played {name}");
+            outln!("live view: played {name}");
         } else {
-            println!("live view: no client within 60 s");
+            outln!("live view: no client within 60 s");
         }
     }
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
@@ -684,11 +696,11 @@ fn run_scenario(
     let plots =
         plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
     if s.about.is_empty() {
-        println!("{name}");
+        outln!("{name}");
     } else {
-        println!("{name}: {}", s.about);
+        outln!("{name}: {}", s.about);
     }
-    println!(
+    outln!(
         "  {}: {:.2} s simulated in {} ticks of {} ms, over a virtual CAN bus at {} kbit/s (load {:.1} %){}",
         robot.name(),
         (run.trajectory.len() - 1) as f64 * dt,
@@ -699,7 +711,7 @@ fn run_scenario(
         if sim.cut { ", ended by max_time_s" } else { "" }
     );
     for a in &run.adjustments {
-        println!(
+        outln!(
             "  re-plan at {:.3} s: single support adjusted by {:+.3} s (r = {:.3}, plane {})",
             a.tick as f64 * dt,
             a.adjust_s,
@@ -707,29 +719,29 @@ fn run_scenario(
             if a.plane == 0 { "x" } else { "y" }
         );
     }
-    println!(
+    outln!(
         "  largest ZMP fluctuation in single support: {:.1} mm along the foot, {:.1} mm across",
         along * 1e3,
         across * 1e3
     );
-    println!(
+    outln!(
         "  largest multi-body ZMP error ({} model): {:.1} mm",
         robot.name(),
         mb_error * 1e3
     );
-    println!(
+    outln!(
         "  results: {}, summary.json, can.log, walk.mcap and {} plots in {}",
         traj.display(),
         plots.len(),
         out.display()
     );
     for (note, ids) in &notes {
-        println!("  steps {}: {note}", ids.join(", "));
+        outln!("  steps {}: {note}", ids.join(", "));
     }
     if !lines.is_empty() {
-        println!("  commands that failed (time sent, entry: command: what happened):");
+        outln!("  commands that failed (time sent, entry: command: what happened):");
         for l in &lines {
-            println!("{l}");
+            outln!("{l}");
         }
     }
     if let Some(e) = mb_failure {
@@ -756,8 +768,16 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         fs::read_to_string(log).map_err(|e| format!("cannot read {}: {e}", log.display()))?;
     let cfg = robot.node_config();
     let dt = cfg.params.dt;
-    let frames = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
-    let r = replay::replay(&frames, &cfg, SimConfig::default().bitrate)?;
+    let parsed = replay::parse(&text, dt).map_err(|e| format!("{}: {e}", log.display()))?;
+    if parsed.frames.is_empty() {
+        return Err(format!(
+            "{}: nothing to replay: no frame for the node in the log ({} other frames skipped)",
+            log.display(),
+            parsed.skipped
+        )
+        .into());
+    }
+    let r = replay::replay(&parsed.frames, &cfg, SimConfig::default().bitrate)?;
     let run = Run {
         trajectory: r.trajectory,
         events: Vec::new(),
@@ -765,7 +785,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         footsteps: Vec::new(),
     };
     let mb = evaluate(&robot.model, &run.trajectory, dt).unwrap_or_else(|e| {
-        println!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
+        outln!("  the multi-body model cannot follow the walk ({e}): no multi-body columns");
         Vec::new()
     });
     create_dir(out)?;
@@ -788,6 +808,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         "log": log.display().to_string(),
         "robot": robot.name(),
         "frames_replayed": r.replayed,
+        "frames_skipped": parsed.skipped,
         "frames_lost": r.lost,
         "answers": r.acks.len(),
         "refused": refused,
@@ -798,7 +819,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    println!(
+    outln!(
         "{}: {} frames replayed into the {} node, {} answers, {:.2} s{}; results in {}",
         log.display(),
         r.replayed,
@@ -812,8 +833,15 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         },
         out.display()
     );
+    if parsed.skipped > 0 {
+        outln!(
+            "  {} frames skipped: extended, remote or CAN FD frames (other nodes' traffic; the \
+             node never receives them)",
+            parsed.skipped
+        );
+    }
     for v in &refused {
-        println!(
+        outln!(
             "  refused at {:.3} s: command {} seq/id {}: {}",
             v["t_s"].as_f64().unwrap_or(f64::NAN),
             v["command"].as_str().unwrap_or(""),
@@ -822,7 +850,7 @@ fn replay_log(log: &Path, out: &Path, robot: &Robot) -> Result<(), Box<dyn Error
         );
     }
     if r.lost > 0 {
-        println!("  {} frames lost: a receive FIFO was full", r.lost);
+        outln!("  {} frames lost: a receive FIFO was full", r.lost);
     }
     if !refused.is_empty() || r.cut || r.lost > 0 {
         return Err(Unexpected(format!(

@@ -297,11 +297,35 @@ fn help_lists_every_subcommand() {
         "physics-tables",
         "physics-faults",
         "physics-sequence",
+        "push-map",
+        "robot",
         "node",
     ] {
         assert!(
             t.lines().any(|l| l.trim_start().starts_with(sub)),
             "--help does not list {sub}:\n{t}"
+        );
+    }
+    // The book's sentence on `--help` names every subcommand `--help` lists.
+    let listed: Vec<&str> = t
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(listed.len() >= 11, "{t}");
+    let book = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/src/host-sim.md"),
+    )
+    .expect("the book's host-sim chapter");
+    let from = book.find("lists the subcommands").expect("the sentence");
+    let sentence = &book[from..from + book[from..].find("exit status").expect("its end")];
+    for c in &listed {
+        assert!(
+            sentence.contains(&format!("`{c}`")),
+            "docs/src/host-sim.md does not list `{c}`: {sentence}"
         );
     }
     // The exit status of every command that can fail its run.
@@ -447,4 +471,256 @@ fn the_consequences_of_a_refusal_are_grouped_under_it() {
         [serde_json::Value::Null, 2.into(), 2.into()],
         "{s}"
     );
+}
+
+/// `host-sim ARGS` with its standard output a socket whose reader has gone away (as `| head`
+/// leaves it once it has read enough): every write to it fails with a broken pipe.
+#[cfg(unix)]
+fn with_closed_stdout(args: &[&str]) -> Output {
+    use std::os::fd::OwnedFd;
+    use std::os::unix::net::UnixStream;
+    let (writer, reader) = UnixStream::pair().expect("a socket pair");
+    drop(reader);
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .stdout(std::process::Stdio::from(OwnedFd::from(writer)))
+        .output()
+        .expect("run host-sim")
+}
+
+/// The same with standard error into the same closed socket (`2>&1 | head`): its exit status.
+#[cfg(unix)]
+fn with_closed_stdout_and_stderr(args: &[&str]) -> Option<i32> {
+    use std::os::fd::OwnedFd;
+    use std::os::unix::net::UnixStream;
+    let (writer, reader) = UnixStream::pair().expect("a socket pair");
+    drop(reader);
+    let err = writer.try_clone().expect("a second handle");
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .stdout(std::process::Stdio::from(OwnedFd::from(writer)))
+        .stderr(std::process::Stdio::from(OwnedFd::from(err)))
+        .status()
+        .expect("run host-sim")
+        .code()
+}
+
+/// A reader that stops reading (`host-sim … | head`) ends the printing, not the command: no
+/// panic, the command's own exit status, its files written.
+#[cfg(unix)]
+#[test]
+fn a_closed_standard_output_is_no_crash() {
+    let dir = temp_dir("closed-stdout");
+    let out = dir.join("fig4");
+    let cases: [(&[&str], i32); 3] = [
+        (&["list"], 0),
+        (
+            &["run", "fig4", "--out", out.to_str().expect("UTF-8 path")],
+            0,
+        ),
+        (&["run", "nonsense"], 2),
+    ];
+    for (args, status) in cases {
+        let o = with_closed_stdout(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(status), "{args:?}: {err}");
+    }
+    assert!(out.join("summary.json").is_file(), "run wrote its results");
+    // Its error message into a closed pipe too: still its own status, no panic (101).
+    assert_eq!(with_closed_stdout_and_stderr(&["run", "nonsense"]), Some(2));
+    assert_eq!(with_closed_stdout_and_stderr(&["list"]), Some(0));
+}
+
+/// No line of the command line is printed with `println!`, `print!`, `eprintln!` or `eprint!`
+/// (which panic when the reader has gone away): every one goes through `host_sim::console`.
+#[test]
+fn every_printed_line_survives_a_closed_pipe() {
+    fn walk(dir: &Path, found: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).expect("host-sim/src") {
+            let p = e.expect("an entry").path();
+            if p.is_dir() {
+                walk(&p, found);
+            } else if p.extension().is_some_and(|x| x == "rs") && !p.ends_with("console.rs") {
+                let text = std::fs::read_to_string(&p).expect("a source file");
+                for (i, line) in text.lines().enumerate() {
+                    let code = line.split("//").next().unwrap_or("");
+                    let bare = |m: &str| {
+                        code.match_indices(m).any(|(at, _)| {
+                            !code[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_')
+                        })
+                    };
+                    if ["println!", "print!", "eprintln!", "eprint!"]
+                        .iter()
+                        .any(|m| bare(m))
+                    {
+                        found.push(format!("{}:{}: {line}", p.display(), i + 1));
+                    }
+                }
+            }
+        }
+    }
+    let mut found = Vec::new();
+    walk(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
+        &mut found,
+    );
+    assert!(
+        found.is_empty(),
+        "print with host_sim::outln!:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The long engine commands draw their progress on standard error only when it is a
+/// terminal: piped, it carries nothing but their one-line error (here: no Python to run the
+/// engine).
+#[test]
+fn progress_is_not_written_to_a_pipe() {
+    let dir = temp_dir("progress");
+    let cases: [&[&str]; 3] = [
+        &["physics-tables", "--cells", "0,0"],
+        &["physics-faults", "--rows", "0"],
+        &[
+            "push-map",
+            "--quick",
+            "--phases",
+            "double",
+            "--directions",
+            "0",
+        ],
+    ];
+    for args in cases {
+        let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(args)
+            .args(["--out", dir.to_str().expect("UTF-8 path")])
+            .env("HOST_SIM_PYTHON", dir.join("no-python"))
+            .output()
+            .expect("run host-sim");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(!err.contains('\r'), "{args:?}: {err:?}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err:?}");
+    }
+}
+
+/// A log recorded on a robot's bus, with other nodes' extended and remote frames among the
+/// node's: `replay` skips them, says how many, and answers as without them; a log with
+/// nothing for the node is refused, naming why.
+#[test]
+fn replay_skips_other_nodes_frames_and_refuses_an_empty_log() {
+    let dir = temp_dir("replay-foreign");
+    let run = dir.join("run");
+    let o = host_sim(&["run", "fig4", "--out", run.to_str().expect("UTF-8 path")]);
+    assert!(o.status.success(), "{}", text(&o));
+    let log = std::fs::read_to_string(run.join("can.log")).expect("can.log");
+    let mut mixed = String::new();
+    let mut skipped = 0;
+    for (i, line) in log.lines().enumerate() {
+        mixed += line;
+        mixed += "\n";
+        if i % 100 == 7 {
+            let time = line.split_whitespace().next().expect("a time");
+            mixed += &format!("{time} can0 18FF0A01#0102\n{time} can0 123#R\n");
+            skipped += 2;
+        }
+    }
+    assert!(skipped > 2);
+    let replay = |name: &str, text: &str| {
+        let file = dir.join(name);
+        std::fs::write(&file, text).expect("a log");
+        let out = dir.join(format!("{name}.out"));
+        let o = host_sim(&[
+            "replay",
+            file.to_str().expect("UTF-8 path"),
+            "--out",
+            out.to_str().expect("UTF-8 path"),
+        ]);
+        (o, out)
+    };
+    let (plain, plain_out) = replay("plain.log", &log);
+    let (o, out) = replay("mixed.log", &mixed);
+    let t = text(&o);
+    assert_eq!(o.status.code(), plain.status.code(), "{t}");
+    assert_has(&t, &[&format!("{skipped} frames skipped")]);
+    let (a, b) = (summary(&plain_out), summary(&out));
+    assert_eq!(b["frames_skipped"], skipped, "{b}");
+    assert_eq!(a["frames_replayed"], b["frames_replayed"]);
+    assert_eq!(a["refused"], b["refused"]);
+    for empty in ["", "\n\n", "(1767225600.000000) can0 18FF0A01#01\n"] {
+        let (o, _) = replay("empty.log", empty);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{empty:?}: {t}");
+        assert_has(&t, &["nothing to replay"]);
+    }
+}
+
+/// An append numbered 128 or more past the node's next step number cannot be read by the node
+/// (a frame carries the number's low byte) and is answered `bad_crc`; `run`, which numbered
+/// it, names the cause: the number is not the next one. Within the window the node answers
+/// `sequence_gap` itself.
+#[test]
+fn a_step_number_out_of_the_nodes_window_is_named_as_such() {
+    for (id, read_as) in [(256, 0), (200, 65480)] {
+        let toml = format!(
+            "name = \"gap\"\n{}{}{START_STOP}",
+            step(0, "right", 0.2, -0.1, ""),
+            step(id, "left", 0.4, 0.1, ""),
+        );
+        let (_, t, _) = run_toml(&format!("gap-{id}"), &toml);
+        assert_has(
+            &t,
+            &[
+                "refused: bad_crc (code 16)",
+                &format!("step {id} is not the node's next step number (1)"),
+                &format!("(here as step {read_as})"),
+            ],
+        );
+    }
+    let toml = format!(
+        "name = \"gap\"\n{}{}{START_STOP}",
+        step(0, "right", 0.2, -0.1, ""),
+        step(128, "left", 0.4, 0.1, ""),
+    );
+    let (_, t, _) = run_toml("gap-128", &toml);
+    assert_has(&t, &["refused: sequence_gap (code 10)"]);
+    assert!(!t.contains("bad_crc"), "{t}");
+}
+
+/// A `start` refused `wrong_state` because the only step was refused follows from that
+/// refusal: not marked UNEXPECTED, and the run exits 0 when the scenario expects the first.
+#[test]
+fn a_start_after_a_refused_first_step_follows_from_it() {
+    let toml = format!(
+        "name = \"first\"\n{}{}[[command]]\nat_s = 0.1\nkind = \"start\"\n",
+        step(0, "right", 1.2, -0.1, "expect = \"reach\""),
+        step(1, "left", 0.2, 0.1, ""),
+    );
+    let (o, t, out) = run_toml("first-refused", &toml);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert_has(
+        &t,
+        &["start: refused: wrong_state (code 9) (follows from the refusal of step 0)"],
+    );
+    assert!(!t.contains("UNEXPECTED"), "{t}");
+    let s = summary(&out);
+    assert_eq!(s["unexpected_outcomes"], 0, "{s}");
+}
+
+/// `push-map --directions` takes directions in degrees, -180 … 360: anything else is a usage
+/// error naming the value, before any engine run.
+#[test]
+fn push_map_refuses_directions_out_of_range() {
+    let dir = temp_dir("directions");
+    for bad in ["400", "-200", "nan", "inf", "x", "0,361"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(["push-map", "--directions", bad, "--out"])
+            .arg(&dir)
+            .env("HOST_SIM_PYTHON", dir.join("no-python"))
+            .output()
+            .expect("run host-sim");
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {t}");
+        assert_has(&t, &["is not a direction in degrees (-180 … 360"]);
+    }
 }

@@ -221,3 +221,37 @@ fn a_missing_python_package_is_a_clear_error() {
         "a plan was written without its packages"
     );
 }
+
+/// `live` on an interface that cannot be opened (this machine's kernel has no CAN; elsewhere
+/// the interface does not exist) ends in one line that names the interface and what is
+/// missing, exit 2, no traceback.
+#[test]
+fn live_without_a_can_interface_says_what_is_missing() {
+    if !tools_present() {
+        return;
+    }
+    let o = controller(&["live", "--channel", "walknocan0"]);
+    let text = all_output(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(!text.contains("Traceback"), "{text}");
+    assert_eq!(text.trim().lines().count(), 1, "{text}");
+    assert!(text.contains("CAN interface walknocan0"), "{text}");
+    assert!(
+        text.contains("no SocketCAN") || text.contains("there is no interface walknocan0"),
+        "{text}"
+    );
+}
+
+/// `plan --out` writes into a directory it creates (the book's steps keep `out/ctl.log` out
+/// of the repository's root).
+#[test]
+fn plan_creates_its_output_directory() {
+    if !tools_present() {
+        return;
+    }
+    let d = dir("plan-dir");
+    let log = d.join("out/ctl.log");
+    let o = controller(&["plan", "--out", log.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", all_output(&o));
+    assert!(log.is_file());
+}

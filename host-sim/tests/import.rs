@@ -448,6 +448,25 @@ fn refusals_name_the_urdf_element() {
         };
         assert!(e.contains(want), "{name}: {e}");
     }
+    // A file cut short, an element closed out of order, an empty file: the file and the line.
+    let text = biped(|s| s);
+    let cut = &text[..=text[..text.len() / 2].rfind('\n').expect("lines")];
+    let e = import_text("cut-short", cut).err().expect("refused");
+    assert!(e.contains("robot.urdf: not a readable URDF"), "{e}");
+    let ends = format!("the file ends at line {} inside <", cut.lines().count());
+    assert!(e.contains(&ends) && e.contains("opened on line"), "{e}");
+    let e = import_text("nesting", &text.replacen("</inertial>", "", 1))
+        .err()
+        .expect("refused");
+    let line = 1 + text[..text.find("</inertial>").expect("inertial")]
+        .matches('\n')
+        .count();
+    assert!(
+        e.contains(&format!("line {line}")) || e.contains(&format!("line {}", line + 1)),
+        "{e}"
+    );
+    let e = import_text("empty", "").err().expect("refused");
+    assert!(e.contains("no XML element"), "{e}");
     // The command line: exit status 2 and the message.
     let dir = temp_dir("cli");
     let path = dir.join("robot.urdf");

@@ -143,6 +143,8 @@ struct BuiltInWalks {
     straight_json: String,
     /// The files `host-sim physics straight` wrote into DIR.
     straight_files: Vec<String>,
+    /// What it printed.
+    straight_stdout: String,
     /// Every built-in scenario in [`BUILT_IN`]'s order (`straight` from its `physics.json`).
     walks: Vec<(&'static str, Walk)>,
 }
@@ -177,6 +179,7 @@ fn built_in_walks() -> Option<&'static BuiltInWalks> {
                 })
                 .collect();
             straight_files.sort();
+            let straight_stdout = String::from_utf8_lossy(&out.stdout).into_owned();
             let _ = std::fs::remove_dir_all(&dir);
             let j: serde_json::Value = serde_json::from_str(&straight_json).expect("JSON");
             let walks = BUILT_IN
@@ -193,6 +196,7 @@ fn built_in_walks() -> Option<&'static BuiltInWalks> {
             Some(BuiltInWalks {
                 straight_json,
                 straight_files,
+                straight_stdout,
                 walks,
             })
         })
@@ -230,6 +234,24 @@ fn straight_walks_through_the_command_line_contract() {
             "{f} missing: {:?}",
             b.straight_files
         );
+    }
+    // It prints the seconds the book's run-time table quotes (with the settle) beside the
+    // walk's own.
+    let engine = engine_seconds(num("simulated_s"));
+    assert!(
+        b.straight_stdout
+            .contains(&format!("{engine:.2} s in the engine with the 1 s settle")),
+        "{}",
+        b.straight_stdout
+    );
+    // It names every file it wrote.
+    let results = b
+        .straight_stdout
+        .lines()
+        .find(|l| l.contains("results"))
+        .unwrap_or_else(|| panic!("no results line: {}", b.straight_stdout));
+    for f in &b.straight_files {
+        assert!(results.contains(f.as_str()), "{f} not named: {results}");
     }
 }
 

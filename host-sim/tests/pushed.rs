@@ -21,7 +21,9 @@ fn a_pushed_adjusting_walk_moves_its_steps_and_replays_the_same() {
     assert!(run.adjusts.iter().any(|a| a.count > 0));
     // Replayed as a controller's log (as the QEMU test replays it on the target): every
     // measured state and command accepted, and the node publishes the same adjustments.
-    let frames = replay::parse(&run.can_log.join("\n"), cfg.params.dt).unwrap();
+    let frames = replay::parse(&run.can_log.join("\n"), cfg.params.dt)
+        .unwrap()
+        .frames;
     let replayed = replay::replay(&frames, &cfg, 1_000_000).unwrap();
     assert!(
         replayed.acks.iter().all(|(_, a)| a.reason.is_none()),

@@ -13,7 +13,9 @@ fn every_built_in_run_replays_bit_for_bit() {
         let s = scenario::built_in(name).unwrap();
         let cfg = SimConfig::default();
         let sim = simulate(&s, &cfg).unwrap();
-        let frames = replay::parse(&(sim.can_log.join("\n") + "\n"), cfg.node.params.dt).unwrap();
+        let frames = replay::parse(&(sim.can_log.join("\n") + "\n"), cfg.node.params.dt)
+            .unwrap()
+            .frames;
         assert!(frames.iter().all(|f| !node_sends(f.frame.id)));
         let r = replay::replay(&frames, &cfg.node, cfg.bitrate).unwrap();
         assert!(!r.cut, "{name}");
@@ -58,14 +60,15 @@ fn the_reader_takes_candump_variants_and_names_bad_lines() {
     assert!(e.contains("line 4") && e.contains("backwards"), "{e}");
     let text = "\n(1767225600.012500) vcan0 020#0a01b3\n(1767225600.012500) can1 080#00\n\
                 (1767225600.012600) can0 010#00\n(1767225600.023000) can0 010#01\n";
-    let f = replay::parse(text, dt).unwrap();
+    let f = replay::parse(text, dt).unwrap().frames;
     let got: Vec<_> = f.iter().map(|t| (t.tick, t.frame.id)).collect();
     assert_eq!(got, [(0, ids::CONTROL), (1, ids::ESTOP), (3, ids::ESTOP)]);
     assert_eq!(f[0].frame.bytes(), &[0x0A, 0x01, 0xB3]);
     assert!(replay::parse("(1000000000.000000) can0 010#00\n", dt).is_ok());
     for (text, line) in [
         ("(1767225600.000000) can0 020#0A\nnonsense\n", "line 2"),
-        ("(1767225600.000000) can0 12345678#00\n", "line 1"),
+        ("(1767225600.000000) can0 2345678A#00\n", "line 1"),
+        ("(1767225600.000000) can0 020#Rx\n", "line 1"),
         ("(1767225600.000000) can0 020#0A0\n", "line 1"),
         (
             "(1767225600.000000) can0 020#001122334455667788\n",
@@ -80,6 +83,28 @@ fn the_reader_takes_candump_variants_and_names_bad_lines() {
         let e = replay::parse(text, dt).unwrap_err();
         assert!(e.contains(line), "{text:?}: {e}");
     }
+}
+
+/// A log recorded on a robot's bus carries other nodes' frames: extended identifiers, remote
+/// and CAN FD frames are skipped and counted (the node never receives them), lower or upper
+/// case, with or without a remote frame's length; their times still may not go backwards.
+#[test]
+fn other_nodes_frames_are_skipped_and_counted() {
+    let dt = 0.005;
+    let text = "(1767225600.000000) can0 020#0A\n(1767225600.001000) can0 12345678#00\n\
+                (1767225600.002000) can0 1FFFFFFF#R\n(1767225600.003000) can0 123#R\n\
+                (1767225600.004000) can0 123#r8\n(1767225600.005000) can0 0000abcd#\n\
+                (1767225600.006000) can0 123##1001122\n(1767225600.007000) can0 010#00\n";
+    let p = replay::parse(text, dt).unwrap();
+    assert_eq!(p.skipped, 6);
+    let ids: Vec<_> = p.frames.iter().map(|t| t.frame.id).collect();
+    assert_eq!(ids, [ids::CONTROL, ids::ESTOP]);
+    let e = replay::parse(
+        "(1767225600.010000) can0 020#0A\n(1767225600.005000) can0 12345678#00\n",
+        dt,
+    )
+    .unwrap_err();
+    assert!(e.contains("line 2") && e.contains("backwards"), "{e}");
 }
 
 #[test]
@@ -184,7 +209,7 @@ fn frames_are_played_in_log_order_and_for_the_poll_after_them() {
         );
     }
     let cfg = SimConfig::default();
-    let frames = replay::parse(&log, cfg.node.params.dt).unwrap();
+    let frames = replay::parse(&log, cfg.node.params.dt).unwrap().frames;
     assert_eq!(frames[0].tick, 0);
     let start = frames
         .iter()
@@ -221,7 +246,7 @@ fn a_burst_in_the_last_cycle_is_read_and_answered_in_full() {
             );
         }
         let cfg = SimConfig::default();
-        let frames = replay::parse(&log, cfg.node.params.dt).unwrap();
+        let frames = replay::parse(&log, cfg.node.params.dt).unwrap().frames;
         let r = replay::replay(&frames, &cfg.node, cfg.bitrate).unwrap();
         assert!(!r.cut);
         assert_eq!(
@@ -243,7 +268,9 @@ fn a_fault_run_replays_into_the_firmware_node_with_its_frames_per_cycle() {
     let (_, log) = run_case_logged(&s, FaultKind::Drop, 0.05, 1).unwrap();
     assert!(log.len() > 1000);
     let cfg = SimConfig::default();
-    let frames = replay::parse(&(log.join("\n") + "\n"), cfg.node.params.dt).unwrap();
+    let frames = replay::parse(&(log.join("\n") + "\n"), cfg.node.params.dt)
+        .unwrap()
+        .frames;
     let r = replay::replay_into::<16>(&frames, &cfg.node, cfg.bitrate).unwrap();
     assert!(!r.cut);
     assert_eq!(r.replayed, frames.len());

@@ -2,14 +2,18 @@
 //! gait produces when driven directly, the controller decodes the stream to its units, and the
 //! stream keeps to the bus.
 
+use doc_figures::Quotes;
 use host_sim::scenario::{self, BUILT_IN};
 use host_sim::sim::bus::Faults;
 use host_sim::sim::{simulate, SimConfig};
 use planner_core::gait::{Footstep, GaitParams, Side};
 use planner_core::wire::WireStep;
 
+/// The node over the bus equals the gait driven directly; the bus load of every built-in
+/// scenario is what the book quotes (`host-sim run <scenario>` prints the same figure).
 #[test]
 fn the_node_over_the_bus_equals_the_gait_driven_directly() {
+    let mut loads = Vec::new();
     for name in BUILT_IN {
         let s = scenario::built_in(name).unwrap();
         // Footsteps travel at 0.5 mm and 1.5 mrad: the direct run is given the footsteps as
@@ -67,7 +71,29 @@ fn the_node_over_the_bus_equals_the_gait_driven_directly() {
             sim.bus_load
         );
         assert!(sim.can_log.len() as u64 >= sim.bus.sent / 2);
+        loads.push((name, sim.bus_load * 100.0));
     }
+    let straight = loads
+        .iter()
+        .find(|(n, _)| *n == "straight")
+        .expect("straight")
+        .1;
+    let (lo, hi) = loads.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), l| {
+        (lo.min(l.1), hi.max(l.1))
+    });
+    let anchor = "load the bus to";
+    Quotes::new("cargo run --release -p host-sim -- run <scenario> (its load line)")
+        .line(
+            "docs/src/host-sim.md",
+            anchor,
+            &format!("**{straight:.1} %**"),
+        )
+        .line(
+            "docs/src/host-sim.md",
+            anchor,
+            &format!("{lo:.1}–{hi:.1} %"),
+        )
+        .assert();
 }
 
 #[test]

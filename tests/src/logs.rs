@@ -413,7 +413,7 @@ pub fn expected(case: &Case, bytes: &[u8]) -> Expected {
     let sim = SimConfig::default();
     let text = case.log.join("\n") + "\n";
     let host = replay::replay_into::<16>(
-        &replay::parse(&text, case.cfg.params.dt).unwrap(),
+        &replay::parse(&text, case.cfg.params.dt).unwrap().frames,
         &case.cfg,
         sim.bitrate,
     )

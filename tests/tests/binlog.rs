@@ -93,7 +93,7 @@ proptest! {
         prop_assert_eq!(&got, &want);
         prop_assert_eq!(header.count as usize, want.len());
         let text = log.join("\n");
-        let parsed = replay::parse(&text, cfg.params.dt).unwrap();
+        let parsed = replay::parse(&text, cfg.params.dt).unwrap().frames;
         prop_assert_eq!(parsed.len(), got.len());
         for (p, (_, f)) in parsed.iter().zip(&got) {
             prop_assert_eq!(p.frame, *f);

@@ -198,6 +198,15 @@ fn m7_cycles_of_every_kind_are_quoted() {
             ),
         )
         .line(
+            "firmware/README.md",
+            "nor FPU latencies (",
+            &format!(
+                "`vdiv.f64` {}, `vsqrt.f64` {} cycles",
+                latency("vdiv.f64"),
+                latency("vsqrt.f64")
+            ),
+        )
+        .line(
             T,
             prose,
             &format!(

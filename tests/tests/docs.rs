@@ -302,3 +302,105 @@ fn a_headline_figure_without_its_command_is_found() {
         .collect();
     assert_eq!(rows, ["b", "c", "d", "f"], "{missing:#?}");
 }
+
+/// The repository file paths the front page's shell commands name (a `.toml`, `.urdf`, `.log`
+/// or `.sh` argument that is not an output: not after `--out`, not under `out/`) exist.
+#[test]
+fn the_front_pages_commands_name_files_that_exist() {
+    let text = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let mut missing = vec![];
+    let mut checked = 0;
+    for (i, block) in text.split("```").enumerate() {
+        if i % 2 == 0 || !block.starts_with("sh\n") {
+            continue;
+        }
+        for line in block.lines() {
+            let code = line.split(" #").next().unwrap_or(line);
+            let words: Vec<&str> = code.split_whitespace().collect();
+            for (j, w) in words.iter().enumerate() {
+                let file = [".toml", ".urdf", ".log", ".sh"]
+                    .iter()
+                    .any(|x| w.ends_with(x));
+                let output = j > 0 && words[j - 1] == "--out" || w.starts_with("out/");
+                if file && !output {
+                    checked += 1;
+                    if !root().join(w).is_file() {
+                        missing.push(format!("{w} (in `{}`)", line.trim()));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        checked >= 2,
+        "no file argument found in README.md's commands"
+    );
+    assert!(
+        missing.is_empty(),
+        "README.md names missing files: {missing:?}"
+    );
+}
+
+/// The front page installs mdbook as `tests/run-all.sh` does (its version, without the
+/// default features), and says how to get probe-rs for flashing.
+#[test]
+fn the_front_page_states_the_installs_the_test_command_uses() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let run_all = std::fs::read_to_string(root().join("tests/run-all.sh")).expect("run-all.sh");
+    let version = run_all
+        .lines()
+        .find_map(|l| l.strip_prefix("MDBOOK_VERSION="))
+        .expect("run-all.sh's MDBOOK_VERSION");
+    assert!(
+        run_all.contains(
+            "cargo install --locked mdbook --version \"$MDBOOK_VERSION\" --no-default-features"
+        ),
+        "run-all.sh's mdbook install changed: update this test and the front page"
+    );
+    let install =
+        format!("cargo install --locked mdbook --version {version} --no-default-features");
+    let flat = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains(&install),
+        "README.md does not say `{install}`"
+    );
+    for doc in ["README.md", "firmware/README.md"] {
+        let text = std::fs::read_to_string(root().join(doc)).expect(doc);
+        let flat = text.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(
+            flat.contains("cargo install probe-rs-tools --locked"),
+            "{doc} does not say how to install probe-rs"
+        );
+    }
+}
+
+/// `cargo run` in firmware/ runs `firmware/probe-run.sh` (the runner of
+/// `firmware/.cargo/config.toml`), which without probe-rs on PATH says how to install it in
+/// one line, exit status 127.
+#[test]
+fn the_flashing_runner_says_how_to_install_probe_rs() {
+    let config =
+        std::fs::read_to_string(root().join("firmware/.cargo/config.toml")).expect("config");
+    assert!(
+        config
+            .lines()
+            .any(|l| l.trim() == "runner = \"./probe-run.sh\""),
+        "{config}"
+    );
+    let empty = std::env::temp_dir().join(format!("walk-no-probe-rs-{}", std::process::id()));
+    std::fs::create_dir_all(&empty).expect("a directory");
+    let o = std::process::Command::new("/bin/sh")
+        .arg(root().join("firmware/probe-run.sh"))
+        .arg("target/board.elf")
+        .env("PATH", &empty)
+        .output()
+        .expect("sh runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(127), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("cargo install probe-rs-tools --locked"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir(&empty);
+}

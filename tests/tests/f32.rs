@@ -114,8 +114,9 @@ fn walk<T: Real>(frames: &[replay::Timed], cfg: NodeConfig<T>, period_us: u64) -
 /// Both nodes replayed on one candump log: the worst COG difference \[m\] and the number of
 /// refusals, after asserting the same answers, re-plans and walk length.
 fn compare(name: &str, log: &[String], cfg: NodeConfig, period_us: u64) -> (f64, usize, Walk) {
-    let frames =
-        replay::parse(&(log.join("\n") + "\n"), cfg.params.dt).expect("host-sim's log parses");
+    let frames = replay::parse(&(log.join("\n") + "\n"), cfg.params.dt)
+        .expect("host-sim's log parses")
+        .frames;
     let wide = walk::<f64>(&frames, cfg, period_us);
     let narrow = walk::<f32>(&frames, cfg.cast::<f32>(), period_us);
     assert!(wide.acks.len() > 5, "{name}: {} answers", wide.acks.len());

@@ -26,7 +26,9 @@ fn compare(name: &str, log: &[String]) {
     let cfg = SimConfig::default();
     let period_us = (cfg.node.params.dt * 1e6).round() as u64;
     let host = replay::replay_into::<16>(
-        &replay::parse(&(log.join("\n") + "\n"), cfg.node.params.dt).unwrap(),
+        &replay::parse(&(log.join("\n") + "\n"), cfg.node.params.dt)
+            .unwrap()
+            .frames,
         &cfg.node,
         cfg.bitrate,
     )

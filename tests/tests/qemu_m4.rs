@@ -235,5 +235,10 @@ fn m4f_image_matches_the_host_f32_node() {
             "worst",
             &format!("(target {target} "),
         )
+        .line(
+            "firmware/README.md",
+            "Instructions per `Node::poll` on the board's cycle, worst over",
+            &format!("the {} replayed logs", cases.len()),
+        )
         .assert();
 }

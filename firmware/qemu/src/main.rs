@@ -37,8 +37,9 @@
 //! counts are exact and repeatable run to run (the virtual clock is driven by the
 //! instruction count only). The image checks the factor itself (`CALIB`: a delay loop of known
 //! instruction count). They are *instructions*, not Cortex-M7 cycles: QEMU models neither the
-//! dual-issue pipeline nor the FPU latencies (a `vdiv.f64` or `vsqrt.f64` takes ~16 cycles
-//! on the real core) nor flash wait states and caches; the board image measures cycles with
+//! dual-issue pipeline nor the FPU latencies (a `vdiv.f64` or `vsqrt.f64` takes 30 cycles in
+//! the cycle estimate's model of the core, `docs/src/timing.md`) nor flash wait states and
+//! caches; the board image measures cycles with
 //! DWT. Reading the log (semihosting traps, decoding) happens outside the timed poll.
 //!
 //! # Memory (as on the board)

@@ -510,10 +510,11 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
     let mut grid = Vec::new();
     // Table I: no adjustment of the COG and ZMP at all (no eq. 18, no shaping).
     let bare = plain_params(params);
+    let bar = crate::console::Progress::new("tables", (n * n) as u64);
     for (r, &after) in STEP_LENGTHS.iter().enumerate() {
         let mut row = Vec::new();
         for (c, &before) in STEP_LENGTHS.iter().enumerate() {
-            eprint!("\rtables: cell {:>2}/49", r * n + c + 1);
+            bar.message(format!("cell ({r}, {c})"));
             let m = modification(params, before, after);
             let w = modification(bare, before, after);
             adjust[r][c] = m.adjust_s;
@@ -527,10 +528,11 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
             let mut m = m;
             m.trajectory.clear();
             row.push(m);
+            bar.inc(format!("cell ({r}, {c})"));
         }
         grid.push(row);
     }
-    eprintln!();
+    drop(bar);
     let within = cells_within(&grid, params.dt, 1.0);
     let json = json!({
         "step_lengths_m": STEP_LENGTHS,
@@ -582,8 +584,8 @@ pub fn tables_command(out: &Path) -> Result<(), String> {
     }
     md += "\nn/a: the model's legs (thigh and shank 0.3 m) cannot reach the footsteps.\n";
     write_file(&out.join("tables.md"), &md)?;
-    println!("{md}");
-    println!(
+    crate::outln!("{md}");
+    crate::outln!(
         "results: {} and {}",
         out.join("tables.json").display(),
         out.join("tables.md").display()

@@ -148,11 +148,16 @@ pub fn sweep_walk(
     robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<Vec<FaultRun>, String> {
-    plan_walk(indices, walk)?
-        .into_iter()
+    let plan = plan_walk(indices, walk)?;
+    let bar = crate::console::Progress::new("physics-faults", plan.len() as u64);
+    plan.into_iter()
         .map(|(kind, rate, s)| {
-            fault_run_walk(s, walk, kind, rate, seed, robot, cfg)
-                .map_err(|e| format!("{} {} on {s}: {e}", kind.name(), kind.rate_label(rate)))
+            let what = format!("{} {} on {s}", kind.name(), kind.rate_label(rate));
+            bar.message(what.clone());
+            let r = fault_run_walk(s, walk, kind, rate, seed, robot, cfg)
+                .map_err(|e| format!("{what}: {e}"));
+            bar.inc(what);
+            r
         })
         .collect()
 }

@@ -127,14 +127,15 @@ fn mode(cfg: &PhysicsConfig) -> String {
     m
 }
 
-/// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name).
+/// Writes `physics.json`, `physics.csv` and the plots into `out` (`robot`: its name); returns
+/// the names of the files written, in that order.
 pub fn write_outputs(
     out: &Path,
     name: &str,
     robot: &str,
     cfg: &PhysicsConfig,
     r: &PhysicsRun,
-) -> Result<(), String> {
+) -> Result<Vec<String>, String> {
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let json = serde_json::to_string_pretty(&report_json(name, robot, cfg, r))
@@ -142,9 +143,10 @@ pub fn write_outputs(
     let path = out.join("physics.json");
     fs::write(&path, json).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     write_csv(&out.join("physics.csv"), r)?;
+    let mut written = vec!["physics.json".to_string(), "physics.csv".to_string()];
     if r.samples.is_empty() {
         // A fall before the first sample (in the settle before the walk): nothing to plot.
-        return Ok(());
+        return Ok(written);
     }
     let mode = mode(cfg);
     let tilt: Vec<(f64, f64)> = r.samples.iter().map(|s| (s.t, s.tilt_deg)).collect();
@@ -154,9 +156,11 @@ pub fn write_outputs(
         .map(|s| (s.t, super::metrics::FALL_TILT_DEG))
         .step_by(20)
         .collect();
-    let plot = |file: &str, caption: String, axis: &str, curves: &[Curve]| {
+    let mut plot = |file: &str, caption: String, axis: &str, curves: &[Curve]| {
         let p = out.join(file);
-        write_time_plot(&p, &caption, axis, curves).map_err(|e| format!("{}: {e}", p.display()))
+        write_time_plot(&p, &caption, axis, curves).map_err(|e| format!("{}: {e}", p.display()))?;
+        written.push(file.to_string());
+        Ok::<(), String>(())
     };
     plot(
         "physics_tilt.png",
@@ -192,21 +196,27 @@ pub fn write_outputs(
             ],
         )?;
     }
-    Ok(())
+    Ok(written)
 }
 
 /// The `physics` command: runs the scenario with `robot` (`cfg.robot` should be
-/// [`super::model::Robot::of`] it), writes the files, returns the JSON.
+/// [`super::model::Robot::of`] it), writes the files, returns the JSON and the names of the
+/// files written.
 pub fn physics_command(
     name: &str,
     out: &Path,
     robot: &Robot,
     cfg: &PhysicsConfig,
-) -> Result<Value, String> {
+) -> Result<(Value, Vec<String>), String> {
     let (sname, trajectory, dt) = scenario_trajectory(name, robot)?;
     let r = run(&trajectory, dt, cfg).map_err(|e| format!("{sname} in MuJoCo: {e}"))?;
-    write_outputs(out, &sname, robot.name(), cfg, &r)?;
-    Ok(report_json(&sname, robot.name(), cfg, &r))
+    let written = write_outputs(out, &sname, robot.name(), cfg, &r)?;
+    Ok((report_json(&sname, robot.name(), cfg, &r), written))
+}
+
+/// The line that names the files a `physics` run wrote into `out`.
+pub fn results_line(out: &Path, written: &[String]) -> String {
+    format!("  results in {}: {}", out.display(), written.join(", "))
 }
 
 /// Parses `--push T,FX,FY`: a push of 0.1 s starting at `T` (trajectory time) \[s\] with the
@@ -254,14 +264,15 @@ pub fn cli(
             &default_out
         }
     };
-    let mut j = physics_command(name, out, robot, &cfg)?;
+    let (mut j, written) = physics_command(name, out, robot, &cfg)?;
     probe.record(&mut j);
     let path = out.join("physics.json");
     fs::write(&path, serde_json::to_string_pretty(&j)?)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let num = |k: &str| j[k].as_f64().unwrap_or(f64::NAN);
-    println!(
-        "{} ({}): {} in MuJoCo ({}), {:.2} s simulated",
+    crate::outln!(
+        "{} ({}): {} in MuJoCo ({}), {:.2} s simulated (walk and tail; {:.2} s in the engine \
+         with the {} s settle before it)",
         j["scenario"].as_str().unwrap_or(name),
         robot.name(),
         if j["fell"].as_bool() == Some(true) {
@@ -280,9 +291,11 @@ pub fn cli(
             "walked through, no fall".to_string()
         },
         mode(&cfg),
-        num("simulated_s")
+        num("simulated_s"),
+        cfg.settle_s + num("simulated_s"),
+        cfg.settle_s
     );
-    println!(
+    crate::outln!(
         "  max tilt {:.2} deg; CoP vs reference ZMP (50 ms): mean {:.1} mm, worst {:.1} mm; COG drift {:.1} mm, foot drift {:.1} mm",
         num("max_tilt_deg"),
         num("cop_err_mean_m") * 1e3,
@@ -291,9 +304,9 @@ pub fn cli(
         num("foot_drift_max_m") * 1e3
     );
     if j["ended_standing"].as_bool() == Some(false) {
-        println!("  the scenario's walk did not end standing (cut at its max_time_s?)");
+        crate::outln!("  the scenario's walk did not end standing (cut at its max_time_s?)");
     }
-    println!("  results: {}", out.join("physics.json").display());
+    crate::outln!("{}", results_line(out, &written));
     Ok(())
 }
 
@@ -314,13 +327,15 @@ pub fn tables_cli(
     let cfg = probe.cfg.clone();
     let mode = probe.mode();
     let mut done = Vec::new();
-    for (i, &(r, c)) in list.iter().enumerate() {
-        eprint!("\rphysics-tables: cell {:>2}/{}", i + 1, list.len());
+    let bar = crate::console::Progress::new("physics-tables", list.len() as u64);
+    for &(r, c) in &list {
+        bar.message(format!("cell ({r}, {c})"));
         done.push(
             cell(r, c, &robot.planner.params, &cfg).map_err(|e| format!("cell ({r}, {c}): {e}"))?,
         );
+        bar.inc(format!("cell ({r}, {c})"));
     }
-    eprintln!();
+    drop(bar);
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
     let path = out.join("physics_tables.json");
@@ -378,8 +393,8 @@ pub fn tables_cli(
     );
     let mdpath = out.join("physics_tables.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
-    println!("{md}");
-    println!("results: {} and {}", path.display(), mdpath.display());
+    crate::outln!("{md}");
+    crate::outln!("results: {} and {}", path.display(), mdpath.display());
     Ok(())
 }
 
@@ -420,9 +435,9 @@ pub fn faults_cli(
     );
     let mdpath = out.join("physics_faults.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
-    println!("{md}");
+    crate::outln!("{md}");
     let falls = runs.iter().filter(|r| r.report.fell).count();
-    println!(
+    crate::outln!(
         "{} runs, {falls} fell in the engine; results: {} and {}",
         runs.len(),
         path.display(),

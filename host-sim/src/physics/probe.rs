@@ -313,7 +313,7 @@ pub fn weakest(robot: &Robot, kd: Option<f64>) -> Result<(Option<f64>, Vec<Rung>
             }
         }
         let walked = rung.walked();
-        eprintln!(
+        crate::errln!(
             "stabilizer scale {scale}: {}",
             if walked {
                 "every built-in scenario walks".to_string()

@@ -191,6 +191,7 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
             }
         }
     }
+    let bar = crate::console::Progress::new("push-map", jobs.len() as u64);
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Result<Cell, String>>>> = Mutex::new(vec![None; jobs.len()]);
     std::thread::scope(|scope| {
@@ -201,6 +202,7 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
                     break;
                 };
                 let r = bisect(node, cfg, s, p, d, spec.resolution_bw);
+                bar.inc(format!("{}, {}, {d}°", s.name(), p.name()));
                 if let Ok(mut v) = results.lock() {
                     v[i] = Some(r);
                 }
@@ -406,8 +408,10 @@ pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
             d.trim()
                 .parse::<f64>()
                 .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{d:?} is not a direction in degrees"))
+                .filter(|v| (-180.0..=360.0).contains(v))
+                .ok_or_else(|| {
+                    format!("{d:?} is not a direction in degrees (-180 … 360, 0 forward, 90 left)")
+                })
         })
         .collect()
 }
@@ -473,8 +477,8 @@ pub fn cli(
             &series,
         )?;
     }
-    print!("{md}");
-    println!(
+    crate::out!("{md}");
+    crate::outln!(
         "{} engine runs; wrote {}",
         cells.iter().map(|c| c.runs).sum::<usize>(),
         out.join("push_map.json").display()

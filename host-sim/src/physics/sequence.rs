@@ -204,8 +204,8 @@ pub fn cli(
     ) + &probe.ladder_markdown();
     let mdpath = out.join("physics_sequence.md");
     fs::write(&mdpath, &md).map_err(|e| format!("cannot write {}: {e}", mdpath.display()))?;
-    println!("{md}");
-    println!("results: {} and {}", path.display(), mdpath.display());
+    crate::outln!("{md}");
+    crate::outln!("results: {} and {}", path.display(), mdpath.display());
     Ok(())
 }
 

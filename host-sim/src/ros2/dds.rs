@@ -317,7 +317,7 @@ pub fn run(
                         detail: format!("the message could not be decoded: {e:?}"),
                         ..CommandRefusal::default()
                     };
-                    eprintln!("refused: footstep_list: malformed: {e:?}");
+                    crate::errln!("refused: footstep_list: malformed: {e:?}");
                     put(&io.refusals, r, &mut stats);
                 }
             }
@@ -348,7 +348,7 @@ pub fn run(
                         ),
                         ..CommandRefusal::default()
                     };
-                    eprintln!("refused: {}", r.detail);
+                    crate::errln!("refused: {}", r.detail);
                     put(&io.refusals, r, &mut stats);
                 }
             }
@@ -449,7 +449,9 @@ pub fn run(
                         &mut stats,
                     );
                 }
-                Output::Log(line) => println!("{:8.3} s  {line}", start.elapsed().as_secs_f64()),
+                Output::Log(line) => {
+                    crate::outln!("{:8.3} s  {line}", start.elapsed().as_secs_f64())
+                }
             }
         }
         if status_published {

@@ -307,6 +307,39 @@ pub fn parse_candump_line(line: &str) -> Option<LogEntry> {
     ))
 }
 
+/// The time (µs since the Unix epoch) of a `candump -l` line whose frame is not a classic data
+/// frame with a standard identifier: an extended identifier (8 hexadecimal digits, at most
+/// `1FFFFFFF`), a remote frame (`ID#R`, with or without its length digit) or a CAN FD frame
+/// (`ID##F…`). Other nodes' traffic on a robot's bus: the node's filters never let it in.
+/// `None` for anything else (a frame [`parse_candump_line`] reads, or no candump line).
+pub fn other_frame_time(line: &str) -> Option<u64> {
+    let mut parts = line.split_whitespace();
+    let (Some(time), Some(_iface), Some(frame), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return None;
+    };
+    // The time as the strict reader reads it, through a frame it accepts.
+    let unix_us = parse_log_line(&format!("{time} {LOG_IFACE} 000#"))?.unix_us;
+    let hex = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_hexdigit());
+    let (id, data) = frame.split_once('#')?;
+    let extended = id.len() == 8 && hex(id) && u32::from_str_radix(id, 16).ok()? <= 0x1FFF_FFFF;
+    if !(extended || id.len() == 3 && hex(id) && u16::from_str_radix(id, 16).ok()? <= 0x7FF) {
+        return None;
+    }
+    let data_frame = data.is_empty() || hex(data) && data.len() % 2 == 0 && data.len() <= 16;
+    let remote = matches!(data.as_bytes(), [b'R' | b'r'] | [b'R' | b'r', b'0'..=b'8']);
+    let fd = data
+        .strip_prefix('#')
+        .is_some_and(|d| d.len() % 2 == 1 && d.len() <= 129 && hex(d));
+    let other = if extended {
+        data_frame || remote || fd
+    } else {
+        remote || fd
+    };
+    other.then_some(unix_us)
+}
+
 /// Parses one line of the log, strictly in the format [`log_line`] writes:
 /// `(` ≥ 1 decimal digits `.` 6 decimal digits `) ` [`LOG_IFACE`] ` ` 3 hexadecimal digits
 /// (at most `7FF`) `#` 0 to 8 bytes as hexadecimal digit pairs. `None` for anything else.

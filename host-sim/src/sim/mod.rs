@@ -120,6 +120,9 @@ pub struct SimRun {
     /// its footstep in the cycle it was handled (`Node::reach_broken`, asked right after that
     /// cycle), `None` for other commands and for footsteps within reach.
     pub broken: Vec<Option<Broken<f64>>>,
+    /// The node's next step number when the scenario's first command was sent (its first
+    /// append's number; every accepted append adds one).
+    pub first_step: u16,
 }
 
 fn send(port: &mut crate::sim::bus::Port, f: RawFrame) {
@@ -181,6 +184,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     }
     send(&mut ctl, ctl_state.control(ControlOp::Reset).encode());
     ctl_state.epoch = ctl_state.epoch.wrapping_add(1);
+    let first_step = node.next_step();
     for k in 0..s.max_ticks {
         let t0 = (k + 1) * 5 * ms;
         bus.advance(t0);
@@ -295,6 +299,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         steps: steps.into_iter().map(|(id, _, f)| (id, f)).collect(),
         cut,
         broken,
+        first_step,
     })
 }
 
@@ -335,6 +340,22 @@ pub struct Outcome {
     pub detail: String,
 }
 
+/// Why an append numbered `id` is refused `bad_crc` by a node whose next step number is
+/// `next` when `id` is not within −128 … +127 of it: the frame carries the number's low byte
+/// only, the node reads it as the number with that low byte nearest its next one, and the
+/// frame's CRC, keyed with the true number's high byte, does not match that one. The node
+/// cannot tell this from a corrupted frame (`planner_core::wire`: every frame's CRC matches
+/// exactly one high byte); the controller that numbered the step can.
+pub fn out_of_window_text(id: u16, next: u16) -> String {
+    format!(
+        "step {id} is not the node's next step number ({next}): a footstep frame carries its \
+         number's low byte, read within -128 … +127 of the next number (here as step {}), so \
+         the CRC keyed with step {id}'s high byte fails; number the steps on from the next \
+         one (DIAG next_step)",
+        wire::step_number(id as u8, next)
+    )
+}
+
 /// Same pose within the wire's resolution (0.5 mm, 2π/4096 rad) and some rounding.
 fn same_pose(a: &Footstep<f64>, b: &Footstep<f64>) -> bool {
     let dyaw = (a.yaw - b.yaw + core::f64::consts::PI).rem_euclid(core::f64::consts::TAU)
@@ -353,22 +374,40 @@ pub fn outcomes(s: &Scenario, sim: &SimRun) -> Vec<Outcome> {
         .filter(|e| e.result.is_ok() && e.command == scenario::Command::StopNow)
         .map(|e| e.tick)
         .collect();
+    // The node's next step number as each command reaches it: appends are numbered one after
+    // another, so it is the first one plus the appends accepted before.
+    let mut next_step = sim.first_step;
     sim.run
         .events
         .iter()
         .enumerate()
         .map(|(i, e)| {
+            let expected_step = next_step;
+            if let (Ok(()), scenario::Command::Push(..)) = (&e.result, e.command) {
+                next_step = next_step.wrapping_add(1);
+            }
             let (failure, detail) = match (&e.result, e.command) {
                 (Err(r), _) => match Reason::ALL.into_iter().find(|x| format!("{x:?}") == *r) {
                     Some(reason) => (
                         Some(Failure::Refused(reason)),
-                        match sim.broken.get(i).copied().flatten() {
-                            Some(b) if matches!(reason, Reason::Reach | Reason::Crossing) => {
+                        match (sim.broken.get(i).copied().flatten(), e.command) {
+                            (Some(b), _) if matches!(reason, Reason::Reach | Reason::Crossing) => {
                                 format!(
                                     "refused: {} (code {}): {}",
                                     reason_name(reason),
                                     reason.code(),
                                     limit_text(&b)
+                                )
+                            }
+                            (_, scenario::Command::Push(id, _))
+                                if reason == Reason::BadCrc
+                                    && wire::step_number(id as u8, expected_step) != id =>
+                            {
+                                format!(
+                                    "refused: {} (code {}): {}",
+                                    reason_name(reason),
+                                    reason.code(),
+                                    out_of_window_text(id, expected_step)
                                 )
                             }
                             _ => {

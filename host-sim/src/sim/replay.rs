@@ -21,8 +21,11 @@
 //! own. Every other frame is, the node's commands and foreign traffic alike.
 //!
 //! Accepted lines: any interface name, upper- or lower-case hexadecimal, standard (3-digit)
-//! identifiers, 0 to 8 data bytes; blank lines are skipped. A line that is none of these or a
-//! time going backwards is refused with its line number.
+//! identifiers, 0 to 8 data bytes; blank lines are skipped. A log recorded on a robot's bus
+//! carries other nodes' traffic too: its extended, remote and CAN FD frames are skipped and
+//! counted ([`Parsed::skipped`]; the node's filters never let such a frame in, see
+//! [`crate::sim::bus::other_frame_time`]). A line that is none of these or a time going
+//! backwards is refused with its line number.
 //!
 //! The replay runs until every frame has been sent and read by the node and the node stands
 //! still, or for at most [`MAX_AFTER_S`] after the log's last frame. Frames the node's
@@ -36,7 +39,7 @@ use planner_core::node::{Node, NodeConfig};
 use planner_core::playback::{self, LogClock};
 use planner_core::wire::{ids, Ack, RawFrame};
 
-use crate::sim::bus::{parse_candump_line, Bus, Faults, Tap};
+use crate::sim::bus::{other_frame_time, parse_candump_line, Bus, Faults, LogEntry, Tap};
 use embedded_can::nb::Can;
 
 /// Longest replay after the log's last frame \[s\] (`planner_core::playback::MAX_AFTER_US`).
@@ -90,14 +93,37 @@ pub fn node_sends(id: u16) -> bool {
     )
 }
 
+/// A candump log read for replay.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Parsed {
+    /// The frames to replay, in log order.
+    pub frames: Vec<Timed>,
+    /// Extended, remote and CAN FD frames: skipped, as the node ignores them.
+    pub skipped: usize,
+}
+
+/// One non-blank line of a candump log: a classic standard frame, or the time of another
+/// node's frame the node never receives (skipped). The error names the line.
+fn log_line(n: usize, line: &str) -> Result<Result<LogEntry, u64>, String> {
+    match parse_candump_line(line) {
+        Some(e) => Ok(Ok(e)),
+        None => other_frame_time(line).map(Err).ok_or_else(|| {
+            format!(
+                "line {n}: not a candump -l line (a classic frame with a standard or \
+                 extended identifier, a remote or a CAN FD frame): {line:?}"
+            )
+        }),
+    }
+}
+
 /// Reads a candump log (see the module docs) into the frames to replay, for a control period
 /// of `dt` seconds. The error names the line.
-pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
+pub fn parse(text: &str, dt: f64) -> Result<Parsed, String> {
     let period_us = (dt * 1e6).round() as u64;
     if period_us < 2 {
         return Err(format!("control period {dt} s is below 2 µs"));
     }
-    let mut out = Vec::new();
+    let mut out = Parsed::default();
     let mut base = None;
     let mut last_us = 0;
     for (i, line) in text.lines().enumerate() {
@@ -106,21 +132,26 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
         if line.is_empty() {
             continue;
         }
-        let entry = parse_candump_line(line).ok_or_else(|| {
-            format!("line {n}: not a candump -l line with a standard identifier: {line:?}")
-        })?;
-        let us = entry.unix_us;
+        let entry = log_line(n, line)?;
+        let us = match entry {
+            Ok(e) => e.unix_us,
+            Err(us) => us,
+        };
         if us < last_us {
             return Err(format!("line {n}: time goes backwards"));
         }
         last_us = us;
+        let Ok(entry) = entry else {
+            out.skipped += 1;
+            continue;
+        };
         // The start of the first frame's cycle, on the grid of Unix time.
         let clock = *base.get_or_insert_with(|| LogClock::new(us, period_us));
         let Some(clock) = clock else {
             return Err(format!("control period {dt} s is below 2 µs"));
         };
         if !node_sends(entry.frame.id) {
-            out.push(Timed {
+            out.frames.push(Timed {
                 tick: clock.cycle(us),
                 frame: entry.frame,
             });
@@ -133,7 +164,8 @@ pub fn parse(text: &str, dt: f64) -> Result<Vec<Timed>, String> {
 /// `firmware/app/src/binlog.rs`): the candump log `log` (see the module docs: blank lines
 /// skipped, times not going backwards) as one log named `name` (at most 32 ASCII graphic
 /// bytes), for a node configured by `cfg` (its control period and start feet). The frames are
-/// the ones [`parse`] replays (not the node's own), with their times; the cycle grid starts at
+/// the ones [`parse`] replays (not the node's own, nor those it skips), with their times; the
+/// cycle grid starts at
 /// the log's first line, as in [`parse`].
 pub fn binary_log(name: &str, log: &[String], cfg: &NodeConfig) -> Result<Vec<u8>, String> {
     if name.is_empty() || name.len() > 32 || !name.bytes().all(|b| b.is_ascii_graphic()) {
@@ -154,12 +186,19 @@ pub fn binary_log(name: &str, log: &[String], cfg: &NodeConfig) -> Result<Vec<u8
         if line.is_empty() {
             continue;
         }
-        let entry = parse_candump_line(line)
-            .ok_or_else(|| format!("line {}: not a candump -l line: {line:?}", i + 1))?;
-        if entry.unix_us < last_us {
+        let entry = log_line(i + 1, line)?;
+        let us = match entry {
+            Ok(e) => e.unix_us,
+            Err(us) => us,
+        };
+        if us < last_us {
             return Err(format!("line {}: time goes backwards", i + 1));
         }
-        last_us = entry.unix_us;
+        last_us = us;
+        // Another node's frame the node never receives: not in the log.
+        let Ok(entry) = entry else {
+            continue;
+        };
         first_us.get_or_insert(entry.unix_us);
         if !node_sends(entry.frame.id) {
             frames.push((entry.unix_us, entry.frame));

@@ -4,7 +4,7 @@
 //! A command that failed (refused by the node, never answered, accepted and never carried out)
 //! or did not go as the scenario's entry expected is a line; a refusal that follows from the
 //! refused append of an earlier step (later appends refused `sequence_gap`, modifications
-//! refused `unknown_step`) is marked so and counts as expected; notes on commands carried out
+//! refused `unknown_step`, a `start` refused `wrong_state` with no step taken) is marked so and counts as expected; notes on commands carried out
 //! (steps dropped by the scenario's `stop_now`) are grouped by note.
 
 use planner_core::gait::Side;
@@ -39,8 +39,14 @@ pub fn report(results: &[Outcome], entries: &[Entry], dt: f64) -> Report {
     // The first append the node refused: later appends refused `sequence_gap` and
     // modifications of its step or later ones refused `unknown_step` follow from it.
     let mut first_refused: Option<u64> = None;
+    // Appends the node took: a `start` refused `wrong_state` before any follows from the
+    // refused first append (the queue it would walk is empty).
+    let mut taken = 0;
     for (o, entry) in results.iter().zip(entries) {
-        let follows = consequence_of(o, first_refused).filter(|_| entry.expect.is_none());
+        let follows = consequence_of(o, first_refused, taken).filter(|_| entry.expect.is_none());
+        if let (Command::Push(..), None | Some(Failure::NotWalked)) = (o.command, o.failure) {
+            taken += 1;
+        }
         if let (Command::Push(id, _), Some(Failure::Refused(_)), None) =
             (o.command, o.failure, first_refused)
         {
@@ -142,10 +148,12 @@ fn outcome_line(o: &Outcome, entry: &Entry, follows: Option<u64>, dt: f64) -> (b
 }
 
 /// The step whose refused append `o` follows from, if it does: an append refused
-/// `sequence_gap` after it, or a modification of it or a later step refused `unknown_step`.
-fn consequence_of(o: &Outcome, first_refused: Option<u64>) -> Option<u64> {
+/// `sequence_gap` after it, a modification of it or a later step refused `unknown_step`, or a
+/// `start` refused `wrong_state` while no append was taken (`taken`: appends taken before).
+fn consequence_of(o: &Outcome, first_refused: Option<u64>, taken: usize) -> Option<u64> {
     let k = first_refused?;
     match (o.command, o.failure) {
+        (Command::Start, Some(Failure::Refused(Reason::WrongState))) if taken == 0 => Some(k),
         (Command::Push(id, _), Some(Failure::Refused(Reason::SequenceGap)))
             if u64::from(id) > k =>
         {

@@ -60,7 +60,7 @@ pub fn run_node(
         node.poll(ms, &mut socket);
         cycles += 1;
         if cycles % 200 == 0 {
-            println!(
+            crate::outln!(
                 "{:.1} s: {:?}",
                 start.elapsed().as_secs_f64(),
                 node.status()

@@ -54,6 +54,17 @@
 //!   every error confined to 8 consecutive bits: it is refused [`Reason::BadCrc`], always. A
 //!   start-up numbers at most 65,535 steps (beyond, appends are refused
 //!   [`Reason::Exhausted`]), so no two steps of a start-up share their 16 bits.
+//!
+//!   A number 128 or more past the node's next one (a controller's numbering bug: steps 0,
+//!   then 256) is read the same way, as a number of another block, and is refused
+//!   [`Reason::BadCrc`], where a gap within the window is [`Reason::SequenceGap`]. The node
+//!   cannot tell that gap from a corrupted frame: for every frame exactly one high byte makes
+//!   its CRC match (the key enters the CRC as one byte, and a CRC-8 maps the 256 values of a
+//!   byte to 256 different CRCs), so "the CRC matches another block's key" is true of every
+//!   corrupted frame as well, and answering it as a gap would tell a corrupted frame's sender
+//!   its frame was numbered wrong. The answer stays [`Reason::BadCrc`]; the controller, which
+//!   knows the number it sent, compares it with `DIAG`'s next step number (host-sim's `run`
+//!   names such a refusal so).
 //! * **Versions.** A footstep is appended once (`STEP_APPEND`, version 0) and may be modified
 //!   (`STEP_MODIFY`) up to 127 times: a modification is taken only if its 7-bit version is
 //!   greater than the step's version in force (no modulo: versions never wrap); an equal

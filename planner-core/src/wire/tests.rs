@@ -258,6 +258,26 @@ fn bad_frames_are_rejected_with_a_reason() {
     assert_eq!(Command::decode(&f, 0), Err((Reason::BadCrc, 2)));
 }
 
+/// Every footstep frame, of any content, has its CRC matched by exactly one step key (one
+/// high byte): the CRC alone cannot tell a frame numbered outside the node's window (answered
+/// `BadCrc`, see the module docs) from a corrupted one.
+#[test]
+fn exactly_one_step_key_matches_any_footstep_frame() {
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    for _ in 0..2000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let d = x.to_le_bytes();
+        for id in [ids::STEP_APPEND, ids::STEP_MODIFY] {
+            let matching = (0..=255u8)
+                .filter(|&h| crc8_keyed(id, step_key(u16::from(h) << 8), &d[..7]) == d[7])
+                .count();
+            assert_eq!(matching, 1, "{id:#x} {d:02x?}");
+        }
+    }
+}
+
 /// A footstep frame's number is the one with its low byte nearest to the next append (128
 /// below … 127 above), and the number's key is in the CRC: a copy of a step 256 · k numbers
 /// older (k = 1 … 255), whose frame bytes are otherwise equal, never decodes; every queued

@@ -2,6 +2,7 @@
 //! [`SUPERSAMPLE`] times the size, then averaged down), the PNG file, the legend strip, tick
 //! labels and line series with gaps.
 
+use std::cell::RefCell;
 use std::error::Error;
 use std::fs;
 use std::io::BufWriter;
@@ -161,20 +162,38 @@ pub(super) fn tick_label(v: f64, digits: usize) -> String {
     }
 }
 
-/// The fewest decimals, at least `min` (at most 6), with which the tick values plotters
-/// places on `range` (its key points for 10 labels, as the mesh draws them) have pairwise
-/// different labels.
-pub(super) fn distinct_digits(range: Range<f64>, min: usize) -> usize {
-    let ticks = RangedCoordf64::from(range).key_points(10);
-    (min..=6)
+/// The tick labels a mesh draws on each axis, at most: plotters' key points for this many
+/// labels are the values [`label_digits`] formats (`configure_mesh` asks for exactly this).
+pub(super) const MESH_LABELS: usize = 11;
+
+/// The most decimals a tick label gets.
+const MAX_DIGITS: usize = 9;
+
+/// The fewest decimals, at least `min` (at most [`MAX_DIGITS`]), with which every tick value
+/// plotters places on `range` (its key points for [`MESH_LABELS`] labels, as the mesh draws
+/// them) is labelled truly: the label read back is the value (to a millionth of the ticks'
+/// spacing), so that no two labels are equal and none is rounded to a neighbour's.
+pub(super) fn label_digits(range: Range<f64>, min: usize) -> usize {
+    let ticks = RangedCoordf64::from(range).key_points(MESH_LABELS);
+    let spacing = ticks
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(f64::INFINITY, f64::min);
+    let tolerance = if spacing.is_finite() {
+        spacing * 1e-6
+    } else {
+        // One tick: its label is true to its own magnitude.
+        ticks.first().map_or(0.0, |v| v.abs() * 1e-6)
+    };
+    (min..=MAX_DIGITS)
         .find(|&d| {
-            let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v, d)).collect();
-            labels
-                .iter()
-                .enumerate()
-                .all(|(i, a)| labels[i + 1..].iter().all(|b| b != a))
+            ticks.iter().all(|&v| {
+                tick_label(v, d)
+                    .parse::<f64>()
+                    .is_ok_and(|l| (l - v).abs() <= tolerance)
+            })
         })
-        .unwrap_or(6)
+        .unwrap_or(MAX_DIGITS.max(min))
 }
 
 /// How a legend entry is marked.
@@ -309,29 +328,44 @@ where
     Ok(())
 }
 
-/// The axes, tick labels and a light grid.
+/// The tick labels a mesh drew: (value, label) on the x axis, then on the y axis.
+pub(super) type MeshLabels = (Vec<(f64, String)>, Vec<(f64, String)>);
+
+/// The axes, tick labels and a light grid; returns the labels drawn.
 pub(super) fn configure_mesh<X, Y>(
     chart: &mut ChartContext<'_, BitMapBackend<'_>, Cartesian2d<X, Y>>,
     px: Px,
     x_desc: &str,
     y_desc: &str,
     (x_digits, y_digits): (usize, usize),
-) -> Result<(), Box<dyn Error>>
+) -> Result<MeshLabels, Box<dyn Error>>
 where
     X: plotters::coord::ranged1d::Ranged<ValueType = f64>
         + plotters::coord::ranged1d::ValueFormatter<f64>,
     Y: plotters::coord::ranged1d::Ranged<ValueType = f64>
         + plotters::coord::ranged1d::ValueFormatter<f64>,
 {
-    // Enough decimals that the ticks plotters draws (10 a side) are told apart.
-    let x_digits = distinct_digits(chart.x_range(), x_digits);
-    let y_digits = distinct_digits(chart.y_range(), y_digits);
-    let xf = move |v: &f64| tick_label(*v, x_digits);
-    let yf = move |v: &f64| tick_label(*v, y_digits);
+    // Enough decimals that every tick plotters draws is labelled truly (and so distinctly);
+    // the labels drawn are recorded for the caller.
+    let x_digits = label_digits(chart.x_range(), x_digits);
+    let y_digits = label_digits(chart.y_range(), y_digits);
+    let drawn = RefCell::new((Vec::new(), Vec::new()));
+    let xf = |v: &f64| {
+        let l = tick_label(*v, x_digits);
+        drawn.borrow_mut().0.push((*v, l.clone()));
+        l
+    };
+    let yf = |v: &f64| {
+        let l = tick_label(*v, y_digits);
+        drawn.borrow_mut().1.push((*v, l.clone()));
+        l
+    };
     chart
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
+        .x_labels(MESH_LABELS)
+        .y_labels(MESH_LABELS)
         .axis_desc_style(px.font(19))
         .label_style(px.font(15))
         .x_label_formatter(&xf)
@@ -341,36 +375,75 @@ where
         .axis_style(BLACK.stroke_width(px.u(1)))
         .set_all_tick_mark_size(px.u(5))
         .draw()?;
-    Ok(())
+    Ok(drawn.into_inner())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Every axis the plots can have gets tick labels that differ from one another: a
-    /// footprint plot's 0.05 m grid is labelled with two decimals, not "-0.1 -0.1 0.0 0.0".
+    /// The labels a mesh draws over `x` (and a fixed y range), as the figures draw it.
+    fn drawn_labels(x: Range<f64>, min: usize) -> Vec<(f64, String)> {
+        ensure_font().expect("the plots' font");
+        let (w, h) = (400u32, 300u32);
+        let mut buf = vec![255u8; (w * h * 3) as usize];
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let mut chart = ChartBuilder::on(&root)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(x, 0.0..1.0)
+            .expect("chart");
+        configure_mesh(&mut chart, Px(1), "x", "y", (min, 1))
+            .expect("mesh")
+            .0
+    }
+
+    /// Every axis gets tick labels that are true (each reads back as the value it marks) and
+    /// so pairwise different, over spans from 0.1 mm to 9 km at many offsets, with and
+    /// without a minimum of decimals: the labels the mesh draws, not a model of them.
     #[test]
-    fn tick_labels_are_distinct_on_every_axis() {
-        let ranges = [
-            (-0.12, 0.13),
-            (-0.3, 1.9),
-            (0.0, 12.5),
-            (-0.004, 0.006),
-            (0.1, 0.1004),
-        ];
-        for (lo, hi) in ranges {
-            for min in [0, 1, 2] {
-                let d = distinct_digits(lo..hi, min);
-                let ticks = RangedCoordf64::from(lo..hi).key_points(10);
-                let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v, d)).collect();
-                let mut sorted = labels.clone();
-                sorted.sort();
-                sorted.dedup();
-                assert_eq!(sorted.len(), labels.len(), "{lo}..{hi}: {labels:?}");
-                assert!(d >= min);
+    fn tick_labels_are_true_and_distinct_for_every_range() {
+        let mut checked = 0;
+        for e in -4..=3 {
+            for m in [
+                1.0, 1.1, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 5.2, 6.0, 7.5, 9.0,
+            ] {
+                let span = m * 10f64.powi(e);
+                for centre in [-1.37, -0.12, 0.005, 0.26, 3.3] {
+                    let lo = centre * 10f64.powi(e.max(0)) - 0.5 * span;
+                    for min in [0, 2] {
+                        let labels = drawn_labels(lo..lo + span, min);
+                        assert!(labels.len() >= 2, "{lo}+{span}: {labels:?}");
+                        let spacing = labels[1].0 - labels[0].0;
+                        for (i, (v, l)) in labels.iter().enumerate() {
+                            let read: f64 = l.parse().expect("a number");
+                            assert!(
+                                (read - v).abs() <= spacing.abs() * 1e-6,
+                                "{lo}..{}: {l} marks {v}: {labels:?}",
+                                lo + span
+                            );
+                            assert!(
+                                labels[i + 1..].iter().all(|(_, b)| b != l),
+                                "{lo}..{}: {l} twice: {labels:?}",
+                                lo + span
+                            );
+                        }
+                        checked += 1;
+                    }
+                }
             }
         }
-        assert_eq!(distinct_digits(-0.12..0.13, 1), 2, "the 0.05 m grid");
+        assert!(checked > 1000);
+        // The footprint plot of a short walk: a 0.05 m grid, two decimals.
+        let short: Vec<String> = drawn_labels(-0.26..0.26, 1)
+            .into_iter()
+            .map(|(_, l)| l)
+            .collect();
+        assert_eq!(
+            short.first().map(String::as_str),
+            Some("-0.25"),
+            "{short:?}"
+        );
+        assert_eq!(label_digits(-0.26..0.26, 1), 2);
     }
 }

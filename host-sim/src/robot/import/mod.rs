@@ -38,12 +38,14 @@
 //! * **The gait**: HRP-2's timing, preview weights and eq. 18 limits (the built-in scenarios
 //!   are timed for them); the swing height HRP-2's 0.05 m scaled as the reach.
 //!
-//! Refused, with the URDF element named: several or no root links, a massless base, a leg
-//! without six revolute joints (or with a prismatic, planar or floating joint), no pair of
-//! feet, a foot without geometry, a moving link without an `<inertial>`, a mesh of another
-//! format, a standing posture the legs cannot reach.
+//! Refused, with the file and line named: XML that is not well-formed (a file cut short: where
+//! it ends and which element is open; [`xml`]). Refused, with the URDF element named: several
+//! or no root links, a massless base, a leg without six revolute joints (or with a prismatic,
+//! planar or floating joint), no pair of feet, a foot without geometry, a moving link without
+//! an `<inertial>`, a mesh of another format, a standing posture the legs cannot reach.
 
 pub mod sole;
+pub mod xml;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
@@ -432,6 +434,12 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     // An empty `<texture/>` (a material without an image, as some descriptions write it) is
     // no texture: the reader wants a file name, and the import reads no material.
     let text = text.replace("<texture />", "").replace("<texture/>", "");
+    if let Some(problem) = xml::xml_problem(&text) {
+        return Err(ImportError(format!(
+            "{}: not a readable URDF: {problem}",
+            path.display()
+        )));
+    }
     let urdf = urdf_rs::read_from_string(&text)
         .map_err(|e| ImportError(format!("{}: not a readable URDF: {e}", path.display())))?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
