@@ -235,7 +235,9 @@ def qos(durability, depth):
 class Peer:
     """The gateway's topics under `ns` (IHMC's naming: /ihmc/<robot>/humanoid_control)."""
 
-    def __init__(self, ns, domain=0):
+    def __init__(self, ns, domain=None):
+        if domain is None:
+            domain = int(os.environ.get("ROS_DOMAIN_ID", "0"))
         self.dp = DomainParticipant(domain)
         vol, tl = Policy.Durability.Volatile, Policy.Durability.TransientLocal
 
@@ -269,20 +271,21 @@ class Peer:
         raise SystemExit(f"no gateway on {self.ns} after {timeout} s")
 
     def spin(self, seconds=0.0):
-        """Reads every output for `seconds`."""
+        """Reads every output for `seconds` (a writer's goodbye, an InvalidSample, is skipped)."""
         end = time.time() + seconds
+
+        def valid(reader, typ):
+            return [s for s in reader.take(N=100) if isinstance(s, typ)]
+
         while True:
-            for s in self.footstep_status.take(N=100):
-                self.statuses.append(s)
-            for s in self.walking_status.take(N=100):
-                self.walks.append(s)
-            for s in self.refusals.take(N=100):
-                self.refused.append(s)
-            for s in self.cog.take(N=100):
+            self.statuses += valid(self.footstep_status, FootstepStatusMessage)
+            self.walks += valid(self.walking_status, WalkingStatusMessage)
+            self.refused += valid(self.refusals, CommandRefusal)
+            for s in valid(self.cog, PointStamped):
                 self.last_cog = s
-            for s in self.zmp.take(N=100):
+            for s in valid(self.zmp, PointStamped):
                 self.last_zmp = s
-            for s in self.support.take(N=100):
+            for s in valid(self.support, PolygonStamped):
                 self.last_support = s
             if time.time() >= end:
                 return
@@ -368,6 +371,25 @@ def walk(peer):
         print(f"step {s.sequence_id}: {kind} ({p.x:.4f}, {p.y:.4f})")
     for r in peer.refused:
         print(f"refused: {r.command} {r.footstep_sequence_id}: {r.reason} {r.detail}")
+
+
+def bench(peer, lists=40):
+    """A 16-step walk; while it walks, `lists` OVERRIDE lists 0.1 s apart, each moving the last
+    step by 1 mm (each becomes one STEP_MODIFY): the gateway measures each list's way to the bus
+    (`host-sim ros2 --out DIR` writes gateway.json and prints the figures at its exit)."""
+    peer.wait_for_gateway()
+    peer.spin(0.3)
+    x0 = round(peer.last_cog.point.x, 3) if peer.last_cog else 0.0
+    plan = footsteps(1, 1, 16, x0, length=0.1)
+    peer.lists.write(plan)
+    peer.until(lambda: any(s.footstep_status == STARTED for s in peer.statuses), 10, "the first lift-off")
+    for k in range(lists):
+        plan.sequence_id = 2 + k
+        plan.footstep_data_list[-1].location.x += 0.001 if k % 2 == 0 else -0.001
+        peer.lists.write(plan)
+        peer.spin(0.1)
+    peer.until(lambda: any(w.walking_status == WALK_COMPLETED for w in peer.walks), 30, "the walk's end")
+    print(f"{lists + 1} lists sent; {len(peer.refused)} refused")
 
 
 def near(a, b, tol=2e-4):
@@ -501,7 +523,7 @@ def check(peer):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["walk", "check", "types", "vanish"])
+    ap.add_argument("mode", choices=["walk", "check", "types", "vanish", "bench"])
     ap.add_argument("--namespace", default="/ihmc/hrp2/humanoid_control")
     ap.add_argument("--domain", type=int, default=int(os.environ.get("ROS_DOMAIN_ID", "0")))
     here = os.path.dirname(os.path.abspath(__file__))
@@ -513,6 +535,8 @@ def main():
     peer = Peer(a.namespace, a.domain)
     if a.mode == "walk":
         walk(peer)
+    elif a.mode == "bench":
+        bench(peer)
     elif a.mode == "vanish":
         # Starts a long walk and exits at the first lift-off without a word (the test kills it).
         peer.wait_for_gateway()

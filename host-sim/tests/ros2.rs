@@ -262,3 +262,55 @@ fn a_peer_that_vanishes_mid_walk_is_stopped_by_the_nodes_supervision() {
         "no STATUS 'controller lost' in can.log"
     );
 }
+
+#[test]
+fn the_books_python_peer_runs_as_written() {
+    if !have_cyclonedds() {
+        return;
+    }
+    let book = std::fs::read_to_string(root().join("../docs/src/ros2.md")).unwrap();
+    let section = book.split("## A Python peer").nth(1).expect("the section");
+    let code = section
+        .split("```python\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("a python block");
+    let printed: Vec<String> = section
+        .split("It prints one line per step, each landing where it was sent ")
+        .nth(1)
+        .expect("the expected output")
+        .split(". `host-sim")
+        .next()
+        .unwrap()
+        .replace('\n', " ")
+        .replace('\u{2212}', "-")
+        .split("), ")
+        .map(|p| {
+            p.trim()
+                .trim_start_matches("and ")
+                .trim_end_matches(')')
+                .to_string()
+                + ")"
+        })
+        .collect();
+    let dir = std::env::temp_dir().join("host-sim-ros2-book");
+    let gw = gateway(64, &dir, 60, Some(1));
+    let out = Command::new("python3")
+        .args(["-c", code])
+        .current_dir(root().join(".."))
+        .env("ROS_DOMAIN_ID", "64")
+        .output()
+        .unwrap();
+    let (gw_out, _) = finish(gw);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}\n{gw_out}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let landed: Vec<String> = text
+        .lines()
+        .map(|l| l.split("landed at ").nth(1).unwrap_or("").to_string())
+        .collect();
+    assert_eq!(landed, printed, "the book says {printed:?}");
+}

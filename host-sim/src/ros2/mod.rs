@@ -45,6 +45,7 @@ pub fn serve(
         }
     };
     let stats = dds::run(link.as_mut(), opts, live)?;
+    crate::outln!("{}", latency_summary(&stats));
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let log = link.log();
@@ -58,6 +59,35 @@ pub fn serve(
         std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
     }
     Ok(stats)
+}
+
+/// The latencies of a run in one line: median and maximum of each of [`dds::Stats`]'s two.
+pub fn latency_summary(stats: &dds::Stats) -> String {
+    let describe = |v: &[f64]| {
+        if v.is_empty() {
+            return "none".to_string();
+        }
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        let median = if s.len() % 2 == 1 {
+            s[s.len() / 2]
+        } else {
+            0.5 * (s[s.len() / 2 - 1] + s[s.len() / 2])
+        };
+        format!(
+            "median {median:.2} ms, max {:.2} ms ({} samples)",
+            s[s.len() - 1],
+            s.len()
+        )
+    };
+    format!(
+        "latency: footstep list published to its first CAN frame: {}; node's answer to status \
+         published: {}; {} cycles, {} late",
+        describe(&stats.list_to_frame_ms),
+        describe(&stats.answer_to_status_ms),
+        stats.cycles,
+        stats.late_cycles
+    )
 }
 
 /// The gateway's settings for `robot`: its control period, sole and COG height.
