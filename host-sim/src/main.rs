@@ -118,6 +118,10 @@ enum Cmd {
         /// Push the trunk: `T,FX,FY` (start in trajectory time [s], force [N]; 0.1 s).
         #[arg(long, value_name = "T,FX,FY", allow_hyphen_values = true)]
         push: Option<String>,
+        /// Serve the run live to Foxglove on this port (ws://127.0.0.1:PORT) once computed:
+        /// wait up to 60 s for a client, then play it in real time with the robot's links.
+        #[arg(long, value_name = "PORT")]
+        live: Option<u16>,
         #[command(flatten)]
         probe: ProbeArgs,
         /// The robot file (its link table and soles) [default: HRP-2, host-sim/robots/hrp2.toml].
@@ -391,15 +395,24 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             scenario,
             out,
             push,
+            live,
             robot,
             probe,
-        }) => host_sim::physics::output::cli(
-            &scenario,
-            out.as_deref(),
-            &load_robot(robot.as_deref())?,
-            push.as_deref(),
-            &probe,
-        ),
+        }) => {
+            let robot = load_robot(robot.as_deref())?;
+            let view = match live {
+                Some(port) => Some(start_live(port, &robot)?),
+                None => None,
+            };
+            host_sim::physics::output::cli(
+                &scenario,
+                out.as_deref(),
+                &robot,
+                push.as_deref(),
+                &probe,
+                view.as_ref(),
+            )
+        }
         Some(Cmd::PhysicsTables {
             out,
             cells,

@@ -75,6 +75,19 @@ fn client(port: u16, seconds: f64, required: &[&str]) -> serde_json::Value {
     serde_json::from_str(text.trim()).unwrap()
 }
 
+fn have_mujoco() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import mujoco"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !ok && std::env::var("WALK_REQUIRE_MUJOCO").as_deref() == Ok("1") {
+        panic!("MuJoCo is not installed (python3 -m pip install mujoco==3.2.7)");
+    }
+    ok
+}
+
 const WALK_TOPICS: [&str; 6] = [
     "/reference",
     "/multibody/zmp",
@@ -147,4 +160,39 @@ fn the_gateway_serves_its_walk_live() {
     let _ = child.kill();
     let _ = child.wait();
     assert!(v["messages"]["/can"].as_u64().unwrap() >= 100, "{v}");
+}
+
+#[test]
+fn physics_serves_the_robots_links_from_the_engine() {
+    if !have_client() || !have_mujoco() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("host-sim-live-physics");
+    let (mut child, port) = start(&[
+        "physics",
+        "straight",
+        "--out",
+        dir.to_str().unwrap(),
+        "--live",
+        "0",
+    ]);
+    // The engine computes the run first (seconds), then plays it in real time.
+    let v = client(port, 12.0, &["/tf", "/measured", "/reference", "/scene"]);
+    let _ = child.kill();
+    let _ = child.wait();
+    let tf = v["first"]["/tf"]["transforms"].as_array().unwrap();
+    // The waist, six links per leg and the two soles, each in `world`.
+    assert_eq!(tf.len(), 15, "{tf:?}");
+    let z = |name: &str| {
+        tf.iter()
+            .find(|t| t["child_frame_id"] == name)
+            .unwrap_or_else(|| panic!("no {name}"))["translation"]["z"]
+            .as_f64()
+            .unwrap()
+    };
+    // Standing at the start: soles on the floor, the waist above them.
+    assert!(z("left_sole").abs() < 0.02 && z("right_sole").abs() < 0.02);
+    assert!(z("waist") > 0.4, "waist at {}", z("waist"));
+    let cog = &v["first"]["/measured"]["cog"];
+    assert!(cog["x"].as_f64().unwrap().abs() < 0.1, "{cog}");
 }

@@ -4,7 +4,7 @@
 //! The channels and their schemas are the MCAP file's ([`super::mcap::TOPICS`],
 //! [`super::mcap::schemas`]: JSON messages, JSON Schema), so a recording and the live view
 //! look alike in a viewer; the live view adds `/tf` (`foxglove.FrameTransforms`: the robot's
-//! links from the engine state, where a command has them). Every message carries its log time
+//! links from the engine state, in `physics`) and `/measured` (the engine's COG and CoP). Every message carries its log time
 //! on the clock of the MCAP file ([`super::mcap::log_time_ns`]).
 //!
 //! Connect Foxglove (or Lichtblick) to `ws://localhost:<port>` ("Open connection" →
@@ -23,6 +23,62 @@ use crate::eval::multibody::MbSample;
 
 /// The topic of the links' transforms.
 pub const TF_TOPIC: &str = "/tf";
+/// The topic of the measured COG and CoP (engine runs).
+pub const MEASURED_TOPIC: &str = "/measured";
+
+fn measured_schema() -> Value {
+    let xy = json!({ "type": "object", "properties": {
+        "x": { "type": "number" }, "y": { "type": "number" } } });
+    json!({
+        "title": "host_sim.Measured",
+        "description": "The robot as the engine has it: whole-body COG and floor CoP [m]",
+        "type": "object",
+        "properties": {
+            "t": { "type": "number", "description": "trajectory time [s]" },
+            "cog": xy.clone(),
+            "cop": xy,
+        },
+    })
+}
+
+/// The unit quaternion (x, y, z, w) of a rotation matrix (rows: `r[i][j]`).
+pub fn quaternion_of(r: &[[f64; 3]; 3]) -> [f64; 4] {
+    let tr = r[0][0] + r[1][1] + r[2][2];
+    let (x, y, z, w) = if tr > 0.0 {
+        let s = (tr + 1.0).sqrt() * 2.0;
+        (
+            (r[2][1] - r[1][2]) / s,
+            (r[0][2] - r[2][0]) / s,
+            (r[1][0] - r[0][1]) / s,
+            0.25 * s,
+        )
+    } else if r[0][0] > r[1][1] && r[0][0] > r[2][2] {
+        let s = (1.0 + r[0][0] - r[1][1] - r[2][2]).sqrt() * 2.0;
+        (
+            0.25 * s,
+            (r[0][1] + r[1][0]) / s,
+            (r[0][2] + r[2][0]) / s,
+            (r[2][1] - r[1][2]) / s,
+        )
+    } else if r[1][1] > r[2][2] {
+        let s = (1.0 + r[1][1] - r[0][0] - r[2][2]).sqrt() * 2.0;
+        (
+            (r[0][1] + r[1][0]) / s,
+            0.25 * s,
+            (r[1][2] + r[2][1]) / s,
+            (r[0][2] - r[2][0]) / s,
+        )
+    } else {
+        let s = (1.0 + r[2][2] - r[0][0] - r[1][1]).sqrt() * 2.0;
+        (
+            (r[0][2] + r[2][0]) / s,
+            (r[1][2] + r[2][1]) / s,
+            0.25 * s,
+            (r[1][0] - r[0][1]) / s,
+        )
+    };
+    [x, y, z, w]
+}
 
 /// One link's pose in its parent's frame: name, parent, position \[m\], orientation (x, y, z,
 /// w).
@@ -69,6 +125,7 @@ pub struct LiveView {
     server: Option<foxglove::WebSocketServerHandle>,
     channels: Vec<Arc<RawChannel>>,
     tf: Arc<RawChannel>,
+    measured: Arc<RawChannel>,
     cog_height: f64,
     sole: [f64; 2],
 }
@@ -102,6 +159,12 @@ impl LiveView {
             .schema(schema(&tf_schema()))
             .build_raw()
             .map_err(|e| format!("live view channel {TF_TOPIC}: {e}"))?;
+        let measured = ChannelBuilder::new(MEASURED_TOPIC)
+            .context(&ctx)
+            .message_encoding("json")
+            .schema(schema(&measured_schema()))
+            .build_raw()
+            .map_err(|e| format!("live view channel {MEASURED_TOPIC}: {e}"))?;
         let server = WebSocketServer::new()
             .name("host-sim")
             .context(&ctx)
@@ -114,6 +177,7 @@ impl LiveView {
             server: Some(server),
             channels,
             tf,
+            measured,
             cog_height,
             sole,
         })
@@ -171,6 +235,13 @@ impl LiveView {
         self.put(&self.tf, ns, &json!({ "transforms": tfs }));
     }
 
+    /// The robot as the engine has it at trajectory time `t` \[s\]: whole-body COG and floor CoP.
+    pub fn measured(&self, t: f64, cog: [f64; 2], cop: [f64; 2]) {
+        let v = json!({ "t": t, "cog": { "x": cog[0], "y": cog[1] },
+                        "cop": { "x": cop[0], "y": cop[1] } });
+        self.put(&self.measured, log_time_ns(t), &v);
+    }
+
     /// Waits up to `timeout` for a first client, then `settle` more for its subscriptions.
     pub fn wait_for_client(&self, timeout: Duration, settle: Duration) -> bool {
         let start = Instant::now();
@@ -217,6 +288,39 @@ impl Drop for LiveView {
     fn drop(&mut self) {
         if let Some(s) = self.server.take() {
             s.stop().wait_blocking();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quaternions_of_rotations_round_trip() {
+        // Rotations about each axis and a general one, each branch of the conversion.
+        for (axis, angle) in [(0, 0.3), (1, -2.9), (2, 3.0), (0, 3.1), (1, 1.0), (2, -0.2)] {
+            let (s, c) = f64::sin_cos(angle);
+            let mut r = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            let (i, j) = [(1, 2), (2, 0), (0, 1)][axis];
+            r[i][i] = c;
+            r[j][j] = c;
+            r[i][j] = -s;
+            r[j][i] = s;
+            let q = quaternion_of(&r);
+            let mut want = [0.0, 0.0, 0.0, (angle / 2.0).cos()];
+            want[axis] = (angle / 2.0).sin();
+            let sign = if q[3] * want[3] + q[axis] * want[axis] < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            for k in 0..4 {
+                assert!(
+                    (sign * q[k] - want[k]).abs() < 1e-12,
+                    "axis {axis} angle {angle}: {q:?}"
+                );
+            }
         }
     }
 }

@@ -138,6 +138,10 @@ pub struct PhysicsSample {
     pub cog_ref: [f64; 2],
     /// Waist height \[m\].
     pub base_z: f64,
+    /// The waist's pose from the engine: position \[m\] and orientation (w, x, y, z).
+    pub base: ([f64; 3], [f64; 4]),
+    /// The leg joints' angles from the encoders (left, right; hip first) \[rad\].
+    pub legs: [[f64; 6]; 2],
 }
 
 /// The outcome of a run (the figures of `physics.json`).
@@ -298,7 +302,8 @@ pub fn reference_at(trajectory: &[Reference<f64>], dt: f64, t: f64) -> Reference
     }
 }
 
-fn quat_to_mat(q: [f64; 4]) -> crate::robot::model::Mat3 {
+/// The rotation of the unit quaternion `q` (w, x, y, z) as a matrix.
+pub fn quat_to_mat(q: [f64; 4]) -> crate::robot::model::Mat3 {
     let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     [
@@ -428,6 +433,8 @@ pub fn run(
                 cog: [cog[0], cog[1]],
                 cog_ref: [r1.x.cog, r1.y.cog],
                 base_z: obs.base_pos[2],
+                base: (obs.base_pos, obs.base_quat),
+                legs: q,
             });
         }
         report.simulated_s = t1.max(0.0);

@@ -630,6 +630,23 @@ impl Robot {
         (soles, ankles, [s[0] / m, s[1] / m, s[2] / m])
     }
 
+    /// Every link's frame in the world for a waist pose and the joint angles, by the MuJoCo
+    /// body's name: the waist (`waist`), each leg's six links, and the soles (`left_sole`,
+    /// `right_sole`).
+    pub fn link_frames(&self, waist: &Pose, q: &[LegAngles; 2]) -> Vec<(String, Pose)> {
+        let h = &self.model;
+        let mut out = vec![("waist".to_string(), *waist)];
+        for (k, side) in [Side::Left, Side::Right].into_iter().enumerate() {
+            let fr = h.leg_fk(side, waist, &q[k]);
+            for (frame, link) in fr.links.iter().zip(&h.legs[k].links) {
+                out.push((link.name.clone(), *frame));
+            }
+            let sole = if k == 0 { "left_sole" } else { "right_sole" };
+            out.push((sole.to_string(), fr.sole));
+        }
+        out
+    }
+
     /// Finds the waist position (orientation `r`, at height `z`) that puts the whole-body COG
     /// at `target` (x, y) with the soles at `soles`: Newton's method as in
     /// [`Model::solve_waist`], but for any waist orientation. Returns the waist pose and the

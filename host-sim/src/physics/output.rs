@@ -208,10 +208,74 @@ pub fn physics_command(
     robot: &Robot,
     cfg: &PhysicsConfig,
 ) -> Result<(Value, Vec<String>), String> {
+    let (j, written, _) = physics_played(name, out, robot, cfg)?;
+    Ok((j, written))
+}
+
+/// What a `physics` run played: the trajectory, its tick \[s\] and the engine's run.
+pub struct Played {
+    /// The node's references.
+    pub trajectory: Vec<planner_core::gait::Reference<f64>>,
+    /// Their tick \[s\].
+    pub dt: f64,
+    /// The run in the engine.
+    pub run: super::PhysicsRun,
+}
+
+/// [`physics_command`], handing back what was played as well (for the live view).
+pub fn physics_played(
+    name: &str,
+    out: &Path,
+    robot: &Robot,
+    cfg: &PhysicsConfig,
+) -> Result<(Value, Vec<String>, Played), String> {
     let (sname, trajectory, dt) = scenario_trajectory(name, robot)?;
     let r = run(&trajectory, dt, cfg).map_err(|e| format!("{sname} in MuJoCo: {e}"))?;
     let written = write_outputs(out, &sname, robot.name(), cfg, &r)?;
-    Ok((report_json(&sname, robot.name(), cfg, &r), written))
+    let j = report_json(&sname, robot.name(), cfg, &r);
+    Ok((
+        j,
+        written,
+        Played {
+            trajectory,
+            dt,
+            run: r,
+        },
+    ))
+}
+
+/// Plays an engine run on the live view in real time: every sample's reference, the robot's
+/// links (`/tf`, from the engine's waist pose and the leg encoders) and the measured COG and
+/// CoP.
+pub fn play_live(view: &crate::output::live::LiveView, cfg: &PhysicsConfig, played: &Played) {
+    use crate::output::live::{quaternion_of, LinkPose};
+    let start = std::time::Instant::now();
+    let first = played.run.samples.first().map(|s| s.t).unwrap_or(0.0);
+    for s in &played.run.samples {
+        let due = std::time::Duration::from_secs_f64((s.t - first).max(0.0));
+        if let Some(wait) = due.checked_sub(start.elapsed()) {
+            std::thread::sleep(wait);
+        }
+        let r = super::reference_at(&played.trajectory, played.dt, s.t.max(0.0));
+        view.sample(s.t.max(0.0), &r, None);
+        view.measured(s.t.max(0.0), s.cog, s.cop);
+        let base = crate::robot::model::Pose {
+            p: s.base.0,
+            r: super::quat_to_mat(s.base.1),
+        };
+        let links: Vec<LinkPose> = cfg
+            .robot
+            .link_frames(&base, &s.legs)
+            .into_iter()
+            .map(|(name, p)| LinkPose {
+                child: name,
+                parent: crate::output::mcap::WORLD_FRAME.to_string(),
+                position: p.p,
+                orientation: quaternion_of(&p.r),
+            })
+            .collect();
+        view.transforms(s.t.max(0.0), &links);
+    }
 }
 
 /// The line that names the files a `physics` run wrote into `out`.
@@ -248,6 +312,7 @@ pub fn cli(
     robot: &Robot,
     push: Option<&str>,
     probe: &super::probe::ProbeArgs,
+    live: Option<&crate::output::live::LiveView>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let probe = probe.resolve(robot)?;
     let mut cfg = probe.cfg.clone();
@@ -264,7 +329,18 @@ pub fn cli(
             &default_out
         }
     };
-    let (mut j, written) = physics_command(name, out, robot, &cfg)?;
+    let (mut j, written, played) = physics_played(name, out, robot, &cfg)?;
+    if let Some(view) = live {
+        if view.wait_for_client(
+            std::time::Duration::from_secs(60),
+            std::time::Duration::from_millis(500),
+        ) {
+            play_live(view, &cfg, &played);
+            crate::outln!("live view: played the run");
+        } else {
+            crate::outln!("live view: no client within 60 s");
+        }
+    }
     probe.record(&mut j);
     let path = out.join("physics.json");
     fs::write(&path, serde_json::to_string_pretty(&j)?)

@@ -27,6 +27,7 @@ async def main(url, seconds, required):
     async with websockets.connect(url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"], max_size=None) as ws:
         channels = {}
         counts = {}
+        first = {}
         invalid = []
         subscribed = False
         sub_of = {}
@@ -66,6 +67,8 @@ async def main(url, seconds, required):
                         jsonschema.validate(payload, json.loads(c["schema"]))
                     except jsonschema.ValidationError as e:
                         invalid.append(f"{c['topic']}: {e.message}")
+                if n == 0:
+                    first[c["topic"]] = payload
                 counts[c["topic"]] = n + 1
         out = {
             "server": info["name"] if info else None,
@@ -75,6 +78,7 @@ async def main(url, seconds, required):
             ),
             "messages": counts,
             "invalid": invalid[:5],
+            "first": first,
         }
         print(json.dumps(out))
         missing = [t for t in required if not counts.get(t)]
