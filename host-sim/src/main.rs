@@ -237,8 +237,12 @@ enum Cmd {
         walks: Option<usize>,
         /// Drive a real node on this CAN interface (feature `socketcan`) instead of the node in
         /// this process.
-        #[arg(long, value_name = "IFACE")]
+        #[arg(long, value_name = "IFACE", conflicts_with = "mujoco")]
         interface: Option<String>,
+        /// The robot in MuJoCo follows the node in this process (needs `python3 -m pip install
+        /// mujoco==3.2.7`): the landings reported are the engine's soles.
+        #[arg(long)]
+        mujoco: bool,
         /// Write can.log and gateway.json (what the run measured) here.
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
@@ -483,6 +487,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             seconds,
             walks,
             interface,
+            mujoco,
             out,
             live,
             robot,
@@ -509,7 +514,11 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 "ROS 2 gateway: topics under {} (domain {}), node: {}",
                 opts.namespace,
                 opts.domain,
-                interface.as_deref().unwrap_or("in this process")
+                match (interface.as_deref(), mujoco) {
+                    (Some(i), _) => i,
+                    (None, true) => "in this process, the robot in MuJoCo",
+                    (None, false) => "in this process",
+                }
             );
             let view = match live {
                 Some(port) => Some(start_live(port, &robot)?),
@@ -519,6 +528,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 &robot,
                 &opts,
                 interface.as_deref(),
+                mujoco,
                 out.as_deref(),
                 view.as_ref(),
             )?;

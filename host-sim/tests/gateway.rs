@@ -277,3 +277,74 @@ fn a_pause_stops_after_the_swing_and_the_resume_walks_the_rest_where_sent() {
         ]
     );
 }
+
+#[test]
+fn with_mujoco_the_landings_reported_are_the_engines_soles() {
+    use host_sim::ros2::link::WithEngine;
+    let have = std::process::Command::new("python3")
+        .args(["-c", "import mujoco"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        assert_ne!(
+            std::env::var("WALK_REQUIRE_MUJOCO").as_deref(),
+            Ok("1"),
+            "MuJoCo is not installed (python3 -m pip install mujoco==3.2.7)"
+        );
+        eprintln!("skipped: python3 -m pip install mujoco==3.2.7 to run this test");
+        return;
+    }
+    let robot = Robot::hrp2();
+    let mut link = WithEngine::new(robot.node_config(), &robot).unwrap();
+    let mut g = Gateway::new(host_sim::ros2::gateway_config(&robot));
+    let mut out = Vec::new();
+    let mut cycle = |g: &mut Gateway, link: &mut WithEngine, out: &mut Vec<Output>| {
+        let frames = g.poll(true);
+        for f in link.cycle(&frames) {
+            g.on_frame(&f);
+        }
+        g.set_measured_soles(link.measured_soles());
+        g.end_cycle();
+        out.extend(g.take_outputs());
+    };
+    while !g.is_open() {
+        cycle(&mut g, &mut link, &mut out);
+    }
+    let list = forward(1, 1, 4, 0.0);
+    g.on_footstep_list(list.clone());
+    for _ in 0..1500 {
+        cycle(&mut g, &mut link, &mut out);
+        if out
+            .iter()
+            .any(|o| matches!(o, Output::Walking(w, _) if *w == WALKING_COMPLETED))
+        {
+            break;
+        }
+    }
+    assert!(link.fell.is_none(), "fell: {:?}", link.fell);
+    let done: Vec<_> = out
+        .iter()
+        .filter_map(|o| match o {
+            Output::Footstep(s) if s.footstep_status == FOOTSTEP_STATUS_COMPLETED => Some(s),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(done.len(), 4);
+    let mut off_reference = 0;
+    for s in &done {
+        let (d, a) = (
+            &s.desired_foot_position_in_world,
+            &s.actual_foot_position_in_world,
+        );
+        let err = (a.x - d.x).hypot(a.y - d.y);
+        // The robot follows its reference within the stabilizer's tracking, and the report is
+        // the engine's sole, not the reference (which lands exactly on the 0.5 mm grid).
+        assert!(
+            err < 0.02,
+            "step {}: landed {err} m from its pose",
+            s.sequence_id
+        );
+        off_reference += usize::from(err > 1e-5);
+    }
+    assert!(off_reference > 0, "every landing equals the reference");
+}

@@ -375,6 +375,7 @@ pub fn run(
         for f in &answers {
             gw.on_frame(f);
         }
+        gw.set_measured_soles(link.measured_soles());
         gw.end_cycle();
         // Outputs.
         let mut status_published = false;

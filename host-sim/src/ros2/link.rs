@@ -17,6 +17,12 @@ use crate::sim::bus::{Bus, Faults, Port};
 pub trait NodeLink {
     /// Sends `frames`, lets one control cycle pass, and returns the frames the node sent.
     fn cycle(&mut self, frames: &[RawFrame]) -> Vec<RawFrame>;
+    /// The soles where the robot has them now (left, right: x, y, heading in the world frame),
+    /// where the link has a robot ([`WithEngine`]); `None`: the node's reference is all there
+    /// is.
+    fn measured_soles(&self) -> Option<[(f64, f64, f64); 2]> {
+        None
+    }
     /// The bus log so far (`candump -l` lines), where the link records one.
     fn log(&self) -> Vec<String> {
         Vec::new()
@@ -49,9 +55,119 @@ impl InProcess {
         })
     }
 
-    /// The node (for tests).
+    /// The node (for tests and the engine).
     pub fn node(&self) -> &Node<16> {
         &self.node
+    }
+}
+
+/// The node in this process and the robot in MuJoCo: after each node cycle the engine runs the
+/// cycle's five 1 ms ticks under the stabilizer, tracking the reference (interpolated from the
+/// cycle before, as in `host_sim::physics::closed_loop`), and the soles are read from the
+/// engine's waist pose and leg encoders. The gateway reports those as the landings.
+pub struct WithEngine {
+    inner: InProcess,
+    engine: crate::physics::bridge::Engine,
+    stab: crate::physics::stabilizer::Stabilizer,
+    sensed: crate::physics::sensors::Sensors,
+    robot: crate::physics::model::Robot,
+    obs: crate::physics::bridge::Observation,
+    prev: planner_core::gait::Reference<f64>,
+    waist_z0: f64,
+    /// The first fall, if any: when (s) and why.
+    pub fell: Option<(f64, String)>,
+    k: u64,
+}
+
+impl WithEngine {
+    /// The node configured by `cfg` and `robot` in MuJoCo (`python3 -m pip install
+    /// mujoco==3.2.7`), standing in the node's first pose.
+    pub fn new(cfg: NodeConfig, robot: &crate::robot::Robot) -> Result<Self, String> {
+        use crate::physics::{initial_pose, PhysicsConfig, PHYSICS_DT};
+        let inner = InProcess::new(cfg)?;
+        let pc = PhysicsConfig::for_robot(robot);
+        let r0 = *inner.node().gait().last();
+        let (waist0, qpos) = initial_pose(&pc.robot, &r0)?;
+        let mut engine = crate::physics::bridge::Engine::start(&pc.robot.mjcf())?;
+        let obs = engine.reset(&qpos)?;
+        Ok(Self {
+            inner,
+            engine,
+            stab: crate::physics::stabilizer::Stabilizer::new(
+                pc.robot.clone(),
+                pc.gains,
+                PHYSICS_DT,
+                pc.z_c,
+            ),
+            sensed: crate::physics::sensors::Sensors::new(pc.sensors),
+            robot: pc.robot,
+            obs,
+            prev: r0,
+            waist_z0: waist0.p[2],
+            fell: None,
+            k: 0,
+        })
+    }
+}
+
+impl NodeLink for WithEngine {
+    fn cycle(&mut self, frames: &[RawFrame]) -> Vec<RawFrame> {
+        use crate::physics::{metrics::fall_check, reference_at, PHYSICS_DT};
+        let out = self.inner.cycle(frames);
+        let r = *self.inner.node().gait().last();
+        let pair = [self.prev, r];
+        let dt = self.inner.node().gait().params().dt;
+        self.k += 1;
+        for j in 0..5 {
+            if self.fell.is_some() {
+                break;
+            }
+            let rj = reference_at(&pair, dt, (j + 1) as f64 * PHYSICS_DT);
+            let step = self
+                .stab
+                .step(&rj, self.sensed.read(&self.obs.sensors))
+                .and_then(|ctrl| self.engine.step(1, &ctrl, [0.0; 6]));
+            match step {
+                Ok(obs) => self.obs = obs,
+                Err(e) => {
+                    self.fell = Some((self.k as f64 * dt, format!("engine: {e}")));
+                    break;
+                }
+            }
+            if let Some(cause) = fall_check(
+                self.obs.base_quat,
+                self.obs.base_pos[2],
+                self.waist_z0,
+                self.obs.other_contact,
+            ) {
+                self.fell = Some((self.k as f64 * dt, format!("{cause:?}")));
+            }
+        }
+        self.prev = r;
+        out
+    }
+
+    fn log(&self) -> Vec<String> {
+        self.inner.log()
+    }
+
+    fn measured_soles(&self) -> Option<[(f64, f64, f64); 2]> {
+        use crate::physics::model::sensor;
+        let o = &self.obs;
+        let mut q = [[0.0; 6]; 2];
+        for (j, leg) in q.iter_mut().enumerate() {
+            leg.copy_from_slice(
+                o.sensors
+                    .get(sensor::QPOS + 6 * j..sensor::QPOS + 6 * j + 6)?,
+            );
+        }
+        let base = crate::robot::model::Pose {
+            p: o.base_pos,
+            r: crate::physics::quat_to_mat(o.base_quat),
+        };
+        let (soles, _, _) = self.robot.fk(&base, &q);
+        let pose = |p: &crate::robot::model::Pose| (p.p[0], p.p[1], p.r[1][0].atan2(p.r[0][0]));
+        Some([pose(&soles[0]), pose(&soles[1])])
     }
 }
 

@@ -21,7 +21,8 @@ use std::path::Path;
 use crate::robot::Robot;
 use link::NodeLink;
 
-/// Runs the gateway for `robot`: on the node in this process (`interface` `None`) or on a real
+/// Runs the gateway for `robot`: on the node in this process (`interface` `None`; with
+/// `mujoco`, the robot in MuJoCo follows it and the landings are the engine's) or on a real
 /// node on that CAN interface (feature `socketcan`), served on `live` as well if given. With
 /// `out`, writes `can.log` (in this process) and `gateway.json` (what the run measured,
 /// [`dds::Stats`]) there.
@@ -29,10 +30,12 @@ pub fn serve(
     robot: &Robot,
     opts: &dds::Options,
     interface: Option<&str>,
+    mujoco: bool,
     out: Option<&Path>,
     live: Option<&crate::output::live::LiveView>,
 ) -> Result<dds::Stats, String> {
     let mut link: Box<dyn NodeLink> = match interface {
+        None if mujoco => Box::new(link::WithEngine::new(robot.node_config(), robot)?),
         None => Box::new(link::InProcess::new(robot.node_config())?),
         #[cfg(feature = "socketcan")]
         Some(i) => Box::new(link::SocketCan::open(i)?),

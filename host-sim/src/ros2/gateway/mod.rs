@@ -218,6 +218,7 @@ pub struct Gateway {
     resetting: bool,
     session_seen: bool,
     resume: bool,
+    measured: Option<[Pose; 2]>,
     outputs: Vec<Output>,
 }
 
@@ -252,6 +253,7 @@ impl Gateway {
             resetting: false,
             session_seen: false,
             resume: false,
+            measured: None,
             outputs: Vec::new(),
         }
     }
@@ -274,6 +276,13 @@ impl Gateway {
     /// A walk is under way (started and not yet standing again).
     pub fn is_walking(&self) -> bool {
         self.walking.is_some()
+    }
+
+    /// The soles where the robot has them (left, right; world frame), when the link has a robot
+    /// (MuJoCo): a landing is reported where the robot's sole is at touchdown. `None`: where
+    /// the node's reference puts it.
+    pub fn set_measured_soles(&mut self, soles: Option<[(f64, f64, f64); 2]>) {
+        self.measured = soles.map(|s| s.map(|(x, y, yaw)| Pose { x, y, yaw }));
     }
 
     /// What to publish, since the last call.

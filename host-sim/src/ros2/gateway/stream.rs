@@ -109,7 +109,10 @@ impl Gateway {
         if self.steps[k].side != swing {
             return;
         }
-        let landed = self.foot(swing);
+        let landed = match self.measured {
+            Some(m) => m[usize::from(swing == Side::Right)],
+            None => self.foot(swing),
+        };
         let swing_s = self.steps[k]
             .lift
             .map(|(c, _)| (self.cycle - c) as f64 * self.cfg.dt)
