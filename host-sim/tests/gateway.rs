@@ -298,7 +298,7 @@ fn with_mujoco_the_landings_reported_are_the_engines_soles() {
     let mut link = WithEngine::new(robot.node_config(), &robot).unwrap();
     let mut g = Gateway::new(host_sim::ros2::gateway_config(&robot));
     let mut out = Vec::new();
-    let mut cycle = |g: &mut Gateway, link: &mut WithEngine, out: &mut Vec<Output>| {
+    let cycle = |g: &mut Gateway, link: &mut WithEngine, out: &mut Vec<Output>| {
         let frames = g.poll(true);
         for f in link.cycle(&frames) {
             g.on_frame(&f);
