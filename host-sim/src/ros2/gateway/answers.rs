@@ -13,12 +13,9 @@ impl Gateway {
                     return Encoded::Skip;
                 }
                 if self.failed_lists.contains(&s.list) {
-                    let (list, id, index) = (s.list, s.id, s.index);
-                    self.steps[key].state = State::Refused;
-                    self.refusal(
-                        list,
-                        id,
-                        index,
+                    self.refuse_step(
+                        key,
+                        State::Refused,
                         "step_append",
                         Err("after_refused_step"),
                         "not sent: an earlier step of its list was refused".into(),
@@ -31,12 +28,9 @@ impl Gateway {
                 let p = self.frame.relative(&s.pose);
                 let left = s.side == Side::Left;
                 let Some(c) = self.book.append(number, left, p.x, p.y, p.yaw) else {
-                    let (list, id, index) = (s.list, s.id, s.index);
-                    self.steps[key].state = State::Refused;
-                    self.refusal(
-                        list,
-                        id,
-                        index,
+                    self.refuse_step(
+                        key,
+                        State::Refused,
                         "step_append",
                         Err("out_of_range"),
                         "the pose is not representable on the bus".into(),
@@ -98,13 +92,9 @@ impl Gateway {
                         .filter(|&k| self.steps[k].list == list && self.steps[k].unlifted())
                         .collect();
                     for &k in &dropped {
-                        let s = &self.steps[k];
-                        let (id, index) = (s.id, s.index);
-                        self.steps[k].state = State::Dropped;
-                        self.refusal(
-                            list,
-                            id,
-                            index,
+                        self.refuse_step(
+                            k,
+                            State::Dropped,
                             "step_append",
                             Err("list_not_walked"),
                             "accepted, then dropped: another step of its list was refused".into(),
@@ -249,13 +239,9 @@ impl Gateway {
                 .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
                 .collect();
             for k in dropped {
-                let s = &self.steps[k];
-                let (list, id, index) = (s.list, s.id, s.index);
-                self.steps[k].state = State::Dropped;
-                self.refusal(
-                    list,
-                    id,
-                    index,
+                self.refuse_step(
+                    k,
+                    State::Dropped,
                     "step_append",
                     Ok(why),
                     "dropped: the node stopped the walk".into(),

@@ -317,6 +317,21 @@ impl Gateway {
         }));
     }
 
+    /// Puts step `key` in `state` and publishes the refusal of `command` for it.
+    fn refuse_step(
+        &mut self,
+        key: usize,
+        state: State,
+        command: &str,
+        reason: Result<Reason, &str>,
+        detail: String,
+    ) {
+        let s = &self.steps[key];
+        let (list, id, index) = (s.list, s.id, s.index);
+        self.steps[key].state = state;
+        self.refusal(list, id, index, command, reason, detail);
+    }
+
     fn refuse_list(&mut self, msg: &FootstepDataListMessage, e: plan::ListError) {
         self.refusal(
             msg.sequence_id,
