@@ -348,3 +348,21 @@ fn with_mujoco_the_landings_reported_are_the_engines_soles() {
     }
     assert!(off_reference > 0, "every landing equals the reference");
 }
+
+#[test]
+fn an_override_before_the_walk_started_replaces_the_plan_and_walks_once() {
+    let mut rig = Rig::new();
+    rig.g.on_footstep_list(forward(1, 1, 4, 0.0));
+    // The next cycle's override names other steps: while standing, it replaces the first.
+    rig.cycle(true);
+    rig.g.on_footstep_list(forward(2, 11, 6, 0.0));
+    rig.run_until(|r| r.walking().contains(&WALKING_COMPLETED), 3000);
+    let done: Vec<u32> = rig
+        .statuses(FOOTSTEP_STATUS_COMPLETED)
+        .iter()
+        .map(|d| d.0)
+        .collect();
+    assert_eq!(done, (11..=16).collect::<Vec<u32>>(), "{:?}", rig.logs());
+    assert_eq!(rig.walking(), [WALKING_STARTED, WALKING_COMPLETED]);
+    assert!(rig.refusals().is_empty(), "{:?}", rig.logs());
+}

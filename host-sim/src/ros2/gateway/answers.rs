@@ -105,7 +105,15 @@ impl Gateway {
                     }
                     return Encoded::Frame(self.control(ControlOp::StopNow));
                 }
-                if !self.steps.iter().any(|s| s.state == State::Queued) {
+                // One start a walk: a walk already started (or starting) takes the list's steps.
+                let starting = self
+                    .inflight
+                    .iter()
+                    .any(|f| matches!(f.item, Item::Start(..)));
+                if self.walking.is_some()
+                    || starting
+                    || !self.steps.iter().any(|s| s.state == State::Queued)
+                {
                     return Encoded::Skip;
                 }
                 let op = if adjusting {
@@ -208,7 +216,9 @@ impl Gateway {
                 .inflight
                 .iter()
                 .any(|f| matches!(f.item, Item::Append(_)));
-            if self.link == Link::Open && !appending && !self.resetting {
+            // Before the handshake's Reset is answered the number holds too: that Reset skips
+            // none (a later one does, and its number is waited for).
+            if !appending && !self.resetting {
                 self.next_number = Some(d.next_step);
             }
             return;

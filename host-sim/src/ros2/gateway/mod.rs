@@ -445,13 +445,22 @@ impl Gateway {
         };
         let list = msg.sequence_id;
         if planned.drop_queue {
+            // The node's queue is dropped only if it holds some of them (a StopNow while
+            // standing with nothing queued is refused); steps not yet sent just stay unsent.
+            let in_node = self
+                .steps
+                .iter()
+                .any(|s| matches!(s.state, State::Sent | State::Queued));
             for s in self.steps.iter_mut().filter(|s| s.unlifted()) {
                 s.state = State::Dropped;
             }
+            // Nothing of the plan it replaces is sent any more, its start included.
             self.outbox
-                .retain(|i| !matches!(i, Item::Append(_) | Item::Modify(..)));
-            self.outbox
-                .push_back(Item::Control(ControlOp::StopNow, Origin::List(list)));
+                .retain(|i| !matches!(i, Item::Append(_) | Item::Modify(..) | Item::Start(..)));
+            if in_node {
+                self.outbox
+                    .push_back(Item::Control(ControlOp::StopNow, Origin::List(list)));
+            }
         }
         for (key, d) in planned.late {
             let pose = self.steps[key].pose;
