@@ -413,6 +413,8 @@ impl Gateway {
                 self.stopping = true;
                 match origin {
                     Origin::Abort(id) | Origin::Pause(id) => {
+                        // The walk ends here: no COMPLETED follows when the robot stands.
+                        self.walking = None;
                         self.outputs
                             .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
                     }

@@ -566,7 +566,19 @@ impl Gateway {
         let had = self
             .steps
             .iter()
-            .any(|s| s.unlifted() || s.state == State::Held);
+            .any(|s| s.unlifted() || s.state == State::Held)
+            || !self.deferred.is_empty();
+        // What the node holds or does: a walk, or steps it queued (the answer of an append on
+        // its way counts).
+        let in_node = self.walking.is_some()
+            || self
+                .steps
+                .iter()
+                .any(|s| matches!(s.state, State::Sent | State::Queued))
+            || self
+                .inflight
+                .iter()
+                .any(|f| matches!(f.item, Item::Start(..)));
         for s in self
             .steps
             .iter_mut()
@@ -579,9 +591,13 @@ impl Gateway {
         self.resume = false;
         self.outbox
             .retain(|i| !matches!(i, Item::Append(_) | Item::Modify(..) | Item::Start(..)));
-        if self.walking.is_some() || had {
+        if in_node {
             self.outbox
                 .push_back(Item::Control(ControlOp::StopNow, Origin::Abort(id)));
+        } else if had {
+            // Nothing reached the node: the abort is carried out here.
+            self.outputs
+                .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
         } else {
             self.refusal(id, 0, -1, "abort", Err("not_walking"), "no walk".into());
         }
