@@ -10,7 +10,7 @@
 //! | `input/pause_walking` | `controller_msgs/PauseWalkingMessage` | in | reliable, volatile, keep last 16 |
 //! | `input/abort_walking` | `controller_msgs/AbortWalkingMessage` | in | reliable, volatile, keep last 16 |
 //! | `output/footstep_status` | `controller_msgs/FootstepStatusMessage` | out | reliable, transient-local, keep last 64 |
-//! | `output/walking_status` | `controller_msgs/WalkingStatusMessage` | out | reliable, transient-local, keep last 1 |
+//! | `output/walking_status` | `controller_msgs/WalkingStatusMessage` | out | reliable, transient-local, keep last 16 |
 //! | `output/command_refusal` | `walking_node_msgs/CommandRefusal` | out | reliable, transient-local, keep last 64 |
 //! | `output/reference/cog` | `geometry_msgs/PointStamped` | out | reliable, volatile, keep last 1 |
 //! | `output/reference/zmp` | `geometry_msgs/PointStamped` | out | reliable, volatile, keep last 1 |
@@ -83,6 +83,13 @@ pub fn reference_qos() -> QosProfile {
         .reliability_reliable(WhenFull::Fail)
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 1 })
+}
+
+/// One message from the peer.
+enum Input {
+    List(Box<FootstepDataListMessage>),
+    Pause(PauseWalkingMessage),
+    Abort(AbortWalkingMessage),
 }
 
 /// The gateway's options.
@@ -201,7 +208,7 @@ impl Io {
                 &output,
                 "walking_status",
                 (c, "WalkingStatusMessage"),
-                status_qos(1),
+                status_qos(16),
             )?,
             refusals: publisher(
                 node,
@@ -296,16 +303,19 @@ pub fn run(
             stats.late_cycles += 1;
         }
         stats.cycles += 1;
-        // Inputs.
+        // Inputs, in the order the peer published them (source timestamps; across the three
+        // topics, so that an abort followed by a new plan is carried out in that order).
         let mut first_list_ns: Option<i64> = None;
+        let mut inputs: Vec<(i64, usize, Input)> = Vec::new();
+        let stamp = |info: &ros2_client::MessageInfo| {
+            info.source_timestamp()
+                .map(|t| t.to_nanos())
+                .unwrap_or(i64::MAX)
+        };
         loop {
             match io.lists.take() {
                 Ok(Some((msg, info))) => {
-                    stats.lists += 1;
-                    if first_list_ns.is_none() {
-                        first_list_ns = info.source_timestamp().map(|t| t.to_nanos());
-                    }
-                    gw.on_footstep_list(msg);
+                    inputs.push((stamp(&info), inputs.len(), Input::List(Box::new(msg))))
                 }
                 Ok(None) => break,
                 Err(e) => {
@@ -322,11 +332,27 @@ pub fn run(
                 }
             }
         }
-        while let Ok(Some((m, _))) = io.pauses.take() {
-            gw.on_pause(m.sequence_id, m.pause, m.clear_remaining_footstep_queue);
+        while let Ok(Some((m, info))) = io.pauses.take() {
+            inputs.push((stamp(&info), inputs.len(), Input::Pause(m)));
         }
-        while let Ok(Some((m, _))) = io.aborts.take() {
-            gw.on_abort(m.sequence_id);
+        while let Ok(Some((m, info))) = io.aborts.take() {
+            inputs.push((stamp(&info), inputs.len(), Input::Abort(m)));
+        }
+        inputs.sort_by_key(|(t, n, _)| (*t, *n));
+        for (t, _, input) in inputs {
+            match input {
+                Input::List(msg) => {
+                    stats.lists += 1;
+                    if first_list_ns.is_none() && t != i64::MAX {
+                        first_list_ns = Some(t);
+                    }
+                    gw.on_footstep_list(*msg);
+                }
+                Input::Pause(m) => {
+                    gw.on_pause(m.sequence_id, m.pause, m.clear_remaining_footstep_queue)
+                }
+                Input::Abort(m) => gw.on_abort(m.sequence_id),
+            }
         }
         // Writers of another type on the footstep topic (DDS does not match them).
         if stats.cycles % 200 == 1 {

@@ -12,7 +12,7 @@ impl Gateway {
                 if s.state != State::Pending {
                     return Encoded::Skip;
                 }
-                if self.failed_lists.contains(&s.list) {
+                if self.failed_batches.contains(&s.batch) {
                     self.refuse_step(
                         key,
                         State::Refused,
@@ -47,6 +47,14 @@ impl Gateway {
                 let Some(number) = s.number else {
                     return Encoded::Skip;
                 };
+                // One modification of a step at a time, at most one every MODIFY_CYCLES.
+                let on_its_way = self
+                    .inflight
+                    .iter()
+                    .any(|f| matches!(f.item, Item::Modify(k, ..) if k == key));
+                if on_its_way || self.cycle < s.last_modify + MODIFY_CYCLES {
+                    return Encoded::Later;
+                }
                 if !s.unlifted() {
                     self.refusal(
                         list,
@@ -59,25 +67,41 @@ impl Gateway {
                     return Encoded::Skip;
                 }
                 let p = self.frame.relative(&d.pose);
+                if self.book.version(number).is_some_and(|v| v >= 127) {
+                    self.steps[key].requested = self.steps[key].pose;
+                    self.refusal(
+                        list,
+                        d.id,
+                        d.index,
+                        "step_modify",
+                        Err("versions_exhausted"),
+                        "the step has had its 127 modifications; it lands at its last accepted \
+                         pose"
+                            .into(),
+                    );
+                    return Encoded::Skip;
+                }
                 match self.book.modify(number, p.x, p.y, p.yaw) {
-                    Some(c) => Encoded::Frame(c),
+                    Some(c) => {
+                        self.steps[key].last_modify = self.cycle;
+                        Encoded::Frame(c)
+                    }
                     None => {
+                        self.steps[key].requested = self.steps[key].pose;
                         self.refusal(
                             list,
                             d.id,
                             d.index,
                             "step_modify",
                             Err("out_of_range"),
-                            "the move from the appended pose is beyond the bus's ±4.096 m, or \
-                             the step had its 127 versions"
-                                .into(),
+                            "the move from the appended pose is beyond the bus's ±4.096 m".into(),
                         );
                         Encoded::Skip
                     }
                 }
             }
             Item::Control(op, _) => Encoded::Frame(self.control(op)),
-            Item::Start(list, adjusting) => {
+            Item::Start(batch, adjusting) => {
                 let appending = self
                     .inflight
                     .iter()
@@ -85,11 +109,11 @@ impl Gateway {
                 if appending {
                     return Encoded::Wait;
                 }
-                if self.failed_lists.contains(&list) {
+                if self.failed_batches.contains(&batch) {
                     // Walk a list whole or not at all from standing: drop what of it the node
                     // queued.
                     let dropped: Vec<usize> = (0..self.steps.len())
-                        .filter(|&k| self.steps[k].list == list && self.steps[k].unlifted())
+                        .filter(|&k| self.steps[k].batch == batch && self.steps[k].unlifted())
                         .collect();
                     for &k in &dropped {
                         self.refuse_step(
@@ -134,6 +158,7 @@ impl Gateway {
             item,
             cycle: self.cycle,
             silent: false,
+            resend: false,
         });
     }
 
@@ -176,7 +201,7 @@ impl Gateway {
                 (s.list, s.id, s.index, "step_append")
             }
             Item::Modify(_, d, list) => (list, d.id, d.index, "step_modify"),
-            Item::Start(list, _) => (list, 0, -1, "start"),
+            Item::Start(batch, _) => (self.list_of(batch), 0, -1, "start"),
             Item::Control(op, origin) => {
                 let list = match origin {
                     Origin::Gateway => 0,
@@ -207,6 +232,8 @@ impl Gateway {
             if self.link == Link::WaitSession {
                 self.epoch = s.epoch;
                 self.session_seen = true;
+            } else if self.link == Link::Open && s.epoch != self.epoch && !self.resetting {
+                self.session_taken(s.epoch);
             }
             self.seq = self.seq.max(s.last_seq);
             return;
@@ -264,6 +291,7 @@ impl Gateway {
                 self.outputs
                     .push(Output::Walking(WALKING_ABORT_REQUESTED, 0));
             }
+            self.close_walk();
             self.stopping = false;
             self.stop_sent = false;
         }
@@ -279,30 +307,48 @@ impl Gateway {
         };
         let f = self.inflight.remove(pos);
         match f.item {
+            Item::Append(key) if f.resend && a.reason.is_some() => {
+                // Refused as a gap behind another list's refused step: sent again.
+                let s = &mut self.steps[key];
+                (s.state, s.number) = (State::Pending, None);
+                self.resend.push(key);
+            }
             Item::Append(key) => self.on_append_answer(key, a.reason, f.silent),
             Item::Modify(key, d, list) => match a.reason {
                 None => {
                     let s = &mut self.steps[key];
                     (s.pose, s.list, s.index) = (d.pose, list, d.index);
                 }
-                Some(r) => self.refusal(
-                    list,
-                    d.id,
-                    d.index,
-                    "step_modify",
-                    Ok(r),
-                    format!("to ({:.4}, {:.4}) m", d.pose.x, d.pose.y),
-                ),
+                Some(r) => {
+                    // The pose in force stays; a newer one waiting is still compared with.
+                    let waiting = self
+                        .outbox
+                        .iter()
+                        .any(|i| matches!(i, Item::Modify(k, ..) if *k == key));
+                    if !waiting {
+                        self.steps[key].requested = self.steps[key].pose;
+                    }
+                    self.refusal(
+                        list,
+                        d.id,
+                        d.index,
+                        "step_modify",
+                        Ok(r),
+                        format!("to ({:.4}, {:.4}) m", d.pose.x, d.pose.y),
+                    )
+                }
             },
-            Item::Start(list, _) => match a.reason {
-                None if self.failed_lists.contains(&list) => self.stopping = true,
+            Item::Start(batch, _) => match a.reason {
+                None if self.failed_batches.contains(&batch) => self.stopping = true,
                 None => {
+                    let list = self.list_of(batch);
                     self.walking = Some(list);
                     self.moved = false;
                     self.stop_sent = false;
                     self.outputs.push(Output::Walking(WALKING_STARTED, list));
                 }
                 Some(r) => {
+                    let list = self.list_of(batch);
                     self.refusal(list, 0, -1, "start", Ok(r), "the walk did not start".into());
                     self.drop_unlifted();
                     if self.steps.iter().any(|s| s.state == State::Dropped) {
@@ -313,6 +359,63 @@ impl Gateway {
             },
             Item::Control(op, origin) => self.on_control_answer(op, origin, a.reason),
         }
+    }
+
+    /// Another controller opened a session (`epoch`): the gateway's commands are of an old
+    /// session now. Every step not yet walked is dropped, the heartbeats stop, and the next
+    /// list opens a session of the gateway's own (a `Reset`, once standing). The other
+    /// controller's `Reset` moved the node's frame: it is found again from the feet, which did
+    /// not move (see `end_cycle`).
+    pub(super) fn session_taken(&mut self, epoch: u32) {
+        self.outputs.push(Output::Log(format!(
+            "session {epoch:#x} opened by another controller; the next list opens one again"
+        )));
+        let dropped: Vec<usize> = (0..self.steps.len())
+            .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
+            .collect();
+        for k in dropped {
+            self.refuse_step(
+                k,
+                State::Dropped,
+                "step_append",
+                Err("session_taken"),
+                "dropped: another controller opened a session on the node".into(),
+            );
+        }
+        if self.walking.take().is_some() {
+            self.outputs
+                .push(Output::Walking(WALKING_ABORT_REQUESTED, 0));
+        }
+        self.close_walk();
+        self.outbox.clear();
+        self.inflight.clear();
+        (self.paused, self.resume, self.stop_sent, self.stopping) = (false, false, false, false);
+        self.epoch = epoch;
+        self.link = Link::WaitSession;
+        self.claim_on_demand = true;
+        self.next_number = None;
+        self.book.clear();
+    }
+
+    /// The steps of the walk that ended: their ids name no step any more (a peer may use
+    /// them again for new steps).
+    pub(super) fn close_walk(&mut self) {
+        for s in self
+            .steps
+            .iter_mut()
+            .filter(|s| !s.unlifted() && s.state != State::Held && s.state != State::Swinging)
+        {
+            s.closed = true;
+        }
+    }
+
+    /// The peer's id of the list the gateway numbered `batch`.
+    pub(super) fn list_of(&self, batch: u32) -> u32 {
+        self.steps
+            .iter()
+            .find(|s| s.batch == batch)
+            .map(|s| s.list)
+            .unwrap_or(0)
     }
 
     pub(super) fn drop_unlifted(&mut self) {
@@ -326,7 +429,8 @@ impl Gateway {
             None => self.steps[key].state = State::Queued,
             Some(r) => {
                 let s = &self.steps[key];
-                let (list, id, index, number, pose) = (s.list, s.id, s.index, s.number, s.pose);
+                let (list, id, index, number, pose, batch) =
+                    (s.list, s.id, s.index, s.number, s.pose, s.batch);
                 self.steps[key].state = State::Refused;
                 if silent {
                     return;
@@ -339,23 +443,27 @@ impl Gateway {
                     Ok(r),
                     format!("at ({:.4}, {:.4}) m", pose.x, pose.y),
                 );
-                // The rest of its list is not sent; what is on its way is refused as a gap.
-                self.failed_lists.push(list);
+                // The rest of its list is not sent; what is on its way is refused as a gap
+                // (another list's steps on their way are sent again, renumbered).
+                self.failed_batches.push(batch);
                 for f in self.inflight.iter_mut() {
                     if let Item::Append(k) = f.item {
-                        if self.steps[k].list == list {
+                        if self.steps[k].batch != batch {
                             f.silent = true;
-                            let s = &self.steps[k];
-                            self.outputs.push(Output::Refusal(CommandRefusal {
-                                footstep_list_sequence_id: list,
-                                footstep_sequence_id: s.id,
-                                footstep_index: s.index,
-                                command: "step_append".into(),
-                                reason_code: 0,
-                                reason: "after_refused_step".into(),
-                                detail: "an earlier step of its list was refused".into(),
-                            }));
+                            f.resend = true;
+                            continue;
                         }
+                        f.silent = true;
+                        let s = &self.steps[k];
+                        self.outputs.push(Output::Refusal(CommandRefusal {
+                            footstep_list_sequence_id: list,
+                            footstep_sequence_id: s.id,
+                            footstep_index: s.index,
+                            command: "step_append".into(),
+                            reason_code: 0,
+                            reason: "after_refused_step".into(),
+                            detail: "an earlier step of its list was refused".into(),
+                        }));
                     }
                 }
                 self.next_number = number;
@@ -415,13 +523,24 @@ impl Gateway {
                     Origin::Abort(id) | Origin::Pause(id) => {
                         // The walk ends here: no COMPLETED follows when the robot stands.
                         self.walking = None;
+                        if matches!(origin, Origin::Abort(_)) {
+                            self.close_walk();
+                        }
                         self.outputs
                             .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
                     }
                     _ => {}
                 }
             }
-            (ControlOp::Heartbeat, None) => {}
+            // A heartbeat answers nothing the peer asked: refused, it is only logged.
+            (ControlOp::Heartbeat, r) => {
+                if let Some(r) = r {
+                    self.outputs.push(Output::Log(format!(
+                        "heartbeat refused: {}",
+                        reason_name(r)
+                    )));
+                }
+            }
             (_, Some(r)) => {
                 let (list, _, _, what) = self.describe(&Item::Control(op, origin));
                 self.refusal(list, 0, -1, what, Ok(r), String::new());

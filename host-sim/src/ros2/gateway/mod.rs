@@ -138,8 +138,17 @@ struct Step {
     list: u32,
     index: i32,
     side: Side,
-    /// The pose in force (world).
+    /// The pose in force (world): as appended, or as the node's last accepted modification.
     pose: Pose,
+    /// The pose last asked for (a modification on its way included): what a list is
+    /// compared with.
+    requested: Pose,
+    /// The gateway's own number of the list that appended it (the peer's list ids may repeat).
+    batch: u32,
+    /// Its walk has ended: its id names no step any more.
+    closed: bool,
+    /// The cycle its last modification was sent in.
+    last_modify: u64,
     number: Option<u16>,
     state: State,
     lift: Option<(u64, Pose)>,
@@ -165,9 +174,14 @@ enum Item {
     Append(usize),
     Modify(usize, Draft, u32),
     Control(ControlOp, Origin),
-    /// Start the walk once no append of the list is on its way.
+    /// Start the walk once no append of the batch (the gateway's list number) is on its way.
     Start(u32, bool),
 }
+
+/// The fewest cycles between two modifications of one step: a peer that streams its plan
+/// spends the step's 127 versions over at least 127 · 4 cycles (2.5 s), and only the newest
+/// pose waits.
+pub const MODIFY_CYCLES: u64 = 4;
 
 #[derive(Clone, Copy, Debug)]
 struct InFlight {
@@ -178,6 +192,8 @@ struct InFlight {
     cycle: u64,
     /// Expected to be refused (an append after a refused one): not reported.
     silent: bool,
+    /// An append of another list behind a refused one: refused as a gap, and sent again.
+    resend: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -200,7 +216,6 @@ pub struct Gateway {
     outbox: VecDeque<Item>,
     inflight: Vec<InFlight>,
     deferred: VecDeque<FootstepDataListMessage>,
-    failed_lists: Vec<u32>,
     /// The node's frame in the world.
     frame: Pose,
     stream: Stream,
@@ -219,6 +234,15 @@ pub struct Gateway {
     session_seen: bool,
     resume: bool,
     measured: Option<[Pose; 2]>,
+    batch: u32,
+    failed_batches: Vec<u32>,
+    adjusting: bool,
+    resend: Vec<usize>,
+    /// After another controller took the session: open one only when a list asks for it.
+    claim_on_demand: bool,
+    /// The soles in the world frame and in the node's frame at the last cycle (a `Reset`
+    /// moves the node's frame while the feet stand: the frame is found again from them).
+    last_feet: Option<([Pose; 2], [Pose; 2])>,
     outputs: Vec<Output>,
 }
 
@@ -236,7 +260,6 @@ impl Gateway {
             outbox: VecDeque::new(),
             inflight: Vec::new(),
             deferred: VecDeque::new(),
-            failed_lists: Vec::new(),
             frame: Pose::default(),
             stream: Stream::default(),
             have_stream: false,
@@ -254,6 +277,12 @@ impl Gateway {
             session_seen: false,
             resume: false,
             measured: None,
+            batch: 0,
+            failed_batches: Vec::new(),
+            adjusting: false,
+            resend: Vec::new(),
+            claim_on_demand: false,
+            last_feet: None,
             outputs: Vec::new(),
         }
     }
@@ -350,7 +379,7 @@ impl Gateway {
             self.refuse_list(&msg, e);
             return;
         }
-        if self.node_state == 2 {
+        if self.node_state == 2 && !self.claim_on_demand {
             self.refusal(
                 msg.sequence_id,
                 0,
@@ -373,6 +402,7 @@ impl Gateway {
         self.link == Link::Open
             && self.next_number.is_some()
             && !self.stopping
+            && !self.stop_sent
             && !self.resetting
             && !self
                 .inflight
@@ -409,16 +439,19 @@ impl Gateway {
         let mut lifted: Vec<KnownStep> = Vec::new();
         let mut unlifted: Vec<KnownStep> = Vec::new();
         for (key, s) in self.steps.iter().enumerate() {
+            if s.closed {
+                continue;
+            }
             let known = match s.state {
                 State::Swinging | State::Landed => Known::Lifted,
-                State::Pending | State::Sent | State::Queued => Known::Unlifted,
+                State::Pending | State::Sent | State::Queued | State::Held => Known::Unlifted,
                 _ => continue,
             };
             let k = KnownStep {
                 key,
                 id: s.id,
                 side: s.side,
-                pose: s.pose,
+                pose: s.requested,
                 known,
             };
             if known == Known::Lifted {
@@ -437,13 +470,17 @@ impl Gateway {
             Ok(d) => d,
             Err(e) => return self.refuse_list(&msg, e),
         };
-        let standing = self.walking.is_none() && self.phase == 0;
+        // Paused, the held steps are the plan and the robot stands (or will): a list is
+        // matched with them, and its steps are held too until the resume.
+        let standing = (self.walking.is_none() && self.phase == 0) || self.paused;
         let mode = msg.queueing_properties.execution_mode;
         let planned = match plan::plan(&drafts, mode, &self.known(), standing) {
             Ok(p) => p,
             Err(e) => return self.refuse_list(&msg, e),
         };
         let list = msg.sequence_id;
+        self.batch += 1;
+        let batch = self.batch;
         if planned.drop_queue {
             // The node's queue is dropped only if it holds some of them (a StopNow while
             // standing with nothing queued is refused); steps not yet sent just stay unsent.
@@ -451,7 +488,11 @@ impl Gateway {
                 .steps
                 .iter()
                 .any(|s| matches!(s.state, State::Sent | State::Queued));
-            for s in self.steps.iter_mut().filter(|s| s.unlifted()) {
+            for s in self
+                .steps
+                .iter_mut()
+                .filter(|s| s.unlifted() || s.state == State::Held)
+            {
                 s.state = State::Dropped;
             }
             // Nothing of the plan it replaces is sent any more, its start included.
@@ -478,11 +519,15 @@ impl Gateway {
             );
         }
         for (key, d) in planned.modify {
-            if self.steps[key].state == State::Pending {
+            let s = &mut self.steps[key];
+            s.requested = d.pose;
+            if matches!(s.state, State::Pending | State::Held) {
                 // Not yet sent: the append carries the new pose.
-                let s = &mut self.steps[key];
                 (s.pose, s.list, s.index) = (d.pose, list, d.index);
             } else {
+                // Only the newest pose of a step waits to be sent.
+                self.outbox
+                    .retain(|i| !matches!(i, Item::Modify(k, ..) if *k == key));
                 self.outbox.push_back(Item::Modify(key, d, list));
             }
         }
@@ -494,26 +539,50 @@ impl Gateway {
                 index: d.index,
                 side: d.side,
                 pose: d.pose,
+                requested: d.pose,
+                batch,
+                closed: false,
+                last_modify: 0,
                 number: None,
-                state: State::Pending,
+                state: if self.paused {
+                    State::Held
+                } else {
+                    State::Pending
+                },
                 lift: None,
             });
-            self.outbox.push_back(Item::Append(self.steps.len() - 1));
+            if !self.paused {
+                self.outbox.push_back(Item::Append(self.steps.len() - 1));
+            }
         }
         if new && self.walking.is_none() && !self.paused {
+            self.adjusting = msg.are_footsteps_adjustable;
             self.outbox
-                .push_back(Item::Start(list, msg.are_footsteps_adjustable));
+                .push_back(Item::Start(batch, msg.are_footsteps_adjustable));
         }
         self.outputs.push(Output::Log(format!(
-            "list {list}: {} footsteps (mode {mode})",
-            drafts.len()
+            "list {list}: {} footsteps (mode {mode}{})",
+            drafts.len(),
+            if self.paused {
+                ", held by the pause"
+            } else {
+                ""
+            }
         )));
     }
 
     /// A pause (`true`) or resume (`false`) from the peer; `clear`: drop the held steps.
+    ///
+    /// A pause holds every step not yet walked, whether the walk has started or not: the node
+    /// stops after the step being swung (`StopNow`; standing, it drops its queue) and nothing
+    /// else is sent. Lists that come while paused are matched with the held steps and held
+    /// too. The resume sends the held steps again, in order, and starts the walk.
     pub fn on_pause(&mut self, id: u32, pause: bool, clear: bool) {
         if pause {
-            if self.walking.is_none() || self.paused {
+            let planned = self.walking.is_some()
+                || !self.deferred.is_empty()
+                || self.steps.iter().any(|s| s.unlifted());
+            if self.paused || !planned {
                 let why = if self.paused {
                     "already paused"
                 } else {
@@ -521,6 +590,15 @@ impl Gateway {
                 };
                 return self.refusal(id, 0, -1, "pause", Err("not_walking"), why.into());
             }
+            let in_node = self.walking.is_some()
+                || self
+                    .steps
+                    .iter()
+                    .any(|s| matches!(s.state, State::Sent | State::Queued))
+                || self
+                    .inflight
+                    .iter()
+                    .any(|f| matches!(f.item, Item::Start(..)));
             self.paused = true;
             let held = if clear { State::Dropped } else { State::Held };
             for s in self.steps.iter_mut().filter(|s| s.unlifted()) {
@@ -528,8 +606,13 @@ impl Gateway {
             }
             self.outbox
                 .retain(|i| !matches!(i, Item::Append(_) | Item::Modify(..) | Item::Start(..)));
-            self.outbox
-                .push_back(Item::Control(ControlOp::StopNow, Origin::Pause(id)));
+            if in_node {
+                self.outbox
+                    .push_back(Item::Control(ControlOp::StopNow, Origin::Pause(id)));
+            } else {
+                self.outputs
+                    .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
+            }
         } else {
             if !self.paused {
                 return self.refusal(id, 0, -1, "resume", Err("not_paused"), "no pause".into());
@@ -540,7 +623,7 @@ impl Gateway {
         }
     }
 
-    /// The steps a pause held, sent again (new step numbers) and walked.
+    /// The steps a pause held, sent again (new step numbers) in order, and walked.
     fn resume_now(&mut self) {
         self.resume = false;
         self.paused = false;
@@ -550,15 +633,17 @@ impl Gateway {
         if held.is_empty() {
             return;
         }
+        self.batch += 1;
         for &k in &held {
             let mut s = self.steps[k].clone();
             self.steps[k].state = State::Dropped;
-            (s.state, s.number) = (State::Pending, None);
+            self.steps[k].closed = true;
+            (s.state, s.number, s.batch) = (State::Pending, None, self.batch);
             self.steps.push(s);
             self.outbox.push_back(Item::Append(self.steps.len() - 1));
         }
-        let list = self.steps[held[0]].list;
-        self.outbox.push_back(Item::Start(list, false));
+        self.outbox
+            .push_back(Item::Start(self.batch, self.adjusting));
     }
 
     /// An abort from the peer: the node drops every step not yet walked (`StopNow`).
@@ -598,6 +683,7 @@ impl Gateway {
             // Nothing reached the node: the abort is carried out here.
             self.outputs
                 .push(Output::Walking(WALKING_ABORT_REQUESTED, id));
+            self.close_walk();
         } else {
             self.refusal(id, 0, -1, "abort", Err("not_walking"), "no walk".into());
         }
@@ -618,7 +704,9 @@ impl Gateway {
         self.cycle += 1;
         self.peer_alive = peer_alive;
         let mut frames = Vec::new();
-        if self.link == Link::WaitSession && self.have_session() {
+        let wanted = !self.claim_on_demand || !self.deferred.is_empty();
+        if self.link == Link::WaitSession && self.have_session() && wanted {
+            self.claim_on_demand = false;
             let reset = self.control(ControlOp::Reset);
             self.track(&reset, Item::Control(ControlOp::Reset, Origin::Gateway));
             frames.push(reset.encode());
@@ -638,11 +726,24 @@ impl Gateway {
             self.outbox
                 .push_back(Item::Control(ControlOp::Stop, Origin::Gateway));
         }
-        if self.link == Link::Open && peer_alive && self.cycle % self.cfg.heartbeat_cycles == 0 {
-            let hb = self.control(ControlOp::Heartbeat);
-            self.track(&hb, Item::Control(ControlOp::Heartbeat, Origin::Gateway));
-            frames.push(hb.encode());
+        // Steps refused as a gap behind another list's refused step go first, in order.
+        let mut resend = std::mem::take(&mut self.resend);
+        resend.sort_unstable();
+        for key in resend.into_iter().rev() {
+            self.outbox.push_front(Item::Append(key));
         }
+        // The node carries out a StopNow before every other command of its cycle: sent first,
+        // it takes the lowest sequence number, so the commands after it are not stale.
+        if let Some(i) = self
+            .outbox
+            .iter()
+            .position(|i| matches!(i, Item::Control(ControlOp::StopNow, _)))
+        {
+            if let Some(item) = self.outbox.remove(i) {
+                self.outbox.push_front(item);
+            }
+        }
+        let mut later = Vec::new();
         while frames.len() < self.cfg.max_frames && self.link == Link::Open {
             let Some(&item) = self.outbox.front() else {
                 break;
@@ -656,8 +757,30 @@ impl Gateway {
                 Encoded::Skip => {
                     self.outbox.pop_front();
                 }
+                Encoded::Later => {
+                    self.outbox.pop_front();
+                    later.push(item);
+                }
                 Encoded::Wait => break,
             }
+        }
+        for item in later.into_iter().rev() {
+            self.outbox.push_front(item);
+        }
+        // The heartbeat last: its sequence number is above every command of the cycle.
+        // None while a Reset is on its way: it opens a session the heartbeat does not carry.
+        let resetting = self
+            .inflight
+            .iter()
+            .any(|f| matches!(f.item, Item::Control(ControlOp::Reset, _)));
+        if self.link == Link::Open
+            && peer_alive
+            && !resetting
+            && self.cycle % self.cfg.heartbeat_cycles == 0
+        {
+            let hb = self.control(ControlOp::Heartbeat);
+            self.track(&hb, Item::Control(ControlOp::Heartbeat, Origin::Gateway));
+            frames.push(hb.encode());
         }
         frames
     }
@@ -669,7 +792,12 @@ impl Gateway {
 
 /// What an outbox item became.
 enum Encoded {
+    /// Send this.
     Frame(Command),
+    /// Nothing to send: drop the item.
     Skip,
+    /// Not this cycle; the items behind it may go.
+    Later,
+    /// Not this cycle, nor anything behind it.
     Wait,
 }

@@ -26,6 +26,7 @@ impl Gateway {
             let swing = if was == 2 { Side::Right } else { Side::Left };
             self.touch_down(swing);
         }
+        self.refit_frame(was == 0 && phase == 0);
         if phase != 0 {
             self.moved = true;
         }
@@ -36,6 +37,7 @@ impl Gateway {
             if let Some(list) = self.walking.take() {
                 if !self.paused {
                     self.outputs.push(Output::Walking(WALKING_COMPLETED, list));
+                    self.close_walk();
                 }
             }
         }
@@ -44,6 +46,43 @@ impl Gateway {
         }
         self.publish_reference();
         self.run_deferred();
+    }
+
+    /// Keeps the node's frame in the world: standing, the feet do not move, so a jump of the
+    /// stream's feet between two cycles is the node's frame moving (a `Reset`, the gateway's
+    /// or another controller's): the frame is the one that keeps the feet where they were in
+    /// the world (their midpoint and mean heading, as the node re-bases).
+    pub(super) fn refit_frame(&mut self, standing: bool) {
+        let f = self.stream.feet;
+        let node = [
+            Pose {
+                x: f[0][0],
+                y: f[0][1],
+                yaw: f[0][3],
+            },
+            Pose {
+                x: f[1][0],
+                y: f[1][1],
+                yaw: f[1][3],
+            },
+        ];
+        if let (true, Some((world, before))) = (standing, self.last_feet) {
+            let moved = node
+                .iter()
+                .zip(&before)
+                .any(|(a, b)| (a.x - b.x).hypot(a.y - b.y) > 1e-3 || (a.yaw - b.yaw).abs() > 1e-3);
+            if moved {
+                let mid = |p: &[Pose; 2]| Pose {
+                    x: 0.5 * (p[0].x + p[1].x),
+                    y: 0.5 * (p[0].y + p[1].y),
+                    yaw: (p[0].yaw.sin() + p[1].yaw.sin()).atan2(p[0].yaw.cos() + p[1].yaw.cos()),
+                };
+                let (w, n) = (mid(&world), mid(&node));
+                self.frame = w.compose(&n.relative(&Pose::default()));
+            }
+        }
+        let world = [self.frame.compose(&node[0]), self.frame.compose(&node[1])];
+        self.last_feet = Some((world, node));
     }
 
     pub(super) fn foot(&self, side: Side) -> Pose {
