@@ -2,8 +2,8 @@
 //! with moved, late and new steps, pauses, resumes, aborts, the peer vanishing and coming
 //! back), against the node in this process. Whatever the program:
 //!
-//! * every status is about a step the peer sent, each step lifts off at most once and lands at
-//!   most once, and only after it lifted off;
+//! * every status is about a step the peer sent, each step lifts off at most once in a walk
+//!   and lands at most once, and only after it lifted off;
 //! * a step lands where its last accepted pose puts it (the node's reference: within the
 //!   bus's footstep grid, 0.25 mm, and the stream's rounding, 0.05 mm), and the status's
 //!   desired pose is that pose;
@@ -41,6 +41,10 @@ enum Act {
     Abort,
     /// Cycles to let pass, the peer there or not.
     Wait(u32, bool),
+    /// The peer restarts: its ids start again from 1 (a walk's ids are its own).
+    Restart,
+    /// The next act comes in the same cycle (no cycle after this one).
+    Together,
 }
 
 fn act() -> impl Strategy<Value = Act> {
@@ -51,16 +55,22 @@ fn act() -> impl Strategy<Value = Act> {
         1 => (any::<bool>(), any::<bool>()).prop_map(|(p, c)| Act::Pause(p, c)),
         1 => Just(Act::Abort),
         4 => (1u32..200, prop::bool::weighted(0.9)).prop_map(|(k, alive)| Act::Wait(k, alive)),
+        1 => Just(Act::Restart),
+        1 => Just(Act::Together),
     ]
 }
 
 struct World {
     g: Gateway,
     link: InProcess,
-    out: Vec<Output>,
+    /// Every output with the peer's era (restarts) it came in.
+    out: Vec<(u32, Output)>,
+    era: u32,
     /// The peer's ids so far, in order, with their side and pose.
     plan: Vec<(u32, u8, f64, f64)>,
     next_id: u32,
+    /// The largest id ever sent (ids repeat after a restart).
+    max_id: u32,
     list_id: u32,
     bad: Vec<String>,
 }
@@ -81,7 +91,9 @@ impl World {
             self.g.on_frame(&f);
         }
         self.g.end_cycle();
-        self.out.extend(self.g.take_outputs());
+        let era = self.era;
+        self.out
+            .extend(self.g.take_outputs().into_iter().map(|o| (era, o)));
     }
 
     /// The feet's x (left, right) and which foot stands ahead, from the node's feet.
@@ -127,6 +139,7 @@ impl World {
                 let x = x0 + length * (k as f64 + 1.0).min((n - 1).max(1) as f64);
                 let y = if side == 1 { -0.1 } else { 0.1 };
                 self.next_id += 1;
+                self.max_id = self.max_id.max(self.next_id);
                 plan.push((self.next_id, side, x, y));
             }
             if mode == 1 {
@@ -151,25 +164,32 @@ impl World {
 }
 
 fn check(world: &World) -> Result<(), String> {
-    let mut started: BTreeSet<u32> = BTreeSet::new();
-    let mut landed: BTreeMap<u32, usize> = BTreeMap::new();
+    // A step is its id within its walk: a walk's ids are its own (a peer may send a plan
+    // again once it was walked, or restart and number from 1 again).
+    let mut walk = 0u32;
+    let mut started: BTreeSet<(u32, u32)> = BTreeSet::new();
+    let mut landed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
     let mut walking_open = false;
-    for o in &world.out {
+    let mut swinging: Option<(u32, u32)> = None;
+    for (_, o) in &world.out {
         match o {
             Output::Footstep(s) if s.footstep_status == FOOTSTEP_STATUS_STARTED => {
-                if s.sequence_id == 0 || s.sequence_id > world.next_id {
+                if s.sequence_id == 0 || s.sequence_id > world.max_id {
                     return Err(format!("a status for step {} never sent", s.sequence_id));
                 }
-                if !started.insert(s.sequence_id) {
-                    return Err(format!("step {} lifted off twice", s.sequence_id));
+                if !started.insert((walk, s.sequence_id)) {
+                    return Err(format!("step {} lifted off twice in a walk", s.sequence_id));
                 }
+                swinging = Some((walk, s.sequence_id));
             }
             Output::Footstep(s) if s.footstep_status == FOOTSTEP_STATUS_COMPLETED => {
-                if !started.contains(&s.sequence_id) {
+                // The step that lands is the one that lifted off last (its era may be the
+                // previous one, when the peer restarted during its swing).
+                let Some(key) = swinging.take().filter(|k| k.1 == s.sequence_id) else {
                     return Err(format!("step {} landed, never lifted off", s.sequence_id));
-                }
-                *landed.entry(s.sequence_id).or_default() += 1;
-                if landed[&s.sequence_id] > 1 {
+                };
+                *landed.entry(key).or_default() += 1;
+                if landed[&key] > 1 {
                     return Err(format!("step {} landed twice", s.sequence_id));
                 }
                 let (d, a) = (
@@ -195,7 +215,10 @@ fn check(world: &World) -> Result<(), String> {
                     WALKING_COMPLETED if !walking_open => {
                         return Err("a walk completed that had not started".into())
                     }
-                    _ => walking_open = *w == WALKING_STARTED,
+                    _ => {
+                        walking_open = *w == WALKING_STARTED;
+                        walk += u32::from(walking_open);
+                    }
                 }
             }
             _ => {}
@@ -226,20 +249,35 @@ proptest! {
             out: Vec::new(),
             plan: Vec::new(),
             next_id: 0,
+            max_id: 0,
+            era: 0,
             list_id: 0,
             bad: Vec::new(),
         };
         while !w.g.is_open() {
             w.cycle(true);
         }
+        let mut together = false;
         for a in &acts {
             match *a {
                 Act::List { mode, n, length, reuse, nudge } => w.list(mode, n, length, reuse, nudge),
                 Act::Pause(p, c) => { w.list_id += 1; w.g.on_pause(w.list_id, p, c) }
                 Act::Abort => { w.list_id += 1; w.g.on_abort(w.list_id) }
                 Act::Wait(k, alive) => for _ in 0..k { w.cycle(alive) },
+                Act::Restart => {
+                    // A new peer: it knows nothing of the old plan and numbers from 1.
+                    w.era += 1;
+                    w.next_id = 0;
+                    w.plan.clear();
+                    w.list_id += 1;
+                    w.g.on_abort(w.list_id);
+                }
+                Act::Together => { together = true; continue }
             }
-            w.cycle(true);
+            if !together {
+                w.cycle(true);
+            }
+            together = false;
         }
         // The peer falls silent, then leaves: the walk ends by itself or by the node's
         // supervision, within the time of a full queue.
@@ -254,7 +292,7 @@ proptest! {
             prop_assert!(quiet < 8000, "still moving 40 s after the peer's last message");
         }
         if let Err(e) = check(&w) {
-            let logs: Vec<String> = w.out.iter().filter_map(|o| match o {
+            let logs: Vec<String> = w.out.iter().filter_map(|(_, o)| match o {
                 Output::Log(l) => Some(l.clone()),
                 Output::Refusal(r) => Some(format!("{} {} {}: {}", r.command, r.footstep_sequence_id, r.reason, r.detail)),
                 _ => None,
@@ -275,6 +313,8 @@ fn the_random_programs_walk() {
         out: Vec::new(),
         plan: Vec::new(),
         next_id: 0,
+        max_id: 0,
+        era: 0,
         list_id: 0,
         bad: Vec::new(),
     };
@@ -293,7 +333,7 @@ fn the_random_programs_walk() {
         .out
         .iter()
         .filter(
-            |o| matches!(o, Output::Footstep(s) if s.footstep_status == FOOTSTEP_STATUS_COMPLETED),
+            |(_, o)| matches!(o, Output::Footstep(s) if s.footstep_status == FOOTSTEP_STATUS_COMPLETED),
         )
         .count();
     assert_eq!(
@@ -302,7 +342,7 @@ fn the_random_programs_walk() {
         "{:?}",
         w.out
             .iter()
-            .filter(|o| matches!(o, Output::Log(_) | Output::Refusal(_)))
+            .filter(|(_, o)| matches!(o, Output::Log(_) | Output::Refusal(_)))
             .collect::<Vec<_>>()
     );
     check(&w).unwrap();
