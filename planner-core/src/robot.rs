@@ -467,7 +467,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
     right: {right},
     heartbeat_timeout_ms: {hb},
     max_rx: {max_rx},
-    max_foreign: {max_foreign},
+    max_frames: {max_frames},
     max_plans: {max_plans},
     reach: ::planner_core::node::Reach {{
         max_forward: {mf},
@@ -512,7 +512,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         right = foot(&cfg.right),
         hb = cfg.heartbeat_timeout_ms,
         max_rx = cfg.max_rx,
-        max_foreign = cfg.max_foreign,
+        max_frames = cfg.max_frames,
         max_plans = cfg.max_plans,
         mf = r.max_forward.literal(),
         mb = r.max_backward.literal(),
