@@ -55,8 +55,10 @@ impl Plane {
 struct Outcome {
     fallen: bool,
     worst: f64,
-    /// The node's shift after the run \[0.5 mm\], and every `ADJUST` seen.
+    /// The node's last shift other than 0 during the run \[0.5 mm\], its shift after the run
+    /// (the walk ended: 0), and every `ADJUST` seen.
     shift: [i32; 2],
+    shift_after: [i32; 2],
     adjusts: Vec<Adjust>,
     /// Landings: (commanded x, y, landed x, y).
     landings: Vec<(f64, f64, f64, f64)>,
@@ -103,7 +105,17 @@ fn walk_pushed(
     measure: (bool, u32, u32),
     at: PushAt,
 ) -> Outcome {
-    let mut r = rig.fork();
+    walk_on(&mut rig.fork(), adjusting, dv, measure, at)
+}
+
+/// [`walk_pushed`] on the rig `r` itself (left standing after the walk).
+fn walk_on(
+    r: &mut Rig,
+    adjusting: bool,
+    dv: [f64; 2],
+    measure: (bool, u32, u32),
+    at: PushAt,
+) -> Outcome {
     let n_steps = 10u16;
     let len = 0.2;
     let mut commanded = vec![];
@@ -179,6 +191,9 @@ fn walk_pushed(
         r.t += 5;
         let plans = r.n.gait().plans();
         r.n.poll(r.t, &mut r.bus);
+        if r.n.shift() != [0, 0] {
+            out.shift = r.n.shift();
+        }
         if r.n.gait().plans() != plans && r.n.gait().replanned_from_measured() {
             out.from_measured += 1;
         }
@@ -220,7 +235,7 @@ fn walk_pushed(
             break;
         }
     }
-    out.shift = r.n.shift();
+    out.shift_after = r.n.shift();
     out
 }
 
@@ -284,12 +299,17 @@ fn adjusted_walk_lands_where_adjust_says(rig: &Rig, measured: bool) {
         o.shift[0] > 0,
         "a forward push moves the steps forward: {o:?}"
     );
-    let last = o.adjusts.last().expect("ADJUST frames");
+    // The last shift published is the one the walk had; the walk's end ends it.
+    let moved = o.adjusts.iter().rev().find(|a| a.shift != [0, 0]);
+    let moved = moved.expect("ADJUST frames");
     assert_eq!(
-        [i32::from(last.shift[0]), i32::from(last.shift[1])],
+        [i32::from(moved.shift[0]), i32::from(moved.shift[1])],
         o.shift
     );
-    assert!(last.count > 0);
+    assert!(moved.count > 0);
+    let last = o.adjusts.last().unwrap();
+    assert_eq!((last.shift, o.shift_after), ([0, 0], [0, 0]), "{last:?}");
+    assert!(last.count > moved.count);
     // The capture step's window started from the measured state, where the node says so.
     assert_eq!(o.from_measured > 0, measured, "{o:?}");
     // Every landing is its commanded position plus a shift the node published.
@@ -429,4 +449,51 @@ fn measured_states_of_the_session_before_a_wrap_are_refused() {
     r.bus.rx.push_back(old.encode(epoch));
     let acks = r.cycle();
     assert_eq!(acks[0].reason, Some(Reason::BadCrc), "{acks:?}");
+}
+
+/// The shift ends with its walk: after an adjusted walk (pushed, steps moved), `Stop` and
+/// standing, with no `Reset`, a plain `Start` walk's steps commanded beside the feet are
+/// taken and land where commanded; `ADJUST` said so (shift 0 from the next step on).
+#[test]
+fn the_shift_ends_with_its_walk() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    for push in [[0.35, 0.0], [0.0, -0.2]] {
+        let mut r = rig.fork();
+        let o = walk_on(&mut r, true, push, (true, 0, 0), PUSH_IN_SINGLE);
+        assert!(!o.fallen && o.shift != [0, 0], "{o:?}");
+        assert!(r.n.gait().is_standing());
+        assert_eq!(r.n.shift(), [0, 0]);
+        let adjust = r.n.adjustment();
+        assert_eq!((adjust.shift, adjust.from), ([0, 0], r.n.next_step() as u8));
+        // A plain walk from where the feet stand.
+        let feet = *r.n.gait().feet();
+        let x0 = feet[0].x.max(feet[1].x);
+        let right_first = r.n.gait().next_side() != Some(Side::Left);
+        let mut commanded = vec![];
+        for i in 0..4u16 {
+            let left = (i % 2 == 1) == right_first;
+            let (x, yy) = (x0 + 0.15 * f64::from(i + 1), feet[usize::from(!left)].y);
+            let id = r.n.next_step();
+            assert_eq!(r.append(id, left, x, yy), None, "push {push:?}, step {i}");
+            commanded.push((id, left, x, yy));
+        }
+        assert_eq!(r.control(ControlOp::Start), None);
+        assert_eq!(r.control(ControlOp::Stop), None);
+        let mut landed = vec![];
+        let mut swinging = None;
+        for k in 0..1200 {
+            r.run(1, k % 20 == 0);
+            let s = r.n.gait().swinging();
+            if let (Some(id), None) = (swinging, s) {
+                let &(_, left, x, yy) = commanded.iter().find(|c| c.0 == id).unwrap();
+                let f = r.n.gait().feet()[usize::from(!left)];
+                landed.push(((f.x - x).abs(), (f.y - yy).abs()));
+            }
+            swinging = s;
+        }
+        assert_eq!(landed.len(), 4, "push {push:?}");
+        for (dx, dy) in landed {
+            assert!(dx < 1e-9 && dy < 1e-9, "push {push:?}: {dx}, {dy}");
+        }
+    }
 }

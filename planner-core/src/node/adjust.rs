@@ -15,14 +15,15 @@
 //! ([`crate::gait::Gait::place_steps`]), whose single support eq. 18 may shorten but not
 //! lengthen.
 //!
-//! # One shift for the rest of the walk
+//! # One shift for the rest of the walk, and no longer
 //! The move is a shift `s` (in the footstep unit, 0.5 mm) of the next swing target and every
-//! step after it, queued or appended later, so that the walk after the landing is the plan,
-//! moved: every step lands at its commanded position plus the shift in force when it was
+//! step after it, queued or appended later in the walk, so that the walk after the landing is
+//! the plan, moved: every step lands at its commanded position plus the shift in force when it was
 //! queued or moved. The shift a window's adjustments start from is the one in force when the
 //! window was planned (`base`): before the next re-plan the reference has not moved with the
 //! landing, so `e` is measured against the same plan, and the shift in force is
-//! `base + offset(e)`.
+//! `base + offset(e)`. The shift ends with its walk: once the robot stands it is 0 from the
+//! next step number on, so the next walk's steps land where commanded.
 //!
 //! # Limits
 //! * only in a walk started with `StartAdjusting` (a `CONTROL` operation: the controller opts
@@ -53,7 +54,7 @@
 //! measured with the option off.
 //!
 //! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
-//! adjusts or a shift is in force), so that
+//! adjusts or once the session has adjusted), so that
 //! the controller's book of the steps stays true.
 
 use super::*;
@@ -379,6 +380,25 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.adj.count = self.adj.count.saturating_add(1);
         self.adj.flags = flags;
         self.adj.due = true;
+    }
+
+    /// The end of a walk (the gait stands): the shift ends with it, so that the next walk's
+    /// steps land where commanded (a `Start`'s as an adjusting one's, which adjusts afresh).
+    /// The change is sent in `ADJUST` (from the next step number on, shift 0), and repeated
+    /// every 100 ms as long as the session lasts, as every shift is while it is in force.
+    pub(super) fn end_of_walk(&mut self) {
+        if !self.gait.is_standing() || (self.adj.shift == [0, 0] && !self.adj.enabled) {
+            return;
+        }
+        self.adj.enabled = false;
+        self.adj.halvings = 0;
+        if self.adj.shift != [0, 0] {
+            self.adj.shift = [0, 0];
+            self.adj.base = [0, 0];
+            self.adj.from = self.next_step();
+            self.adj.count = self.adj.count.saturating_add(1);
+            self.adj.due = true;
+        }
     }
 
     /// The step adjustment as `ADJUST` reports it.

@@ -233,6 +233,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         } else {
             *self.gait.last()
         };
+        // The shift ends with its walk.
+        self.end_of_walk();
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)
@@ -249,8 +251,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // `ADJUST` (before the stream: frames go out in identifier order) when the shift
         // changed, and every 20 cycles half-way between the reports (the bus load spread:
         // no cycle carries more than one report frame beyond the stream's and the reports')
-        // while the walk adjusts or a shift is in force.
-        let adjusting = self.adj.enabled || self.adj.shift != [0, 0];
+        // while the walk adjusts, or once the session has adjusted (the shift in force, or
+        // its end with the walk).
+        let adjusting = self.adj.enabled || self.adj.shift != [0, 0] || self.adj.count > 0;
         if (streaming && self.adj.due) || (adjusting && self.cycle % 20 == 11) {
             self.adj.due = false;
             let a = self.adjustment().encode();
