@@ -485,6 +485,8 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         max_age: {age},
         margin: {db},
         min_change: {mc},
+        max_shift: {msh},
+        max_deviation: {mdv},
         from_measured: {fm},
     }},
     entropy: 0,
@@ -527,6 +529,8 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         age = cfg.adjust.max_age,
         db = cfg.adjust.margin.literal(),
         mc = cfg.adjust.min_change.literal(),
+        msh = cfg.adjust.max_shift.literal(),
+        mdv = cfg.adjust.max_deviation.literal(),
         fm = cfg.adjust.from_measured,
     )
 }

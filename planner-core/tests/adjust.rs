@@ -25,7 +25,7 @@ mod common;
 use common::{y, Rig};
 use planner_core::gait::{Phase, Side};
 use planner_core::node::NodeConfig;
-use planner_core::wire::{Ack, Adjust, ControlOp, Measured, Reason};
+use planner_core::wire::{Ack, Adjust, Command, ControlOp, Measured, Reason};
 
 /// The stabilizer's DCM error gain \[1/s\]: `p = p_ref + (1 + k/ω)(ξ − ξ_ref)`.
 const K_DCM: f64 = 3.0;
@@ -496,4 +496,107 @@ fn the_shift_ends_with_its_walk() {
             assert!(dx < 1e-9 && dy < 1e-9, "push {push:?}: {dx}, {dy}");
         }
     }
+}
+
+/// What an estimator claiming the constant deviation `dev` \[m\] every cycle does to an
+/// adjusting straight walk of `n_steps`: the first shift's length, the largest shift's
+/// length, and the farthest landing from its commanded position \[m\].
+fn constant_claim(rig: &Rig, dev: [f64; 2], n_steps: u16) -> (f64, f64, f64) {
+    let mut r = rig.fork();
+    let mut commanded = vec![];
+    for i in 0..n_steps {
+        let left = i % 2 == 1;
+        let x = 0.2 * f64::from(i + 1).min(f64::from(n_steps - 1));
+        let id = r.n.next_step();
+        assert_eq!(r.append(id, left, x, y(left)), None, "step {i}");
+        commanded.push((id, left, x, y(left)));
+    }
+    assert_eq!(r.control(ControlOp::StartAdjusting), None);
+    let stop = r.command(ControlOp::Stop);
+    r.bus.rx.push_back(stop.encode());
+    let (mut first, mut largest, mut farthest) = (None, 0.0f64, 0.0f64);
+    let mut swinging = None;
+    for k in 0..4000u32 {
+        let m = Measured::from_si(r.n.cycles(), dev).unwrap();
+        r.bus.rx.push_back(m.encode(r.session.epoch));
+        if k % 20 == 0 {
+            let hb = r.heartbeat();
+            r.bus.rx.push_back(hb.encode());
+        }
+        r.cycle();
+        let s = r.n.shift();
+        let length = f64::from(s[0]).hypot(f64::from(s[1])) * 5e-4;
+        if length > 0.0 && first.is_none() {
+            first = Some(length);
+        }
+        largest = largest.max(length);
+        let now = r.n.gait().swinging();
+        if let (Some(id), None) = (swinging, now) {
+            let &(_, left, x, yy) = commanded.iter().find(|c| c.0 == id).unwrap();
+            let f = r.n.gait().feet()[usize::from(!left)];
+            farthest = farthest.max((f.x - x).hypot(f.y - yy));
+        }
+        swinging = now;
+        if r.n.gait().is_standing() && k > 100 {
+            break;
+        }
+    }
+    (first.unwrap_or(0.0), largest, farthest)
+}
+
+/// The largest admissible capture step for any deviation: a constant measured deviation of
+/// 0.05 … 0.9 m forward, outward or backward moves the first capture step, never less for a
+/// larger deviation (the reach cut finds the largest part of the move that keeps the limits,
+/// to the footstep unit, however small a part that is; before, a move of which even 1/64
+/// broke a limit was given up). A deviation whose move is beyond `ADJUST`'s fields (1.6 m
+/// backward: an offset of about 26 m) is cut to the shift bound along its direction, not
+/// dropped.
+#[test]
+fn a_larger_push_gets_the_largest_capture_step() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    for dir in [[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0]] {
+        let mut last = 0.0;
+        for e in [0.05, 0.2, 0.4, 0.6, 0.9] {
+            let (first, _, _) = constant_claim(&rig, [dir[0] * e, dir[1] * e], 6);
+            assert!(first > 0.0, "{dir:?} × {e} m: no capture step");
+            assert!(first >= last - 1e-9, "{dir:?} × {e} m: {first} < {last}");
+            last = first;
+        }
+    }
+    let mut cfg = NodeConfig::hrp2();
+    cfg.adjust.max_deviation = 1.6;
+    let rig = Rig::new(cfg);
+    let (first, largest, _) = constant_claim(&rig, [-1.6, 0.0], 6);
+    assert!(first > 0.0, "1.6 m backward: no capture step");
+    assert!(largest <= cfg.adjust.max_shift + 1e-9, "{largest}");
+}
+
+/// Nothing walks the robot farther than the shift bound from its commanded path, whatever
+/// the estimator claims: a constant 0.3 m claim to the side for a 12-step walk keeps every
+/// landing within `max_shift` (0.30 m) of where it was commanded (before: 0.47 m); a claim
+/// beyond `max_deviation` (1.0 m) is refused `OutOfRange` and changes nothing.
+#[test]
+fn a_lying_estimator_moves_the_path_at_most_the_shift_bound() {
+    let cfg = NodeConfig::hrp2();
+    let rig = Rig::new(cfg);
+    for dev in [[0.0, 0.3], [0.0, -0.3], [0.3, 0.3], [-0.3, 0.0]] {
+        let (_, largest, farthest) = constant_claim(&rig, dev, 12);
+        let bound = cfg.adjust.max_shift + 1e-9;
+        assert!(
+            largest > 0.0 && largest <= bound,
+            "{dev:?}: shift {largest}"
+        );
+        assert!(farthest <= bound, "{dev:?}: landed {farthest} m off");
+    }
+    let mut r = rig.fork();
+    for dev in [[1.2, 0.0], [0.0, -1.4], [0.75, 0.75]] {
+        let m = Measured::from_si(r.n.cycles(), dev).unwrap();
+        assert_eq!(
+            r.ask(Command::Measured(m)),
+            Some(Reason::OutOfRange),
+            "{dev:?}"
+        );
+    }
+    let m = Measured::from_si(r.n.cycles(), [0.7, 0.7]).unwrap();
+    assert_eq!(r.ask(Command::Measured(m)), None, "0.99 m is a state");
 }

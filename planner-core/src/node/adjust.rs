@@ -33,7 +33,13 @@
 //!   least [`AdjustConfig::min_change`];
 //! * the reach limits and the sole gap ([`super::Reach`]) hold for the moved step against the
 //!   feet before it and for its successors: a shift that breaks them is cut to the largest
-//!   part of it (to 1/64) that keeps them (`ADJUST` flag *reach limited*);
+//!   part of it (to the footstep unit, 0.5 mm) that keeps them (`ADJUST` flag *reach
+//!   limited*);
+//! * the shift's length is at most [`AdjustConfig::max_shift`] (0.30 m): a wanted shift
+//!   beyond it (however large the deviation, even beyond `ADJUST`'s fields) is cut to it along
+//!   its direction, so no measured state moves the path farther from the commanded one;
+//! * a measured state claiming a deviation beyond [`AdjustConfig::max_deviation`] (1.0 m) is
+//!   refused `OutOfRange` (plausibility: the robot would have fallen whatever the step);
 //! * eq. 17 checks the moved next swing target as it checks a modification (the ZMP stays in
 //!   the sole): a shift it refuses is put back and the next attempt in this window takes half
 //!   of it (flag *ZMP limited*);
@@ -65,6 +71,10 @@ use crate::wire::{Adjust, Measured, STAMPS, STEP_UNIT};
 /// The bound of [`AdjustConfig::max_age`] \[cycles\].
 pub const MAX_AGE: u32 = 40;
 
+/// The bound of [`AdjustConfig::max_shift`] \[m\]: what `ADJUST`'s 16-bit fields of 0.5 mm
+/// carry.
+pub const MAX_SHIFT: f64 = 16.0;
+
 /// The step adjustment's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdjustConfig<T = f64> {
@@ -75,6 +85,15 @@ pub struct AdjustConfig<T = f64> {
     pub margin: T,
     /// The least change of the shift that is carried out \[m\].
     pub min_change: T,
+    /// The farthest the node moves the path from the commanded one \[m\]: the shift's length
+    /// never exceeds it (a wanted shift beyond it is cut to it along its direction), so no
+    /// measured state, true or not, moves a landing farther from where it was commanded.
+    /// At most [`MAX_SHIFT`].
+    pub max_shift: T,
+    /// The largest deviation a measured state may claim \[m\] (plausibility): beyond it the
+    /// robot has fallen whatever the step, and a state that claims more is refused
+    /// `OutOfRange` (it changes nothing).
+    pub max_deviation: T,
     /// The re-plan that lifts a capture step's foot starts from the measured state (see
     /// [`crate::gait::Gait::set_measured`]): the reference's COG velocity then steps by the
     /// captured deviation times `ω` at that tick (its position, acceleration and ZMP stay
@@ -84,12 +103,17 @@ pub struct AdjustConfig<T = f64> {
 }
 
 impl AdjustConfig {
-    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes, capture steps re-planned from the
-    /// reference's state (the reference stays C¹).
+    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes, the path moved by at most 0.30 m
+    /// (about a step's length: what one capture step can move), measured deviations up to
+    /// 1.0 m (a COG velocity error of about 3.5 m/s at HRP-2's `ω`, ten times the pushes
+    /// the robot survives), capture steps re-planned from the reference's state (the
+    /// reference stays C¹).
     pub const DEFAULT: Self = Self {
         max_age: 4,
         margin: 0.02,
         min_change: 0.005,
+        max_shift: 0.30,
+        max_deviation: 1.0,
         from_measured: false,
     };
 }
@@ -101,6 +125,8 @@ impl<T: Real> AdjustConfig<T> {
             max_age: self.max_age,
             margin: U::of(self.margin.f64()),
             min_change: U::of(self.min_change.f64()),
+            max_shift: U::of(self.max_shift.f64()),
+            max_deviation: U::of(self.max_deviation.f64()),
             from_measured: self.from_measured,
         }
     }
@@ -166,6 +192,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.lost {
             return Err(Reason::ControllerLost);
         }
+        let e = m.deviation_in::<T>();
+        // (`!(… <= …)`: a bound that is not a number refuses every state.)
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !((e[0] * e[0] + e[1] * e[1]).sqrt() <= self.cfg.adjust.max_deviation) {
+            return Err(Reason::OutOfRange);
+        }
         // The last reference published is this cycle's predecessor's.
         if self.cycle >= STAMPS {
             return Err(Reason::Exhausted);
@@ -187,7 +219,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             Some((last, _)) if last > at => return Err(Reason::Stale),
             _ => {}
         }
-        self.adj.measured = Some((at, m.deviation_in()));
+        self.adj.measured = Some((at, e));
         Ok(())
     }
 
@@ -311,21 +343,34 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let remaining = p.dt * T::of_i32(n.min(1 << 20) as i32);
         let offset = capture_offset(e, self.cfg.adjust.margin, p.omega, remaining);
         let unit = T::of(STEP_UNIT);
-        let units = |v: T| {
-            let k = (v / unit).round();
-            // (far beyond any reach: the clamp only keeps the integer conversion exact)
-            k.max(T::of(-1e6)).min(T::of(1e6)).trunc_i32()
-        };
-        let scale = |v: i32| v >> self.adj.halvings.min(8);
-        let wanted = [
-            self.adj.base[0].saturating_add(scale(units(offset[0]))),
-            self.adj.base[1].saturating_add(scale(units(offset[1]))),
+        // The shift wanted: the window's base and the offset (a power of ½ of it after eq. 17
+        // refused more), cut along its direction to `max_shift` (which `ADJUST`'s fields
+        // carry): however large the deviation, the node tries the largest shift it allows.
+        let half = T::of_i32(1 << self.adj.halvings.min(8));
+        let mut wanted_m = [
+            T::of_i32(self.adj.base[0]) * unit + offset[0] / half,
+            T::of_i32(self.adj.base[1]) * unit + offset[1] / half,
         ];
-        // The shift stays inside `ADJUST`'s 16-bit fields (±16 m: far beyond any reach).
-        let (lo, hi) = (i32::from(i16::MIN), i32::from(i16::MAX));
-        if !wanted.iter().all(|w| (lo..=hi).contains(w)) {
+        if !(wanted_m[0].is_finite() && wanted_m[1].is_finite()) {
             return;
         }
+        let length = (wanted_m[0] * wanted_m[0] + wanted_m[1] * wanted_m[1]).sqrt();
+        let max_shift = self.cfg.adjust.max_shift;
+        if length > max_shift {
+            wanted_m = [
+                wanted_m[0] * max_shift / length,
+                wanted_m[1] * max_shift / length,
+            ];
+        }
+        // (within ±MAX_SHIFT: the integers are exact, the clamp only keeps them so)
+        let units = |v: T| {
+            (v / unit)
+                .round()
+                .max(T::of(-32767.0))
+                .min(T::of(32767.0))
+                .trunc_i32()
+        };
+        let wanted = [units(wanted_m[0]), units(wanted_m[1])];
         let delta = [wanted[0] - self.adj.shift[0], wanted[1] - self.adj.shift[1]];
         let (dx, dy) = (T::of_i32(delta[0]), T::of_i32(delta[1]));
         let change = (dx * dx + dy * dy).sqrt() * unit;
@@ -336,10 +381,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let old = self.adj.shift;
         let mut flags = self.adj.flags & Adjust::FRESH;
         // The reach: the whole move if it keeps the limits, else the largest part of it that
-        // does (bisection on k/64 of the move; the limits are checked on the moved step and its
+        // does, to the footstep unit (bisection on k/n of the move, n its longer component in
+        // 0.5 mm: at most 16 halvings; the limits are checked on the moved step and its
         // successor, the steps after them keeping their places relative to both).
-        let part = |k: i32| [old[0] + delta[0] * k / 64, old[1] + delta[1] * k / 64];
-        let keeps = |node: &Self, k: i32| {
+        let n = delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1) as i64;
+        let part = |k: i64| {
+            let at = |o: i32, d: i32| o + (i64::from(d) * k / n) as i32;
+            [at(old[0], delta[0]), at(old[1], delta[1])]
+        };
+        let keeps = |node: &Self, k: i64| {
             let to = part(k);
             let d = [
                 T::of_i32(to[0] - old[0]) * unit,
@@ -347,11 +397,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             ];
             node.reach_broken_moved(front, d).is_none()
         };
-        let k = if keeps(self, 64) {
-            64
+        let k = if keeps(self, n) {
+            n
         } else {
             flags |= Adjust::REACH_LIMITED;
-            let (mut lo, mut hi) = (0, 64);
+            let (mut lo, mut hi) = (0, n);
             while hi - lo > 1 {
                 let mid = (lo + hi) / 2;
                 if keeps(self, mid) {

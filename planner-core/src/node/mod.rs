@@ -118,7 +118,7 @@ use core::borrow::Borrow;
 use heapless::Deque;
 
 use adjust::Adjusting;
-pub use adjust::{AdjustConfig, MAX_AGE};
+pub use adjust::{AdjustConfig, MAX_AGE, MAX_SHIFT};
 use cycle::*;
 use reach::Frame;
 pub use reach::{Broken, Limit, Reach, Soles};
@@ -461,6 +461,8 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                     max_age: 0,
                     margin: T::ZERO,
                     min_change: T::ZERO,
+                    max_shift: T::ZERO,
+                    max_deviation: T::ZERO,
                     from_measured: false,
                 },
                 entropy: 0,
@@ -516,7 +518,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let gap_ok = gap
             .partial_cmp(&cfg.reach.sole_gap)
             .is_some_and(|o| o.is_ge());
-        let age_ok = cfg.adjust.max_age <= MAX_AGE;
+        let a = &cfg.adjust;
+        // (`NaN` fails too.)
+        let within = |v: T, lo: T, hi: T| v >= lo && v <= hi;
+        let age_ok = a.max_age <= MAX_AGE
+            && within(a.max_shift, T::ZERO, T::of(MAX_SHIFT))
+            && within(a.max_deviation, T::ZERO, T::of(1e3));
         if !gap_ok
             || !age_ok
             || cfg.max_rx > MAX_RX
