@@ -24,6 +24,9 @@ pub(super) fn keep_rank(f: &RawFrame) -> u8 {
     }
 }
 
+/// `LinkHealth::bus_state` of a link off the bus.
+const BUS_OFF: u8 = 3;
+
 /// Bit `i` of a mask over a cycle's frames (at most [`MAX_RX`] ≤ 64 of them).
 pub(super) const fn bit(i: usize) -> u64 {
     1u64 << (i & 63)
@@ -40,7 +43,8 @@ pub(super) struct Acting {
 impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
     /// The clock check and the supervision rule (module docs, step 3): a moving robot whose
     /// controller has not been heard for longer than the timeout (by the clock or by the
-    /// cycles), or whose clock has stopped, stops, and stays "controller lost". Checked in
+    /// cycles), whose clock has stopped, or whose link was off the bus for more than
+    /// [`OFF_BUS_CYCLES`] cycles, stops, and stays "controller lost". Checked in
     /// every cycle, so it holds for the whole walk.
     pub(super) fn supervise(&mut self, now_ms: u32) {
         if self.cycle == 1 {
@@ -54,6 +58,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.window = (self.cycle, now_ms);
         }
         if self.clock_fault && self.open {
+            self.lost = true;
+        }
+        // The link: cycles in a row off the bus.
+        let off = self.link.is_some_and(|l| l.bus_state == BUS_OFF);
+        self.off_bus = if off {
+            self.off_bus.saturating_add(1)
+        } else {
+            0
+        };
+        if self.off_bus > OFF_BUS_CYCLES && self.open && !self.gait.is_standing() {
             self.lost = true;
         }
         if self.gait.is_standing() {

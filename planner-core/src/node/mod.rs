@@ -43,8 +43,12 @@
 //!    (`ControllerLost`) until a `Reset` once standing. The clock itself is checked: if
 //!    `now_ms` advances by less than half of the nominal time over [`CLOCK_WINDOW`] cycles
 //!    (50 ms over 100 ms), the node latches a clock fault (`STATUS` flag) and stops as for a
-//!    lost controller. So **no foot lifts off more than `heartbeat_timeout_ms` after the
-//!    controller was last heard**, for the whole walk, even with a stopped clock;
+//!    lost controller. A link off the bus is a lost link: when the firmware reports its CAN
+//!    link bus-off ([`Node::set_link_health`]) in more than [`OFF_BUS_CYCLES`] cycles in a
+//!    row (20 ms: the board's back-off after a bus-off keeps it off for 1 … 64 cycles), a
+//!    moving robot stops as for a lost controller, whatever was heard. So **no foot lifts off
+//!    more than `heartbeat_timeout_ms` after the controller was last heard**, for the whole
+//!    walk, even with a stopped clock, **nor more than 20 ms into a loss of the link**;
 //! 4. advance the gait by one tick;
 //! 5. publish the reference (5 frames; none before a session is open) and, in the first
 //!    cycle and every 20 cycles after it, `STATUS`, `DIAG`, `SESSION` (and `LINK`); frames that cannot be sent now wait in a transmit
@@ -141,6 +145,11 @@ pub const TX_BACKLOG: usize = 32;
 /// among them is carried out first.
 pub const MAX_RX: usize = 32;
 const _: () = assert!(MAX_RX < 64, "a cycle's frames are a 64-bit mask");
+
+/// Control cycles in a row that the firmware may report its link bus-off (off the bus: it
+/// neither sends nor takes part) before a moving robot stops as for a lost controller: more
+/// than this many (20 ms) is a link loss, not a glitch.
+pub const OFF_BUS_CYCLES: u32 = 4;
 
 /// Cycles over which the clock is checked: it must advance by at least half of their nominal
 /// time (see the module docs).
@@ -374,6 +383,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     cycle: u32,
     /// The firmware's CAN link health, published in `LINK` once set.
     link: Option<LinkHealth>,
+    /// Cycles in a row that the link reported bus-off (up to the supervision's).
+    off_bus: u32,
     /// The step adjustment (see `adjust`).
     adj: Adjusting<T>,
 }
@@ -488,6 +499,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             counters: Counters::ZERO,
             cycle: 0,
             link: Some(LinkHealth::ZERO),
+            off_bus: 0,
             adj: Adjusting::ZERO,
         }
     }
@@ -563,6 +575,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
+        self.off_bus = 0;
         self.adj = Adjusting::ZERO;
         Ok(())
     }
@@ -599,7 +612,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// The firmware's report of its CAN link (error counters, bus state, reset reason, missed
     /// slots): from now on the node publishes it in `LINK` with every `STATUS`. Call it once
-    /// per cycle, before [`Node::poll`].
+    /// per cycle, before [`Node::poll`]: a link reported bus-off (`bus_state` 3: the node
+    /// neither sends nor takes part) in more than [`OFF_BUS_CYCLES`] polls in a row stops a
+    /// moving robot as a lost controller does (supervision, see the module docs).
     pub fn set_link_health(&mut self, link: LinkHealth) {
         self.link = Some(link);
     }
@@ -623,6 +638,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.heard_cycle == other.heard_cycle
             && self.window == other.window
             && self.cycle == other.cycle
+            && self.off_bus == other.off_bus
             && self.adj == other.adj
     }
 
