@@ -385,8 +385,8 @@ fn fifo1_comes_before_the_software_queue_and_a_loss_report() {
 
 #[test]
 fn a_foreign_element_in_fifo1_is_dropped_without_reordering() {
-    // An ESTOP element that is no classic frame (DLC 9), then a real one; FIFO0 and the
-    // software queue hold commands.
+    // An ESTOP element that is no classic frame (an FD frame), then a real one; FIFO0 and
+    // the software queue hold commands.
     let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
     mock.estop_fifo1 = true;
     let mut link = Link::new(mock);
@@ -394,7 +394,7 @@ fn a_foreign_element_in_fifo1_is_dropped_without_reordering() {
     link.service(); // heartbeat 1 into the software queue
     link.peripheral_mut().arrive(heartbeat(2)); // FIFO0
     let mut bad = estop();
-    bad[1] = (bad[1] & !(0xF << 16)) | (9 << 16);
+    bad[1] |= 1 << 21;
     link.peripheral_mut().arrive(bad);
     link.peripheral_mut().arrive(estop());
     let seqs: Vec<(u16, u8)> = std::iter::from_fn(|| link.receive().ok())

@@ -118,6 +118,9 @@ impl SafeStateHw for BoardSafeState {
         // SAFETY: setting clock-enable bits only.
         rcc.ahb4enr
             .modify(|r, w| unsafe { w.bits(r.bits() | AHB4ENR_GPIOB_GPIOD) });
+        // The clock takes effect some bus cycles after the write (RM0433: a read of the enable
+        // register back before the peripheral is accessed); the GPIO writes come after it.
+        let _ = rcc.ahb4enr.read().bits();
         // SAFETY: GPIOD's register block at its fixed address; see `drive_high`.
         drive_high(unsafe { &*pac::GPIOD::ptr() }, CAN_TX_PIN);
     }
