@@ -384,9 +384,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // does, to the footstep unit (bisection on k/n of the move, n its longer component in
         // 0.5 mm: at most 16 halvings; the limits are checked on the moved step and its
         // successor, the steps after them keeping their places relative to both).
-        let n = delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1) as i64;
+        let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
         let part = |k: i64| {
-            let at = |o: i32, d: i32| o + (i64::from(d) * k / n) as i32;
+            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
+            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
             [at(old[0], delta[0]), at(old[1], delta[1])]
         };
         let keeps = |node: &Self, k: i64| {

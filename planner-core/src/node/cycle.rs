@@ -112,13 +112,17 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let Some((i, _)) = worst else {
             return Some(f);
         };
-        // (Moved to the end and popped: no indexing that could panic.)
-        if let Some(tail) = batch.get_mut(i..) {
-            let n = tail.len().min(1);
-            tail.rotate_left(n);
+        // The others in their order, then `f` (built anew: no index or rotation that could
+        // panic; only when the held frames are full).
+        let out = batch.get(i).copied();
+        let mut kept: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
+        for (j, g) in batch.iter().enumerate() {
+            if j != i {
+                let _ = kept.push(*g);
+            }
         }
-        let out = batch.pop();
-        let _ = batch.push(f);
+        let _ = kept.push(f);
+        *batch = kept;
         out
     }
 
