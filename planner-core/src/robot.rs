@@ -467,7 +467,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
     right: {right},
     heartbeat_timeout_ms: {hb},
     max_rx: {max_rx},
-    max_foreign: {max_foreign},
+    max_frames: {max_frames},
     max_plans: {max_plans},
     reach: ::planner_core::node::Reach {{
         max_forward: {mf},
@@ -485,6 +485,8 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         max_age: {age},
         margin: {db},
         min_change: {mc},
+        max_shift: {msh},
+        max_deviation: {mdv},
         from_measured: {fm},
     }},
     entropy: 0,
@@ -512,7 +514,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         right = foot(&cfg.right),
         hb = cfg.heartbeat_timeout_ms,
         max_rx = cfg.max_rx,
-        max_foreign = cfg.max_foreign,
+        max_frames = cfg.max_frames,
         max_plans = cfg.max_plans,
         mf = r.max_forward.literal(),
         mb = r.max_backward.literal(),
@@ -527,6 +529,8 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         age = cfg.adjust.max_age,
         db = cfg.adjust.margin.literal(),
         mc = cfg.adjust.min_change.literal(),
+        msh = cfg.adjust.max_shift.literal(),
+        mdv = cfg.adjust.max_deviation.literal(),
         fm = cfg.adjust.from_measured,
     )
 }

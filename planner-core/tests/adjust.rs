@@ -25,7 +25,7 @@ mod common;
 use common::{y, Rig};
 use planner_core::gait::{Phase, Side};
 use planner_core::node::NodeConfig;
-use planner_core::wire::{Ack, Adjust, ControlOp, Measured, Reason};
+use planner_core::wire::{Ack, Adjust, Command, ControlOp, Measured, Reason};
 
 /// The stabilizer's DCM error gain \[1/s\]: `p = p_ref + (1 + k/ω)(ξ − ξ_ref)`.
 const K_DCM: f64 = 3.0;
@@ -55,8 +55,10 @@ impl Plane {
 struct Outcome {
     fallen: bool,
     worst: f64,
-    /// The node's shift after the run \[0.5 mm\], and every `ADJUST` seen.
+    /// The node's last shift other than 0 during the run \[0.5 mm\], its shift after the run
+    /// (the walk ended: 0), and every `ADJUST` seen.
     shift: [i32; 2],
+    shift_after: [i32; 2],
     adjusts: Vec<Adjust>,
     /// Landings: (commanded x, y, landed x, y).
     landings: Vec<(f64, f64, f64, f64)>,
@@ -103,7 +105,17 @@ fn walk_pushed(
     measure: (bool, u32, u32),
     at: PushAt,
 ) -> Outcome {
-    let mut r = rig.fork();
+    walk_on(&mut rig.fork(), adjusting, dv, measure, at)
+}
+
+/// [`walk_pushed`] on the rig `r` itself (left standing after the walk).
+fn walk_on(
+    r: &mut Rig,
+    adjusting: bool,
+    dv: [f64; 2],
+    measure: (bool, u32, u32),
+    at: PushAt,
+) -> Outcome {
     let n_steps = 10u16;
     let len = 0.2;
     let mut commanded = vec![];
@@ -179,6 +191,9 @@ fn walk_pushed(
         r.t += 5;
         let plans = r.n.gait().plans();
         r.n.poll(r.t, &mut r.bus);
+        if r.n.shift() != [0, 0] {
+            out.shift = r.n.shift();
+        }
         if r.n.gait().plans() != plans && r.n.gait().replanned_from_measured() {
             out.from_measured += 1;
         }
@@ -220,7 +235,7 @@ fn walk_pushed(
             break;
         }
     }
-    out.shift = r.n.shift();
+    out.shift_after = r.n.shift();
     out
 }
 
@@ -284,12 +299,17 @@ fn adjusted_walk_lands_where_adjust_says(rig: &Rig, measured: bool) {
         o.shift[0] > 0,
         "a forward push moves the steps forward: {o:?}"
     );
-    let last = o.adjusts.last().expect("ADJUST frames");
+    // The last shift published is the one the walk had; the walk's end ends it.
+    let moved = o.adjusts.iter().rev().find(|a| a.shift != [0, 0]);
+    let moved = moved.expect("ADJUST frames");
     assert_eq!(
-        [i32::from(last.shift[0]), i32::from(last.shift[1])],
+        [i32::from(moved.shift[0]), i32::from(moved.shift[1])],
         o.shift
     );
-    assert!(last.count > 0);
+    assert!(moved.count > 0);
+    let last = o.adjusts.last().unwrap();
+    assert_eq!((last.shift, o.shift_after), ([0, 0], [0, 0]), "{last:?}");
+    assert!(last.count > moved.count);
     // The capture step's window started from the measured state, where the node says so.
     assert_eq!(o.from_measured > 0, measured, "{o:?}");
     // Every landing is its commanded position plus a shift the node published.
@@ -429,4 +449,154 @@ fn measured_states_of_the_session_before_a_wrap_are_refused() {
     r.bus.rx.push_back(old.encode(epoch));
     let acks = r.cycle();
     assert_eq!(acks[0].reason, Some(Reason::BadCrc), "{acks:?}");
+}
+
+/// The shift ends with its walk: after an adjusted walk (pushed, steps moved), `Stop` and
+/// standing, with no `Reset`, a plain `Start` walk's steps commanded beside the feet are
+/// taken and land where commanded; `ADJUST` said so (shift 0 from the next step on).
+#[test]
+fn the_shift_ends_with_its_walk() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    for push in [[0.35, 0.0], [0.0, -0.2]] {
+        let mut r = rig.fork();
+        let o = walk_on(&mut r, true, push, (true, 0, 0), PUSH_IN_SINGLE);
+        assert!(!o.fallen && o.shift != [0, 0], "{o:?}");
+        assert!(r.n.gait().is_standing());
+        assert_eq!(r.n.shift(), [0, 0]);
+        let adjust = r.n.adjustment();
+        assert_eq!((adjust.shift, adjust.from), ([0, 0], r.n.next_step() as u8));
+        // A plain walk from where the feet stand.
+        let feet = *r.n.gait().feet();
+        let x0 = feet[0].x.max(feet[1].x);
+        let right_first = r.n.gait().next_side() != Some(Side::Left);
+        let mut commanded = vec![];
+        for i in 0..4u16 {
+            let left = (i % 2 == 1) == right_first;
+            let (x, yy) = (x0 + 0.15 * f64::from(i + 1), feet[usize::from(!left)].y);
+            let id = r.n.next_step();
+            assert_eq!(r.append(id, left, x, yy), None, "push {push:?}, step {i}");
+            commanded.push((id, left, x, yy));
+        }
+        assert_eq!(r.control(ControlOp::Start), None);
+        assert_eq!(r.control(ControlOp::Stop), None);
+        let mut landed = vec![];
+        let mut swinging = None;
+        for k in 0..1200 {
+            r.run(1, k % 20 == 0);
+            let s = r.n.gait().swinging();
+            if let (Some(id), None) = (swinging, s) {
+                let &(_, left, x, yy) = commanded.iter().find(|c| c.0 == id).unwrap();
+                let f = r.n.gait().feet()[usize::from(!left)];
+                landed.push(((f.x - x).abs(), (f.y - yy).abs()));
+            }
+            swinging = s;
+        }
+        assert_eq!(landed.len(), 4, "push {push:?}");
+        for (dx, dy) in landed {
+            assert!(dx < 1e-9 && dy < 1e-9, "push {push:?}: {dx}, {dy}");
+        }
+    }
+}
+
+/// What an estimator claiming the constant deviation `dev` \[m\] every cycle does to an
+/// adjusting straight walk of `n_steps`: the first shift's length, the largest shift's
+/// length, and the farthest landing from its commanded position \[m\].
+fn constant_claim(rig: &Rig, dev: [f64; 2], n_steps: u16) -> (f64, f64, f64) {
+    let mut r = rig.fork();
+    let mut commanded = vec![];
+    for i in 0..n_steps {
+        let left = i % 2 == 1;
+        let x = 0.2 * f64::from(i + 1).min(f64::from(n_steps - 1));
+        let id = r.n.next_step();
+        assert_eq!(r.append(id, left, x, y(left)), None, "step {i}");
+        commanded.push((id, left, x, y(left)));
+    }
+    assert_eq!(r.control(ControlOp::StartAdjusting), None);
+    let stop = r.command(ControlOp::Stop);
+    r.bus.rx.push_back(stop.encode());
+    let (mut first, mut largest, mut farthest) = (None, 0.0f64, 0.0f64);
+    let mut swinging = None;
+    for k in 0..4000u32 {
+        let m = Measured::from_si(r.n.cycles(), dev).unwrap();
+        r.bus.rx.push_back(m.encode(r.session.epoch));
+        if k % 20 == 0 {
+            let hb = r.heartbeat();
+            r.bus.rx.push_back(hb.encode());
+        }
+        r.cycle();
+        let s = r.n.shift();
+        let length = f64::from(s[0]).hypot(f64::from(s[1])) * 5e-4;
+        if length > 0.0 && first.is_none() {
+            first = Some(length);
+        }
+        largest = largest.max(length);
+        let now = r.n.gait().swinging();
+        if let (Some(id), None) = (swinging, now) {
+            let &(_, left, x, yy) = commanded.iter().find(|c| c.0 == id).unwrap();
+            let f = r.n.gait().feet()[usize::from(!left)];
+            farthest = farthest.max((f.x - x).hypot(f.y - yy));
+        }
+        swinging = now;
+        if r.n.gait().is_standing() && k > 100 {
+            break;
+        }
+    }
+    (first.unwrap_or(0.0), largest, farthest)
+}
+
+/// The largest admissible capture step for any deviation: a constant measured deviation of
+/// 0.05 … 0.9 m forward, outward or backward moves the first capture step, never less for a
+/// larger deviation (the reach cut finds the largest part of the move that keeps the limits,
+/// to the footstep unit, however small a part that is; before, a move of which even 1/64
+/// broke a limit was given up). A deviation whose move is beyond `ADJUST`'s fields (1.6 m
+/// backward: an offset of about 26 m) is cut to the shift bound along its direction, not
+/// dropped.
+#[test]
+fn a_larger_push_gets_the_largest_capture_step() {
+    let rig = Rig::new(NodeConfig::hrp2());
+    for dir in [[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0]] {
+        let mut last = 0.0;
+        for e in [0.05, 0.2, 0.4, 0.6, 0.9] {
+            let (first, _, _) = constant_claim(&rig, [dir[0] * e, dir[1] * e], 6);
+            assert!(first > 0.0, "{dir:?} × {e} m: no capture step");
+            assert!(first >= last - 1e-9, "{dir:?} × {e} m: {first} < {last}");
+            last = first;
+        }
+    }
+    let mut cfg = NodeConfig::hrp2();
+    cfg.adjust.max_deviation = 1.6;
+    let rig = Rig::new(cfg);
+    let (first, largest, _) = constant_claim(&rig, [-1.6, 0.0], 6);
+    assert!(first > 0.0, "1.6 m backward: no capture step");
+    assert!(largest <= cfg.adjust.max_shift + 1e-9, "{largest}");
+}
+
+/// Nothing walks the robot farther than the shift bound from its commanded path, whatever
+/// the estimator claims: a constant 0.3 m claim to the side for a 12-step walk keeps every
+/// landing within `max_shift` (0.30 m) of where it was commanded (before: 0.47 m); a claim
+/// beyond `max_deviation` (1.0 m) is refused `OutOfRange` and changes nothing.
+#[test]
+fn a_lying_estimator_moves_the_path_at_most_the_shift_bound() {
+    let cfg = NodeConfig::hrp2();
+    let rig = Rig::new(cfg);
+    for dev in [[0.0, 0.3], [0.0, -0.3], [0.3, 0.3], [-0.3, 0.0]] {
+        let (_, largest, farthest) = constant_claim(&rig, dev, 12);
+        let bound = cfg.adjust.max_shift + 1e-9;
+        assert!(
+            largest > 0.0 && largest <= bound,
+            "{dev:?}: shift {largest}"
+        );
+        assert!(farthest <= bound, "{dev:?}: landed {farthest} m off");
+    }
+    let mut r = rig.fork();
+    for dev in [[1.2, 0.0], [0.0, -1.4], [0.75, 0.75]] {
+        let m = Measured::from_si(r.n.cycles(), dev).unwrap();
+        assert_eq!(
+            r.ask(Command::Measured(m)),
+            Some(Reason::OutOfRange),
+            "{dev:?}"
+        );
+    }
+    let m = Measured::from_si(r.n.cycles(), [0.7, 0.7]).unwrap();
+    assert_eq!(r.ask(Command::Measured(m)), None, "0.99 m is a state");
 }

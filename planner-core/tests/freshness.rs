@@ -212,16 +212,46 @@ fn an_append_never_accepted_before_a_reset_is_not_taken_after_it() {
     assert_eq!(r.n.gait().queued(), 0);
 }
 
-/// A start-up opens at most 255 sessions after its handshake (each `Reset` skips 256 step
-/// numbers of 65,535): the next `Reset` is refused `Exhausted` and changes nothing.
+/// A latched state is always clearable by a `Reset`, however many sessions came before: the
+/// start-up's step numbers last 255 sessions, and a `Reset` beyond them still opens a session
+/// and leaves the emergency stop or the lost controller, with no step numbers left (appends
+/// `Exhausted`). No frame of an earlier session is taken: an append sent before the last
+/// `Reset` (refused then) is refused after it.
 #[test]
-fn resets_exhaust_the_step_numbers() {
+fn a_latched_stop_is_always_cleared_by_a_reset() {
     let mut r = Rig::hrp2();
-    for k in 0..255 {
-        assert_eq!(r.control(ControlOp::Reset), None, "reset {k}");
+    // A walk, then the controller falls silent: lost.
+    queue_walk(&mut r, 4);
+    assert_eq!(r.control(ControlOp::Start), None);
+    r.run(150, false);
+    assert_eq!(r.n.state(), NodeState::ControllerLost);
+    r.until(2000, |n| n.gait().is_standing());
+    for k in 0..300 {
+        // An append of this session, refused (latched), then delivered after the `Reset`.
+        let next = r.n.next_step();
+        let side = r.n.gait().next_side() == Some(Side::Left);
+        let old = r.book.append(next, side, 0.1, y(side), 0.0).unwrap();
+        assert!(
+            r.ask(old).is_some(),
+            "round {k}: a latched node took a step"
+        );
+        assert_eq!(r.control(ControlOp::Reset), None, "round {k}");
+        assert_eq!(r.n.state(), NodeState::Standing, "round {k}");
+        assert!(r.ask(old).is_some(), "round {k}: an old append taken");
+        assert_eq!(r.n.gait().queued(), 0);
+        assert_eq!(
+            r.ask(Command::EmergencyStop { seq: k as u8 }),
+            None,
+            "round {k}"
+        );
+        assert_eq!(r.n.state(), NodeState::EmergencyStopped);
     }
-    assert_eq!(r.control(ControlOp::Reset), Some(Reason::Exhausted));
+    assert_eq!(r.control(ControlOp::Reset), None);
     assert_eq!(r.n.state(), NodeState::Standing);
+    // The numbers are used up: the robot stands.
+    let next = r.n.next_step();
+    let side = r.n.gait().next_side() == Some(Side::Left);
+    assert_eq!(r.append(next, side, 0.1, y(side)), Some(Reason::Exhausted));
 }
 
 /// Item 4: fifteen modifications of the next target and an `ESTOP` in one cycle: the

@@ -66,3 +66,64 @@ fn the_reports_go_out_in_the_first_cycle() {
     assert_eq!(ids, [ids::STATUS, ids::DIAG, ids::SESSION, ids::LINK]);
     assert_eq!(LinkHealth::decode(&bus.tx[3]).map(|l| l.reset), Some(5));
 }
+
+/// A link loss is a loss: a link reported bus-off in more than `OFF_BUS_CYCLES` cycles in a row
+/// stops a walking robot as a lost controller does (motion refused until a `Reset` standing),
+/// although the controller was heard a moment before; a shorter bus-off (the first back-off,
+/// one cycle; or `OFF_BUS_CYCLES` in a row) leaves the walk going; a standing robot is not
+/// latched by it.
+#[test]
+fn a_link_off_the_bus_for_a_few_cycles_stops_the_walk() {
+    use common::{y, Rig};
+    use planner_core::node::{NodeState, OFF_BUS_CYCLES};
+    use planner_core::wire::{ControlOp, Reason};
+    let off = LinkHealth {
+        bus_state: 3,
+        ..LinkHealth::default()
+    };
+    let on = LinkHealth::default();
+    let walking = || {
+        let mut r = Rig::hrp2();
+        for i in 0..8u16 {
+            let left = i % 2 == 1;
+            let x = 0.15 * f64::from(i + 1);
+            assert_eq!(r.append(i, left, x, y(left)), None);
+        }
+        assert_eq!(r.control(ControlOp::Start), None);
+        r.run(5, true);
+        r
+    };
+    // Off for OFF_BUS_CYCLES in a row, back, off again: a glitch each time.
+    let mut r = walking();
+    for _ in 0..3 {
+        for _ in 0..OFF_BUS_CYCLES {
+            r.n.set_link_health(off);
+            r.run(1, false);
+        }
+        r.n.set_link_health(on);
+        r.run(1, true);
+        assert_eq!(r.n.state(), NodeState::Walking);
+    }
+    // One cycle more: lost, in that cycle.
+    let mut r = walking();
+    for k in 0..=OFF_BUS_CYCLES {
+        r.n.set_link_health(off);
+        assert_eq!(r.n.state(), NodeState::Walking, "cycle {k}");
+        r.run(1, false);
+    }
+    assert_eq!(r.n.state(), NodeState::ControllerLost);
+    r.n.set_link_health(on);
+    assert_eq!(
+        r.append(8, false, 1.35, y(false)),
+        Some(Reason::ControllerLost)
+    );
+    r.until(2000, |n| n.gait().is_standing());
+    assert_eq!(r.control(ControlOp::Reset), None);
+    assert_eq!(r.n.state(), NodeState::Standing);
+    // Standing: nothing to stop, nothing latched.
+    for _ in 0..3 * OFF_BUS_CYCLES {
+        r.n.set_link_health(off);
+        r.run(1, false);
+    }
+    assert_eq!(r.n.state(), NodeState::Standing);
+}

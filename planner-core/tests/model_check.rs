@@ -30,7 +30,9 @@
 //!    if it accepted a command then (new, by 1); and a robot that moves and is not stopped by
 //!    supervision heard one within the timeout (2 cycles here);
 //! 5. **every `ESTOP` in its cycle**: after a cycle in which one was delivered, the node is
-//!    emergency-stopped with nothing queued;
+//!    emergency-stopped with nothing queued — with the node holding 2 commands a cycle of the
+//!    3 delivered, so that a cycle can hold more frames than the node acts on: the frame left
+//!    out is refused `Busy`, and an `ESTOP` is never the one;
 //! 6. **a refusal changes nothing**: the node equals ([`Node::same_state`]) a copy that ran
 //!    the cycle with the accepted frames only; and every frame is answered once.
 //!
@@ -42,7 +44,8 @@
 //! 4 cycles old and newer than every one taken before (besides 1, 2 and 6), never counted as
 //! the controller heard (4).
 //!
-//! Bounds: 2 scripts, at most 3 frames a cycle, 6 cycles (`WALK_LONG=1`: 7 cycles). The front
+//! Bounds: 2 scripts, at most 3 frames a cycle (the node holds 2), 6 cycles (`WALK_LONG=1`: 7
+//! cycles). The front
 //! page's "Headline figures" quote the bounds and each script's states (in millions):
 //! each check asserts that they are the measured ones (at the default bound).
 
@@ -275,6 +278,9 @@ impl Protocol {
         let mut cfg = NodeConfig::hrp2();
         cfg.entropy = ENTROPY;
         cfg.heartbeat_timeout_ms = 10; // 2 cycles: supervision within the bound
+                                       // Fewer commands held a cycle than the bus delivers: the receive's ranking (an `ESTOP`
+                                       // takes the place of another frame, which is refused `Busy`) is within the bound.
+        cfg.max_rx = 2;
         let gains = gains(&cfg);
         Self {
             script,

@@ -458,13 +458,17 @@ fn timing_targets() {
     let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
     let checks: [(&str, f64, f64, f64); 12] = [
         ("Node::new", max("new") as f64, 100_000.0, 100_000.0),
-        ("re-plan (max)", max("replan") as f64, 20_000.0, 20_000.0),
+        // (The worst re-plan cycle is a fault-sweep burst of modifications: the node acts on
+        // 20 commands a cycle, the controller's 16 and the estimator's with room for
+        // emergency stops of other senders.)
+        ("re-plan (max)", max("replan") as f64, 21_000.0, 21_000.0),
         ("control-loop stack [B]", control as f64, 12_288.0, 12_288.0),
         ("steady (mean)", steady_mean, 3_000.0, 3_000.0),
         // (Every 20th cycle sends the four reports: STATUS, DIAG, SESSION and LINK, ~700
         // instructions; the steady maximum is such a cycle, in the adjusting walk, which also
-        // takes the measured state and evaluates the capture law every cycle: 4,400.)
-        ("steady (max)", max("steady") as f64, 4_500.0, 4_500.0),
+        // takes the measured state, checks its plausibility and evaluates the capture law and
+        // the shift bound every cycle: 4,720.)
+        ("steady (max)", max("steady") as f64, 5_000.0, 5_000.0),
         ("worst cycle", max("cycle") as f64, 40_000.0, 40_000.0),
         (
             "adjusted re-plan (max)",

@@ -63,6 +63,8 @@ fn the_generated_source_is_the_configuration_it_was_made_from() {
         r.sole_gap,
         cfg.adjust.margin,
         cfg.adjust.min_change,
+        cfg.adjust.max_shift,
+        cfg.adjust.max_deviation,
     ];
     assert_eq!(floats, want);
     for int in [

@@ -105,9 +105,8 @@ fn class(f: &RawFrame, expect: Expect) -> u8 {
     }
 }
 
-/// Frames the classification looks at (the node takes at most its `max_rx` commands and
-/// `max_foreign` foreign frames per poll; beyond this many the classes of the rest count as
-/// one).
+/// Frames the classification looks at (the node takes at most its `max_frames` frames of all
+/// kinds per poll; beyond this many the classes of the rest count as one).
 const SEEN: usize = 128;
 
 /// What waited for the node before a cycle, to classify the cycle after it ([`Kind`]): by the

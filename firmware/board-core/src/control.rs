@@ -109,6 +109,9 @@ pub struct SummaryLine {
     pub overruns: u32,
     /// Slots missed since start-up.
     pub missed: u32,
+    /// The slot jitter: the most counter ticks (µs on the board) a cycle of the window began
+    /// after its slot did ([`crate::pace::Slot::late_ticks`]).
+    pub late_max: u32,
     /// The link's health.
     pub health: Health,
 }
@@ -170,6 +173,8 @@ pub struct ControlLoop<K, C, W, B, L> {
     stats: Stats,
     reset: ResetReason,
     period_cycles: u32,
+    /// The most `late_ticks` of a slot in the statistics window.
+    late_max: u32,
 }
 
 /// `Node::poll` (through [`ControlNode::poll`]) in a frame of its own: the timed part of the
@@ -205,6 +210,7 @@ where
             stats: Stats::default(),
             reset,
             period_cycles,
+            late_max: 0,
         }
     }
 
@@ -248,6 +254,7 @@ where
         port: &mut P,
     ) -> SlotRun<N::Scalar> {
         let begun = self.io.counter.cycles();
+        self.late_max = self.late_max.max(slot.late_ticks);
         port.cycle();
         node.set_link_health(port.health().to_wire(self.reset, self.pacer.missed()));
 
@@ -288,8 +295,10 @@ where
                 period_cycles: self.period_cycles,
                 overruns: self.stats.overruns,
                 missed: self.pacer.missed(),
+                late_max: self.late_max,
                 health: port.health(),
             });
+            self.late_max = 0;
         }
         SlotRun {
             slot,

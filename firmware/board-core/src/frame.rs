@@ -34,19 +34,19 @@ impl ClassicFrame {
     /// data frame of at most 8 bytes), without building the frame.
     pub fn is_classic(e: &[u32; 4]) -> bool {
         let [r0, r1, _, _] = *e;
-        r0 & (0b11 << 29) == 0 && r1 & (1 << 21) == 0 && (r1 >> 16) & 0xF <= 8
+        r0 & (0b11 << 29) == 0 && r1 & (1 << 21) == 0
     }
 
     /// A message-RAM RX FIFO element as a frame; `None` for what is not a classic standard
-    /// data frame of at most 8 bytes (extended id: R0 bit 30, remote: bit 29, FD: R1 bit 21,
-    /// a DLC above 8).
+    /// data frame (extended id: R0 bit 30, remote: bit 29, FD: R1 bit 21). A classic frame's
+    /// DLC of 9 … 15 means 8 data bytes (ISO 11898-1): such a frame is the 8-byte frame.
     pub fn from_element(e: &[u32; 4]) -> Option<Self> {
         let [r0, r1, d0, d1] = *e;
         let extended = r0 & (1 << 30) != 0;
         let remote = r0 & (1 << 29) != 0;
         let fd = r1 & (1 << 21) != 0;
-        let dlc = ((r1 >> 16) & 0xF) as u8;
-        if extended || remote || fd || dlc > 8 {
+        let dlc = (((r1 >> 16) & 0xF) as u8).min(8);
+        if extended || remote || fd {
             return None;
         }
         let id = StandardId::new(((r0 >> 18) & 0x7FF) as u16)?;
@@ -143,9 +143,15 @@ mod tests {
                 "bit {bit} of word {word}"
             );
         }
-        let mut e = base;
-        e[1] = (e[1] & !(0xF << 16)) | (9 << 16); // DLC 9 is an FD length
-        assert_eq!(ClassicFrame::from_element(&e), None);
+        // A classic frame's DLC 9 … 15 means 8 bytes (in an FD frame, it is an FD length).
+        let eight = frame(0x100, &[1, 2, 3, 4, 5, 6, 7, 8]);
+        for dlc in 9..16u32 {
+            let mut e = eight.to_element();
+            e[1] = (e[1] & !(0xF << 16)) | (dlc << 16);
+            assert_eq!(ClassicFrame::from_element(&e), Some(eight), "DLC {dlc}");
+            e[1] |= 1 << 21;
+            assert_eq!(ClassicFrame::from_element(&e), None, "FD, DLC {dlc}");
+        }
         // `is_classic` says the same as `from_element`, for every combination of the bits.
         for xtd_rtr in 0..4u32 {
             for fdf in 0..2u32 {

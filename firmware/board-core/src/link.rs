@@ -18,8 +18,8 @@
 //! The acceptance filters put `ESTOP` into RX FIFO1 and the other commands into RX FIFO0.
 //! [`Link::receive`](Can::receive) reads FIFO1 first, every time, even before it reports a
 //! lost frame: an `ESTOP` reaches the node in the first frames of the poll after it arrived,
-//! however many commands wait in FIFO0 and in the software queue (the node takes at most
-//! `max_rx` commands a cycle, and stops receiving for the cycle at a receive error).
+//! however many commands wait in FIFO0 and in the software queue (the node takes up to
+//! `max_frames` frames a cycle, and stops receiving for the cycle at a receive error).
 //! [`Link::service`] leaves FIFO1 to the poll (16 elements: more than the node takes in a
 //! cycle).
 //!

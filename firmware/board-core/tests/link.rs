@@ -328,8 +328,11 @@ fn estop() -> [u32; 4] {
 
 /// 48 commands (three cycles of the node's receive budget) wait, 32 of them already in the
 /// software queue, when an `ESTOP` arrives; the cycles until the node is emergency-stopped.
-fn cycles_to_estop(estop_fifo1: bool) -> u32 {
-    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+fn cycles_to_estop(estop_fifo1: bool, max_frames: usize) -> u32 {
+    let mut cfg = NodeConfig::hrp2();
+    cfg.max_frames = max_frames;
+    cfg.max_rx = cfg.max_rx.min(max_frames);
+    let mut node = Node::<16>::new(cfg).unwrap();
     let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
     mock.estop_fifo1 = estop_fifo1;
     let mut link = Link::new(mock);
@@ -349,14 +352,20 @@ fn cycles_to_estop(estop_fifo1: bool) -> u32 {
 
 #[test]
 fn an_estop_in_fifo1_overtakes_a_full_fifo0() {
-    assert_eq!(cycles_to_estop(true), 1);
+    let max_frames = NodeConfig::hrp2().max_frames;
+    assert_eq!(cycles_to_estop(true, max_frames), 1);
+    // The node takes everything waiting (up to `max_frames` a cycle): with every command in
+    // FIFO0, the ESTOP behind 48 commands is carried out in its cycle all the same.
+    assert_eq!(cycles_to_estop(false, max_frames), 1);
+    // A node that took 16 frames a cycle needs FIFO1's routing.
+    assert_eq!(cycles_to_estop(true, 16), 1);
 }
 
 #[test]
 fn an_estop_behind_commands_in_fifo0_waits_cycles() {
-    // The routing before (every command into FIFO0): the ESTOP waits behind 48 commands,
-    // 16 a cycle; the check above is not vacuous.
-    assert_eq!(cycles_to_estop(false), 4);
+    // Every command into FIFO0 and a node that takes 16 frames a cycle: the ESTOP waits
+    // behind 48 commands; the checks above are not vacuous.
+    assert_eq!(cycles_to_estop(false, 16), 4);
 }
 
 #[test]
@@ -376,8 +385,8 @@ fn fifo1_comes_before_the_software_queue_and_a_loss_report() {
 
 #[test]
 fn a_foreign_element_in_fifo1_is_dropped_without_reordering() {
-    // An ESTOP element that is no classic frame (DLC 9), then a real one; FIFO0 and the
-    // software queue hold commands.
+    // An ESTOP element that is no classic frame (an FD frame), then a real one; FIFO0 and
+    // the software queue hold commands.
     let mut mock = MockFdcan::new(board_core::link::RX_ELEMENTS);
     mock.estop_fifo1 = true;
     let mut link = Link::new(mock);
@@ -385,7 +394,7 @@ fn a_foreign_element_in_fifo1_is_dropped_without_reordering() {
     link.service(); // heartbeat 1 into the software queue
     link.peripheral_mut().arrive(heartbeat(2)); // FIFO0
     let mut bad = estop();
-    bad[1] = (bad[1] & !(0xF << 16)) | (9 << 16);
+    bad[1] |= 1 << 21;
     link.peripheral_mut().arrive(bad);
     link.peripheral_mut().arrive(estop());
     let seqs: Vec<(u16, u8)> = std::iter::from_fn(|| link.receive().ok())

@@ -42,7 +42,7 @@ impl LogSink for DefmtLog {
     fn summary(&mut self, s: &SummaryLine) {
         let (w, h) = (&s.window, &s.health);
         defmt::info!(
-            "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32}; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
+            "cycles {=u32}: worst {=u32} mean {=u64} of {=u32}; rx {=u32} refused {=u32} tx {=u32}; overruns {=u32} missed {=u32} slot jitter {=u32} us; TEC {=u8} REC {=u8} state {=u8} bus-offs {=u16} passive {=u16} rx lost {=u16} replaced {=u16}; log dropped {=u32}; loop stack {=u32} B",
             s.cycles,
             w.worst,
             w.mean(),
@@ -52,6 +52,7 @@ impl LogSink for DefmtLog {
             w.sent,
             s.overruns,
             s.missed,
+            s.late_max,
             h.tec,
             h.rec,
             h.state as u8,

@@ -118,6 +118,9 @@ impl SafeStateHw for BoardSafeState {
         // SAFETY: setting clock-enable bits only.
         rcc.ahb4enr
             .modify(|r, w| unsafe { w.bits(r.bits() | AHB4ENR_GPIOB_GPIOD) });
+        // The clock takes effect some bus cycles after the write (RM0433: a read of the enable
+        // register back before the peripheral is accessed); the GPIO writes come after it.
+        let _ = rcc.ahb4enr.read().bits();
         // SAFETY: GPIOD's register block at its fixed address; see `drive_high`.
         drive_high(unsafe { &*pac::GPIOD::ptr() }, CAN_TX_PIN);
     }
@@ -157,16 +160,35 @@ const FEEDS_PER_LINE: u32 = 100;
 /// `safe_state::signal`); then, for ever, the watchdog fed every 10 ms (no reset loop) and an
 /// error line every second (the RTT ring keeps the latest for a probe that attaches later).
 pub fn off_bus(watchdog: &mut IndependentWatchdog, err: BringUpError) -> ! {
-    safe_state::signal(&mut BoardSafeState, MARK_FAULT);
     let (what, detail) = err.describe();
+    stay_off_bus(
+        watchdog,
+        "FDCAN1 configuration did not read back",
+        what,
+        detail,
+    )
+}
+
+/// The random number generator gave no value (`detail`: the attempts): without one of its
+/// own, a start-up would repeat an earlier start-up's session epoch, and a controller's log
+/// recorded before this start-up could be taken. The node does not start: off the bus as
+/// [`off_bus`] (the robot stands; nothing of this start-up can be replayed later).
+pub fn no_entropy(watchdog: &mut IndependentWatchdog, detail: u32) -> ! {
+    stay_off_bus(
+        watchdog,
+        "the random number generator failed",
+        "no session epoch",
+        detail,
+    )
+}
+
+/// Off the bus for ever, saying why every second (see [`off_bus`]).
+fn stay_off_bus(watchdog: &mut IndependentWatchdog, why: &str, what: &str, detail: u32) -> ! {
+    safe_state::signal(&mut BoardSafeState, MARK_FAULT);
     let mut feeds = 0u32;
     loop {
         if feeds == 0 {
-            defmt::error!(
-                "FDCAN1 configuration did not read back ({=str}, {=u32:#x}): off the bus",
-                what,
-                detail
-            );
+            defmt::error!("{=str} ({=str}, {=u32:#x}): off the bus", why, what, detail);
             feeds = FEEDS_PER_LINE;
         }
         feeds -= 1;

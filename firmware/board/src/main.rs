@@ -119,6 +119,8 @@ const CYCLE_HZ: u32 = 200;
 const CYCLE_MS: u32 = 1000 / CYCLE_HZ;
 /// Control cycle in ticks of the microsecond counter.
 const PERIOD_US: u32 = 1_000_000 / CYCLE_HZ;
+/// Reads of the random number generator before the node gives up its start-up.
+const RNG_TRIES: u32 = 8;
 /// Footstep queue capacity of the node.
 const QUEUE: usize = 16;
 // A summary every second.
@@ -263,13 +265,17 @@ fn main() -> ! {
 
     // The node's entropy: 32 bits of the true random number generator (its kernel clock from
     // PLL1Q, 80 MHz), so that every start-up draws another session epoch and first step
-    // number (frames of an earlier start-up are then refused). Should the generator report a
-    // clock or seed error, the cycle counter stands in (it differs with the start-up's timing).
+    // number (frames of an earlier start-up are then refused). A clock or seed error is tried
+    // again ([`RNG_TRIES`] reads); a generator that gives nothing keeps the node off the bus
+    // (`fault::no_entropy`): no stand-in value (a counter, a timer) is sure to differ from
+    // an earlier start-up's.
     let mut rng = dp.RNG.constrain(
         ccdr.peripheral.RNG.kernel_clk_mux(rec::RngClkSel::Pll1Q),
         &ccdr.clocks,
     );
-    let entropy = rng.value().unwrap_or_else(|_| DWT::cycle_count());
+    let Some(entropy) = (0..RNG_TRIES).find_map(|_| rng.value().ok()) else {
+        fault::no_entropy(&mut watchdog, RNG_TRIES)
+    };
     let t0 = DWT::cycle_count();
     // (The constant configuration as it is, the entropy after: the compiler folds the one.)
     let node = match place_node(walk_robot::NODE_CONFIG) {

@@ -414,9 +414,11 @@ pub fn run(
             }
         }
         prev = reference;
-        // The estimator: the DCM deviation against the reference just tracked.
+        // The estimator: the DCM deviation against the reference just tracked; beyond the
+        // node's plausible deviation the robot has fallen, and the estimator sends nothing.
         let e = stab.internals.dcm_error;
-        if let Some(m) = Measured::from_si(stamp, e) {
+        let plausible = e[0].hypot(e[1]) <= node.config().adjust.max_deviation;
+        if let Some(m) = Measured::from_si(stamp, e).filter(|_| plausible) {
             wire.rx.push_back(m.encode(ctl.epoch));
         }
         out.simulated_s = t_walk.unwrap_or(0.0) + f64::from(CYCLE_MS) * 1e-3;

@@ -24,6 +24,7 @@
 //! [`simulate`] refuses one too for scenarios built in code.
 
 pub mod bus;
+pub mod entropy;
 pub mod pushed;
 pub mod replay;
 pub mod report;

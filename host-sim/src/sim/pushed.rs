@@ -113,7 +113,8 @@ pub struct PushedRun {
     pub adjusts: Vec<Adjust>,
     /// The pendulum fell (its DCM left the reference by [`FALLEN_M`]).
     pub fallen: bool,
-    /// The node's shift at the end \[0.5 mm\].
+    /// The node's last shift other than 0 during the walk \[0.5 mm\] (the shift ends with
+    /// the walk: 0 once standing).
     pub shift: [i32; 2],
     /// Control cycles run.
     pub ticks: u64,
@@ -234,6 +235,9 @@ pub fn pushed_walk(
                 out.adjusts.push(a);
             }
         }
+        if node.shift() != [0, 0] {
+            out.shift = node.shift();
+        }
         out.ticks = k + 1;
         if out.fallen
             || (liftoffs > 0 && node.gait().is_standing() && push_at.is_some_and(|t| k > t + 200))
@@ -241,7 +245,6 @@ pub fn pushed_walk(
             break;
         }
     }
-    out.shift = node.shift();
     out.can_log = bus.log();
     Ok(out)
 }

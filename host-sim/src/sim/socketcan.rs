@@ -32,7 +32,8 @@ pub fn command_filters() -> [CanFilter; ids::COMMANDS.len()] {
 }
 
 /// Runs the node configured by `cfg` on `interface` for `seconds` (forever if `None`), one
-/// poll per control period of its gait, printing the status every 200 cycles.
+/// poll per control period of its gait, printing the status every 200 cycles. The entropy of
+/// `cfg` is replaced by the operating system's ([`super::entropy::start_up`]).
 pub fn run_node(
     interface: &str,
     seconds: Option<f64>,
@@ -43,6 +44,9 @@ pub fn run_node(
     // that are not its own.
     socket.set_filters(&command_filters())?;
     socket.set_nonblocking(true)?;
+    // A session epoch and first step number of this start-up's own (`super::entropy`).
+    let cfg = super::entropy::start_up(cfg)
+        .map_err(|e| format!("no entropy for the session epoch (/dev/urandom): {e}"))?;
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
     let period = Duration::from_secs_f64(cfg.params.dt);
     let start = Instant::now();

@@ -150,9 +150,15 @@ impl Rig {
             self.commanded.push(self.cycle);
         }
         if let Some(l) = &mut self.link {
-            // A different bus state and reset reason every 100 ms: every name is heard.
+            // A different bus state and reset reason every 100 ms: every name is heard. The
+            // state only in the cycle that publishes `LINK` (error-active between): a link
+            // bus-off for more than a few cycles in a row would stop the walk.
             let k = self.cycle / 20;
-            l.bus_state = (k % 4) as u8;
+            l.bus_state = if self.cycle % 20 == 1 {
+                (k % 4) as u8
+            } else {
+                0
+            };
             l.reset = (k % board_core::ResetReason::ALL.len() as u32) as u8;
             l.tec = self.cycle as u8;
             self.node.set_link_health(*l);

@@ -15,14 +15,15 @@
 //! ([`crate::gait::Gait::place_steps`]), whose single support eq. 18 may shorten but not
 //! lengthen.
 //!
-//! # One shift for the rest of the walk
+//! # One shift for the rest of the walk, and no longer
 //! The move is a shift `s` (in the footstep unit, 0.5 mm) of the next swing target and every
-//! step after it, queued or appended later, so that the walk after the landing is the plan,
-//! moved: every step lands at its commanded position plus the shift in force when it was
+//! step after it, queued or appended later in the walk, so that the walk after the landing is
+//! the plan, moved: every step lands at its commanded position plus the shift in force when it was
 //! queued or moved. The shift a window's adjustments start from is the one in force when the
 //! window was planned (`base`): before the next re-plan the reference has not moved with the
 //! landing, so `e` is measured against the same plan, and the shift in force is
-//! `base + offset(e)`.
+//! `base + offset(e)`. The shift ends with its walk: once the robot stands it is 0 from the
+//! next step number on, so the next walk's steps land where commanded.
 //!
 //! # Limits
 //! * only in a walk started with `StartAdjusting` (a `CONTROL` operation: the controller opts
@@ -32,7 +33,13 @@
 //!   least [`AdjustConfig::min_change`];
 //! * the reach limits and the sole gap ([`super::Reach`]) hold for the moved step against the
 //!   feet before it and for its successors: a shift that breaks them is cut to the largest
-//!   part of it (to 1/64) that keeps them (`ADJUST` flag *reach limited*);
+//!   part of it (to the footstep unit, 0.5 mm) that keeps them (`ADJUST` flag *reach
+//!   limited*);
+//! * the shift's length is at most [`AdjustConfig::max_shift`] (0.30 m): a wanted shift
+//!   beyond it (however large the deviation, even beyond `ADJUST`'s fields) is cut to it along
+//!   its direction, so no measured state moves the path farther from the commanded one;
+//! * a measured state claiming a deviation beyond [`AdjustConfig::max_deviation`] (1.0 m) is
+//!   refused `OutOfRange` (plausibility: the robot would have fallen whatever the step);
 //! * eq. 17 checks the moved next swing target as it checks a modification (the ZMP stays in
 //!   the sole): a shift it refuses is put back and the next attempt in this window takes half
 //!   of it (flag *ZMP limited*);
@@ -53,7 +60,7 @@
 //! measured with the option off.
 //!
 //! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
-//! adjusts or a shift is in force), so that
+//! adjusts or once the session has adjusted), so that
 //! the controller's book of the steps stays true.
 
 use super::*;
@@ -63,6 +70,10 @@ use crate::wire::{Adjust, Measured, STAMPS, STEP_UNIT};
 
 /// The bound of [`AdjustConfig::max_age`] \[cycles\].
 pub const MAX_AGE: u32 = 40;
+
+/// The bound of [`AdjustConfig::max_shift`] \[m\]: what `ADJUST`'s 16-bit fields of 0.5 mm
+/// carry.
+pub const MAX_SHIFT: f64 = 16.0;
 
 /// The step adjustment's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +85,15 @@ pub struct AdjustConfig<T = f64> {
     pub margin: T,
     /// The least change of the shift that is carried out \[m\].
     pub min_change: T,
+    /// The farthest the node moves the path from the commanded one \[m\]: the shift's length
+    /// never exceeds it (a wanted shift beyond it is cut to it along its direction), so no
+    /// measured state, true or not, moves a landing farther from where it was commanded.
+    /// At most [`MAX_SHIFT`].
+    pub max_shift: T,
+    /// The largest deviation a measured state may claim \[m\] (plausibility): beyond it the
+    /// robot has fallen whatever the step, and a state that claims more is refused
+    /// `OutOfRange` (it changes nothing).
+    pub max_deviation: T,
     /// The re-plan that lifts a capture step's foot starts from the measured state (see
     /// [`crate::gait::Gait::set_measured`]): the reference's COG velocity then steps by the
     /// captured deviation times `ω` at that tick (its position, acceleration and ZMP stay
@@ -83,12 +103,17 @@ pub struct AdjustConfig<T = f64> {
 }
 
 impl AdjustConfig {
-    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes, capture steps re-planned from the
-    /// reference's state (the reference stays C¹).
+    /// 4 cycles (20 ms), a 20 mm margin, 5 mm changes, the path moved by at most 0.30 m
+    /// (about a step's length: what one capture step can move), measured deviations up to
+    /// 1.0 m (a COG velocity error of about 3.5 m/s at HRP-2's `ω`, ten times the pushes
+    /// the robot survives), capture steps re-planned from the reference's state (the
+    /// reference stays C¹).
     pub const DEFAULT: Self = Self {
         max_age: 4,
         margin: 0.02,
         min_change: 0.005,
+        max_shift: 0.30,
+        max_deviation: 1.0,
         from_measured: false,
     };
 }
@@ -100,6 +125,8 @@ impl<T: Real> AdjustConfig<T> {
             max_age: self.max_age,
             margin: U::of(self.margin.f64()),
             min_change: U::of(self.min_change.f64()),
+            max_shift: U::of(self.max_shift.f64()),
+            max_deviation: U::of(self.max_deviation.f64()),
             from_measured: self.from_measured,
         }
     }
@@ -165,6 +192,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.lost {
             return Err(Reason::ControllerLost);
         }
+        let e = m.deviation_in::<T>();
+        // (`!(… <= …)`: a bound that is not a number refuses every state.)
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !((e[0] * e[0] + e[1] * e[1]).sqrt() <= self.cfg.adjust.max_deviation) {
+            return Err(Reason::OutOfRange);
+        }
         // The last reference published is this cycle's predecessor's.
         if self.cycle >= STAMPS {
             return Err(Reason::Exhausted);
@@ -186,7 +219,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             Some((last, _)) if last > at => return Err(Reason::Stale),
             _ => {}
         }
-        self.adj.measured = Some((at, m.deviation_in()));
+        self.adj.measured = Some((at, e));
         Ok(())
     }
 
@@ -310,21 +343,34 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let remaining = p.dt * T::of_i32(n.min(1 << 20) as i32);
         let offset = capture_offset(e, self.cfg.adjust.margin, p.omega, remaining);
         let unit = T::of(STEP_UNIT);
-        let units = |v: T| {
-            let k = (v / unit).round();
-            // (far beyond any reach: the clamp only keeps the integer conversion exact)
-            k.max(T::of(-1e6)).min(T::of(1e6)).trunc_i32()
-        };
-        let scale = |v: i32| v >> self.adj.halvings.min(8);
-        let wanted = [
-            self.adj.base[0].saturating_add(scale(units(offset[0]))),
-            self.adj.base[1].saturating_add(scale(units(offset[1]))),
+        // The shift wanted: the window's base and the offset (a power of ½ of it after eq. 17
+        // refused more), cut along its direction to `max_shift` (which `ADJUST`'s fields
+        // carry): however large the deviation, the node tries the largest shift it allows.
+        let half = T::of_i32(1 << self.adj.halvings.min(8));
+        let mut wanted_m = [
+            T::of_i32(self.adj.base[0]) * unit + offset[0] / half,
+            T::of_i32(self.adj.base[1]) * unit + offset[1] / half,
         ];
-        // The shift stays inside `ADJUST`'s 16-bit fields (±16 m: far beyond any reach).
-        let (lo, hi) = (i32::from(i16::MIN), i32::from(i16::MAX));
-        if !wanted.iter().all(|w| (lo..=hi).contains(w)) {
+        if !(wanted_m[0].is_finite() && wanted_m[1].is_finite()) {
             return;
         }
+        let length = (wanted_m[0] * wanted_m[0] + wanted_m[1] * wanted_m[1]).sqrt();
+        let max_shift = self.cfg.adjust.max_shift;
+        if length > max_shift {
+            wanted_m = [
+                wanted_m[0] * max_shift / length,
+                wanted_m[1] * max_shift / length,
+            ];
+        }
+        // (within ±MAX_SHIFT: the integers are exact, the clamp only keeps them so)
+        let units = |v: T| {
+            (v / unit)
+                .round()
+                .max(T::of(-32767.0))
+                .min(T::of(32767.0))
+                .trunc_i32()
+        };
+        let wanted = [units(wanted_m[0]), units(wanted_m[1])];
         let delta = [wanted[0] - self.adj.shift[0], wanted[1] - self.adj.shift[1]];
         let (dx, dy) = (T::of_i32(delta[0]), T::of_i32(delta[1]));
         let change = (dx * dx + dy * dy).sqrt() * unit;
@@ -335,10 +381,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let old = self.adj.shift;
         let mut flags = self.adj.flags & Adjust::FRESH;
         // The reach: the whole move if it keeps the limits, else the largest part of it that
-        // does (bisection on k/64 of the move; the limits are checked on the moved step and its
+        // does, to the footstep unit (bisection on k/n of the move, n its longer component in
+        // 0.5 mm: at most 16 halvings; the limits are checked on the moved step and its
         // successor, the steps after them keeping their places relative to both).
-        let part = |k: i32| [old[0] + delta[0] * k / 64, old[1] + delta[1] * k / 64];
-        let keeps = |node: &Self, k: i32| {
+        let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
+        let part = |k: i64| {
+            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
+            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
+            [at(old[0], delta[0]), at(old[1], delta[1])]
+        };
+        let keeps = |node: &Self, k: i64| {
             let to = part(k);
             let d = [
                 T::of_i32(to[0] - old[0]) * unit,
@@ -346,11 +398,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             ];
             node.reach_broken_moved(front, d).is_none()
         };
-        let k = if keeps(self, 64) {
-            64
+        let k = if keeps(self, n) {
+            n
         } else {
             flags |= Adjust::REACH_LIMITED;
-            let (mut lo, mut hi) = (0, 64);
+            let (mut lo, mut hi) = (0, n);
             while hi - lo > 1 {
                 let mid = (lo + hi) / 2;
                 if keeps(self, mid) {
@@ -379,6 +431,25 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.adj.count = self.adj.count.saturating_add(1);
         self.adj.flags = flags;
         self.adj.due = true;
+    }
+
+    /// The end of a walk (the gait stands): the shift ends with it, so that the next walk's
+    /// steps land where commanded (a `Start`'s as an adjusting one's, which adjusts afresh).
+    /// The change is sent in `ADJUST` (from the next step number on, shift 0), and repeated
+    /// every 100 ms as long as the session lasts, as every shift is while it is in force.
+    pub(super) fn end_of_walk(&mut self) {
+        if !self.gait.is_standing() || (self.adj.shift == [0, 0] && !self.adj.enabled) {
+            return;
+        }
+        self.adj.enabled = false;
+        self.adj.halvings = 0;
+        if self.adj.shift != [0, 0] {
+            self.adj.shift = [0, 0];
+            self.adj.base = [0, 0];
+            self.adj.from = self.next_step();
+            self.adj.count = self.adj.count.saturating_add(1);
+            self.adj.due = true;
+        }
     }
 
     /// The step adjustment as `ADJUST` reports it.

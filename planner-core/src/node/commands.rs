@@ -275,14 +275,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// Opens a new session while standing (see the module docs): the frame is re-based on the
     /// feet, except at the handshake after start-up.
     pub(super) fn reset(&mut self) -> Result<(), Reason> {
-        let epoch = self.epoch.checked_add(1).ok_or(Reason::Exhausted)?;
+        // (The epoch names the session; the freshness of control commands is their sequence
+        // number's, so the epoch may wrap.)
+        let epoch = self.epoch.wrapping_add(1);
         // The new session numbers its steps past every number the old one could have sent.
+        // When the start-up's numbers cannot give that, the new session has none left (its
+        // appends are refused `Exhausted`, no frame of the old one can be taken): a `Reset`
+        // always opens a session and leaves the latched states, however many came before.
         let skip = if self.open { SESSION_SKIP } else { 0 };
-        let numbers = self
-            .appended
-            .checked_add(skip)
-            .filter(|&n| n <= STEP_NUMBERS)
-            .ok_or(Reason::Exhausted)?;
+        let numbers = self.appended.saturating_add(skip).min(STEP_NUMBERS);
         if self.open {
             let [l, r] = *self.gait.feet();
             let half = T::of(0.5);

@@ -14,6 +14,19 @@ pub(super) fn rank(f: &RawFrame) -> u8 {
     }
 }
 
+/// The class by which a cycle's held frames make room for another ([`Node::poll`]'s receive):
+/// [`rank`], with the estimator's `MEASURED` below the controller's commands (a state is
+/// superseded by the next cycle's).
+pub(super) fn keep_rank(f: &RawFrame) -> u8 {
+    match f.id {
+        ids::MEASURED => 3,
+        _ => rank(f),
+    }
+}
+
+/// `LinkHealth::bus_state` of a link off the bus.
+const BUS_OFF: u8 = 3;
+
 /// Bit `i` of a mask over a cycle's frames (at most [`MAX_RX`] ≤ 64 of them).
 pub(super) const fn bit(i: usize) -> u64 {
     1u64 << (i & 63)
@@ -30,7 +43,8 @@ pub(super) struct Acting {
 impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
     /// The clock check and the supervision rule (module docs, step 3): a moving robot whose
     /// controller has not been heard for longer than the timeout (by the clock or by the
-    /// cycles), or whose clock has stopped, stops, and stays "controller lost". Checked in
+    /// cycles), whose clock has stopped, or whose link was off the bus for more than
+    /// [`OFF_BUS_CYCLES`] cycles, stops, and stays "controller lost". Checked in
     /// every cycle, so it holds for the whole walk.
     pub(super) fn supervise(&mut self, now_ms: u32) {
         if self.cycle == 1 {
@@ -44,6 +58,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.window = (self.cycle, now_ms);
         }
         if self.clock_fault && self.open {
+            self.lost = true;
+        }
+        // The link: cycles in a row off the bus.
+        let off = self.link.is_some_and(|l| l.bus_state == BUS_OFF);
+        self.off_bus = if off {
+            self.off_bus.saturating_add(1)
+        } else {
+            0
+        };
+        if self.off_bus > OFF_BUS_CYCLES && self.open && !self.gait.is_standing() {
             self.lost = true;
         }
         if self.gait.is_standing() {
@@ -65,6 +89,43 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
+    /// Holds the command frame `f` among the cycle's `batch` (at most `max` frames): returns
+    /// the frame left out, if any (`f`, or the newest held frame of the lowest class below
+    /// `f`'s, whose place `f` takes; the others keep their order of arrival).
+    pub(super) fn hold(
+        &self,
+        batch: &mut heapless::Vec<RawFrame, MAX_RX>,
+        max: usize,
+        f: RawFrame,
+    ) -> Option<RawFrame> {
+        if batch.len() < max {
+            return batch.push(f).err();
+        }
+        let mine = keep_rank(&f);
+        let mut worst: Option<(usize, u8)> = None;
+        for (i, g) in batch.iter().enumerate() {
+            let k = keep_rank(g);
+            if k > mine && worst.is_none_or(|(_, w)| k >= w) {
+                worst = Some((i, k));
+            }
+        }
+        let Some((i, _)) = worst else {
+            return Some(f);
+        };
+        // The others in their order, then `f` (built anew: no index or rotation that could
+        // panic; only when the held frames are full).
+        let out = batch.get(i).copied();
+        let mut kept: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
+        for (j, g) in batch.iter().enumerate() {
+            if j != i {
+                let _ = kept.push(*g);
+            }
+        }
+        let _ = kept.push(f);
+        *batch = kept;
+        out
+    }
+
     pub(super) fn enqueue(&mut self, f: RawFrame) {
         if self.tx.push_back(f).is_err() {
             self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
@@ -77,22 +138,36 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         C: embedded_can::nb::Can,
     {
         self.cycle = self.cycle.wrapping_add(1);
-        // 1. Receive: the node's frames of this cycle are held, the others counted.
+        // 1. Receive: everything waiting, up to `max_frames` frames of all kinds; the node's
+        // commands are held (at most `max_rx`), the others counted. When the held frames are
+        // full, a frame of a higher class (`keep_rank`: an `ESTOP`, a `StopNow`, a controller's
+        // command before an estimator's state) takes the place of the newest one of the
+        // lowest class held; the frame left out is answered `Busy` after the cycle.
         let mut batch: heapless::Vec<RawFrame, MAX_RX> = heapless::Vec::new();
-        let (mut foreign, mut received) = (0usize, 0u8);
+        let mut left_out: heapless::Vec<RawFrame, TX_BACKLOG> = heapless::Vec::new();
+        let mut received = 0u8;
+        let mut drained = 0usize;
         let max_rx = self.cfg.max_rx.min(MAX_RX);
-        while batch.len() < max_rx && foreign < self.cfg.max_foreign {
+        while drained < self.cfg.max_frames {
             match can.receive() {
                 Ok(f) => {
+                    drained += 1;
                     received = received.saturating_add(1);
                     // Extended and remote frames are not ours either.
                     match RawFrame::from_frame(&f).filter(|r| ids::is_command(r.id)) {
                         Some(raw) => {
-                            let _ = batch.push(raw);
+                            let out = self.hold(&mut batch, max_rx, raw);
+                            if let Some(out) = out {
+                                self.refuse(Reason::Busy);
+                                if left_out.push(out).is_err() {
+                                    // (its answer could not be queued either)
+                                    self.counters.tx_dropped =
+                                        self.counters.tx_dropped.saturating_add(1);
+                                }
+                            }
                         }
                         None => {
                             self.counters.foreign = self.counters.foreign.saturating_add(1);
-                            foreign += 1;
                         }
                     }
                 }
@@ -176,6 +251,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         } else {
             *self.gait.last()
         };
+        // The shift ends with its walk.
+        self.end_of_walk();
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)
@@ -192,8 +269,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // `ADJUST` (before the stream: frames go out in identifier order) when the shift
         // changed, and every 20 cycles half-way between the reports (the bus load spread:
         // no cycle carries more than one report frame beyond the stream's and the reports')
-        // while the walk adjusts or a shift is in force.
-        let adjusting = self.adj.enabled || self.adj.shift != [0, 0];
+        // while the walk adjusts, or once the session has adjusted (the shift in force, or
+        // its end with the walk).
+        let adjusting = self.adj.enabled || self.adj.shift != [0, 0] || self.adj.count > 0;
         if (streaming && self.adj.due) || (adjusting && self.cycle % 20 == 11) {
             self.adj.due = false;
             let a = self.adjustment().encode();
@@ -215,6 +293,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.enqueue(l.encode());
             }
         }
+        // The frames left out of the cycle, refused `Busy` (they changed nothing): after the
+        // stream and the reports, so that a flood cannot push those out of the backlog.
+        let expect = self.expect();
+        for f in &left_out {
+            let decoded = Command::decode(f, expect);
+            let a = self.refusal(f, &decoded, Reason::Busy).encode();
+            self.enqueue(a);
+        }
+        let refused = refused.saturating_add(left_out.len().min(255) as u8);
         let mut sent = 0u8;
         while let Some(raw) = self.tx.pop_front() {
             let Some(frame) = raw.to_frame::<C::Frame>() else {

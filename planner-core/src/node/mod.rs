@@ -5,17 +5,27 @@
 //! the same code runs in the firmware (FDCAN), in host-sim (a virtual bus) and in tests.
 //!
 //! Per cycle, with bounded work:
-//! 1. **receive**: drain the device, at most [`NodeConfig::max_rx`] of the node's own frames
-//!    ([`ids::COMMANDS`]) and [`NodeConfig::max_foreign`] others (counted in
-//!    [`Counters::foreign`], published in `DIAG`, never answered), before acting on any;
+//! 1. **receive**: drain the device, at most [`NodeConfig::max_frames`] frames of all kinds
+//!    (160: more than the 106 a 1 Mbit/s bus carries in 5 ms, so nothing received waits for
+//!    the next cycle), before acting on any. Frames that are not the node's
+//!    ([`ids::COMMANDS`]) are counted ([`Counters::foreign`], published in `DIAG`) and never
+//!    answered; of the node's, at most [`NodeConfig::max_rx`] (20) are held, whoever sent
+//!    them. When more arrive, a frame of a higher class takes the place of the newest held
+//!    frame of the lowest class: an `ESTOP` first, then a `StopNow`, then the controller's
+//!    other commands, then the estimator's `MEASURED`; the frame left out is refused `Busy`
+//!    (answered after the cycle's stream and reports, as far as the transmit backlog holds)
+//!    and changes nothing;
 //! 2. **act in priority order**: every `ESTOP` of the cycle first, then every `StopNow`,
 //!    then the other commands in the order they arrived. Each is validated once
 //!    ([`Command::decode`]), checked against the state (session, freshness, reach, side
 //!    order, emergency stop, supervision) and applied to the [`Gait`], and answered with an
-//!    `ACK` that carries the reason code when refused. So **every `ESTOP` and `StopNow` that
-//!    reaches the node is carried out in the cycle in which it is received**, whatever arrives
-//!    before or with it, as long as the controller keeps to `max_rx` commands a cycle (16,
-//!    more than a third of what a 1 Mbit/s bus carries in 5 ms). Commands that plan — a
+//!    `ACK` that carries the reason code when refused. So **a node that an `ESTOP` reaches is
+//!    emergency-stopped in that cycle**, whatever arrives before or with it and from whichever
+//!    sender (an `ESTOP` is left out only when `max_rx` other `ESTOP`s are held), and every
+//!    `StopNow` is carried out in its cycle while fewer than `max_rx` urgent frames arrive.
+//!    The controller keeps to 16 commands a cycle and the estimator to one `MEASURED`: both
+//!    are then taken whole, with room for emergency stops of other senders.
+//!    Commands that plan — a
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
 //!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
 //!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
@@ -33,8 +43,12 @@
 //!    (`ControllerLost`) until a `Reset` once standing. The clock itself is checked: if
 //!    `now_ms` advances by less than half of the nominal time over [`CLOCK_WINDOW`] cycles
 //!    (50 ms over 100 ms), the node latches a clock fault (`STATUS` flag) and stops as for a
-//!    lost controller. So **no foot lifts off more than `heartbeat_timeout_ms` after the
-//!    controller was last heard**, for the whole walk, even with a stopped clock;
+//!    lost controller. A link off the bus is a lost link: when the firmware reports its CAN
+//!    link bus-off ([`Node::set_link_health`]) in more than [`OFF_BUS_CYCLES`] cycles in a
+//!    row (20 ms: the board's back-off after a bus-off keeps it off for 1 … 64 cycles), a
+//!    moving robot stops as for a lost controller, whatever was heard. So **no foot lifts off
+//!    more than `heartbeat_timeout_ms` after the controller was last heard**, for the whole
+//!    walk, even with a stopped clock, **nor more than 20 ms into a loss of the link**;
 //! 4. advance the gait by one tick;
 //! 5. publish the reference (5 frames; none before a session is open) and, in the first
 //!    cycle and every 20 cycles after it, `STATUS`, `DIAG`, `SESSION` (and `LINK`); frames that cannot be sent now wait in a transmit
@@ -108,7 +122,7 @@ use core::borrow::Borrow;
 use heapless::Deque;
 
 use adjust::Adjusting;
-pub use adjust::{AdjustConfig, MAX_AGE};
+pub use adjust::{AdjustConfig, MAX_AGE, MAX_SHIFT};
 use cycle::*;
 use reach::Frame;
 pub use reach::{Broken, Limit, Reach, Soles};
@@ -132,6 +146,11 @@ pub const TX_BACKLOG: usize = 32;
 pub const MAX_RX: usize = 32;
 const _: () = assert!(MAX_RX < 64, "a cycle's frames are a 64-bit mask");
 
+/// Control cycles in a row that the firmware may report its link bus-off (off the bus: it
+/// neither sends nor takes part) before a moving robot stops as for a lost controller: more
+/// than this many (20 ms) is a link loss, not a glitch.
+pub const OFF_BUS_CYCLES: u32 = 4;
+
 /// Cycles over which the clock is checked: it must advance by at least half of their nominal
 /// time (see the module docs).
 pub const CLOCK_WINDOW: u32 = 20;
@@ -145,8 +164,9 @@ pub const STEP_NUMBERS: u32 = 0xFFFF;
 /// node's next one (the frame would be read as a number 256 lower: `BadCrc`), so every
 /// footstep frame of the old session, accepted or not, carries a number below the new
 /// session's first: read against the new numbers it is one already past, or one of another
-/// block (`BadCrc`). So a start-up opens at most 255 sessions (beyond, `Reset` is refused
-/// `Exhausted`), fewer as steps use numbers.
+/// block (`BadCrc`). So a start-up's numbers last 255 sessions, fewer as steps use numbers;
+/// a `Reset` after that still opens a session and leaves every latched state, with no step
+/// numbers (appends `Exhausted`: the robot stands until the node restarts).
 pub const SESSION_SKIP: u32 = 256;
 
 /// Node configuration, in the node's scalar `T` ([`NodeConfig::cast`] converts the `f64`
@@ -162,11 +182,13 @@ pub struct NodeConfig<T = f64> {
     /// Silence of the controller after which a moving robot stops \[ms\] (see the module
     /// docs: the supervision bound).
     pub heartbeat_timeout_ms: u32,
-    /// Command frames received per cycle at most (the rest wait in the controller's
-    /// mailbox), at most [`MAX_RX`].
+    /// Command frames acted on per cycle at most, of every sender (at most [`MAX_RX`]): when
+    /// more arrive, the node keeps them by class (see the module docs) and refuses the rest
+    /// `Busy`.
     pub max_rx: usize,
-    /// Frames that are not the node's drained per cycle at most (apart from `max_rx`).
-    pub max_foreign: usize,
+    /// Frames of all kinds (the node's and others) taken from the device per cycle at most:
+    /// more than the bus carries in a cycle, so that nothing waits for the next one.
+    pub max_frames: usize,
     /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
     /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
@@ -191,8 +213,10 @@ impl NodeConfig {
     /// The node for a robot's gait parameters and reach limits (a robot file gives both: see
     /// `planner_core::robot`, feature `robot`), with the node settings that do not depend on
     /// the robot: the feet `step_width` apart at the origin, heading along x; 500 ms
-    /// heartbeat timeout; 16 command frames and 128 foreign frames per cycle (more than a
-    /// 1 Mbit/s bus carries in 5 ms); one planning command per cycle.
+    /// heartbeat timeout; 20 command frames acted on per cycle (the controller's 16 and the
+    /// estimator's one, with room for emergency stops of other senders) out of at most 160
+    /// frames of all kinds taken from the device (a 1 Mbit/s bus carries at most 106 in
+    /// 5 ms); one planning command per cycle.
     pub fn for_robot(params: GaitParams<f64>, reach: Reach) -> Self {
         let half = params.step_width / 2.0;
         Self {
@@ -200,8 +224,8 @@ impl NodeConfig {
             left: Footstep::new(Side::Left, 0.0, half, 0.0),
             right: Footstep::new(Side::Right, 0.0, -half, 0.0),
             heartbeat_timeout_ms: 500,
-            max_rx: 16,
-            max_foreign: 128,
+            max_rx: 20,
+            max_frames: 160,
             max_plans: 1,
             reach,
             adjust: AdjustConfig::DEFAULT,
@@ -241,7 +265,7 @@ impl NodeConfig {
             right: foot(&self.right),
             heartbeat_timeout_ms: self.heartbeat_timeout_ms,
             max_rx: self.max_rx,
-            max_foreign: self.max_foreign,
+            max_frames: self.max_frames,
             max_plans: self.max_plans,
             reach: self.reach.cast(),
             adjust: self.adjust.cast(),
@@ -359,6 +383,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     cycle: u32,
     /// The firmware's CAN link health, published in `LINK` once set.
     link: Option<LinkHealth>,
+    /// Cycles in a row that the link reported bus-off (up to the supervision's).
+    off_bus: u32,
     /// The step adjustment (see `adjust`).
     adj: Adjusting<T>,
 }
@@ -439,13 +465,15 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 right: Footstep::PARKED,
                 heartbeat_timeout_ms: 0,
                 max_rx: 0,
-                max_foreign: 0,
+                max_frames: 0,
                 max_plans: 0,
                 reach: Reach::PARKED,
                 adjust: AdjustConfig {
                     max_age: 0,
                     margin: T::ZERO,
                     min_change: T::ZERO,
+                    max_shift: T::ZERO,
+                    max_deviation: T::ZERO,
                     from_measured: false,
                 },
                 entropy: 0,
@@ -471,6 +499,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             counters: Counters::ZERO,
             cycle: 0,
             link: Some(LinkHealth::ZERO),
+            off_bus: 0,
             adj: Adjusting::ZERO,
         }
     }
@@ -501,8 +530,18 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let gap_ok = gap
             .partial_cmp(&cfg.reach.sole_gap)
             .is_some_and(|o| o.is_ge());
-        let age_ok = cfg.adjust.max_age <= MAX_AGE;
-        if !gap_ok || !age_ok || cfg.max_rx > MAX_RX || cfg.max_rx == 0 {
+        let a = &cfg.adjust;
+        // (`NaN` fails too.)
+        let within = |v: T, lo: T, hi: T| v >= lo && v <= hi;
+        let age_ok = a.max_age <= MAX_AGE
+            && within(a.max_shift, T::ZERO, T::of(MAX_SHIFT))
+            && within(a.max_deviation, T::ZERO, T::of(1e3));
+        if !gap_ok
+            || !age_ok
+            || cfg.max_rx > MAX_RX
+            || cfg.max_rx == 0
+            || cfg.max_frames < cfg.max_rx
+        {
             return Err(GaitError::BadParams);
         }
         // Supervision in cycles: the timeout in whole cycles of `dt` (rounded up).
@@ -536,6 +575,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
+        self.off_bus = 0;
         self.adj = Adjusting::ZERO;
         Ok(())
     }
@@ -572,7 +612,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// The firmware's report of its CAN link (error counters, bus state, reset reason, missed
     /// slots): from now on the node publishes it in `LINK` with every `STATUS`. Call it once
-    /// per cycle, before [`Node::poll`].
+    /// per cycle, before [`Node::poll`]: a link reported bus-off (`bus_state` 3: the node
+    /// neither sends nor takes part) in more than [`OFF_BUS_CYCLES`] polls in a row stops a
+    /// moving robot as a lost controller does (supervision, see the module docs).
     pub fn set_link_health(&mut self, link: LinkHealth) {
         self.link = Some(link);
     }
@@ -596,6 +638,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.heard_cycle == other.heard_cycle
             && self.window == other.window
             && self.cycle == other.cycle
+            && self.off_bus == other.off_bus
             && self.adj == other.adj
     }
 

@@ -80,7 +80,12 @@
 //!   controller alive.
 //! * **`ESTOP`** belongs to no session on purpose: any frame on its identifier with the right
 //!   length stops the robot, in the cycle it is received (a stop is always safe), and proves
-//!   nothing about the controller.
+//!   nothing about the controller. **A controller repeats an `ESTOP` (every cycle, 5 ms)
+//!   until it receives its `ACK`** (accepted, or `Duplicate`: the node was stopped already):
+//!   a frame can be lost on any bus, and a node off the bus (bus-off) hears nothing until it
+//!   is back; an `ESTOP` sent then is heard when it is back, and the node has stopped by
+//!   then on its own (a link off the bus for more than
+//!   [`crate::node::OFF_BUS_CYCLES`] cycles stops a moving robot).
 //!
 //! # End-to-end protection (CRC-8)
 //! CAN's own CRC-15 catches errors on the wire, not a frame a faulty gateway or controller

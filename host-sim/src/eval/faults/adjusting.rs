@@ -147,8 +147,9 @@ type Shift = (u16, [i32; 2]);
 /// The books of the node's shift.
 #[derive(Default)]
 pub(super) struct Shifts {
-    /// The node's own, every change in order, with the node cycle it was made in.
-    pub(super) node: Vec<(u32, Shift)>,
+    /// The node's own, every change in order, with the node cycle it was made in and whether
+    /// it was the end of the shift with its walk (the robot standing: not an adjustment).
+    pub(super) node: Vec<(u32, Shift, bool)>,
     /// The controller's, from the `ADJUST` frames it received (by their count of adjustments:
     /// a late or repeated copy changes nothing; from 255 on, the count saturates and the
     /// latest frame received counts).
@@ -156,12 +157,19 @@ pub(super) struct Shifts {
 }
 
 impl Shifts {
-    /// Records the node's shift after a cycle (`cycle`: its count), if it changed.
-    pub(super) fn note(&mut self, cycle: u32, now: Shift) {
+    /// Records the node's shift after a cycle (`cycle`: its count), if it changed;
+    /// `standing`: the robot stands after the cycle (a change then is the shift's end with
+    /// its walk).
+    pub(super) fn note(&mut self, cycle: u32, now: Shift, standing: bool) {
         // (Every adjustment changes the shift: by the node's least change, 5 mm.)
         if self.node.last().map_or([0, 0], |e| e.1 .1) != now.1 {
-            self.node.push((cycle, now));
+            self.node.push((cycle, now, standing));
         }
+    }
+
+    /// The adjustments (the changes made walking), in order, with their node cycles.
+    pub(super) fn adjustments(&self) -> impl Iterator<Item = (u32, Shift)> + '_ {
+        self.node.iter().filter(|e| !e.2).map(|e| (e.0, e.1))
     }
 
     /// The shift step `id` landed with, by the node's book: the last one made while it was

@@ -421,7 +421,8 @@ pub(super) fn play(
         }
         let a = node.adjustment();
         let from = step_of(&plan, a.from);
-        shifts.note(node.cycles(), (from, a.shift.map(i32::from)));
+        let standing = node.gait().is_standing();
+        shifts.note(node.cycles(), (from, a.shift.map(i32::from)), standing);
         if let Some(e) = estimator.as_mut() {
             let swinging = node.gait().swinging();
             e.track(k, node.cycles(), &report.reference, swinging, &cfg.params);
@@ -652,8 +653,8 @@ pub(super) fn play(
         pendulum_fell: estimator.as_ref().is_some_and(|e| e.fell),
         measured,
         measured_too_old,
-        adjustments: shifts.node.len(),
-        last_adjustment: shifts.node.last().map(|e| e.0),
+        adjustments: shifts.adjustments().count(),
+        last_adjustment: shifts.adjustments().last().map(|e| e.0),
         shift_unheard,
         shifted_landings,
         estimator_silent_from: estimator.as_ref().and_then(|e| e.silent_from),
