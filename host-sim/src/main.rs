@@ -222,37 +222,7 @@ enum Cmd {
     /// The ROS 2 footstep gateway: IHMC's footstep list, pause and abort in, footstep and
     /// walking status, refusals and the reference out, driving the node in this process (or a
     /// real node with --interface); see the book's "From ROS 2".
-    Ros2 {
-        /// The topics' namespace [default: /ihmc/<robot>/humanoid_control].
-        #[arg(long, value_name = "NS")]
-        namespace: Option<String>,
-        /// The DDS domain [default: $ROS_DOMAIN_ID, else 0].
-        #[arg(long, value_name = "N")]
-        domain: Option<u16>,
-        /// Stop after this many seconds (default: run until killed).
-        #[arg(long, value_name = "S", value_parser = positive_seconds, allow_negative_numbers = true)]
-        seconds: Option<f64>,
-        /// Exit after this many walks ended (completed or aborted).
-        #[arg(long, value_name = "N")]
-        walks: Option<usize>,
-        /// Drive a real node on this CAN interface (feature `socketcan`) instead of the node in
-        /// this process.
-        #[arg(long, value_name = "IFACE", conflicts_with = "mujoco")]
-        interface: Option<String>,
-        /// The robot in MuJoCo follows the node in this process (needs `python3 -m pip install
-        /// mujoco==3.2.7`): the landings reported are the engine's soles.
-        #[arg(long)]
-        mujoco: bool,
-        /// Write can.log and gateway.json (what the run measured) here.
-        #[arg(long, value_name = "DIR")]
-        out: Option<PathBuf>,
-        /// Serve the walk live to Foxglove on this port (ws://127.0.0.1:PORT).
-        #[arg(long, value_name = "PORT")]
-        live: Option<u16>,
-        /// The robot file [default: HRP-2, host-sim/robots/hrp2.toml].
-        #[arg(long, value_name = "FILE")]
-        robot: Option<PathBuf>,
-    },
+    Ros2(host_sim::ros2::cli::Ros2Args),
     /// Run the node on a Linux SocketCAN interface (needs the `socketcan` feature).
     Node {
         /// The CAN interface, e.g. can0.
@@ -405,7 +375,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         }) => {
             let robot = load_robot(robot.as_deref())?;
             let view = match live {
-                Some(port) => Some(start_live(port, &robot)?),
+                Some(port) => Some(host_sim::output::live::LiveView::announce(port, &robot)?),
                 None => None,
             };
             host_sim::physics::output::cli(
@@ -481,79 +451,11 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             seconds,
             robot,
         }) => node(&interface, seconds, &load_robot(robot.as_deref())?),
-        Some(Cmd::Ros2 {
-            namespace,
-            domain,
-            seconds,
-            walks,
-            interface,
-            mujoco,
-            out,
-            live,
-            robot,
-        }) => {
-            let robot = load_robot(robot.as_deref())?;
-            let domain = match domain {
-                Some(d) => d,
-                None => match std::env::var("ROS_DOMAIN_ID") {
-                    Ok(v) => v
-                        .parse()
-                        .map_err(|_| format!("ROS_DOMAIN_ID={v} is not a domain id (0 … 232)"))?,
-                    Err(_) => 0,
-                },
-            };
-            let opts = host_sim::ros2::dds::Options {
-                namespace: namespace
-                    .unwrap_or_else(|| host_sim::ros2::dds::default_namespace(robot.name())),
-                domain,
-                seconds,
-                walks,
-                gateway: host_sim::ros2::gateway_config(&robot),
-            };
-            outln!(
-                "ROS 2 gateway: topics under {} (domain {}), node: {}",
-                opts.namespace,
-                opts.domain,
-                match (interface.as_deref(), mujoco) {
-                    (Some(i), _) => i,
-                    (None, true) => "in this process, the robot in MuJoCo",
-                    (None, false) => "in this process",
-                }
-            );
-            let view = match live {
-                Some(port) => Some(start_live(port, &robot)?),
-                None => None,
-            };
-            host_sim::ros2::serve(
-                &robot,
-                &opts,
-                interface.as_deref(),
-                mujoco,
-                out.as_deref(),
-                view.as_ref(),
-            )?;
-            Ok(())
+        Some(Cmd::Ros2(args)) => {
+            let robot = load_robot(args.robot.as_deref())?;
+            host_sim::ros2::cli::command(&args, &robot)
         }
     }
-}
-
-/// The live view on `port` for `robot`, announced on stdout.
-fn start_live(
-    port: u16,
-    robot: &Robot,
-) -> Result<host_sim::output::live::LiveView, Box<dyn Error>> {
-    let p = robot.node_config().params;
-    let view = host_sim::output::live::LiveView::start(
-        "127.0.0.1",
-        port,
-        p.cog_height,
-        [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
-    )?;
-    outln!(
-        "live view: ws://127.0.0.1:{} (Foxglove: Open connection, Foxglove WebSocket)",
-        view.port()
-    );
-    Ok(view)
 }
 
 /// The robot file at `path`, or HRP-2.
@@ -697,22 +599,7 @@ fn run_scenario(
         serde_json::to_string_pretty(&summary)?,
     )?;
     if let Some(port) = live {
-        let view = start_live(port, robot)?;
-        if view.wait_for_client(
-            std::time::Duration::from_secs(60),
-            std::time::Duration::from_millis(500),
-        ) {
-            let frames = sim
-                .can_log
-                .iter()
-                .filter(|l| !l.trim().is_empty())
-                .map(|l| host_sim::output::mcap::parse_log_line(l))
-                .collect::<Result<Vec<_>, _>>()?;
-            view.play(&run.trajectory, dt, &mb, &frames);
-            outln!("live view: played {name}");
-        } else {
-            outln!("live view: no client within 60 s");
-        }
+        host_sim::output::live::serve_walk(port, robot, &run.trajectory, dt, &mb, &sim.can_log)?;
     }
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
     let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;

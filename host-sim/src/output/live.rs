@@ -183,6 +183,22 @@ impl LiveView {
         })
     }
 
+    /// The live view for `robot` on `127.0.0.1:port`, its address printed for the user.
+    pub fn announce(port: u16, robot: &crate::robot::Robot) -> Result<Self, String> {
+        let p = robot.node_config().params;
+        let view = Self::start(
+            "127.0.0.1",
+            port,
+            p.cog_height,
+            [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
+        )?;
+        crate::outln!(
+            "live view: ws://127.0.0.1:{} (Foxglove: Open connection, Foxglove WebSocket)",
+            view.port()
+        );
+        Ok(view)
+    }
+
     /// The port the view listens on.
     pub fn port(&self) -> u16 {
         self.server.as_ref().map(|s| s.port()).unwrap_or(0)
@@ -282,6 +298,31 @@ impl LiveView {
             self.can(f);
         }
     }
+}
+
+/// `run --live PORT`: the computed walk served on `port`, once a client has connected (within
+/// 60 s), in real time.
+pub fn serve_walk(
+    port: u16,
+    robot: &crate::robot::Robot,
+    trajectory: &[Reference<f64>],
+    dt: f64,
+    mb: &[MbSample],
+    can_log: &[String],
+) -> Result<(), String> {
+    let view = LiveView::announce(port, robot)?;
+    if view.wait_for_client(Duration::from_secs(60), Duration::from_millis(500)) {
+        let frames = can_log
+            .iter()
+            .filter(|l| !l.trim().is_empty())
+            .map(|l| super::mcap::parse_log_line(l))
+            .collect::<Result<Vec<_>, _>>()?;
+        view.play(trajectory, dt, mb, &frames);
+        crate::outln!("live view: played the walk");
+    } else {
+        crate::outln!("live view: no client within 60 s");
+    }
+    Ok(())
 }
 
 impl Drop for LiveView {

@@ -5,11 +5,13 @@
 //! * [`plan`]: a footstep list validated and matched with the steps already sent;
 //! * [`gateway`]: the state machine between the two (no DDS, no bus: tested alone);
 //! * [`link`]: the node in this process on the virtual bus, or a real node on SocketCAN;
+//! * [`cli`]: the `ros2` subcommand's options;
 //! * [`dds`]: the ROS 2 side (`ros2-client` over RustDDS: no ROS installation), its topics
 //!   and their QoS, and the gateway's real-time loop.
 //!
 //! The book's chapter *From ROS 2* gives the topics, the semantics and a Python peer.
 
+pub mod cli;
 pub mod dds;
 pub mod gateway;
 pub mod link;
