@@ -76,6 +76,26 @@ struct World {
 }
 
 impl World {
+    /// HRP-2's node in this process and a gateway that has opened its session.
+    fn open() -> Self {
+        let robot = Robot::hrp2();
+        let mut w = World {
+            g: Gateway::new(GatewayConfig::default()),
+            link: InProcess::new(robot.node_config()).unwrap(),
+            out: Vec::new(),
+            plan: Vec::new(),
+            next_id: 0,
+            max_id: 0,
+            era: 0,
+            list_id: 0,
+            bad: Vec::new(),
+        };
+        while !w.g.is_open() {
+            w.cycle(true);
+        }
+        w
+    }
+
     fn cycle(&mut self, alive: bool) {
         let frames = self.g.poll(alive);
         for f in self.link.cycle(&frames) {
@@ -242,21 +262,7 @@ proptest! {
 
     #[test]
     fn the_gateway_keeps_its_promises_for_any_program(acts in prop::collection::vec(act(), 1..14)) {
-        let robot = Robot::hrp2();
-        let mut w = World {
-            g: Gateway::new(GatewayConfig::default()),
-            link: InProcess::new(robot.node_config()).unwrap(),
-            out: Vec::new(),
-            plan: Vec::new(),
-            next_id: 0,
-            max_id: 0,
-            era: 0,
-            list_id: 0,
-            bad: Vec::new(),
-        };
-        while !w.g.is_open() {
-            w.cycle(true);
-        }
+        let mut w = World::open();
         let mut together = false;
         for a in &acts {
             match *a {
@@ -306,21 +312,7 @@ proptest! {
 fn the_random_programs_walk() {
     // The programs' lists walk: a list from standing and a QUEUE list while it walks, built
     // as the property test builds them, land every step.
-    let robot = Robot::hrp2();
-    let mut w = World {
-        g: Gateway::new(GatewayConfig::default()),
-        link: InProcess::new(robot.node_config()).unwrap(),
-        out: Vec::new(),
-        plan: Vec::new(),
-        next_id: 0,
-        max_id: 0,
-        era: 0,
-        list_id: 0,
-        bad: Vec::new(),
-    };
-    while !w.g.is_open() {
-        w.cycle(true);
-    }
+    let mut w = World::open();
     w.list(0, 6, 0.1, false, 0.0);
     for _ in 0..50 {
         w.cycle(true);

@@ -3,6 +3,20 @@
 use super::*;
 
 impl Gateway {
+    /// The node holds or walks some of the plan: a walk, steps it queued or whose append is on
+    /// its way, or a start on its way.
+    fn node_holds_plan(&self) -> bool {
+        self.walking.is_some()
+            || self
+                .steps
+                .iter()
+                .any(|s| matches!(s.state, State::Sent | State::Queued))
+            || self
+                .inflight
+                .iter()
+                .any(|f| matches!(f.item, Item::Start(..)))
+    }
+
     /// A pause (`true`) or resume (`false`) from the peer; `clear`: drop the held steps.
     ///
     /// A pause holds every step not yet walked, whether the walk has started or not: the node
@@ -22,15 +36,7 @@ impl Gateway {
                 };
                 return self.refusal(id, 0, -1, "pause", Err("not_walking"), why.into());
             }
-            let in_node = self.walking.is_some()
-                || self
-                    .steps
-                    .iter()
-                    .any(|s| matches!(s.state, State::Sent | State::Queued))
-                || self
-                    .inflight
-                    .iter()
-                    .any(|f| matches!(f.item, Item::Start(..)));
+            let in_node = self.node_holds_plan();
             self.paused = true;
             let held = if clear { State::Dropped } else { State::Held };
             for s in self.steps.iter_mut().filter(|s| s.unlifted()) {
@@ -85,17 +91,7 @@ impl Gateway {
             .iter()
             .any(|s| s.unlifted() || s.state == State::Held)
             || !self.deferred.is_empty();
-        // What the node holds or does: a walk, or steps it queued (the answer of an append on
-        // its way counts).
-        let in_node = self.walking.is_some()
-            || self
-                .steps
-                .iter()
-                .any(|s| matches!(s.state, State::Sent | State::Queued))
-            || self
-                .inflight
-                .iter()
-                .any(|f| matches!(f.item, Item::Start(..)));
+        let in_node = self.node_holds_plan();
         for s in self
             .steps
             .iter_mut()
