@@ -272,18 +272,7 @@ impl Gateway {
             } else {
                 Reason::ControllerLost
             };
-            let dropped: Vec<usize> = (0..self.steps.len())
-                .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
-                .collect();
-            for k in dropped {
-                self.refuse_step(
-                    k,
-                    State::Dropped,
-                    "step_append",
-                    Ok(why),
-                    "dropped: the node stopped the walk".into(),
-                );
-            }
+            self.drop_plan(Ok(why), "dropped: the node stopped the walk");
             self.outbox.clear();
             self.paused = false;
             self.resume = false;
@@ -370,18 +359,10 @@ impl Gateway {
         self.outputs.push(Output::Log(format!(
             "session {epoch:#x} opened by another controller; the next list opens one again"
         )));
-        let dropped: Vec<usize> = (0..self.steps.len())
-            .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
-            .collect();
-        for k in dropped {
-            self.refuse_step(
-                k,
-                State::Dropped,
-                "step_append",
-                Err("session_taken"),
-                "dropped: another controller opened a session on the node".into(),
-            );
-        }
+        self.drop_plan(
+            Err("session_taken"),
+            "dropped: another controller opened a session on the node",
+        );
         if self.walking.take().is_some() {
             self.outputs
                 .push(Output::Walking(WALKING_ABORT_REQUESTED, 0));
@@ -395,6 +376,16 @@ impl Gateway {
         self.claim_on_demand = true;
         self.next_number = None;
         self.book.clear();
+    }
+
+    /// Every step not yet walked (held ones included) dropped, each refused with `reason`.
+    pub(super) fn drop_plan(&mut self, reason: Result<Reason, &str>, detail: &str) {
+        let dropped: Vec<usize> = (0..self.steps.len())
+            .filter(|&k| self.steps[k].unlifted() || self.steps[k].state == State::Held)
+            .collect();
+        for k in dropped {
+            self.refuse_step(k, State::Dropped, "step_append", reason, detail.into());
+        }
     }
 
     /// The steps of the walk that ended: their ids name no step any more (a peer may use
