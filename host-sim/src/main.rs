@@ -265,6 +265,9 @@ fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<d
         },
     };
     let imported = host_sim::robot::import::import(urdf, soles)?;
+    for w in &imported.warnings {
+        errln!("warning: {w}");
+    }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
@@ -395,7 +398,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         }) => host_sim::physics::output::tables_cli(
             &out,
             &cells,
-            &load_robot(robot.as_deref())?,
+            &engine_robot(robot.as_deref())?,
             &probe,
         ),
         Some(Cmd::PhysicsFaults {
@@ -410,7 +413,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             &rows,
             walk,
             seed,
-            &load_robot(robot.as_deref())?,
+            &engine_robot(robot.as_deref())?,
             &probe,
         ),
         Some(Cmd::PhysicsSequence {
@@ -423,7 +426,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             &out,
             before,
             &afters,
-            &load_robot(robot.as_deref())?,
+            &engine_robot(robot.as_deref())?,
             &probe,
         ),
         Some(Cmd::PushMap {
@@ -436,7 +439,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             probe,
         }) => host_sim::physics::push_map::cli(
             &out,
-            &load_robot(robot.as_deref())?,
+            &engine_robot(robot.as_deref())?,
             quick,
             phases.as_deref(),
             directions.as_deref(),
@@ -459,6 +462,16 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
 }
 
 /// The robot file at `path`, or HRP-2.
+/// A robot for a command of many engine runs: a robot file's robot must stand in the engine
+/// first (HRP-2's built-in file is checked by the tests).
+fn engine_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
+    let robot = load_robot(path)?;
+    if path.is_some() {
+        host_sim::physics::start::stands(&robot)?;
+    }
+    Ok(robot)
+}
+
 fn load_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
     Ok(match path {
         Some(p) => Robot::load(p)?,

@@ -44,6 +44,7 @@ pub mod push_map;
 pub mod sensors;
 pub mod sequence;
 pub mod stabilizer;
+pub mod start;
 pub mod tables;
 
 use crate::robot::model::{mean_yaw, Pose};

@@ -383,7 +383,10 @@ pub fn cli(
         crate::outln!("  the scenario's walk did not end standing (cut at its max_time_s?)");
     }
     crate::outln!("{}", results_line(out, &written));
-    Ok(())
+    match super::start::not_started(&j) {
+        Some(why) => Err(why.into()),
+        None => Ok(()),
+    }
 }
 
 /// The command line's `physics-tables` subcommand: the cells (`all`, or `r,c;r,c`) both ways,

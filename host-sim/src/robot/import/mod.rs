@@ -44,11 +44,15 @@
 //! planar or floating joint), no pair of feet, a foot without geometry, a moving link without
 //! an `<inertial>`, a mesh of another format, a standing posture the legs cannot reach.
 
+pub mod collada;
+mod feet;
 pub mod sole;
+mod text;
 pub mod xml;
 
+use text::{multibody, num};
+
 use std::collections::{BTreeMap, BTreeSet};
-use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use planner_core::gait::Side;
@@ -250,8 +254,6 @@ struct LegImport {
     specs: Vec<LinkOut>,
     /// URDF links rigidly part of the foot, with their poses in the ankle frame.
     foot: Vec<(String, Pose)>,
-    /// The leaf's pose in the ankle frame, if it is a frame below the ankle.
-    sole_frame: Option<Pose>,
     /// The ankle link (the last moved one).
     ankle: String,
     /// The links fixed to the base before the first joint, in the base frame.
@@ -373,13 +375,9 @@ fn leg(
             ));
         }
     }
-    let sole_frame = (leaf != ankle)
-        .then(|| foot.iter().find(|(n, _)| n == leaf).map(|f| f.1))
-        .flatten();
     Ok(LegImport {
         specs,
         foot,
-        sole_frame,
         ankle: ankle.clone(),
         pre,
     })
@@ -391,6 +389,8 @@ pub struct Imported {
     pub toml: String,
     /// The robot it describes.
     pub robot: Robot,
+    /// What the import warns about (a sole frame it did not use, and why).
+    pub warnings: Vec<String>,
 }
 
 /// Finds `package://NAME/…`: the directory `NAME` above `dir`, or on `ROS_PACKAGE_PATH`.
@@ -456,6 +456,9 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
             }
             names.map(String::from)
         }
+        None if feet::by_geometry(&t, &base, &zero).is_some() => {
+            feet::by_geometry(&t, &base, &zero).unwrap_or_default()
+        }
         None => {
             let mut leaves: Vec<(&String, &Pose)> =
                 zero.iter().filter(|(l, _)| t.kids(l).is_empty()).collect();
@@ -468,6 +471,22 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
             }
         }
     };
+    if soles.is_none() {
+        let at = |l: &str| zero.get(l).map_or([0.0; 3], |p| p.p);
+        let below = |p: Vec3| -p[2] > p[0].abs().max(p[1].abs());
+        if !leaves.iter().all(|l| below(at(l))) {
+            return err(format!(
+                "no pair of feet below the base: the lowest bodies on each side, <link name=\"{}\"> \
+                 at {:?} and <link name=\"{}\"> at {:?} m in the frame of the \
+                 base <link name=\"{base}\"> at zero joint angles, do not lie below it (the \
+                 base's z axis must point up)",
+                leaves[0],
+                at(&leaves[0]).map(round_mm),
+                leaves[1],
+                at(&leaves[1]).map(round_mm),
+            ));
+        }
+    }
     let paths: Vec<Vec<usize>> = leaves
         .iter()
         .map(|l| t.path(&base, l).unwrap_or_default())
@@ -502,15 +521,45 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     // Soles.
     let mut sole_out = [Pose::IDENTITY; 2];
     let mut size = [f64::INFINITY; 2];
+    let mut warnings = Vec::new();
+    let mut from = Vec::new();
     for (k, l) in legs.iter().enumerate() {
         let level = zero.get(&l.ankle).map_or(IDENTITY, |p| p.r);
-        let s = sole::sole(&t, &l.foot, l.sole_frame, &level)?;
+        let frames: Vec<sole::Frame> = match soles {
+            Some(_) if leaves[k] != l.ankle => l
+                .foot
+                .iter()
+                .filter(|(n, _)| *n == leaves[k])
+                .map(|(n, p)| sole::Frame {
+                    link: n.clone(),
+                    pose: *p,
+                    named: true,
+                })
+                .collect(),
+            _ => l.foot[1..]
+                .iter()
+                .filter(|(n, _)| {
+                    let link = t.link(n);
+                    link.collision.is_empty() && link.visual.is_empty()
+                })
+                .map(|(n, p)| sole::Frame {
+                    link: n.clone(),
+                    pose: *p,
+                    named: false,
+                })
+                .collect(),
+        };
+        let hip = zero.get(&l.specs[0].link).map_or([0.0; 3], |p| p.p);
+        let ankle = zero.get(&l.ankle).map_or([0.0; 3], |p| p.p);
+        let s = sole::sole(&t, &l.foot, &frames, &level, norm(sub(ankle, hip)))?;
         sole_out[k] = Pose {
             p: s.centre,
             r: s.rotation,
         };
         size[0] = size[0].min(s.size[0]);
         size[1] = size[1].min(s.size[1]);
+        warnings.extend(s.warnings);
+        from.push(s.from);
     }
     let parts = Parts {
         waist,
@@ -518,6 +567,7 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
         legs: [&legs[0].specs, &legs[1].specs],
         soles: sole_out,
         sole_size: size,
+        sole_from: from,
     };
     let name = if t.urdf.name.is_empty() {
         path.file_stem()
@@ -525,7 +575,9 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     } else {
         t.urdf.name.clone()
     };
-    write(&name, path, &parts)
+    let mut imported = write(&name, path, &parts)?;
+    imported.warnings = warnings;
+    Ok(imported)
 }
 
 /// The model's parts as imported.
@@ -535,96 +587,8 @@ struct Parts<'a> {
     legs: [&'a [LinkOut]; 2],
     soles: [Pose; 2],
     sole_size: [f64; 2],
-}
-
-fn num(v: f64) -> String {
-    let s = format!("{v:.9}");
-    let s = s.trim_end_matches('0');
-    if s.ends_with('.') {
-        format!("{s}0")
-    } else {
-        s.into()
-    }
-}
-
-fn arr(v: &[f64]) -> String {
-    format!(
-        "[{}]",
-        v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ")
-    )
-}
-
-fn body_keys(b: &Body) -> String {
-    let i = &b.inertia;
-    format!(
-        "mass = {}\ncom = {}\ninertia = {}\n",
-        num(b.mass),
-        arr(&b.com),
-        arr(&[i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]])
-    )
-}
-
-/// The `[multibody]` part with the waist at `waist_height`.
-fn multibody(g: &Parts, waist_height: f64) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "[multibody]");
-    let _ = writeln!(s, "waist_height = {}", num(waist_height));
-    let _ = writeln!(
-        s,
-        "\n[multibody.waist]       # the base link's own body, its frame"
-    );
-    s.push_str(&body_keys(&g.waist));
-    let _ = writeln!(
-        s,
-        "\n[multibody.trunk]       # every link off the legs, at zero joint angles, merged"
-    );
-    s.push_str(&body_keys(&g.trunk));
-    let _ = writeln!(
-        s,
-        "\n[multibody.sole]        # sole centres in the ankle frames\nleft = {}\nright = {}",
-        arr(&g.soles[0].p),
-        arr(&g.soles[1].p)
-    );
-    for (side, sole) in ["left", "right"].iter().zip(&g.soles) {
-        if sole.r != IDENTITY {
-            let (r, p, y) = rpy(sole);
-            let _ = writeln!(s, "{side}_rpy = {}", arr(&[r, p, y]));
-        }
-    }
-    for (side, links) in ["left", "right"].iter().zip(g.legs) {
-        for l in links {
-            let _ = writeln!(s, "\n[[multibody.{side}]]");
-            let _ = writeln!(s, "joint = {:?}\nlink = {:?}", l.joint, l.link);
-            let (r, p, y) = rpy(&l.origin);
-            let _ = writeln!(
-                s,
-                "origin = {}\nrpy = {}\naxis = {}",
-                arr(&l.origin.p),
-                arr(&[r, p, y]),
-                arr(&l.axis)
-            );
-            if let Some(r) = l.range {
-                let _ = writeln!(s, "range = {}", arr(&r));
-            }
-            if let Some(e) = l.effort {
-                let _ = writeln!(s, "effort = {}", num(e));
-            }
-            if let Some(v) = l.velocity {
-                let _ = writeln!(s, "velocity = {}", num(v));
-            }
-            s.push_str(&body_keys(&l.body));
-        }
-    }
-    s
-}
-
-/// The URDF `rpy` of a rotation (`R = R_z(y) R_y(p) R_x(r)`).
-fn rpy(p: &Pose) -> (f64, f64, f64) {
-    let r = &p.r;
-    let pitch = (-r[2][0]).clamp(-1.0, 1.0).asin();
-    let roll = r[2][1].atan2(r[2][2]);
-    let yaw = r[1][0].atan2(r[0][0]);
-    (roll, pitch, yaw)
+    /// Where each sole centre comes from.
+    sole_from: Vec<String>,
 }
 
 /// HRP-2's robot file's planner part, with the values of this robot.
@@ -748,7 +712,11 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
     let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
     let robot =
         Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
-    Ok(Imported { toml, robot })
+    Ok(Imported {
+        toml,
+        robot,
+        warnings: Vec::new(),
+    })
 }
 
 /// Both legs reach feet `dx` apart along x and `w` across, the waist midway at its height.

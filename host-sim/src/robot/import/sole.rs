@@ -3,10 +3,23 @@
 //! Every collision shape of the foot's links (their visual shapes if they have none) is turned
 //! into points in the ankle frame: a box's eight corners, a sphere's lowest point, a
 //! cylinder's two end circles (32 points each), a capsule's two end spheres' lowest points
-//! and end circles, a mesh's vertices (scaled; STL, COLLADA `.dae` and OBJ). The **sole plane** is the lowest point's height `z_s`; the **contact points**
-//! those within [`CONTACT_BAND_M`] of it. The sole centre is the foot's sole frame where the
-//! URDF gives one (a frame fixed below the ankle), the middle of the contact points' bounds
-//! otherwise; the sole rectangle is the largest one centred there inside those bounds.
+//! and end circles, a mesh's vertices (STL, COLLADA `.dae` placed by its node transforms
+//! ([`super::collada`]) and OBJ; then the URDF's mesh `scale`). The **sole plane** is the
+//! lowest point's height `z_s`; the **contact points** those within [`CONTACT_BAND_M`] of it.
+//!
+//! The geometry is checked against the leg: its lowest point must lie below the ankle and at
+//! most [`MAX_SOLE_DEPTH`] leg lengths below it, its contact points span at most one leg
+//! length; otherwise the import is refused naming the shape (the mesh or primitive, its link
+//! and its placement) that puts the sole there.
+//!
+//! The sole centre is a frame of the foot where the URDF gives one that fits the geometry: a
+//! massless link without geometry fixed to the foot (or the `--sole` link) lying on the sole
+//! plane (within [`CONTACT_BAND_M`]), inside the contact points' bounds, whose centred
+//! rectangle spans at least [`SOLE_COVER`] of those bounds along and across (one named
+//! `…sole…` first, then the one nearest the bounds' middle). Otherwise the centre is the
+//! middle of the bounds; a `--sole` link or a frame named `…sole…` that does not fit is
+//! named in a warning with its placement. The sole rectangle is the largest one centred
+//! there inside the bounds.
 
 use std::fs::File;
 use std::io::BufReader;
@@ -18,9 +31,14 @@ use crate::robot::model::{mul_mv, transpose, Mat3, Pose, Vec3};
 
 /// Points this close above the lowest one are the sole's \[m\].
 pub const CONTACT_BAND_M: f64 = 0.005;
+/// A sole frame is the sole centre only if the rectangle centred on it spans at least this
+/// fraction of the contact points' bounds, along and across.
+pub const SOLE_COVER: f64 = 0.7;
+/// The foot's lowest point at most this many leg lengths (hip to ankle) below the ankle.
+pub const MAX_SOLE_DEPTH: f64 = 0.5;
 
 /// A foot's sole in its ankle frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Sole {
     /// The sole centre \[m\].
     pub centre: Vec3,
@@ -28,6 +46,18 @@ pub struct Sole {
     pub rotation: Mat3,
     /// Length (along x) and width (along y) \[m\].
     pub size: [f64; 2],
+    /// Where the centre comes from: the frame's link, or the geometry.
+    pub from: String,
+    /// What the import warns about this sole.
+    pub warnings: Vec<String>,
+}
+
+/// A frame the sole may be centred on: its link, its pose in the ankle frame, and whether
+/// the user named it (`--sole`).
+pub(crate) struct Frame {
+    pub(crate) link: String,
+    pub(crate) pose: Pose,
+    pub(crate) named: bool,
 }
 
 fn circle(pose: &Pose, radius: f64, z: f64, out: &mut Vec<Vec3>) {
@@ -37,8 +67,13 @@ fn circle(pose: &Pose, radius: f64, z: f64, out: &mut Vec<Vec3>) {
     }
 }
 
-/// The points of one collision shape placed at `pose` (in the ankle frame).
-fn points(t: &Tree, g: &Geometry, pose: &Pose, out: &mut Vec<Vec3>) -> Result<(), ImportError> {
+/// The points of one shape placed at `pose`.
+pub(crate) fn points(
+    t: &Tree,
+    g: &Geometry,
+    pose: &Pose,
+    out: &mut Vec<Vec3>,
+) -> Result<(), ImportError> {
     match g {
         Geometry::Box { size } => {
             for k in 0..8 {
@@ -77,7 +112,11 @@ fn points(t: &Tree, g: &Geometry, pose: &Pose, out: &mut Vec<Vec3>) -> Result<()
                 }
                 "dae" | "obj" => {
                     let text = std::fs::read_to_string(&path).map_err(|e| named(e.to_string()))?;
-                    let v = if ext == "dae" { dae(&text) } else { obj(&text) };
+                    let v = if ext == "dae" {
+                        super::collada::vertices(&text).map_err(named)?
+                    } else {
+                        obj(&text)
+                    };
                     if v.is_empty() {
                         return Err(named("no vertex positions found".into()));
                     }
@@ -99,62 +138,6 @@ fn points(t: &Tree, g: &Geometry, pose: &Pose, out: &mut Vec<Vec3>) -> Result<()
     Ok(())
 }
 
-/// The vertex positions of a COLLADA document: every `<float_array>` of a source whose id
-/// names positions, in metres (`<unit meter>`, and a uniform `<scale>` shared by the scene's
-/// nodes) and z up (`<up_axis>` `Y_UP` turned). Other node transforms are not applied.
-fn dae(text: &str) -> Vec<Vec3> {
-    let attr = |tag: &str, name: &str| -> Option<String> {
-        let at = tag.find(&format!("{name}=\""))? + name.len() + 2;
-        Some(tag[at..at + tag[at..].find('"')?].to_string())
-    };
-    let unit = text
-        .find("<unit")
-        .and_then(|i| attr(&text[i..i + text[i..].find('>').unwrap_or(0)], "meter"))
-        .and_then(|m| m.parse::<f64>().ok())
-        .unwrap_or(1.0);
-    let y_up = text.contains("<up_axis>Y_UP</up_axis>");
-    // The scene's nodes may scale the geometry (a mesh in centimetres under a node scaled by
-    // 0.01): one uniform scale shared by every node applies; other node transforms do not.
-    let scales: Vec<f64> = text
-        .match_indices("<scale")
-        .filter_map(|(i, _)| {
-            let body = &text[i..];
-            let v: Vec<f64> = body[body.find('>')? + 1..body.find("</scale>")?]
-                .split_whitespace()
-                .filter_map(|x| x.parse().ok())
-                .collect();
-            (v.len() == 3 && v[0] == v[1] && v[1] == v[2]).then_some(v[0])
-        })
-        .collect();
-    let node_scale = match scales.first() {
-        Some(&first) if scales.iter().all(|&s| s == first) => first,
-        _ => 1.0,
-    };
-    let unit = unit * node_scale;
-    let mut out = Vec::new();
-    let mut rest = text;
-    while let Some(i) = rest.find("<float_array") {
-        rest = &rest[i..];
-        let Some(end_tag) = rest.find('>') else { break };
-        let tag = &rest[..end_tag];
-        let body_end = rest.find("</float_array>").unwrap_or(end_tag);
-        let body = &rest[end_tag + 1..body_end.max(end_tag + 1)];
-        let is_position = attr(tag, "id").is_some_and(|id| id.to_lowercase().contains("position"));
-        if is_position {
-            let v: Vec<f64> = body
-                .split_whitespace()
-                .filter_map(|x| x.parse().ok())
-                .collect();
-            for c in v.chunks_exact(3) {
-                let p = [c[0] * unit, c[1] * unit, c[2] * unit];
-                out.push(if y_up { [p[0], -p[2], p[1]] } else { p });
-            }
-        }
-        rest = &rest[end_tag..];
-    }
-    out
-}
-
 /// The vertex positions of an OBJ file (its `v x y z` lines).
 fn obj(text: &str) -> Vec<Vec3> {
     text.lines()
@@ -169,62 +152,209 @@ fn obj(text: &str) -> Vec<Vec3> {
         .collect()
 }
 
-/// The sole of a foot made of `links` (each with its pose in the ankle frame), with the
-/// URDF's sole frame `frame` if there is one; `level`: the ankle frame's orientation in the
-/// base frame at zero joint angles (the sole is level with the base there, whatever the
-/// ankle frame's axes: the points are taken in base-aligned axes).
+/// A shape as the URDF writes it, for messages.
+fn shape_name(g: &Geometry) -> String {
+    match g {
+        Geometry::Box { size } => format!("<box size=\"{:?}\">", size.0),
+        Geometry::Sphere { radius } => format!("<sphere radius=\"{radius}\">"),
+        Geometry::Cylinder { radius, length } => {
+            format!("<cylinder radius=\"{radius}\" length=\"{length}\">")
+        }
+        Geometry::Capsule { radius, length } => {
+            format!("<capsule radius=\"{radius}\" length=\"{length}\">")
+        }
+        Geometry::Mesh { filename, scale } => match scale {
+            Some(s) => format!("<mesh filename=\"{filename}\" scale=\"{:?}\">", s.0),
+            None => format!("<mesh filename=\"{filename}\">"),
+        },
+    }
+}
+
+fn xyz(v: Vec3) -> String {
+    format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2])
+}
+
+/// The points of a foot's shapes (its collision shapes, or its visual ones if it has none)
+/// in the ankle frame, each with the index of its shape in the descriptions returned.
+pub(crate) fn foot_points(
+    t: &Tree,
+    links: &[(String, Pose)],
+) -> Result<(Vec<(Vec3, usize)>, Vec<String>), ImportError> {
+    let mut pts = Vec::new();
+    let mut shapes = Vec::new();
+    for kind in ["collision", "visual"] {
+        for (name, pose) in links {
+            let l = t.link(name);
+            let list: Vec<(&urdf_rs::Pose, &Geometry)> = if kind == "collision" {
+                l.collision
+                    .iter()
+                    .map(|c| (&c.origin, &c.geometry))
+                    .collect()
+            } else {
+                l.visual.iter().map(|v| (&v.origin, &v.geometry)).collect()
+            };
+            for (origin, g) in list {
+                let at = pose.then(&pose_of(origin));
+                let mut v = Vec::new();
+                points(t, g, &at, &mut v)?;
+                pts.extend(v.into_iter().map(|p| (p, shapes.len())));
+                shapes.push(format!(
+                    "the <{kind}> {} of <link name=\"{name}\"> (origin xyz=\"{}\" rpy=\"{}\", \
+                     placed at {} in the ankle frame)",
+                    shape_name(g),
+                    xyz(origin.xyz.0),
+                    xyz(origin.rpy.0),
+                    xyz(at.p),
+                ));
+            }
+        }
+        if !pts.is_empty() {
+            break;
+        }
+    }
+    Ok((pts, shapes))
+}
+
+/// The sole of a foot made of `links` (each with its pose in the ankle frame, the first the
+/// ankle link), centred on one of `frames` if one fits (see the module docs); `level`: the
+/// ankle frame's orientation in the base frame at zero joint angles (the sole is level with
+/// the base there, whatever the ankle frame's axes: the points are taken in base-aligned
+/// axes); `leg`: the leg's length, hip to ankle \[m\].
 pub(crate) fn sole(
     t: &Tree,
     links: &[(String, Pose)],
-    frame: Option<Pose>,
+    frames: &[Frame],
     level: &Mat3,
+    leg: f64,
 ) -> Result<Sole, ImportError> {
-    let mut pts = Vec::new();
-    for (name, pose) in links {
-        for c in &t.link(name).collision {
-            points(t, &c.geometry, &pose.then(&pose_of(&c.origin)), &mut pts)?;
-        }
-    }
-    if pts.is_empty() {
-        // No collision shape: the visual one.
-        for (name, pose) in links {
-            for v in &t.link(name).visual {
-                points(t, &v.geometry, &pose.then(&pose_of(&v.origin)), &mut pts)?;
-            }
-        }
-    }
-    let names: Vec<&str> = links.iter().map(|(n, _)| n.as_str()).collect();
+    let (pts, shapes) = foot_points(t, links)?;
+    let names = links
+        .iter()
+        .map(|(n, _)| format!("<link name=\"{n}\">"))
+        .collect::<Vec<_>>()
+        .join(", ");
     if pts.is_empty() {
         return err(format!(
-            "the foot (<link name=\"{}\">) has no <collision> or <visual> geometry: its sole \
-             cannot be found",
-            names.join("\">, <link name=\"")
+            "the foot ({names}) has no <collision> or <visual> geometry: its sole cannot be found"
         ));
     }
-    let pts: Vec<Vec3> = pts.iter().map(|p| mul_mv(level, *p)).collect();
-    let zs = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
-    let contact: Vec<&Vec3> = pts.iter().filter(|p| p[2] <= zs + CONTACT_BAND_M).collect();
-    let lo = |i: usize| contact.iter().map(|p| p[i]).fold(f64::INFINITY, f64::min);
+    let pts: Vec<(Vec3, usize)> = pts.iter().map(|(p, s)| (mul_mv(level, *p), *s)).collect();
+    let (lowest, _) = pts
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1 .0[2].total_cmp(&b.1 .0[2]))
+        .map_or((0, 0.0), |(i, p)| (i, p.0[2]));
+    let zs = pts[lowest].0[2];
+    let contact: Vec<&(Vec3, usize)> = pts
+        .iter()
+        .filter(|p| p.0[2] <= zs + CONTACT_BAND_M)
+        .collect();
+    let lo = |i: usize| contact.iter().map(|p| p.0[i]).fold(f64::INFINITY, f64::min);
     let hi = |i: usize| {
         contact
             .iter()
-            .map(|p| p[i])
+            .map(|p| p.0[i])
             .fold(f64::NEG_INFINITY, f64::max)
     };
     let (x0, x1, y0, y1) = (lo(0), hi(0), lo(1), hi(1));
-    let centre = match frame {
-        Some(f) => mul_mv(level, f.p),
-        None => [0.5 * (x0 + x1), 0.5 * (y0 + y1), zs],
-    };
+    let ankle = &links[0].0;
+    // The geometry against the leg.
+    let at_lowest = &shapes[pts[lowest].1];
+    if zs >= 0.0 || -zs > MAX_SOLE_DEPTH * leg {
+        return err(format!(
+            "the foot's lowest point lies {:.4} m {} the ankle <link name=\"{ankle}\"> (legs \
+             {leg:.4} m, hip to ankle; a sole lies below the ankle, at most {MAX_SOLE_DEPTH} \
+             legs): it is a point of {at_lowest}: are the mesh's units, its COLLADA node \
+             transforms or its scale wrong?",
+            zs.abs(),
+            if zs >= 0.0 { "above" } else { "below" }
+        ));
+    }
+    for (i, a, b) in [(0, x0, x1), (1, y0, y1)] {
+        if b - a > leg {
+            let far = contact
+                .iter()
+                .max_by(|p, q| {
+                    (p.0[i] - 0.5 * (a + b))
+                        .abs()
+                        .total_cmp(&(q.0[i] - 0.5 * (a + b)).abs())
+                })
+                .map_or(at_lowest, |p| &shapes[p.1]);
+            return err(format!(
+                "the foot's sole spans {:.4} m {} (legs {leg:.4} m, hip to ankle): its far end \
+                 is a point of {far}: are the mesh's units, its COLLADA node transforms or its \
+                 scale wrong?",
+                b - a,
+                if i == 0 { "along" } else { "across" }
+            ));
+        }
+    }
+    // The centre: a frame that fits, or the middle.
     let half = |c: f64, a: f64, b: f64| (c - a).min(b - c);
+    let fit = |c: Vec3| -> Result<(), String> {
+        if (c[2] - zs).abs() > CONTACT_BAND_M {
+            return Err(format!(
+                "lies {:.4} m {} the foot's lowest point ({at_lowest})",
+                (c[2] - zs).abs(),
+                if c[2] > zs { "above" } else { "below" }
+            ));
+        }
+        let cover = [
+            2.0 * half(c[0], x0, x1) / (x1 - x0),
+            2.0 * half(c[1], y0, y1) / (y1 - y0),
+        ];
+        if cover.iter().any(|v| !(*v >= SOLE_COVER)) {
+            return Err(format!(
+                "is off the middle of the foot's contact area ({:.4} × {:.4} m): a sole centred \
+                 on it spans {:.0} % of it along and {:.0} % across (at least {:.0} % wanted)",
+                x1 - x0,
+                y1 - y0,
+                100.0 * cover[0].max(0.0),
+                100.0 * cover[1].max(0.0),
+                100.0 * SOLE_COVER
+            ));
+        }
+        Ok(())
+    };
+    let middle = [0.5 * (x0 + x1), 0.5 * (y0 + y1)];
+    let mut fits: Vec<(&Frame, Vec3)> = Vec::new();
+    let mut warnings = Vec::new();
+    for f in frames {
+        let c = mul_mv(level, f.pose.p);
+        match fit(c) {
+            Ok(()) => fits.push((f, c)),
+            Err(why) if f.named || f.link.to_lowercase().contains("sole") => {
+                warnings.push(format!(
+                    "the sole frame <link name=\"{}\"> (at {} in the frame of the ankle \
+                     <link name=\"{ankle}\">) {why}: the sole is centred on the foot's \
+                     geometry instead",
+                    f.link,
+                    xyz(f.pose.p)
+                ));
+            }
+            Err(_) => {}
+        }
+    }
+    fits.sort_by(|a, b| {
+        let named = |f: &Frame| !(f.named || f.link.to_lowercase().contains("sole"));
+        let off = |c: &Vec3| (c[0] - middle[0]).hypot(c[1] - middle[1]);
+        named(a.0)
+            .cmp(&named(b.0))
+            .then(off(&a.1).total_cmp(&off(&b.1)))
+    });
+    let (centre, from) = match fits.first() {
+        Some((f, c)) => (*c, format!("<link name=\"{}\">", f.link)),
+        None => (
+            [middle[0], middle[1], zs],
+            "the middle of the foot's contact geometry".to_string(),
+        ),
+    };
     let size = [2.0 * half(centre[0], x0, x1), 2.0 * half(centre[1], y0, y1)];
     if !(size[0] > 0.01 && size[1] > 0.01) {
         return err(format!(
-            "the foot (<link name=\"{}\">): its collision geometry gives a sole of {:.3} × {:.3} m \
-             around its centre",
-            names.join("\">, <link name=\""),
-            size[0],
-            size[1]
+            "the foot ({names}): its collision geometry gives a sole of {:.3} × {:.3} m around \
+             its centre",
+            size[0], size[1]
         ));
     }
     let back = transpose(level);
@@ -232,6 +362,8 @@ pub(crate) fn sole(
         centre: mul_mv(&back, centre),
         rotation: back,
         size,
+        from,
+        warnings,
     })
 }
 
@@ -240,23 +372,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn collada_positions_in_metres_and_z_up() {
-        let doc = r#"<COLLADA><asset><unit meter="0.1" name="decimetre"/><up_axis>Y_UP</up_axis></asset>
-            <library_geometries><geometry><mesh>
-            <source id="a-positions"><float_array id="a-positions-array" count="6">1 2 3 4 5 6</float_array></source>
-            <source id="a-normals"><float_array id="a-normals-array" count="3">0 0 1</float_array></source>
-            </mesh></geometry></library_geometries>
-            <library_visual_scenes><visual_scene><node><scale sid="scale">0.5 0.5 0.5</scale></node></visual_scene></library_visual_scenes>
-            </COLLADA>"#;
-        // × 0.1 (unit) × 0.5 (the nodes' scale), then y up turned to z up: (x, −z, y).
-        let v = dae(doc);
-        let want = [[0.05, -0.15, 0.1], [0.2, -0.3, 0.25]];
-        assert_eq!(v.len(), 2);
-        for (a, b) in v.iter().zip(want) {
-            for i in 0..3 {
-                assert!((a[i] - b[i]).abs() < 1e-12, "{v:?}");
-            }
-        }
+    fn obj_vertices() {
         assert_eq!(
             obj("# c\nv 1 2 3\nvn 0 0 1\nv 4 5 6 1\n"),
             vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]

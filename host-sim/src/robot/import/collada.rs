@@ -1,0 +1,346 @@
+//! The vertex positions of a COLLADA (`.dae`) document, placed as its scene places them.
+//!
+//! The scene's nodes are walked from the visual scene the document's `<scene>` instantiates
+//! (the first one if it names none): each node's transform elements in document order
+//! (`<matrix>`, `<translate>`, `<rotate>`, `<scale>`; a `<lookat>` or `<skew>` is refused),
+//! composed down nested `<node>`s and through `<instance_node>` references into
+//! `<library_nodes>`; every `<instance_geometry>` adds its mesh's `POSITION` source under the
+//! transform of its node. A document without a visual scene gives every geometry's positions
+//! unmoved. Then the asset's `<unit meter>` scales the result, and a `Y_UP` (or `X_UP`)
+//! document is turned to z up, as the COLLADA specification defines the axes.
+
+use std::collections::BTreeMap;
+
+use quick_xml::events::Event;
+
+use crate::robot::model::Vec3;
+
+/// An element of the document: its name (without a namespace prefix), attributes, text and
+/// children.
+#[derive(Debug, Default)]
+struct El {
+    name: String,
+    attrs: Vec<(String, String)>,
+    text: String,
+    kids: Vec<El>,
+}
+
+impl El {
+    fn attr(&self, name: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn kid(&self, name: &str) -> Option<&El> {
+        self.kids.iter().find(|k| k.name == name)
+    }
+
+    fn all<'a>(&'a self, name: &'a str) -> impl Iterator<Item = &'a El> + 'a {
+        self.kids.iter().filter(move |k| k.name == name)
+    }
+
+    /// Every element named `name` at any depth, in document order.
+    fn descendants<'a>(&'a self, name: &str, out: &mut Vec<&'a El>) {
+        for k in &self.kids {
+            if k.name == name {
+                out.push(k);
+            }
+            k.descendants(name, out);
+        }
+    }
+
+    fn numbers(&self) -> Result<Vec<f64>, String> {
+        self.text
+            .split_whitespace()
+            .map(|x| {
+                x.parse::<f64>()
+                    .map_err(|_| format!("<{}>: {x:?} is not a number", self.name))
+            })
+            .collect()
+    }
+}
+
+fn local(name: &[u8]) -> String {
+    let n = String::from_utf8_lossy(name);
+    n.rsplit(':').next().unwrap_or(&n).to_string()
+}
+
+fn parse(text: &str) -> Result<El, String> {
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut stack: Vec<El> = vec![El::default()];
+    let open = |e: &quick_xml::events::BytesStart| El {
+        name: local(e.name().as_ref()),
+        attrs: e
+            .attributes()
+            .flatten()
+            .map(|a| {
+                (
+                    local(a.key.as_ref()),
+                    String::from_utf8_lossy(&a.value).into_owned(),
+                )
+            })
+            .collect(),
+        ..El::default()
+    };
+    loop {
+        match reader.read_event() {
+            Err(e) => return Err(format!("not well-formed XML: {e}")),
+            Ok(Event::Start(e)) => stack.push(open(&e)),
+            Ok(Event::Empty(e)) => {
+                let el = open(&e);
+                if let Some(top) = stack.last_mut() {
+                    top.kids.push(el);
+                }
+            }
+            Ok(Event::Text(t)) => {
+                if let Some(top) = stack.last_mut() {
+                    top.text.push_str(&String::from_utf8_lossy(t.as_ref()));
+                }
+            }
+            Ok(Event::End(_)) => {
+                let el = stack.pop().ok_or("unbalanced XML")?;
+                match stack.last_mut() {
+                    Some(top) => top.kids.push(el),
+                    None => return Err("unbalanced XML".into()),
+                }
+            }
+            Ok(Event::Eof) => break,
+            Ok(_) => {}
+        }
+    }
+    let mut root = stack.pop().ok_or("empty document")?;
+    if !stack.is_empty() {
+        return Err("the document ends inside an element".into());
+    }
+    root.kids
+        .pop()
+        .filter(|r| r.name == "COLLADA")
+        .ok_or_else(|| "no <COLLADA> root element".into())
+}
+
+/// A 4 × 4 homogeneous transform, row-major.
+type Mat4 = [[f64; 4]; 4];
+
+const ID4: Mat4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+fn mul4(a: &Mat4, b: &Mat4) -> Mat4 {
+    let mut c = [[0.0; 4]; 4];
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..4).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+fn apply4(m: &Mat4, p: Vec3) -> Vec3 {
+    let mut out = [0.0; 3];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + m[i][3];
+    }
+    out
+}
+
+/// The transform of one transform element (`None`: not a transform element).
+fn transform(e: &El) -> Result<Option<Mat4>, String> {
+    let want = |n: usize| -> Result<Vec<f64>, String> {
+        let v = e.numbers()?;
+        if v.len() == n {
+            Ok(v)
+        } else {
+            Err(format!("<{}> has {} numbers, not {n}", e.name, v.len()))
+        }
+    };
+    let mut m = ID4;
+    match e.name.as_str() {
+        "matrix" => {
+            let v = want(16)?;
+            for (i, row) in m.iter_mut().enumerate() {
+                row.copy_from_slice(&v[4 * i..4 * i + 4]);
+            }
+        }
+        "translate" => {
+            let v = want(3)?;
+            for i in 0..3 {
+                m[i][3] = v[i];
+            }
+        }
+        "scale" => {
+            let v = want(3)?;
+            for i in 0..3 {
+                m[i][i] = v[i];
+            }
+        }
+        "rotate" => {
+            let v = want(4)?;
+            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if n == 0.0 {
+                return Err("<rotate> about a zero axis".into());
+            }
+            let (x, y, z) = (v[0] / n, v[1] / n, v[2] / n);
+            let (s, c) = v[3].to_radians().sin_cos();
+            let t = 1.0 - c;
+            m[0][..3].copy_from_slice(&[t * x * x + c, t * x * y - s * z, t * x * z + s * y]);
+            m[1][..3].copy_from_slice(&[t * x * y + s * z, t * y * y + c, t * y * z - s * x]);
+            m[2][..3].copy_from_slice(&[t * x * z - s * y, t * y * z + s * x, t * z * z + c]);
+        }
+        "lookat" | "skew" => {
+            return Err(format!(
+                "a node's <{}> transform is not read (matrix, translate, rotate and scale are)",
+                e.name
+            ))
+        }
+        _ => return Ok(None),
+    }
+    Ok(Some(m))
+}
+
+/// The document's geometries: id → vertex positions (in the mesh's own frame).
+fn geometries(root: &El) -> Result<BTreeMap<String, Vec<Vec3>>, String> {
+    let mut out = BTreeMap::new();
+    let mut geoms = Vec::new();
+    root.descendants("geometry", &mut geoms);
+    for g in geoms {
+        let Some(mesh) = g.kid("mesh") else { continue };
+        // The source the <vertices> POSITION input names, else one whose id names positions.
+        let named = mesh
+            .kid("vertices")
+            .and_then(|v| {
+                v.all("input")
+                    .find(|i| i.attr("semantic") == Some("POSITION"))
+            })
+            .and_then(|i| i.attr("source"))
+            .map(|s| s.trim_start_matches('#').to_string());
+        let source = mesh.all("source").find(|s| match &named {
+            Some(id) => s.attr("id") == Some(id.as_str()),
+            None => s
+                .attr("id")
+                .is_some_and(|id| id.to_lowercase().contains("position")),
+        });
+        let Some(array) = source.and_then(|s| s.kid("float_array")) else {
+            continue;
+        };
+        let v = array.numbers()?;
+        let stride = source
+            .and_then(|s| s.kid("technique_common"))
+            .and_then(|t| t.kid("accessor"))
+            .and_then(|a| a.attr("stride"))
+            .and_then(|s| s.parse::<usize>().ok())
+            .unwrap_or(3)
+            .max(3);
+        let points = v.chunks_exact(stride).map(|c| [c[0], c[1], c[2]]).collect();
+        out.insert(g.attr("id").unwrap_or_default().to_string(), points);
+    }
+    Ok(out)
+}
+
+/// The element an `url` attribute names (its id).
+fn url(e: &El) -> &str {
+    e.attr("url").unwrap_or_default().trim_start_matches('#')
+}
+
+/// Walks `node` under `parent`, adding its geometries' vertices to `out`.
+fn walk(
+    node: &El,
+    parent: &Mat4,
+    lib: &BTreeMap<String, &El>,
+    geoms: &BTreeMap<String, Vec<Vec3>>,
+    depth: usize,
+    out: &mut Vec<Vec3>,
+) -> Result<(), String> {
+    if depth > 64 {
+        return Err("nodes nested more than 64 deep (an <instance_node> cycle?)".into());
+    }
+    let mut m = *parent;
+    for k in &node.kids {
+        if let Some(t) = transform(k)? {
+            m = mul4(&m, &t);
+        }
+    }
+    for k in &node.kids {
+        match k.name.as_str() {
+            "instance_geometry" => {
+                let g = geoms.get(url(k)).ok_or_else(|| {
+                    format!("<instance_geometry url=\"#{}\">: no such mesh", url(k))
+                })?;
+                out.extend(g.iter().map(|p| apply4(&m, *p)));
+            }
+            "instance_node" => {
+                let n = lib
+                    .get(url(k))
+                    .ok_or_else(|| format!("<instance_node url=\"#{}\">: no such node", url(k)))?;
+                walk(n, &m, lib, geoms, depth + 1, out)?;
+            }
+            "node" => walk(k, &m, lib, geoms, depth + 1, out)?,
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// The vertex positions of the document `text`, in metres, z up (see the module docs).
+pub fn vertices(text: &str) -> Result<Vec<Vec3>, String> {
+    let root = parse(text)?;
+    let asset = root.kid("asset");
+    let unit = asset
+        .and_then(|a| a.kid("unit"))
+        .and_then(|u| u.attr("meter"))
+        .map_or(Ok(1.0), |m| {
+            m.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("<unit meter=\"{m}\">: not a number"))
+        })?;
+    let up = asset
+        .and_then(|a| a.kid("up_axis"))
+        .map_or("Y_UP", |u| u.text.trim());
+    let geoms = geometries(&root)?;
+    let mut nodes = Vec::new();
+    root.descendants("node", &mut nodes);
+    let lib: BTreeMap<String, &El> = nodes
+        .iter()
+        .filter_map(|n| n.attr("id").map(|id| (id.to_string(), *n)))
+        .collect();
+    let mut scenes = Vec::new();
+    root.descendants("visual_scene", &mut scenes);
+    let wanted = root
+        .kid("scene")
+        .and_then(|s| s.kid("instance_visual_scene"))
+        .and_then(|i| i.attr("url"))
+        .map(|u| u.trim_start_matches('#').to_string());
+    let scene = match &wanted {
+        Some(id) => scenes
+            .iter()
+            .find(|s| s.attr("id") == Some(id.as_str()))
+            .or(scenes.first()),
+        None => scenes.first(),
+    };
+    let mut out = Vec::new();
+    match scene {
+        Some(s) => {
+            for n in s.all("node") {
+                walk(n, &ID4, &lib, &geoms, 0, &mut out)?;
+            }
+        }
+        None => out.extend(geoms.values().flatten().copied()),
+    }
+    Ok(out
+        .into_iter()
+        .map(|p| {
+            let p = p.map(|v| v * unit);
+            match up {
+                // The specification's axes (right, up, in): Y_UP (x, y, z), X_UP (−y, x, z),
+                // Z_UP (x, z, −y).
+                "Y_UP" => [p[0], -p[2], p[1]],
+                "X_UP" => [-p[1], -p[2], p[0]],
+                _ => p,
+            }
+        })
+        .collect())
+}

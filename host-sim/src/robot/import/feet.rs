@@ -1,0 +1,98 @@
+//! Which links are the feet, when `--sole` does not say: the lowest geometry, not the lowest
+//! frame.
+//!
+//! The URDF's rigid bodies are its links grouped by fixed joints; an **end body** is one with
+//! no moving joint below it (a foot, a hand, a head). Each end body's lowest point is that of
+//! its collision shapes (its visual ones if it has none) at zero joint angles; the feet are
+//! the end body with the lowest point on each side of the base (left: its first link's
+//! origin at positive y). A massless frame (a sensor or a sole frame) is part of the body it
+//! is fixed to, so it is never taken for a foot by itself; whether it is the sole centre is
+//! decided against the foot's geometry ([`super::sole`]). If no end body on a side has
+//! geometry, the lowest leaf link on each side is taken (and refused later if its foot has
+//! no geometry).
+
+use std::collections::BTreeMap;
+
+use urdf_rs::JointType;
+
+use super::{sole, Tree};
+use crate::robot::model::Pose;
+
+/// The end bodies below `base`: each as its first link (moved by a joint) and its links
+/// with their poses in that link's frame.
+pub(crate) fn end_bodies(t: &Tree, base: &str) -> Vec<Vec<(String, Pose)>> {
+    let mut out = Vec::new();
+    let mut roots = Vec::new();
+    let mut stack = vec![base.to_string()];
+    while let Some(l) = stack.pop() {
+        for &j in t.kids(&l) {
+            let joint = &t.urdf.joints[j];
+            if joint.joint_type != JointType::Fixed {
+                roots.push(joint.child.link.clone());
+            }
+            stack.push(joint.child.link.clone());
+        }
+    }
+    for root in roots {
+        let mut body = Vec::new();
+        let mut end = true;
+        let mut stack = vec![(root.clone(), Pose::IDENTITY)];
+        while let Some((l, p)) = stack.pop() {
+            for &j in t.kids(&l) {
+                let joint = &t.urdf.joints[j];
+                if joint.joint_type == JointType::Fixed {
+                    stack.push((
+                        joint.child.link.clone(),
+                        p.then(&super::pose_of(&joint.origin)),
+                    ));
+                } else {
+                    end = false;
+                }
+            }
+            body.push((l, p));
+        }
+        if end {
+            out.push(body);
+        }
+    }
+    out
+}
+
+/// The feet by their geometry (see the module docs): the first link of the left and the
+/// right foot, `None` if a side has no end body with geometry.
+pub(crate) fn by_geometry(
+    t: &Tree,
+    base: &str,
+    zero: &BTreeMap<String, Pose>,
+) -> Option<[String; 2]> {
+    let mut best: [Option<(f64, String)>; 2] = [None, None];
+    for body in end_bodies(t, base) {
+        let first = &body[0].0;
+        let Some(at) = zero.get(first) else { continue };
+        // A shape that cannot be read does not make a foot (a foot's own is refused later).
+        let Ok((pts, _)) = sole::foot_points(t, &body) else {
+            continue;
+        };
+        let Some(low) = pts
+            .iter()
+            .map(|(p, _)| at.apply(*p)[2])
+            .min_by(f64::total_cmp)
+        else {
+            continue;
+        };
+        let side = if at.p[1] > 0.0 {
+            0
+        } else if at.p[1] < 0.0 {
+            1
+        } else {
+            continue;
+        };
+        if best[side].as_ref().is_none_or(|(z, _)| low < *z) {
+            best[side] = Some((low, first.clone()));
+        }
+    }
+    match best {
+        [Some((_, l)), Some((_, r))] => Some([l, r]),
+        _ => None,
+    }
+}
