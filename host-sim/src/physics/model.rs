@@ -17,7 +17,8 @@
 //! Collision shapes: the **soles** are boxes of the robot file's `[feet]` `sole_length` ×
 //! `sole_width` (HRP-2: 0.24 × 0.14 m), [`SOLE_BOX_HEIGHT`] = 0.08 m high or the ankle's
 //! height above the sole if that is less, their bottom face on the sole centre's plane, in the
-//! ankle's frame; every other body (but the last two links of a leg, at the ankle) has the box
+//! ankle's frame; every other body (but the last two links of a leg, at the ankle, and a
+//! body lighter than [`NO_BOX_BELOW_KG`]) has the box
 //! of equal principal moments
 //! (`a² = 6 (I_y + I_z − I_x) / m`, and so on, from the diagonal of its tensor), so that a fall
 //! can touch the floor with a knee, a hip or the trunk. Robot geoms collide with the floor only
@@ -165,6 +166,10 @@ fn inertial(b: &Body) -> String {
     }
 }
 
+/// A body lighter than this has no collision box: its equivalent box says nothing of its
+/// shape (a URDF's placeholder base of 1 mg with a unit tensor would be metres wide) \[kg\].
+pub const NO_BOX_BELOW_KG: f64 = 1e-3;
+
 fn collision_box(name: &str, b: &Body) -> String {
     collision_box_within(name, b, None)
 }
@@ -173,6 +178,9 @@ fn collision_box(name: &str, b: &Body) -> String {
 /// between a joint and the next, with a margin) when given: a slender link whose mass is
 /// spread unevenly has an equivalent box longer than the link, which would reach the floor.
 fn collision_box_within(name: &str, b: &Body, z: Option<[f64; 2]>) -> String {
+    if b.mass < NO_BOX_BELOW_KG {
+        return String::new();
+    }
     let mut c = b.com;
     let mut h = equivalent_box(b);
     if let Some([lo, hi]) = z {

@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use urdf_rs::JointType;
 
 use super::{sole, Tree};
-use crate::robot::model::Pose;
+use crate::robot::model::{cross, mul_mv, norm, sub, Pose};
 
 /// The end bodies below `base`: each as its first link (moved by a joint) and its links
 /// with their poses in that link's frame.
@@ -95,4 +95,67 @@ pub(crate) fn by_geometry(
         [Some((_, l)), Some((_, r))] => Some([l, r]),
         _ => None,
     }
+}
+
+/// The knee of the leg to `leaf` if it bends forward of the base's x axis (the robot then
+/// faces −x, as iCub's `root_link` does): the leg's moving joint farthest from both the hip
+/// and the ankle, flexed towards the longer side of its range, moves the ankle towards +x.
+/// `None` if it moves it towards −x, or if the knee has no range to tell.
+pub(crate) fn knee_bends_forward(
+    t: &Tree,
+    base: &str,
+    zero: &BTreeMap<String, Pose>,
+    leaf: &str,
+) -> Option<String> {
+    let moving: Vec<usize> = t
+        .path(base, leaf)?
+        .into_iter()
+        .filter(|&j| t.urdf.joints[j].joint_type != JointType::Fixed)
+        .collect();
+    let at = |j: usize| zero.get(&t.urdf.joints[j].child.link);
+    let hip = at(*moving.first()?)?.p;
+    let ankle = at(*moving.last()?)?.p;
+    let apart = |j: usize| at(j).map_or(0.0, |p| norm(sub(p.p, hip)).min(norm(sub(p.p, ankle))));
+    let knee = moving
+        .iter()
+        .copied()
+        .max_by(|&a, &b| apart(a).total_cmp(&apart(b)))?;
+    let joint = &t.urdf.joints[knee];
+    let l = &joint.limit;
+    if joint.joint_type != JointType::Revolute || !(l.lower < l.upper) || apart(knee) <= 0.0 {
+        return None;
+    }
+    let flex = if l.upper.abs() >= l.lower.abs() {
+        1.0
+    } else {
+        -1.0
+    };
+    let frame = at(knee)?;
+    let axis = mul_mv(&frame.r, joint.axis.xyz.0).map(|v| v * flex);
+    let d = cross(axis, sub(ankle, frame.p));
+    (d[0] > 0.5 * norm(d)).then(|| joint.name.clone())
+}
+
+/// Turns the base frame by 180° about z: the joints from the base and the base's inertial
+/// are placed in the turned frame.
+pub(crate) fn turn_base(t: &mut Tree, base: &str) {
+    let turn = Pose {
+        p: [0.0; 3],
+        r: [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+    };
+    let turned = |o: &urdf_rs::Pose| {
+        let p = turn.then(&super::pose_of(o));
+        let (r, pi, y) = super::text::rpy(&p);
+        urdf_rs::Pose {
+            xyz: urdf_rs::Vec3(p.p),
+            rpy: urdf_rs::Vec3([r, pi, y]),
+        }
+    };
+    for j in t.kids(base).to_vec() {
+        let o = turned(&t.urdf.joints[j].origin);
+        t.urdf.joints[j].origin = o;
+    }
+    let i = t.links[base];
+    let o = turned(&t.urdf.links[i].inertial.origin);
+    t.urdf.links[i].inertial.origin = o;
 }

@@ -109,6 +109,29 @@ fn inertial(l: &urdf_rs::Link) -> Option<Body> {
     Some(body.moved(&pose_of(&i.origin)))
 }
 
+/// `b`'s inertia tensor as the engine takes it (each principal moment at least 1e-6 kg m²,
+/// [`crate::physics::model`]) positive definite: else an error naming `what`.
+fn positive(b: &Body, what: &str) -> Result<(), ImportError> {
+    let mut i = b.inertia;
+    for (k, row) in i.iter_mut().enumerate() {
+        row[k] = row[k].max(1e-6);
+    }
+    let m2 = i[0][0] * i[1][1] - i[0][1] * i[1][0];
+    let det = i[0][0] * (i[1][1] * i[2][2] - i[1][2] * i[2][1])
+        - i[0][1] * (i[1][0] * i[2][2] - i[1][2] * i[2][0])
+        + i[0][2] * (i[1][0] * i[2][1] - i[1][1] * i[2][0]);
+    if b.mass <= 0.0 || (m2 > 0.0 && det > 0.0) {
+        return Ok(());
+    }
+    let i = &b.inertia;
+    err(format!(
+        "{what}: its inertia tensor about its centre of mass (ixx {}, iyy {}, izz {}, ixy {}, \
+         ixz {}, iyz {}) is not positive definite: no body has it (a tensor about another point \
+         than the <inertial> origin?), and the engine cannot simulate it",
+        i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]
+    ))
+}
+
 /// The URDF as a tree.
 pub(crate) struct Tree {
     pub(crate) urdf: urdf_rs::Robot,
@@ -487,6 +510,21 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
             ));
         }
     }
+    // A robot whose knees bend forward of the base's x axis faces −x: the base is turned.
+    let mut warnings = Vec::new();
+    let (mut t, mut zero, mut leaves) = (t, zero, leaves);
+    if let Some(knee) = feet::knee_bends_forward(&t, &base, &zero, &leaves[0]) {
+        feet::turn_base(&mut t, &base);
+        zero = t.zero_poses(&base);
+        if soles.is_none() {
+            leaves.swap(0, 1);
+        }
+        warnings.push(format!(
+            "the knee <joint name=\"{knee}\"> bends forward of the x axis of the base <link \
+             name=\"{base}\">: the robot faces its −x, and the import turns the base frame by \
+             180° about z (the robot walks along the URDF's −x)"
+        ));
+    }
     let paths: Vec<Vec<usize>> = leaves
         .iter()
         .map(|l| t.path(&base, l).unwrap_or_default())
@@ -518,10 +556,17 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     for l in &legs {
         trunk = trunk.merged(&l.pre);
     }
+    positive(&waist, &format!("<link name=\"{base}\"> (the base)"))?;
+    positive(&trunk, "the upper body (every link off the legs, merged)")?;
+    for s in legs.iter().flat_map(|l| &l.specs) {
+        positive(
+            &s.body,
+            &format!("<link name=\"{}\"> (with the links fixed to it)", s.link),
+        )?;
+    }
     // Soles.
     let mut sole_out = [Pose::IDENTITY; 2];
     let mut size = [f64::INFINITY; 2];
-    let mut warnings = Vec::new();
     let mut from = Vec::new();
     for (k, l) in legs.iter().enumerate() {
         let level = zero.get(&l.ankle).map_or(IDENTITY, |p| p.r);

@@ -88,7 +88,7 @@ pub(super) fn multibody(g: &Parts, waist_height: f64) -> String {
 }
 
 /// The URDF `rpy` of a rotation (`R = R_z(y) R_y(p) R_x(r)`).
-fn rpy(p: &Pose) -> (f64, f64, f64) {
+pub(super) fn rpy(p: &Pose) -> (f64, f64, f64) {
     let r = &p.r;
     let pitch = (-r[2][0]).clamp(-1.0, 1.0).asin();
     let roll = r[2][1].atan2(r[2][2]);
