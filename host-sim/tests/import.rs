@@ -354,12 +354,161 @@ fn biped(edit: impl Fn(String) -> String) -> String {
 }
 
 fn import_text(name: &str, text: &str) -> Result<host_sim::robot::import::Imported, String> {
+    import_with(name, text, &[], None)
+}
+
+/// Imports `text` as `robot.urdf` with `files` (name, text) beside it, and `--sole soles`.
+fn import_with(
+    name: &str,
+    text: &str,
+    files: &[(&str, &str)],
+    soles: Option<[&str; 2]>,
+) -> Result<host_sim::robot::import::Imported, String> {
     let dir = temp_dir(name);
     let path = dir.join("robot.urdf");
     std::fs::write(&path, text).expect("written");
-    let r = import(&path, None).map_err(|e| e.to_string());
+    for (f, t) in files {
+        std::fs::write(dir.join(f), t).expect("written");
+    }
+    let r = import(&path, soles).map_err(|e| e.to_string());
     let _ = std::fs::remove_dir_all(&dir);
     r
+}
+
+/// The collision box of [`biped`]'s feet, as written there.
+const FOOT_BOX: &str = "<collision><origin xyz=\"0.03 0 -0.05\"/><geometry><box size=\"0.2 0.1 0.05\"/></geometry></collision>";
+
+/// The foot mesh written here (`tests/urdf/foot_cm.dae`): the biped's foot box in centimetres,
+/// placed by its scene's node transforms.
+fn foot_cm() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/urdf/foot_cm.dae"))
+        .expect("the fixture")
+}
+
+/// Sole length, width and the two sole centres in the ankle frames.
+fn soles_of(r: &Robot) -> ([f64; 2], [[f64; 3]; 2]) {
+    let p = &r.planner.params;
+    (
+        [2.0 * p.sole_half_length, 2.0 * p.sole_half_width],
+        [r.model.legs[0].sole.p, r.model.legs[1].sole.p],
+    )
+}
+
+fn near(a: &[f64], b: &[f64], tol: f64) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+}
+
+#[test]
+fn collada_node_transforms_and_mesh_scale_place_the_sole() {
+    let boxed = import_text("box-feet", &biped(|s| s))
+        .expect("imports")
+        .robot;
+    let (size, centres) = soles_of(&boxed);
+    // The same feet as a COLLADA mesh in centimetres, under a node <matrix> (cm to m, 3 cm
+    // forward, 5 cm down), an instanced library node and a <rotate>: the same soles.
+    let mesh = |attrs: &str| {
+        biped(move |s| {
+            s.replace(
+                FOOT_BOX,
+                &format!("<collision><geometry><mesh filename=\"foot_cm.dae\"{attrs}/></geometry></collision>"),
+            )
+        })
+    };
+    let dae = foot_cm();
+    let r = import_with("dae-feet", &mesh(""), &[("foot_cm.dae", &dae)], None)
+        .expect("imports")
+        .robot;
+    let (s, c) = soles_of(&r);
+    assert!(near(&s, &size, 1e-9), "{s:?} against {size:?}");
+    for k in 0..2 {
+        assert!(near(&c[k], &centres[k], 1e-9), "{c:?} against {centres:?}");
+    }
+    // The URDF's mesh scale on top: 1.5 along x makes the sole 0.3 m long, centred 4.5 cm ahead.
+    let r = import_with(
+        "dae-scaled",
+        &mesh(" scale=\"1.5 1 1\""),
+        &[("foot_cm.dae", &dae)],
+        None,
+    )
+    .expect("imports")
+    .robot;
+    let (s, c) = soles_of(&r);
+    assert!(near(&s, &[0.3, 0.1], 1e-9), "{s:?}");
+    assert!(near(&c[0], &[0.045, 0.0, -0.075], 1e-9), "{c:?}");
+    // Without the node's matrix the mesh is read in centimetres as metres: refused, naming
+    // the mesh, its link and its placement.
+    let unscaled = dae.replace(
+        "0.01 0 0 0.03 0 0.01 0 0 0 0 0.01 -0.05 0 0 0 1",
+        "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1",
+    );
+    assert_ne!(unscaled, dae);
+    let e = import_with("dae-cm", &mesh(""), &[("foot_cm.dae", &unscaled)], None)
+        .err()
+        .expect("refused");
+    assert!(
+        e.contains("<mesh filename=\"foot_cm.dae\">")
+            && e.contains("<link name=\"l_link5\">")
+            && e.contains("placed at")
+            && e.contains("COLLADA node transforms"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_massless_frame_is_never_the_sole_without_the_geometry_below_it() {
+    // A massless sensor frame at each ankle joint, the lowest leaf link of each leg.
+    let frames = |s: String| {
+        let mut out = s.replace("</robot>", "");
+        for side in ["l", "r"] {
+            out += &format!(
+                "<link name=\"{side}_ft_frame\"/><joint name=\"{side}_ft\" type=\"fixed\">\
+                 <parent link=\"{side}_link5\"/><child link=\"{side}_ft_frame\"/>\
+                 <origin xyz=\"0 0 0\"/></joint>\n"
+            );
+        }
+        out + "</robot>\n"
+    };
+    let want = [0.03, 0.0, -0.075];
+    let r = import_text("ft-frame", &biped(frames)).expect("imports");
+    let (size, c) = soles_of(&r.robot);
+    assert!(near(&size, &[0.2, 0.1], 1e-9), "{size:?}");
+    assert!(
+        near(&c[0], &want, 1e-12) && near(&c[1], &want, 1e-12),
+        "{c:?}"
+    );
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    // Named as the soles: the soles stay on the geometry, and the import says why.
+    let r = import_with(
+        "ft-frame-named",
+        &biped(frames),
+        &[],
+        Some(["l_ft_frame", "r_ft_frame"]),
+    )
+    .expect("imports");
+    let (_, c) = soles_of(&r.robot);
+    assert!(near(&c[0], &want, 1e-12), "{c:?}");
+    assert_eq!(r.warnings.len(), 2, "{:?}", r.warnings);
+    assert!(
+        r.warnings[0].contains("<link name=\"l_ft_frame\"> (at (0.0000, 0.0000, 0.0000)")
+            && r.warnings[0].contains("lies 0.0750 m above the foot's lowest point"),
+        "{}",
+        r.warnings[0]
+    );
+    // A sole frame on the geometry's sole plane is the sole centre (here 2 cm behind the
+    // middle: the sole is the largest rectangle centred on it).
+    let soles = |s: String| {
+        frames(s).replace("_ft_frame", "_sole").replace(
+            "<origin xyz=\"0 0 0\"/></joint>",
+            "<origin xyz=\"0.01 0 -0.075\"/></joint>",
+        )
+    };
+    let r = import_text("sole-frame", &biped(soles)).expect("imports");
+    let (size, c) = soles_of(&r.robot);
+    assert!(near(&c[0], &[0.01, 0.0, -0.075], 1e-12), "{c:?}");
+    assert!(near(&size, &[0.16, 0.1], 1e-9), "{size:?}");
+    assert!(r
+        .toml
+        .contains("# from: <link name=\"l_sole\">; <link name=\"r_sole\">"));
 }
 
 #[test]
