@@ -668,3 +668,78 @@ fn talos_push_map_is_the_books() {
         assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
     }
 }
+
+/// `key = value` of a robot file's text, its first occurrence.
+fn value_of(toml: &str, key: &str) -> f64 {
+    toml.lines()
+        .find_map(|l| l.strip_prefix(&format!("{key} = ")))
+        .and_then(|v| v.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .expect("a number")
+}
+
+/// A robot that falls before its first step (its soles written 0.1 m above its ankles, where
+/// its shanks reach the floor): `physics` writes its files and exits non-zero naming the fall;
+/// the commands of many runs stop before the first.
+#[test]
+fn a_run_that_cannot_start_exits_non_zero_naming_why() {
+    let test = "a_run_that_cannot_start_exits_non_zero_naming_why";
+    if !engine_here(test) {
+        return;
+    }
+    let good = import_text("cannot-start", &biped(|s| s)).expect("imports");
+    let sole_z = good.robot.model.legs[0].sole.p[2];
+    let up = 0.1 - sole_z;
+    let mut text = good.toml.replace(
+        &format!("left = [0.03, 0.0, {sole_z}]"),
+        "left = [0.03, 0.0, 0.1]",
+    );
+    text = text.replace(
+        &format!("right = [0.03, 0.0, {sole_z}]"),
+        "right = [0.03, 0.0, 0.1]",
+    );
+    for key in ["waist_height", "cog_height"] {
+        let v = value_of(&good.toml, key);
+        text = text.replacen(
+            &format!("{key} = {v}"),
+            &format!("{key} = {:.4}", v - up),
+            1,
+        );
+    }
+    assert_eq!(text.matches("0.0, 0.1]").count(), 2, "{text}");
+    let dir = temp_dir("cannot-start");
+    let file = dir.join("robot.toml");
+    std::fs::write(&file, &text).expect("written");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(args)
+            .arg("--robot")
+            .arg(&file)
+            .arg("--out")
+            .arg(dir.join(args[0]))
+            .output()
+            .expect("host-sim runs")
+    };
+    let out = run(&["physics", "straight"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("biped cannot start the walk: it fell")
+            && err.contains("during the engine's settle (non-sole contact), and walked 0 s"),
+        "{err}"
+    );
+    let j: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(dir.join("physics/physics.json")).expect("physics.json written"),
+    )
+    .expect("JSON");
+    assert_eq!(j["fell"], true);
+    assert!(j["fall_time_s"].as_f64().expect("a time") < 0.0, "{j}");
+    let out = run(&["physics-sequence"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("biped cannot start the walk: standing on its soles in MuJoCo"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
