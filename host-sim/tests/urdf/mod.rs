@@ -89,3 +89,31 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).expect("temp dir");
     d
 }
+
+/// Every URDF of the installed `example-robot-data` (sorted by path), or `None` after saying
+/// that `test` is skipped (a failure under `WALK_REQUIRE_ROBOT_DATA=1`).
+pub fn all_robot_files(test: &str) -> Option<Vec<PathBuf>> {
+    let script = "import importlib.metadata as m\n\
+                  fs = [str(f.locate()) for f in (m.files('example-robot-data') or []) \
+                  if str(f).endswith('.urdf')]\n\
+                  print('\\n'.join(sorted(fs)))";
+    let out = Command::new(python())
+        .args(["-c", script])
+        .stdin(Stdio::null())
+        .output();
+    let files: Vec<PathBuf> = match &out {
+        Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.is_empty())
+            .map(PathBuf::from)
+            .collect(),
+        _ => Vec::new(),
+    };
+    if files.is_empty() {
+        let e = "example-robot-data is not installed (python3 -m pip install example-robot-data)";
+        assert!(!required(), "{e} ({REQUIRE}=1)");
+        eprintln!("SKIPPED {test}: {e} ({REQUIRE}=1 makes this a failure)");
+        return None;
+    }
+    Some(files)
+}

@@ -300,6 +300,7 @@ fn leg(
     base: &str,
     leaf: &str,
     on_legs: &BTreeSet<usize>,
+    pre_done: &mut BTreeSet<String>,
 ) -> Result<LegImport, ImportError> {
     let path = t
         .path(base, leaf)
@@ -365,11 +366,14 @@ fn leg(
             at = Pose::IDENTITY;
         }
         // The link's own body and everything hanging from it off the legs.
+        // (A link fixed to the base before both legs' first joints is merged once.)
         let acc = match specs.last_mut() {
-            Some(s) => &mut s.body,
-            None => &mut pre,
+            Some(s) => Some(&mut s.body),
+            None => pre_done.insert(child.clone()).then_some(&mut pre),
         };
-        t.subtree_body(child, &at, on_legs, acc);
+        if let Some(acc) = acc {
+            t.subtree_body(child, &at, on_legs, acc);
+        }
         if specs.len() == 6 {
             foot.push((child.clone(), at));
         }
@@ -530,9 +534,10 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
         .map(|l| t.path(&base, l).unwrap_or_default())
         .collect();
     let on_legs: BTreeSet<usize> = paths.iter().flatten().copied().collect();
+    let mut pre_done = BTreeSet::new();
     let legs = [
-        leg(&t, &base, &leaves[0], &on_legs)?,
-        leg(&t, &base, &leaves[1], &on_legs)?,
+        leg(&t, &base, &leaves[0], &on_legs, &mut pre_done)?,
+        leg(&t, &base, &leaves[1], &on_legs, &mut pre_done)?,
     ];
     // The waist and the upper body.
     let waist = inertial(t.link(&base)).ok_or_else(|| {

@@ -1,0 +1,254 @@
+//! Every biped of PyPI's `example-robot-data` with two six-joint legs (found here from the
+//! URDFs, not listed by hand): each is imported with soles that fit its feet and stands in
+//! MuJoCo (and walks `straight`, for those that walk today), or is refused with a reason
+//! naming what is missing. A biped the package adds, or one whose outcome changes, fails the
+//! test until the table below says what it does.
+//!
+//! The default run imports every one and stands iCub in the engine; `WALK_LONG=1` stands every
+//! imported one and walks `straight` with those that walk.
+
+mod engine;
+mod urdf;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use engine::engine_here;
+use host_sim::physics::{run, start::stands, PhysicsConfig};
+use host_sim::robot::import::import;
+use host_sim::robot::model::{norm, rot_rpy, sub, Pose};
+use host_sim::robot::Robot;
+use host_sim::sim::scenario_trajectory;
+use planner_core::gait::Side;
+use urdf::all_robot_files;
+
+/// What a biped does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Outcome {
+    /// Imported; stands and walks `straight` in MuJoCo.
+    Walks,
+    /// Imported; stands in MuJoCo, and falls walking `straight` today (the stabilizer's part).
+    Stands,
+    /// Refused, the message containing this.
+    Refused(&'static str),
+}
+
+/// The bipeds of example-robot-data 6.0.0, by the path under its `robots/` directory.
+const BIPEDS: &[(&str, Outcome)] = &[
+    (
+        "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf",
+        Outcome::Walks,
+    ),
+    ("g1_description/urdf/g1_29dof_rev_1_0.urdf", Outcome::Walks),
+    (
+        "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf",
+        Outcome::Walks,
+    ),
+    (
+        "human_description/robots/human.urdf",
+        Outcome::Refused("no pair of feet below the base"),
+    ),
+    ("icub_description/robots/icub.urdf", Outcome::Walks),
+    ("icub_description/robots/icub_reduced.urdf", Outcome::Walks),
+    ("romeo_description/urdf/romeo.urdf", Outcome::Stands),
+    (
+        "romeo_description/urdf/romeo_laas_small.urdf",
+        Outcome::Refused("<link name=\"body\"> (the base): its inertia tensor"),
+    ),
+    ("romeo_description/urdf/romeo_small.urdf", Outcome::Stands),
+    (
+        "simple_humanoid_description/urdf/simple_humanoid.urdf",
+        Outcome::Refused("_ankle\">) has no <collision> or <visual> geometry"),
+    ),
+    (
+        "simple_humanoid_description/urdf/simple_humanoid_classical.urdf",
+        Outcome::Refused("_ankle\">) has no <collision> or <visual> geometry"),
+    ),
+    ("talos_data/robots/talos_full_v2.urdf", Outcome::Walks),
+    ("talos_data/robots/talos_full_v2_box.urdf", Outcome::Walks),
+    ("talos_data/robots/talos_reduced.urdf", Outcome::Walks),
+    ("talos_data/robots/talos_reduced_box.urdf", Outcome::Walks),
+    (
+        "talos_data/robots/talos_reduced_corrected.urdf",
+        Outcome::Walks,
+    ),
+];
+
+/// The bipeds in the default run's engine check.
+const QUICK: &[&str] = &["icub_description/robots/icub.urdf"];
+
+fn long() -> bool {
+    std::env::var("WALK_LONG").as_deref() == Ok("1")
+}
+
+/// Whether a URDF has two six-joint legs: of its end bodies (links joined by fixed joints, no
+/// moving joint below them) six moving joints from the root, exactly one mirrored pair (at
+/// zero joint angles, the same position but for the sign of one coordinate, to 1 mm; a head
+/// six joints from the root has no twin, a quadruped has two pairs).
+fn two_six_joint_legs(path: &Path) -> bool {
+    let text = std::fs::read_to_string(path)
+        .expect("URDF")
+        .replace("<texture />", "")
+        .replace("<texture/>", "");
+    let Ok(u) = urdf_rs::read_from_string(&text) else {
+        panic!("{}: urdf-rs cannot read it", path.display());
+    };
+    let parent: BTreeMap<&str, &urdf_rs::Joint> = u
+        .joints
+        .iter()
+        .map(|j| (j.child.link.as_str(), j))
+        .collect();
+    let moving = |j: &urdf_rs::Joint| j.joint_type != urdf_rs::JointType::Fixed;
+    // Links with a moving joint somewhere below them.
+    let mut above_moving = std::collections::BTreeSet::new();
+    for j in u.joints.iter().filter(|j| moving(j)) {
+        let mut at = j.parent.link.as_str();
+        while above_moving.insert(at) {
+            match parent.get(at) {
+                Some(p) => at = p.parent.link.as_str(),
+                None => break,
+            }
+        }
+    }
+    let mut ends = Vec::new();
+    for j in u.joints.iter().filter(|j| moving(j)) {
+        let end = j.child.link.as_str();
+        if above_moving.contains(end) {
+            continue;
+        }
+        let (mut n, mut first, mut at) = (0, "", end);
+        let mut pose = Pose::IDENTITY;
+        while let Some(p) = parent.get(at) {
+            if moving(p) {
+                n += 1;
+                first = p.name.as_str();
+            }
+            let o = Pose {
+                p: p.origin.xyz.0,
+                r: rot_rpy(p.origin.rpy.0),
+            };
+            pose = o.then(&pose);
+            at = p.parent.link.as_str();
+        }
+        if n == 6 {
+            ends.push((first.to_string(), pose.p));
+        }
+    }
+    let twins = |a: [f64; 3], b: [f64; 3]| {
+        (0..3).any(|k| {
+            (0..3).all(|i| {
+                let s = if i == k { -1.0 } else { 1.0 };
+                (a[i] - s * b[i]).abs() < 1e-3
+            }) && a[k].abs() > 1e-3
+        })
+    };
+    let mut pairs = 0;
+    for (i, a) in ends.iter().enumerate() {
+        pairs += ends[i + 1..]
+            .iter()
+            .filter(|b| b.0 != a.0 && twins(a.1, b.1))
+            .count();
+    }
+    pairs == 1
+}
+
+/// The sum of the URDF's link masses.
+fn urdf_mass(path: &Path) -> f64 {
+    let text = std::fs::read_to_string(path)
+        .expect("URDF")
+        .replace("<texture />", "")
+        .replace("<texture/>", "");
+    let u = urdf_rs::read_from_string(&text).expect("URDF");
+    u.links.iter().map(|l| l.inertial.mass.value).sum()
+}
+
+/// An imported robot's soles against its legs: below the ankles, at least 0.2 leg lengths
+/// long and 0.08 wide (every human-like foot is; iCub's first import, 0.058 × 0.059 m on
+/// 0.437 m legs, was not), the whole URDF's mass, the written file the robot.
+fn check_import(tail: &str, path: &Path, toml: &str, r: &Robot) {
+    let m = &r.model;
+    assert!(
+        (m.total_mass() - urdf_mass(path)).abs() < 1e-6,
+        "{tail}: {} kg",
+        m.total_mass()
+    );
+    let p = &r.planner.params;
+    let (length, width) = (2.0 * p.sole_half_length, 2.0 * p.sole_half_width);
+    for side in [Side::Left, Side::Right] {
+        let z = m.leg_fk(side, &Pose::IDENTITY, &[0.0; 6]);
+        let leg = norm(sub(z.ankle().p, z.links[0].p));
+        assert!(
+            z.sole.p[2] < z.ankle().p[2],
+            "{tail}: a sole above its ankle"
+        );
+        assert!(
+            length >= 0.2 * leg && width >= 0.08 * leg,
+            "{tail}: soles {length:.3} × {width:.3} m on legs {leg:.3} m long"
+        );
+    }
+    assert_eq!(
+        &Robot::from_toml(toml).expect("the written file reads"),
+        r,
+        "{tail}"
+    );
+}
+
+#[test]
+fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
+    let test = "every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused";
+    let Some(files) = all_robot_files(test) else {
+        return;
+    };
+    let engine = engine_here(test);
+    let mut found = Vec::new();
+    for path in files.iter().filter(|p| two_six_joint_legs(p)) {
+        let s = path.to_string_lossy();
+        let tail = s
+            .split_once("example-robot-data/robots/")
+            .map_or(&*s, |(_, t)| t)
+            .to_string();
+        let Some(&(_, want)) = BIPEDS.iter().find(|(t, _)| *t == tail) else {
+            panic!("{tail}: a biped with two six-joint legs this test does not know: add it");
+        };
+        found.push(tail.clone());
+        let imported = import(path, None);
+        let r = match (want, imported) {
+            (Outcome::Refused(why), Err(e)) => {
+                assert!(e.to_string().contains(why), "{tail}: {e}");
+                println!("{tail}: refused: {e}");
+                continue;
+            }
+            (Outcome::Refused(_), Ok(_)) => panic!("{tail}: imported, expected refused"),
+            (_, Err(e)) => panic!("{tail}: {e}"),
+            (_, Ok(i)) => {
+                check_import(&tail, path, &i.toml, &i.robot);
+                for w in &i.warnings {
+                    println!("{tail}: warning: {w}");
+                }
+                i.robot
+            }
+        };
+        let p = &r.planner.params;
+        println!(
+            "{tail}: soles {:.3} × {:.3} m, feet {:.3} m apart",
+            2.0 * p.sole_half_length,
+            2.0 * p.sole_half_width,
+            p.step_width
+        );
+        if !engine || !(long() || QUICK.contains(&tail.as_str())) {
+            continue;
+        }
+        stands(&r).unwrap_or_else(|e| panic!("{tail}: {e}"));
+        if want == Outcome::Walks && long() {
+            let (_, trajectory, dt) = scenario_trajectory("straight", &r).expect("straight");
+            let out = run(&trajectory, dt, &PhysicsConfig::for_robot(&r)).expect("the engine");
+            assert!(!out.report.fell, "{tail}: straight: {:?}", out.report);
+            println!(
+                "{tail}: straight: no fall, tilt {:.2}°",
+                out.report.max_tilt_deg
+            );
+        }
+    }
+    let listed: Vec<String> = BIPEDS.iter().map(|(t, _)| t.to_string()).collect();
+    assert_eq!(found, listed, "the bipeds found are not the table's");
+}
