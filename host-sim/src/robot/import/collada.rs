@@ -344,3 +344,66 @@ pub fn vertices(text: &str) -> Result<Vec<Vec3>, String> {
         })
         .collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &[Vec3], b: &[Vec3]) -> bool {
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(p, q)| (0..3).all(|i| (p[i] - q[i]).abs() < 1e-12))
+    }
+
+    #[test]
+    fn positions_in_metres_z_up_under_the_node_transforms() {
+        let doc = |scene: &str| {
+            format!(
+                r##"<COLLADA><asset><unit meter="0.1" name="decimetre"/><up_axis>Y_UP</up_axis></asset>
+            <library_geometries><geometry id="g"><mesh>
+            <source id="a-normals"><float_array id="a-normals-array" count="3">0 0 1</float_array></source>
+            <source id="a-pos"><float_array id="a-pos-array" count="6">1 2 3 4 5 6</float_array></source>
+            <vertices id="v"><input semantic="POSITION" source="#a-pos"/></vertices>
+            </mesh></geometry></library_geometries>
+            <library_nodes><node id="lib"><translate>1 0 0</translate><instance_geometry url="#g"/></node></library_nodes>
+            <library_visual_scenes><visual_scene id="s">{scene}</visual_scene></library_visual_scenes>
+            <scene><instance_visual_scene url="#s"/></scene></COLLADA>"##
+            )
+        };
+        // × 0.1 (unit), y up turned to z up: (x, −z, y); the normals are not positions.
+        let plain = vertices(&doc(r##"<node><instance_geometry url="#g"/></node>"##));
+        assert!(
+            close(
+                &plain.clone().expect("read"),
+                &[[0.1, -0.3, 0.2], [0.4, -0.6, 0.5]]
+            ),
+            "{plain:?}"
+        );
+        // A scale, then a nested node turned 90° about its z, then an instanced node moved
+        // along its x: (1, 2, 3) → (2, 2, 3) → (−2, 2, 3) → × 0.5 → (−1, 1, 1.5).
+        let nested = vertices(&doc(
+            r##"<node><scale>0.5 0.5 0.5</scale><node><rotate>0 0 1 90</rotate>
+                <instance_node url="#lib"/></node></node>"##,
+        ))
+        .expect("read");
+        let want = |p: Vec3| [0.1 * p[0], -0.1 * p[2], 0.1 * p[1]];
+        assert!(
+            close(&nested, &[want([-1.0, 1.0, 1.5]), want([-2.5, 2.5, 3.0])]),
+            "{nested:?}"
+        );
+        // A <matrix> (row-major) composes as the others: here x doubled and moved by 1 along z.
+        let m = vertices(&doc(
+            r##"<node><matrix>2 0 0 0 0 1 0 0 0 0 1 1 0 0 0 1</matrix><instance_geometry url="#g"/></node>"##,
+        ))
+        .expect("read");
+        assert!(
+            close(&m, &[want([2.0, 2.0, 4.0]), want([8.0, 5.0, 7.0])]),
+            "{m:?}"
+        );
+        let e = vertices(&doc(r##"<node><lookat>0 0 1 0 0 0 0 1 0</lookat></node>"##))
+            .err()
+            .expect("refused");
+        assert!(e.contains("<lookat>"), "{e}");
+    }
+}
