@@ -246,8 +246,8 @@ enum RobotCmd {
         /// The URDF file (`package://` meshes are found in the directory of that name above
         /// it, or on ROS_PACKAGE_PATH).
         urdf: PathBuf,
-        /// The feet: the left and the right sole (or foot) link [default: the lowest leaf
-        /// link on each side].
+        /// The feet: the left and the right sole (or foot) link [default: on each side, the
+        /// foot whose geometry reaches lowest].
         #[arg(long, value_name = "LEFT,RIGHT")]
         sole: Option<String>,
         /// The robot file to write.

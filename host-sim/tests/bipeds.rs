@@ -163,8 +163,9 @@ fn urdf_mass(path: &Path) -> f64 {
 }
 
 /// An imported robot's soles against its legs: below the ankles, at least 0.2 leg lengths
-/// long and 0.08 wide (every human-like foot is; iCub's first import, 0.058 × 0.059 m on
-/// 0.437 m legs, was not), the whole URDF's mass, the written file the robot.
+/// long and 0.08 wide (a sole of 0.058 × 0.059 m under iCub's 0.437 m legs, a frame under its
+/// ankle taken for the sole's middle, is not), the whole URDF's mass, the written file the
+/// robot.
 fn check_import(tail: &str, path: &Path, toml: &str, r: &Robot) {
     let m = &r.model;
     assert!(

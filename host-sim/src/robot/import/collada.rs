@@ -402,8 +402,7 @@ mod tests {
             "{m:?}"
         );
         let e = vertices(&doc(r##"<node><lookat>0 0 1 0 0 0 0 1 0</lookat></node>"##))
-            .err()
-            .expect("refused");
+            .expect_err("refused");
         assert!(e.contains("<lookat>"), "{e}");
     }
 }

@@ -122,7 +122,10 @@ pub(crate) fn knee_bends_forward(
         .max_by(|&a, &b| apart(a).total_cmp(&apart(b)))?;
     let joint = &t.urdf.joints[knee];
     let l = &joint.limit;
-    if joint.joint_type != JointType::Revolute || !(l.lower < l.upper) || apart(knee) <= 0.0 {
+    if joint.joint_type != JointType::Revolute
+        || l.lower.partial_cmp(&l.upper) != Some(std::cmp::Ordering::Less)
+        || apart(knee) <= 0.0
+    {
         return None;
     }
     let flex = if l.upper.abs() >= l.lower.abs() {

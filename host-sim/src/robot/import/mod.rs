@@ -5,24 +5,27 @@
 //!
 //! * **The floating base**: the URDF's root link (the one link that is no joint's child); a
 //!   massless root with a single fixed or floating child (a `world` or footprint frame) gives
-//!   way to that child. It is the waist of the model.
-//! * **The legs**: the two lowest leaf links at zero joint angles, one on each side (or the
-//!   `--sole` links); each leg is the path from the root to its leaf, which must have exactly
+//!   way to that child. It is the waist of the model; if the knees bend forward of its x axis
+//!   (the robot faces −x), it is turned by 180° about z ([`feet::knee_bends_forward`]).
+//! * **The legs**: the feet are the end bodies whose geometry reaches lowest, one on each side
+//!   ([`feet`]; or the `--sole` links); each leg is the path from the root to its foot, with exactly
 //!   six revolute (or continuous) joints and no other moving joint. Fixed joints on the path
 //!   are folded into the next joint's origin, and the links they carry into the link before.
 //! * **The upper body**: every link off the legs' paths (torso, arms, head, grippers) at zero
 //!   joint angles, merged rigidly into one `trunk` body (its mass in the COM and the ZMP); the
-//!   root link's own body is the `waist`. Links hanging from a leg link are merged into it.
+//!   root link's own body is the `waist`. Links hanging from a leg link are merged into it; a
+//!   link fixed to the base before both legs, once.
 //! * **Masses and inertias**: each `<inertial>` as given (its `rpy` turned into the link frame,
-//!   the full tensor kept), merged by the parallel-axis theorem ([`Body::merged`]).
+//!   the full tensor kept), merged by the parallel-axis theorem ([`Body::merged`]); every merged
+//!   tensor positive definite as the engine takes it.
 //! * **The soles** ([`sole`]): the collision geometry of the foot (the last leg link and what
 //!   is fixed to it, or its visual geometry if it has none: boxes, cylinders, capsules, spheres,
-//!   STL, COLLADA and OBJ meshes with `package://` resolved
-//!   by the directory of that name above the URDF or on `ROS_PACKAGE_PATH`); the sole plane is
-//!   its lowest point, the sole its points within [`sole::CONTACT_BAND_M`] of it; the sole
-//!   centre the leaf's frame if the leaf is a frame fixed below the ankle (Talos's
-//!   `left_sole_link`), the sole's middle otherwise; the sole rectangle the largest one centred
-//!   there inside the contact points' bounds. The sole is flat in the ankle frame.
+//!   STL, COLLADA ([`collada`]) and OBJ meshes with `package://` resolved by the directory of
+//!   that name above the URDF or on `ROS_PACKAGE_PATH`); the sole plane is its lowest point,
+//!   the sole its points within [`sole::CONTACT_BAND_M`] of it; the sole centre a frame of the
+//!   foot that fits that geometry (Talos's `left_sole_link`), the sole's middle otherwise (a
+//!   sole frame that does not fit is named in a warning); the sole rectangle the largest one
+//!   centred there inside the contact points' bounds. The sole is flat in the ankle frame.
 //! * **The standing posture**: the feet straight below the hips (`step_width` the distance of
 //!   the sole centres at zero angles), the waist lowered by [`KNEE_DROP`] of the leg length
 //!   (hip to ankle) from the straight-legged height, so that the knees bend as HRP-2's do
@@ -41,8 +44,10 @@
 //! Refused, with the file and line named: XML that is not well-formed (a file cut short: where
 //! it ends and which element is open; [`xml`]). Refused, with the URDF element named: several
 //! or no root links, a massless base, a leg without six revolute joints (or with a prismatic,
-//! planar or floating joint), no pair of feet, a foot without geometry, a moving link without
-//! an `<inertial>`, a mesh of another format, a standing posture the legs cannot reach.
+//! planar or floating joint), no pair of feet below the base, a foot without geometry or with
+//! geometry out of proportion to the leg (the shape named), a moving link without an
+//! `<inertial>`, an inertia tensor that is not positive definite, a mesh of another format, a
+//! standing posture the legs cannot reach.
 
 pub mod collada;
 mod feet;

@@ -174,12 +174,12 @@ fn xyz(v: Vec3) -> String {
     format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2])
 }
 
+/// Points, each with the index of its shape, and the shapes' descriptions.
+pub(crate) type FootPoints = (Vec<(Vec3, usize)>, Vec<String>);
+
 /// The points of a foot's shapes (its collision shapes, or its visual ones if it has none)
 /// in the ankle frame, each with the index of its shape in the descriptions returned.
-pub(crate) fn foot_points(
-    t: &Tree,
-    links: &[(String, Pose)],
-) -> Result<(Vec<(Vec3, usize)>, Vec<String>), ImportError> {
+pub(crate) fn foot_points(t: &Tree, links: &[(String, Pose)]) -> Result<FootPoints, ImportError> {
     let mut pts = Vec::new();
     let mut shapes = Vec::new();
     for kind in ["collision", "visual"] {
@@ -303,7 +303,7 @@ pub(crate) fn sole(
             2.0 * half(c[0], x0, x1) / (x1 - x0),
             2.0 * half(c[1], y0, y1) / (y1 - y0),
         ];
-        if cover.iter().any(|v| !(*v >= SOLE_COVER)) {
+        if cover.iter().any(|v| v.is_nan() || *v < SOLE_COVER) {
             return Err(format!(
                 "is off the middle of the foot's contact area ({:.4} × {:.4} m): a sole centred \
                  on it spans {:.0} % of it along and {:.0} % across (at least {:.0} % wanted)",
