@@ -24,7 +24,7 @@
 //! and never carried out) with its time, step id and reason, and exits with status 1 if one
 //! failed that the scenario did not expect (`expect` in a TOML entry, see
 //! `host_sim::scenario::file`). Exit status 2: a usage error, an invalid scenario, a file that
-//! cannot be read or written.
+//! cannot be read or written, an engine command whose robot falls before its first step.
 
 use std::error::Error;
 use std::fs;
@@ -58,7 +58,8 @@ use serde_json::json;
                   answered, accepted and never carried out) that the scenario did not expect, \
                   or the multi-body model cannot follow the walk; 1 `replay`: a command was \
                   refused, frames were lost, or the log ends before the robot stands; 2 a \
-                  usage error, an invalid scenario, or a file that cannot be read or written."
+                  usage error, an invalid scenario, a file that cannot be read or written, or \
+                  an engine command whose robot falls before its first step."
 )]
 struct Cli {
     #[command(subcommand)]
