@@ -4,7 +4,7 @@
 //! naming what is missing. A biped the package adds, or one whose outcome changes, fails the
 //! test until the table below says what it does.
 //!
-//! The default run imports every one and stands iCub in the engine; `WALK_LONG=1` stands every
+//! The default run imports every one and stands iCub and Romeo in the engine; `WALK_LONG=1` stands every
 //! imported one and walks `straight` with those that walk.
 
 mod engine;
@@ -75,7 +75,10 @@ const BIPEDS: &[(&str, Outcome)] = &[
 ];
 
 /// The bipeds in the default run's engine check.
-const QUICK: &[&str] = &["icub_description/robots/icub.urdf"];
+const QUICK: &[&str] = &[
+    "icub_description/robots/icub.urdf",
+    "romeo_description/urdf/romeo.urdf",
+];
 
 fn long() -> bool {
     std::env::var("WALK_LONG").as_deref() == Ok("1")
