@@ -589,6 +589,24 @@ fn refusals_name_the_urdf_element() {
             }),
             "<mesh filename=\"foot.ply\">: the soles are read from STL, COLLADA",
         ),
+        (
+            "a mesh sole and a hand",
+            biped(|s| {
+                s.replace(
+                    "<box size=\"0.2 0.1 0.05\"/>",
+                    "<mesh filename=\"foot.ply\"/>",
+                )
+                .replace(
+                    "</robot>",
+                    &format!(
+                        "{}{}</robot>",
+                        link("hand", 1.0, Some("<box size=\"0.1 0.1 0.1\"/>")),
+                        joint("wrist", "revolute", "torso", "hand", "0 0.2 0", "1 0 0")
+                    ),
+                )
+            }),
+            "<mesh filename=\"foot.ply\">: the soles are read from STL, COLLADA",
+        ),
     ];
     for (name, text, want) in cases {
         let e = match import_text(&name.replace(' ', "-"), &text) {

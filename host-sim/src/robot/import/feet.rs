@@ -9,13 +9,14 @@
 //! is fixed to, so it is never taken for a foot by itself; whether it is the sole centre is
 //! decided against the foot's geometry ([`super::sole`]). If no end body on a side has
 //! geometry, the lowest leaf link on each side is taken (and refused later if its foot has
-//! no geometry).
+//! no geometry). An end body whose shapes cannot be read (a mesh of another format) below the
+//! lowest geometry on its side refuses the import, the shape named.
 
 use std::collections::BTreeMap;
 
 use urdf_rs::JointType;
 
-use super::{sole, Tree};
+use super::{sole, ImportError, Tree};
 use crate::robot::model::{cross, mul_mv, norm, sub, Pose};
 
 /// The end bodies below `base`: each as its first link (moved by a joint) and its links
@@ -59,19 +60,34 @@ pub(crate) fn end_bodies(t: &Tree, base: &str) -> Vec<Vec<(String, Pose)>> {
 }
 
 /// The feet by their geometry (see the module docs): the first link of the left and the
-/// right foot, `None` if a side has no end body with geometry.
+/// right foot, `None` if a side has no end body with geometry. An end body whose shapes cannot
+/// be read, lower (its first link's origin) than the lowest geometry on its side, is the
+/// error.
 pub(crate) fn by_geometry(
     t: &Tree,
     base: &str,
     zero: &BTreeMap<String, Pose>,
-) -> Option<[String; 2]> {
+) -> Result<Option<[String; 2]>, ImportError> {
     let mut best: [Option<(f64, String)>; 2] = [None, None];
+    let mut unread: [Option<(f64, ImportError)>; 2] = [None, None];
     for body in end_bodies(t, base) {
         let first = &body[0].0;
         let Some(at) = zero.get(first) else { continue };
-        // A shape that cannot be read does not make a foot (a foot's own is refused later).
-        let Ok((pts, _)) = sole::foot_points(t, &body) else {
+        let side = if at.p[1] > 0.0 {
+            0
+        } else if at.p[1] < 0.0 {
+            1
+        } else {
             continue;
+        };
+        let pts = match sole::foot_points(t, &body) {
+            Ok((pts, _)) => pts,
+            Err(e) => {
+                if unread[side].as_ref().is_none_or(|(z, _)| at.p[2] < *z) {
+                    unread[side] = Some((at.p[2], e));
+                }
+                continue;
+            }
         };
         let Some(low) = pts
             .iter()
@@ -80,21 +96,21 @@ pub(crate) fn by_geometry(
         else {
             continue;
         };
-        let side = if at.p[1] > 0.0 {
-            0
-        } else if at.p[1] < 0.0 {
-            1
-        } else {
-            continue;
-        };
         if best[side].as_ref().is_none_or(|(z, _)| low < *z) {
             best[side] = Some((low, first.clone()));
         }
     }
-    match best {
+    for (b, u) in best.iter().zip(unread) {
+        if let Some((z, e)) = u {
+            if b.as_ref().is_none_or(|(low, _)| z < *low) {
+                return Err(e);
+            }
+        }
+    }
+    Ok(match best {
         [Some((_, l)), Some((_, r))] => Some([l, r]),
         _ => None,
-    }
+    })
 }
 
 /// The knee of the leg to `leaf` if it bends forward of the base's x axis (the robot then

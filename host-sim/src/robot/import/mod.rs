@@ -479,6 +479,10 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
     let base = t.base()?;
     let zero = t.zero_poses(&base);
     // The feet.
+    let by_geometry = match soles {
+        None => feet::by_geometry(&t, &base, &zero)?,
+        Some(_) => None,
+    };
     let leaves: [String; 2] = match soles {
         Some(names) => {
             for n in names {
@@ -488,9 +492,7 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
             }
             names.map(String::from)
         }
-        None if feet::by_geometry(&t, &base, &zero).is_some() => {
-            feet::by_geometry(&t, &base, &zero).unwrap_or_default()
-        }
+        None if by_geometry.is_some() => by_geometry.unwrap_or_default(),
         None => {
             let mut leaves: Vec<(&String, &Pose)> =
                 zero.iter().filter(|(l, _)| t.kids(l).is_empty()).collect();
