@@ -2,7 +2,8 @@
 //! URDFs, not listed by hand): each is imported with soles that fit its feet and stands in
 //! MuJoCo (and walks `straight`, for those that walk today), or is refused with a reason
 //! naming what is missing. A biped the package adds, or one whose outcome changes, fails the
-//! test until the table below says what it does.
+//! test until the table below says what it does. The soles of the feet Coal reads (not COLLADA)
+//! are compared with Pinocchio's placement of the same geometry.
 //!
 //! The default run imports every one and stands iCub and Romeo in the engine; `WALK_LONG=1` stands every
 //! imported one and walks `straight` with those that walk.
@@ -11,16 +12,19 @@ mod engine;
 mod urdf;
 
 use std::collections::BTreeMap;
+use std::io::Write;
 use std::path::Path;
+use std::process::{Command, Stdio};
 
 use engine::engine_here;
 use host_sim::physics::{run, start::stands, PhysicsConfig};
 use host_sim::robot::import::import;
+use host_sim::robot::import::sole::{CONTACT_BAND_M, SOLE_COVER};
 use host_sim::robot::model::{norm, rot_rpy, sub, Pose};
 use host_sim::robot::Robot;
 use host_sim::sim::scenario_trajectory;
 use planner_core::gait::Side;
-use urdf::all_robot_files;
+use urdf::{all_robot_files, pinocchio_here};
 
 /// What a biped does.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -197,6 +201,80 @@ fn check_import(tail: &str, path: &Path, toml: &str, r: &Robot) {
     );
 }
 
+/// The imported soles against Pinocchio and Coal's reading of the same feet
+/// (`tests/urdf/pinocchio_soles.py`): the sole plane within [`CONTACT_BAND_M`] of the foot's
+/// lowest point below the ankle, and the sole rectangle inside the bounds of its contact
+/// points (to 1 mm), spanning at least [`SOLE_COVER`] of them. Feet of COLLADA meshes are not
+/// compared (Coal does not turn a COLLADA up axis). The number of feet compared.
+fn soles_against_pinocchio(tail: &str, path: &Path, r: &Robot) -> usize {
+    let m = &r.model;
+    let package_dir = path
+        .ancestors()
+        .find(|a| a.file_name().is_some_and(|n| n == "example-robot-data"))
+        .and_then(Path::parent)
+        .expect("the package's directory");
+    let job = serde_json::json!({
+        "urdf": path,
+        "package_dir": package_dir,
+        "ankles": [&m.legs[0].links[5].joint.name, &m.legs[1].links[5].joint.name],
+    });
+    let mut child = Command::new(host_sim::physics::bridge::python())
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/urdf/pinocchio_soles.py"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3 runs");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(job.to_string().as_bytes())
+        .expect("job written");
+    let out = child.wait_with_output().expect("the oracle ends");
+    assert!(
+        out.status.success(),
+        "{tail}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let feet: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).expect("JSON");
+    let p = &r.planner.params;
+    let half = [p.sole_half_length, p.sole_half_width];
+    let mut compared = 0;
+    for (foot, side) in feet.iter().zip([Side::Left, Side::Right]) {
+        if foot.get("skipped").is_some() {
+            continue;
+        }
+        let num = |k: &str, i: usize| foot[k][i].as_f64().expect("a number");
+        let z = m.leg_fk(side, &Pose::IDENTITY, &[0.0; 6]);
+        let (ankle, sole) = (z.ankle().p, z.sole.p);
+        let depth = num("ankle", 2) - foot["lowest"].as_f64().expect("lowest");
+        assert!(
+            ((ankle[2] - sole[2]) - depth).abs() <= CONTACT_BAND_M,
+            "{tail} {side:?}: sole {:.4} m below the ankle, the foot's lowest point {depth:.4} m",
+            ankle[2] - sole[2]
+        );
+        for (i, k) in ["x", "y"].iter().enumerate() {
+            let (lo, hi) = (num(k, 0) - num("ankle", i), num(k, 1) - num("ankle", i));
+            let c = sole[i] - ankle[i];
+            assert!(
+                c - half[i] >= lo - 1e-3 && c + half[i] <= hi + 1e-3,
+                "{tail} {side:?} {k}: sole {:.4} … {:.4} m from the ankle, contact {lo:.4} … {hi:.4}",
+                c - half[i],
+                c + half[i]
+            );
+            assert!(
+                2.0 * half[i] >= SOLE_COVER * (hi - lo) - 2e-3,
+                "{tail} {side:?} {k}: sole {:.4} m of a contact {:.4} m",
+                2.0 * half[i],
+                hi - lo
+            );
+        }
+        compared += 1;
+    }
+    compared
+}
+
 #[test]
 fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
     let test = "every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused";
@@ -204,6 +282,8 @@ fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
         return;
     };
     let engine = engine_here(test);
+    let pinocchio = pinocchio_here(test);
+    let mut compared = 0;
     let mut found = Vec::new();
     for path in files.iter().filter(|p| two_six_joint_legs(p)) {
         let s = path.to_string_lossy();
@@ -226,6 +306,9 @@ fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
             (_, Err(e)) => panic!("{tail}: {e}"),
             (_, Ok(i)) => {
                 check_import(&tail, path, &i.toml, &i.robot);
+                if pinocchio {
+                    compared += soles_against_pinocchio(&tail, path, &i.robot);
+                }
                 for w in &i.warnings {
                     println!("{tail}: warning: {w}");
                 }
@@ -253,6 +336,12 @@ fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
             );
         }
     }
+    // Talos (5 descriptions), G1 (2) and Alexander: two feet each.
+    assert!(
+        !pinocchio || compared == 16,
+        "{compared} feet compared with Pinocchio"
+    );
+    println!("{compared} feet's soles against Pinocchio and Coal");
     let listed: Vec<String> = BIPEDS.iter().map(|(t, _)| t.to_string()).collect();
     assert_eq!(found, listed, "the bipeds found are not the table's");
 }
