@@ -442,16 +442,18 @@ fn collada_node_transforms_and_mesh_scale_place_the_sole() {
         "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1",
     );
     assert_ne!(unscaled, dae);
-    let e = import_with("dae-cm", &mesh(""), &[("foot_cm.dae", &unscaled)], None)
-        .err()
-        .expect("refused");
-    assert!(
-        e.contains("<mesh filename=\"foot_cm.dae\">")
-            && e.contains("<link name=\"l_link5\">")
-            && e.contains("placed at")
-            && e.contains("COLLADA node transforms"),
-        "{e}"
-    );
+    for soles in [None, Some(["l_link5", "r_link5"])] {
+        let e = import_with("dae-cm", &mesh(""), &[("foot_cm.dae", &unscaled)], soles)
+            .err()
+            .expect("refused");
+        assert!(
+            e.contains("<mesh filename=\"foot_cm.dae\">")
+                && e.contains("<link name=\"l_link5\">")
+                && e.contains("placed at")
+                && e.contains("COLLADA node transforms"),
+            "{soles:?}: {e}"
+        );
+    }
 }
 
 #[test]
