@@ -12,7 +12,7 @@
 //!                                  faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
-//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [PROBE] [--robot FILE]
+//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D] [PROBE] [--robot FILE]
 //!                                  the push-recovery map in MuJoCo, with and without step adjustment
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //!
@@ -212,6 +212,15 @@ enum Cmd {
         /// (the node's default) or the measured one.
         #[arg(long, value_name = "reference|measured", default_value = "reference", value_parser = ["reference", "measured"])]
         replan_from: String,
+        /// One cell only, CONFIG,PHASE,DIRECTION (for example `proposed,double,90`; CONFIG is
+        /// stabilizer_only, plain or proposed): its result as one JSON line on standard
+        /// output, nothing written to DIR; for spreading a map over processes or machines.
+        #[arg(
+            long,
+            value_name = "CONFIG,PHASE,DIRECTION",
+            allow_hyphen_values = true
+        )]
+        cell: Option<String>,
         #[command(flatten)]
         probe: ProbeArgs,
     },
@@ -437,14 +446,18 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             directions,
             robot,
             replan_from,
+            cell,
             probe,
         }) => host_sim::physics::push_map::cli(
-            &out,
+            &host_sim::physics::push_map::MapArgs {
+                out: &out,
+                quick,
+                phases: phases.as_deref(),
+                directions: directions.as_deref(),
+                from_measured: replan_from == "measured",
+                cell: cell.as_deref(),
+            },
             &engine_robot(robot.as_deref())?,
-            quick,
-            phases.as_deref(),
-            directions.as_deref(),
-            replan_from == "measured",
             &probe,
         ),
         Some(Cmd::Robot {

@@ -205,7 +205,8 @@ fn full_map(test: &str, from_measured: bool) -> Option<(MapSpec, Vec<Cell>, Stri
     let spec = MapSpec::new(false);
     let mut node = robot.node_config();
     node.adjust.from_measured = from_measured;
-    let cells = map(&node, &cfg, &spec).unwrap();
+    let cells = map(&node, &cfg, &spec);
+    assert!(cells.iter().all(|c| c.ok()), "failed cells: {cells:?}");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let book = std::fs::read_to_string(root.join("docs/src/adjust.md")).unwrap();
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
@@ -266,4 +267,98 @@ fn the_measured_start_map_is_the_books() {
         .collect();
     let quoted = format!("from the measured state, mean Δv {} m/s", means.join(" / "));
     assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
+}
+
+/// A cell that cannot be measured is written as failed with its cause: it is left out of the
+/// summary and the comparison (not counted as a zero), and the table names the cause.
+#[test]
+fn a_failed_cell_is_reported_not_counted() {
+    let spec = MapSpec {
+        phases: vec![PushPhase::Double],
+        directions: vec![0.0, 90.0],
+        resolution_bw: 0.125,
+        steppings: Stepping::ALL.to_vec(),
+        threads: 1,
+    };
+    let ok = |s: Stepping, d: f64, bw: f64| Cell {
+        stepping: s,
+        phase: PushPhase::Double,
+        direction_deg: d,
+        max_force_n: bw * 1000.0,
+        dv_mps: bw,
+        bw_fraction: bw,
+        steps_adjusted: 0,
+        runs: 3,
+        error: None,
+    };
+    let cause = "left ankle out of reach: 0.6980 m, reach 0.6983 m";
+    let cells = vec![
+        ok(Stepping::Fixed, 0.0, 0.25),
+        ok(Stepping::Fixed, 90.0, 0.25),
+        ok(Stepping::Plain, 0.0, 0.5),
+        Cell::failed(Stepping::Plain, PushPhase::Double, 90.0, cause.into()),
+        ok(Stepping::Proposed, 0.0, 0.125),
+        ok(Stepping::Proposed, 90.0, 0.5),
+    ];
+    let sums = summary_lines(&spec, &cells);
+    assert!(
+        sums.contains("plain: mean Δv 0.500 m/s; larger than the stabilizer only in 1 of 1 cells, smaller in 0"),
+        "{sums}"
+    );
+    assert!(
+        sums.contains("proposed against plain: larger in 0 of 1 cells, smaller in 1"),
+        "{sums}"
+    );
+    let md = markdown(&spec, &cells);
+    assert!(md.contains(&format!("failed: {cause}")), "{md}");
+    let j = host_sim::physics::push_map::map_json("test", 100.0, &spec, &cells);
+    let plain = j["configs"]["plain"].as_array().unwrap();
+    assert_eq!(plain[1]["error"].as_str(), Some(cause));
+    assert!(plain[0].get("error").is_none());
+    assert!((plain[0]["impulse_ns"].as_f64().unwrap() - 500.0 * PUSH_S).abs() < 1e-12);
+}
+
+/// `push-map --cell` measures one cell in its own process: one JSON line, the same cell the
+/// map's bisection gives; a malformed `--cell` is refused with the expected form.
+#[test]
+fn one_cell_per_process() {
+    let bad = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["push-map", "--cell", "proposed,double"])
+        .output()
+        .expect("host-sim runs");
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("CONFIG,PHASE,DIRECTION"), "{err}");
+    if !engine_here("one_cell_per_process") {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["push-map", "--quick", "--cell", "stabilizer_only,double,0"])
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    let j: Value = serde_json::from_str(lines[0]).expect("one JSON line");
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let cell = bisect(
+        &robot.node_config(),
+        &cfg,
+        Stepping::Fixed,
+        PushPhase::Double,
+        0.0,
+        host_sim::physics::push_map::QUICK_RESOLUTION_BW,
+    )
+    .unwrap();
+    assert_eq!(j["config"].as_str(), Some("stabilizer_only"));
+    assert_eq!(j["robot"].as_str(), Some(robot.name()));
+    assert_eq!(j["max_force_n"].as_f64(), Some(cell.max_force_n));
+    assert_eq!(j["engine_runs"].as_u64(), Some(cell.runs as u64));
+    assert!((j["impulse_ns"].as_f64().unwrap() - cell.max_force_n * PUSH_S).abs() < 1e-9);
 }

@@ -16,7 +16,14 @@
 //! through, and `steps_adjusted` the steps that this run landed away from their commanded
 //! positions.
 //!
-//! The engine runs of different cells are independent: they run on every core.
+//! Each cell is also given as the impulse `F Δt` \[N·s\]. A cell whose engine run cannot be
+//! carried out (a leg out of reach in the inverse kinematics, the walk never reaching the push)
+//! is reported as failed with its cause; it never stops the rest of the map, and the command
+//! ends with an error naming the failed cells after writing everything else.
+//!
+//! The engine runs of different cells are independent: they run on every core, or one cell per
+//! process with `--cell CONFIG,PHASE,DIRECTION` (one JSON line on standard output), so that a
+//! large map can be spread over machines by any scheduler.
 
 use std::fs;
 use std::path::Path;
@@ -73,19 +80,51 @@ pub struct Cell {
     pub steps_adjusted: usize,
     /// Engine runs of the bisection.
     pub runs: usize,
+    /// Why the cell could not be measured (its force fields are then 0).
+    pub error: Option<String>,
 }
 
 impl Cell {
-    /// The cell's entry in `push_map.json`.
+    /// The cell's entry in `push_map.json` (`error` only for a failed cell).
     pub fn json(&self) -> Value {
-        json!({
+        let mut j = json!({
             "phase": self.phase.name(),
             "direction_deg": self.direction_deg,
             "max_force_n": self.max_force_n,
+            "impulse_ns": self.impulse_ns(),
             "dv_mps": self.dv_mps,
             "bw_fraction": self.bw_fraction,
             "steps_adjusted": self.steps_adjusted,
-        })
+        });
+        if let Some(e) = &self.error {
+            j["error"] = Value::String(e.clone());
+        }
+        j
+    }
+
+    /// The push's impulse `F Δt` \[N·s\].
+    pub fn impulse_ns(&self) -> f64 {
+        self.max_force_n * PUSH_S
+    }
+
+    /// `true` when the cell was measured.
+    pub fn ok(&self) -> bool {
+        self.error.is_none()
+    }
+
+    /// A failed cell: `error` is why.
+    pub fn failed(stepping: Stepping, phase: PushPhase, direction_deg: f64, error: String) -> Self {
+        Self {
+            stepping,
+            phase,
+            direction_deg,
+            max_force_n: 0.0,
+            dv_mps: 0.0,
+            bw_fraction: 0.0,
+            steps_adjusted: 0,
+            runs: 0,
+            error: Some(error),
+        }
     }
 }
 
@@ -177,12 +216,27 @@ pub fn bisect(
         bw_fraction: lo,
         steps_adjusted,
         runs,
+        error: None,
     })
 }
 
+/// One cell, failed (with its cause) rather than an error.
+pub fn cell(
+    node: &NodeConfig,
+    cfg: &PhysicsConfig,
+    stepping: Stepping,
+    phase: PushPhase,
+    direction_deg: f64,
+    resolution_bw: f64,
+) -> Cell {
+    bisect(node, cfg, stepping, phase, direction_deg, resolution_bw)
+        .unwrap_or_else(|e| Cell::failed(stepping, phase, direction_deg, e))
+}
+
 /// Every cell of `spec`, the bisections spread over `spec.threads` threads (in the order of
-/// `spec`: configuration, phase, direction).
-pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec<Cell>, String> {
+/// `spec`: configuration, phase, direction). A cell that cannot be measured is in the list as
+/// failed ([`Cell::error`]).
+pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Vec<Cell> {
     let mut jobs = Vec::new();
     for &s in &spec.steppings {
         for &p in &spec.phases {
@@ -193,7 +247,7 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
     }
     let bar = crate::console::Progress::new("push-map", jobs.len() as u64);
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<Cell, String>>>> = Mutex::new(vec![None; jobs.len()]);
+    let results: Mutex<Vec<Option<Cell>>> = Mutex::new(vec![None; jobs.len()]);
     std::thread::scope(|scope| {
         for _ in 0..spec.threads.max(1).min(jobs.len().max(1)) {
             scope.spawn(|| loop {
@@ -201,7 +255,7 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
                 let Some(&(s, p, d)) = jobs.get(i) else {
                     break;
                 };
-                let r = bisect(node, cfg, s, p, d, spec.resolution_bw);
+                let r = cell(node, cfg, s, p, d, spec.resolution_bw);
                 bar.inc(format!("{}, {}, {d}°", s.name(), p.name()));
                 if let Ok(mut v) = results.lock() {
                     v[i] = Some(r);
@@ -209,10 +263,16 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Result<Vec
             });
         }
     });
-    let results = results.into_inner().map_err(|_| "a map thread panicked")?;
+    // A poisoned lock only means a thread panicked after storing; the cells it stored stand.
+    let results = results
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     results
         .into_iter()
-        .map(|r| r.unwrap_or_else(|| Err("a cell was not run".into())))
+        .zip(&jobs)
+        .map(|(r, &(s, p, d))| {
+            r.unwrap_or_else(|| Cell::failed(s, p, d, "the cell's engine run did not end".into()))
+        })
         .collect()
 }
 
@@ -236,6 +296,7 @@ pub fn summary(spec: &MapSpec, cells: &[Cell]) -> Vec<Summary> {
     let base = |c: &Cell| {
         cells.iter().find(|b| {
             b.stepping == Stepping::Fixed
+                && b.ok()
                 && b.phase == c.phase
                 && b.direction_deg == c.direction_deg
         })
@@ -243,7 +304,7 @@ pub fn summary(spec: &MapSpec, cells: &[Cell]) -> Vec<Summary> {
     spec.steppings
         .iter()
         .map(|&s| {
-            let mine: Vec<&Cell> = cells.iter().filter(|c| c.stepping == s).collect();
+            let mine: Vec<&Cell> = cells.iter().filter(|c| c.stepping == s && c.ok()).collect();
             let n = mine.len().max(1) as f64;
             let mut out = Summary {
                 stepping: s,
@@ -267,11 +328,10 @@ pub fn summary(spec: &MapSpec, cells: &[Cell]) -> Vec<Summary> {
 /// Cells where `a` walks through a larger push than `b`, and where a smaller one.
 pub fn compare(cells: &[Cell], a: Stepping, b: Stepping) -> (usize, usize, usize) {
     let (mut larger, mut smaller, mut n) = (0, 0, 0);
-    for c in cells.iter().filter(|c| c.stepping == a) {
-        if let Some(d) = cells
-            .iter()
-            .find(|d| d.stepping == b && d.phase == c.phase && d.direction_deg == c.direction_deg)
-        {
+    for c in cells.iter().filter(|c| c.stepping == a && c.ok()) {
+        if let Some(d) = cells.iter().find(|d| {
+            d.stepping == b && d.ok() && d.phase == c.phase && d.direction_deg == c.direction_deg
+        }) {
             n += 1;
             larger += usize::from(c.max_force_n > d.max_force_n);
             smaller += usize::from(c.max_force_n < d.max_force_n);
@@ -364,6 +424,7 @@ pub fn markdown(spec: &MapSpec, cells: &[Cell]) -> String {
                     .iter()
                     .find(|c| c.stepping == st && c.phase == p && c.direction_deg == d)
                 {
+                    Some(Cell { error: Some(e), .. }) => s += &format!(" failed: {e} |"),
                     Some(c) => {
                         s += &format!(" {:.3} ({:.2}) |", c.dv_mps, c.bw_fraction);
                         if st == Stepping::Proposed {
@@ -416,33 +477,92 @@ pub fn parse_directions(s: &str) -> Result<Vec<f64>, String> {
         .collect()
 }
 
-/// The `push-map` command: the map of `robot`, written to `out` (`push_map.json`,
-/// `push_map.md`, a polar plot per phase); `from_measured`: the node re-plans a capture step
-/// from the measured state rather than from the reference's (its default).
+/// What the `push-map` command was asked for.
+#[derive(Clone, Debug)]
+pub struct MapArgs<'a> {
+    /// The output directory (not used with `cell`).
+    pub out: &'a Path,
+    /// The quick map.
+    pub quick: bool,
+    /// `--phases`.
+    pub phases: Option<&'a str>,
+    /// `--directions`.
+    pub directions: Option<&'a str>,
+    /// The node re-plans a capture step from the measured state rather than from the
+    /// reference's (its default).
+    pub from_measured: bool,
+    /// `--cell CONFIG,PHASE,DIRECTION`: that cell only, one JSON line on standard output.
+    pub cell: Option<&'a str>,
+}
+
+/// Parses `--cell CONFIG,PHASE,DIRECTION` (for example `proposed,double,90`).
+pub fn parse_cell(s: &str) -> Result<(Stepping, PushPhase, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [config, phase, direction] = parts.as_slice() else {
+        return Err(format!(
+            "--cell {s:?}: expected CONFIG,PHASE,DIRECTION (for example proposed,double,90)"
+        ));
+    };
+    let stepping = Stepping::ALL
+        .into_iter()
+        .find(|st| st.name() == *config)
+        .ok_or_else(|| {
+            format!(
+                "unknown configuration {config:?} (one of {})",
+                Stepping::ALL.map(Stepping::name).join(", ")
+            )
+        })?;
+    let phase = parse_phases(phase)?[0];
+    let direction = parse_directions(direction)?[0];
+    Ok((stepping, phase, direction))
+}
+
+/// The JSON line of `push-map --cell`: the robot, its mass and the cell (with its
+/// configuration and engine runs).
+pub fn cell_line(robot: &str, mass_kg: f64, resolution_bw: f64, c: &Cell) -> Value {
+    let mut j = c.json();
+    j["robot"] = Value::String(robot.into());
+    j["mass_kg"] = json!(mass_kg);
+    j["config"] = Value::String(c.stepping.name().into());
+    j["push_duration_s"] = json!(PUSH_S);
+    j["resolution_bw"] = json!(resolution_bw);
+    j["engine_runs"] = json!(c.runs);
+    j
+}
+
+/// The `push-map` command: the map of `robot`, written to `args.out` (`push_map.json`,
+/// `push_map.md`, a polar plot per phase), or one cell as a JSON line. Failed cells are written
+/// as failed; the command then ends with an error that names them.
 pub fn cli(
-    out: &Path,
+    args: &MapArgs,
     robot: &crate::robot::Robot,
-    quick: bool,
-    phases: Option<&str>,
-    directions: Option<&str>,
-    from_measured: bool,
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let probe = probe.resolve(robot)?;
     let cfg = probe.cfg;
-    let mut spec = MapSpec::new(quick);
-    if let Some(p) = phases {
+    let mut spec = MapSpec::new(args.quick);
+    if let Some(p) = args.phases {
         spec.phases = parse_phases(p)?;
     }
-    if let Some(d) = directions {
+    if let Some(d) = args.directions {
         spec.directions = parse_directions(d)?;
     }
+    let mut node = robot.node_config();
+    node.adjust.from_measured = args.from_measured;
+    let mass = cfg.robot.total_mass();
+    if let Some(c) = args.cell {
+        let (s, p, d) = parse_cell(c)?;
+        let c = cell(&node, &cfg, s, p, d, spec.resolution_bw);
+        crate::outln!("{}", cell_line(robot.name(), mass, spec.resolution_bw, &c));
+        return match c.error {
+            Some(e) => Err(format!("the cell failed: {e}").into()),
+            None => Ok(()),
+        };
+    }
+    let out = args.out;
     fs::create_dir_all(out)
         .map_err(|e| format!("cannot create the output directory {}: {e}", out.display()))?;
-    let mut node = robot.node_config();
-    node.adjust.from_measured = from_measured;
-    let cells = map(&node, &cfg, &spec)?;
-    let mass = cfg.robot.total_mass();
+    let cells = map(&node, &cfg, &spec);
     let j = map_json(robot.name(), mass, &spec, &cells);
     let sums = summary_lines(&spec, &cells);
     let write = |name: &str, text: String| {
@@ -461,7 +581,7 @@ pub fn cli(
                     s.name(),
                     cells
                         .iter()
-                        .filter(|c| c.stepping == s && c.phase == p)
+                        .filter(|c| c.stepping == s && c.phase == p && c.ok())
                         .map(|c| (c.direction_deg, c.dv_mps))
                         .collect(),
                 )
@@ -483,5 +603,28 @@ pub fn cli(
         cells.iter().map(|c| c.runs).sum::<usize>(),
         out.join("push_map.json").display()
     );
-    Ok(())
+    let failed: Vec<String> = cells
+        .iter()
+        .filter_map(|c| {
+            c.error.as_ref().map(|e| {
+                format!(
+                    "{}, {}, {}°: {e}",
+                    c.stepping.name(),
+                    c.phase.name(),
+                    c.direction_deg
+                )
+            })
+        })
+        .collect();
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{} of {} cells failed (written as failed):\n  {}",
+            failed.len(),
+            cells.len(),
+            failed.join("\n  ")
+        )
+        .into())
+    }
 }
