@@ -266,39 +266,6 @@ enum RobotCmd {
     },
 }
 
-fn robot_import(urdf: &Path, sole: Option<&str>, out: &Path) -> Result<(), Box<dyn Error>> {
-    let soles = match sole {
-        None => None,
-        Some(s) => match s.split_once(',') {
-            Some((l, r)) if !l.is_empty() && !r.is_empty() && !r.contains(',') => Some([l, r]),
-            _ => return Err(format!("--sole {s:?}: give LEFT,RIGHT").into()),
-        },
-    };
-    let imported = host_sim::robot::import::import(urdf, soles)?;
-    for w in &imported.warnings {
-        errln!("warning: {w}");
-    }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    }
-    fs::write(out, &imported.toml).map_err(|e| format!("{}: {e}", out.display()))?;
-    let r = &imported.robot;
-    let p = &r.planner.params;
-    outln!(
-        "{}: {:.2} kg, COG {:.3} m standing, feet {:.3} m apart, soles {:.3} × {:.3} m, \
-         steps up to {:.3} m forward; wrote {}",
-        r.name(),
-        r.model.total_mass(),
-        p.cog_height,
-        p.step_width,
-        2.0 * p.sole_half_length,
-        2.0 * p.sole_half_width,
-        r.planner.reach.max_forward,
-        out.display()
-    );
-    Ok(())
-}
-
 fn walk(s: &str) -> Result<Walk, String> {
     match s {
         "plain" => Ok(Walk::Plain),
@@ -462,7 +429,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
         ),
         Some(Cmd::Robot {
             action: RobotCmd::Import { urdf, sole, out },
-        }) => robot_import(&urdf, sole.as_deref(), &out),
+        }) => host_sim::robot::import::cli::command(&urdf, sole.as_deref(), &out),
         Some(Cmd::Node {
             interface,
             seconds,
@@ -475,7 +442,6 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
     }
 }
 
-/// The robot file at `path`, or HRP-2.
 /// A robot for a command of many engine runs: a robot file's robot must stand in the engine
 /// first (HRP-2's built-in file is checked by the tests).
 fn engine_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
@@ -486,6 +452,7 @@ fn engine_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
     Ok(robot)
 }
 
+/// The robot file at `path`, or HRP-2.
 fn load_robot(path: Option<&Path>) -> Result<Robot, Box<dyn Error>> {
     Ok(match path {
         Some(p) => Robot::load(p)?,

@@ -538,6 +538,8 @@ pub fn cli(
     robot: &crate::robot::Robot,
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
+    // An engine that cannot start fails the command, not each cell.
+    super::bridge::installed_version(&super::bridge::python())?;
     let probe = probe.resolve(robot)?;
     let cfg = probe.cfg;
     let mut spec = MapSpec::new(args.quick);

@@ -49,6 +49,7 @@
 //! `<inertial>`, an inertia tensor that is not positive definite, a mesh of another format, a
 //! standing posture the legs cannot reach.
 
+pub mod cli;
 pub mod collada;
 mod feet;
 pub mod sole;
