@@ -753,6 +753,13 @@ fn overflow_bus_off_and_silence_over_the_registers() {
     l.cycle();
     model(&l).st().settle();
     assert!(!model(&l).st().in_init(), "recovery started");
+    // The recovery takes 129 × 11 recessive bits: bus-off until they have passed.
+    l.service();
+    assert_eq!(l.health().state, BusState::BusOff);
+    model(&l).st().idle_bits(regmodel::RECOVERY_BITS - 1);
+    l.service();
+    assert_eq!(l.health().state, BusState::BusOff);
+    model(&l).st().idle_bits(1);
     l.service();
     assert_eq!(l.health().bus_offs, 1);
     assert_eq!(l.health().state, BusState::Active);
@@ -910,15 +917,25 @@ fn the_tx_fifo_follows_its_put_index_and_full_flag() {
 
 // --- bus-off back-off and message RAM access failures ---
 
-/// Control cycles (`Link::cycle`, with services between) until the core re-joins the bus
-/// after a bus-off; `None` if it has not within 1,000.
+/// Bit times of a 5 ms control cycle at 1 Mbit/s.
+const CYCLE_BITS: u32 = 5_000;
+
+/// One control cycle of a quiet bus: `Link::cycle`, then the cycle's bus time with services
+/// between.
+fn quiet_cycle(l: &mut ModelLink) {
+    l.cycle();
+    for _ in 0..4 {
+        model(l).st().idle_bits(CYCLE_BITS / 4);
+        l.service();
+    }
+}
+
+/// Control cycles ([`quiet_cycle`]) until the core re-joins the bus after a bus-off; `None`
+/// if it has not within 1,000.
 fn cycles_to_rejoin(l: &mut ModelLink) -> Option<u32> {
     let joins = model(l).st().joins;
     for k in 1..=1000 {
-        l.cycle();
-        for _ in 0..4 {
-            l.service();
-        }
+        quiet_cycle(l);
         if model(l).st().joins > joins {
             return Some(k);
         }
@@ -951,16 +968,14 @@ fn bus_off_recovery_backs_off_doubling_to_a_cap_and_resets_after_a_quiet_stretch
     assert_eq!(l.health().bus_offs, 9);
     // Error-active on the bus for a while, but not long enough: the back-off stays.
     for _ in 0..BACKOFF_RESET_CYCLES - 2 {
-        l.cycle();
-        l.service();
+        quiet_cycle(&mut l);
     }
     model(&l).st().bus_off();
     l.service();
     assert_eq!(cycles_to_rejoin(&mut l), Some(64));
     // A whole quiet stretch: back to 1 cycle (and published as none meanwhile).
     for _ in 0..BACKOFF_RESET_CYCLES {
-        l.cycle();
-        l.service();
+        quiet_cycle(&mut l);
     }
     assert_eq!(l.health().backoff, 0);
     model(&l).st().bus_off();
