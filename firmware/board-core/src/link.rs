@@ -3,7 +3,7 @@
 //! counters) and the replacement of stale frames.
 //!
 //! # Message RAM (the board's layout: [`crate::fdcan::layout`])
-//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`crate::fdcan::RX1_ELEMENTS`] (16);
+//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`RX1_ELEMENTS`] (16);
 //! there are [`TX_SLOTS`] (16) dedicated TX buffers and a TX FIFO of [`TX_FIFO`] (16)
 //! elements, 8-byte elements. At 1 Mbit/s a
 //! classic frame takes at least 47 bit times (~21
@@ -41,16 +41,42 @@
 //!
 //! # Errors
 //! [`Link::service`] reads the protocol status and error counters each time it runs. When the
-//! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter cancels every pending
-//! dedicated TX buffer (old stream frames; the `ACK`s in the TX FIFO stay, still owed) and
-//! counts the bus-off; the core stays off the bus for a **back-off** of whole control cycles
+//! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter counts the bus-off
+//! and keeps the node **off the bus** for a **back-off** of whole control cycles
 //! ([`Link::cycle`], once per cycle): 1 cycle after the first bus-off, doubling at every
 //! further one up to [`BACKOFF_CAP`] (64 cycles, 320 ms), and back to 1 after
-//! [`BACKOFF_RESET_CYCLES`] cycles error-active on the bus. Then the adapter clears `INIT`:
-//! the core waits for 129 occurrences of 11 recessive bits (~1.4 ms at 1 Mbit/s) and is
-//! error-active again. So a node on a faulty bus (a wiring fault, a wrong bit rate) re-joins
-//! at most every 320 ms instead of every ~3 ms, and the joints' traffic sees its error flags
-//! that rarely. Entering error-passive counts one episode.
+//! [`BACKOFF_RESET_CYCLES`] cycles error-active on the bus. So a node on a faulty bus (a
+//! wiring fault, a wrong bit rate) re-joins at most every 320 ms instead of every ~3 ms, and
+//! the joints' traffic sees its error flags that rarely. Entering error-passive counts one
+//! episode. The published state ([`Health::state`]) is bus-off for the whole back-off.
+//!
+//! # Listening during the back-off
+//! The node **listens** during the back-off: the adapter puts the core into bus monitoring
+//! (`CCCR.MON`), where it receives and filters as usual but never transmits (no frame, no
+//! acknowledge bit, no error flag: the bus is not disturbed), so an `ESTOP` sent during the
+//! back-off reaches the node in the cycle it arrives. The sequence at a bus-off:
+//!
+//! 1. the pending dedicated TX buffers (old stream frames) are cancelled;
+//! 2. both RX FIFOs are **drained** into software queues (RX FIFO1, `ESTOP`, into one of its
+//!    own that [`Link::receive`](Can::receive) reads before everything else), and the `ACK`s
+//!    still owed in the TX FIFO are **copied**, in their order, into a shadow queue: the next
+//!    step resets the FIFO statuses and every TX request (RM0433: setting `CCE` resets
+//!    `RXF0S`, `RXF1S`, `TXFQS`, `TXBRP`, …);
+//! 3. configuration mode (`CCE`, the core being in `INIT`), `MON` set, `INIT` cleared: the
+//!    core waits for 129 × 11 recessive bits (~1.4 ms at 1 Mbit/s), the bus-off recovery,
+//!    and then listens.
+//!
+//! At the back-off's end (once the recovery is over) the adapter takes the core into `INIT`
+//! (waiting, bounded, until it reads set), drains the RX FIFOs again, clears `MON` in
+//! configuration mode and clears `INIT`: the core joins after 11 recessive bits. The owed
+//! `ACK`s go into the TX FIFO first, in their order, before any frame queued since; frames
+//! the node sent during the back-off waited in the software queue (stream frames replacing
+//! their older ones). A frame beyond a software queue's room when the FIFOs are drained
+//! (more than [`SOFT_RX`] commands waiting in RX FIFO0 at that moment) is lost, counted
+//! ([`Health::rx_lost`]) and reported as a receive error. If configuration mode cannot be
+//! entered (a core that does not set `CCE`: nothing is reset then), the adapter falls back to
+//! holding the core in `INIT` for the back-off (deaf, with its `ACK`s still in the TX FIFO),
+//! then clearing `INIT`.
 //!
 //! A **message RAM access failure** (`IR.MRAF`: the core could not read or write an element in
 //! time; a transmit failure also puts it into restricted operation, `CCCR.ASM`, where it
@@ -66,6 +92,9 @@ use crate::frame::ClassicFrame;
 
 /// Elements of RX FIFO0 in the board's message-RAM layout.
 pub const RX_ELEMENTS: usize = 64;
+/// Elements of RX FIFO1, which receives only `ESTOP` (read before everything else at every
+/// receive: more `ESTOP`s than the node takes in a cycle).
+pub const RX1_ELEMENTS: usize = 16;
 /// Dedicated TX buffers in the board's message-RAM layout (buffers 0 … 15; the stream
 /// frames: 9 identifiers, with room for buffers still being cancelled).
 pub const TX_SLOTS: usize = 16;
@@ -131,6 +160,30 @@ pub trait Fdcan {
     /// `true` once after a message RAM access failure (`IR.MRAF`, cleared) or in restricted
     /// operation (`CCCR.ASM`, left): the core is back in normal operation afterwards.
     fn take_ram_failure(&mut self) -> bool;
+    /// Requests the initialisation state (`CCCR.INIT`) and waits for it, bounded; `true` once
+    /// it reads set (the core then neither receives nor sends). Called only after
+    /// [`Fdcan::restart`] succeeded; the default (a device without it) refuses.
+    fn enter_init(&mut self) -> bool {
+        false
+    }
+    /// From the initialisation state: configuration mode (`CCE`), bus monitoring
+    /// (`CCCR.MON`) set to `monitoring` (the other mode bits unchanged), then `INIT` cleared:
+    /// the core joins the bus, receiving only if `monitoring`. Entering configuration mode
+    /// resets the RX FIFOs' and the TX FIFO's statuses and every TX request: drain and copy
+    /// first. `true` if configuration mode was entered (the statuses are reset; should `MON`
+    /// not read back as asked, the core stays in `INIT`); `false` if nothing changed (not in
+    /// `INIT`, or `CCE` refused). The default (a device without bus monitoring) refuses.
+    fn restart(&mut self, monitoring: bool) -> bool {
+        let _ = monitoring;
+        false
+    }
+    /// The element `k` places after the TX FIFO's get index (`k` < [`TX_FIFO`]) if its
+    /// transmission is still pending (`TXBRP`), else `None`: the `ACK`s still owed, in their
+    /// order. The default: none.
+    fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
+        let _ = k;
+        None
+    }
 }
 
 /// The state of the node on the bus (ISO 11898-1 fault confinement).
@@ -162,7 +215,8 @@ pub struct Health {
     pub rec: u8,
     /// The receive error counter reached the error-passive level (`ECR.RP`).
     pub rx_passive: bool,
-    /// Bus state at the last [`Link::service`].
+    /// Bus state at the last [`Link::service`]; bus-off for the whole back-off (also while
+    /// the core listens in bus monitoring: it sends nothing).
     pub state: BusState,
     /// Bus-off events since start-up (each one recovered).
     pub bus_offs: u16,
@@ -214,7 +268,12 @@ impl embedded_can::Error for RxLost {
 pub struct Link<P: Fdcan> {
     hw: P,
     rx: Deque<ClassicFrame, SOFT_RX>,
+    /// RX FIFO1's frames (`ESTOP`) drained before configuration mode reset its status.
+    rx1: Deque<ClassicFrame, RX1_ELEMENTS>,
     tx: Deque<ClassicFrame, SOFT_TX>,
+    /// The TX FIFO's `ACK`s copied at a bus-off (configuration mode drops their requests),
+    /// put back into the FIFO first, in order, after the back-off.
+    owed: Deque<ClassicFrame, TX_FIFO>,
     /// Identifier in each TX buffer since it was started (meaningful while pending).
     slot_id: [u16; TX_SLOTS],
     /// Buffers whose cancellation the adapter requested and that are still pending.
@@ -227,6 +286,11 @@ pub struct Link<P: Fdcan> {
     quiet_cycles: u16,
     /// `INIT` clear requested after a back-off and not yet seen clear.
     rejoining: bool,
+    /// The core was put into bus monitoring for the back-off (configuration mode entered).
+    monitoring: bool,
+    /// The bus state as the registers last said (the published one is bus-off during the
+    /// back-off).
+    seen: BusState,
     health: Health,
 }
 
@@ -252,13 +316,17 @@ impl<P: Fdcan> Link<P> {
         Self {
             hw,
             rx: Deque::new(),
+            rx1: Deque::new(),
             tx: Deque::new(),
+            owed: Deque::new(),
             slot_id: [0; TX_SLOTS],
             cancelling: 0,
             lost_unreported: false,
             backoff_wait: 0,
             quiet_cycles: 0,
             rejoining: false,
+            monitoring: false,
+            seen: BusState::Active,
             health: Health::default(),
         }
     }
@@ -284,9 +352,14 @@ impl<P: Fdcan> Link<P> {
         self.rx.iter()
     }
 
-    /// Frames waiting in the software transmit queue.
+    /// Frames waiting in the software transmit queue (with the `ACK`s owed since a bus-off).
     pub fn tx_waiting(&self) -> usize {
-        self.tx.len()
+        self.tx.len() + self.owed.len()
+    }
+
+    /// `true` while the core listens in bus monitoring (the back-off after a bus-off).
+    pub fn listening(&self) -> bool {
+        self.monitoring
     }
 
     /// Error state machine, then RX FIFO0 into the software queue (RX FIFO1 is left to
@@ -299,15 +372,13 @@ impl<P: Fdcan> Link<P> {
     }
 
     /// One control cycle has passed (call it once per cycle): the bus-off back-off counts
-    /// down and, at its end, the core leaves `INIT` (bus-off recovery begins); on the bus,
-    /// error-active cycles count towards resetting the back-off.
+    /// down and, at its end, the core leaves bus monitoring (or `INIT`) and joins the bus;
+    /// on the bus, error-active cycles count towards resetting the back-off.
     pub fn cycle(&mut self) {
         if self.backoff_wait > 0 {
             self.backoff_wait -= 1;
             if self.backoff_wait == 0 {
-                // Recovery: the core re-joins after 129 × 11 recessive bits.
-                self.hw.leave_init();
-                self.rejoining = true;
+                self.end_backoff();
             }
             return;
         }
@@ -319,6 +390,28 @@ impl<P: Fdcan> Link<P> {
         if self.quiet_cycles >= BACKOFF_RESET_CYCLES {
             self.health.backoff = 0;
         }
+    }
+
+    /// The back-off is over: out of bus monitoring (once its recovery has ended: else one
+    /// more cycle), or out of `INIT` (recovery: 129 × 11 recessive bits), onto the bus.
+    fn end_backoff(&mut self) {
+        if self.monitoring {
+            let recovering = !self.hw.in_init() && self.hw.protocol_status() & psr::BO != 0;
+            if recovering || !self.hw.enter_init() {
+                self.backoff_wait = 1;
+                return;
+            }
+            // In INIT nothing arrives any more: what was heard goes to software before
+            // configuration mode resets the FIFO statuses.
+            self.drain_all_rx();
+            self.monitoring = false;
+            if !self.hw.restart(false) {
+                self.hw.leave_init();
+            }
+        } else {
+            self.hw.leave_init();
+        }
+        self.rejoining = true;
     }
 
     /// Control cycles the core still stays off the bus (0: not backing off).
@@ -351,25 +444,75 @@ impl<P: Fdcan> Link<P> {
         }
         // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
         // bus-off that came before this adapter saw the recovery end); not while the adapter
-        // itself holds the core in INIT (the back-off) or has just asked it out.
+        // itself keeps the core off the bus (the back-off) or has just asked it out.
         let waiting = self.backoff_wait > 0 || self.rejoining;
-        if state == BusState::BusOff && !waiting && (h.state != BusState::BusOff || in_init) {
-            h.bus_offs = h.bus_offs.saturating_add(1);
-            // What waits in the dedicated TX buffers is old by the time the bus is back.
-            let pending = self.hw.tx_pending() & ALL_SLOTS;
-            if pending != 0 {
-                self.hw.tx_cancel(pending);
-                self.cancelling |= pending;
+        if state == BusState::BusOff && !waiting && (self.seen != BusState::BusOff || in_init) {
+            self.bus_off();
+        }
+        if state == BusState::Passive && self.seen != BusState::Passive {
+            self.health.passive_episodes = self.health.passive_episodes.saturating_add(1);
+        }
+        self.seen = state;
+        self.health.state = if self.backoff_wait > 0 {
+            BusState::BusOff
+        } else {
+            state
+        };
+    }
+
+    /// A bus-off: counted; old stream frames cancelled; the RX FIFOs drained and the owed
+    /// `ACK`s copied; the core into bus monitoring (module docs) for the back-off.
+    fn bus_off(&mut self) {
+        let h = &mut self.health;
+        h.bus_offs = h.bus_offs.saturating_add(1);
+        // The back-off: 1, 2, 4, … cycles, up to the cap.
+        h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
+        self.backoff_wait = 1 << (h.backoff - 1);
+        self.quiet_cycles = 0;
+        // What waits in the dedicated TX buffers is old by the time the bus is back.
+        let pending = self.hw.tx_pending() & ALL_SLOTS;
+        if pending != 0 {
+            self.hw.tx_cancel(pending);
+            self.cancelling |= pending;
+        }
+        self.drain_all_rx();
+        // The ACKs still owed, in order. Room: the shadow queue is emptied into the (then
+        // empty) TX FIFO by the first pump after every back-off, before any later ACK reaches
+        // the FIFO, and a bus-off needs a transmission, so it is empty here.
+        for k in 0..TX_FIFO {
+            if let Some(f) = self
+                .hw
+                .tx_fifo_owed(k)
+                .and_then(|e| ClassicFrame::from_element(&e))
+            {
+                let _ = self.owed.push_back(f);
             }
-            // The back-off: 1, 2, 4, … cycles, up to the cap.
-            h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
-            self.backoff_wait = 1 << (h.backoff - 1);
-            self.quiet_cycles = 0;
         }
-        if state == BusState::Passive && !matches!(h.state, BusState::Passive) {
-            h.passive_episodes = h.passive_episodes.saturating_add(1);
+        self.monitoring = self.hw.restart(true);
+        if !self.monitoring {
+            // Nothing was reset: the ACKs are still in the TX FIFO (sent after the back-off).
+            self.owed.clear();
         }
-        h.state = state;
+    }
+
+    /// Both RX FIFOs into the software queues (before configuration mode resets their
+    /// statuses); a frame beyond a queue's room is lost, counted and reported.
+    fn drain_all_rx(&mut self) {
+        self.take_lost();
+        let mut lost = false;
+        while let Some(e) = self.hw.rx_pop_fifo1() {
+            match ClassicFrame::from_element(&e) {
+                Some(f) => lost |= self.rx1.push_back(f).is_err(),
+                None => self.health.rx_foreign = self.health.rx_foreign.saturating_add(1),
+            }
+        }
+        while let Some(f) = self.read_hw() {
+            lost |= self.rx.push_back(f).is_err();
+        }
+        if lost {
+            self.health.rx_lost = self.health.rx_lost.saturating_add(1);
+            self.lost_unreported = true;
+        }
     }
 
     fn take_lost(&mut self) {
@@ -439,6 +582,16 @@ impl<P: Fdcan> Link<P> {
     }
 
     fn pump_tx(&mut self) {
+        if self.health.state == BusState::BusOff {
+            return;
+        }
+        // The ACKs owed since a bus-off first, in order.
+        while let Some(f) = self.owed.front() {
+            if !self.hw.tx_fifo_put(&f.to_element()) {
+                return;
+            }
+            self.owed.pop_front();
+        }
         while let Some(f) = self.tx.front().copied() {
             if !self.start(&f) {
                 break;
@@ -501,7 +654,7 @@ impl<P: Fdcan> Can for Link<P> {
     /// (the TX FIFO for an `ACK`, the dedicated ones for a stream frame) and the software
     /// queue are taken.
     fn transmit(&mut self, frame: &ClassicFrame) -> nb::Result<Option<ClassicFrame>, RxLost> {
-        if self.tx.is_empty() {
+        if self.tx.is_empty() && self.owed.is_empty() {
             // The common case: nothing waits in software, so only a TX buffer can hold a
             // stale frame of this identifier.
             self.cancel_stale(frame.raw_id());
@@ -513,7 +666,7 @@ impl<P: Fdcan> Can for Link<P> {
                 return Ok(None);
             }
             self.pump_tx();
-            if self.tx.is_empty() && self.start(frame) {
+            if self.tx.is_empty() && self.owed.is_empty() && self.start(frame) {
                 return Ok(None);
             }
         }
@@ -523,9 +676,13 @@ impl<P: Fdcan> Can for Link<P> {
         }
     }
 
-    /// `ESTOP` first (RX FIFO1), then, once after an overflow, [`RxLost`], then the oldest
-    /// other frame (the software queue, then RX FIFO0).
+    /// `ESTOP` first (those drained at a bus-off or a back-off's end, then RX FIFO1), then,
+    /// once after an overflow, [`RxLost`], then the oldest other frame (the software queue,
+    /// then RX FIFO0).
     fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
+        if let Some(f) = self.rx1.pop_front() {
+            return Ok(f);
+        }
         // RX FIFO1's oldest element, converted by the same code as RX FIFO0's below; one that
         // is not a classic frame is counted and dropped, and this call goes on as without.
         let estop = match self.hw.rx_pop_fifo1() {

@@ -126,4 +126,13 @@ impl Fdcan for Fdcan1 {
     fn take_ram_failure(&mut self) -> bool {
         self.0.take_ram_failure()
     }
+    fn enter_init(&mut self) -> bool {
+        self.0.enter_init()
+    }
+    fn restart(&mut self, monitoring: bool) -> bool {
+        self.0.restart(monitoring)
+    }
+    fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
+        self.0.tx_fifo_owed(k)
+    }
 }

@@ -50,9 +50,7 @@ impl BitTiming {
     }
 }
 
-/// Elements of RX FIFO1, which receives only `ESTOP` (read before everything else at every
-/// receive: more `ESTOP`s than the node takes in a cycle).
-pub const RX1_ELEMENTS: usize = 16;
+pub use crate::link::RX1_ELEMENTS;
 
 /// The message RAM layout, in words of FDCAN1's part (from 0x4000_AC00), all elements with
 /// 8-byte data fields (4 words):
@@ -203,9 +201,10 @@ impl BringUpError {
     }
 }
 
-/// Waits (bounded) until `CCCR.INIT` reads `set`. Not inlined: one copy for both waits.
+/// Waits (bounded, [`INIT_WAIT_READS`]) until `CCCR.INIT` reads `set`. Not inlined: one copy
+/// for every wait.
 #[inline(never)]
-fn wait_init<R: FdcanRegs>(regs: &R, set: bool) -> bool {
+pub(crate) fn wait_init<R: FdcanRegs>(regs: &R, set: bool) -> bool {
     let want = if set { cccr::INIT } else { 0 };
     let mut reads = INIT_WAIT_READS;
     while reads > 0 {

@@ -48,6 +48,7 @@ use board_core::fdcan::{FdcanRegs, Reg};
 mod bus;
 mod errors;
 pub use bus::{BusFrame, Verdict};
+#[allow(unused_imports)] // each test binary uses a part
 pub use errors::RECOVERY_BITS;
 
 /// FDCAN1's message RAM words.
@@ -494,6 +495,12 @@ impl State {
 
     fn write_cccr(&mut self, v: u32) {
         let cur = self.regs[idx(CCCR)];
+        // Fault injection: bits that keep their value (a CCE that never takes resets nothing).
+        let stuck = self
+            .stuck_bits
+            .iter()
+            .filter(|(o, _)| *o == CCCR)
+            .fold(0, |m, (_, b)| m | b);
         let mut new = cur;
         // ASM (restricted operation) can be cleared by software at any time (RM0433
         // §56.5.6); setting it, like the other protected bits, needs INIT and CCE.
@@ -510,7 +517,7 @@ impl State {
             }
         }
         // CCE: set only once INIT reads set (and stays requested); clearable any time.
-        if v & CCE != 0 && cur & CCE == 0 {
+        if v & CCE != 0 && cur & CCE == 0 && stuck & CCE == 0 {
             if cur & INIT != 0 && v & INIT != 0 {
                 new |= CCE;
                 // Setting CCE resets HPMS, RXF0S, RXF1S, TXFQS, TXBRP, TXBTO, TXBCF and TXEFS
@@ -555,7 +562,7 @@ impl State {
         } else {
             self.pending_init = None;
         }
-        self.regs[idx(CCCR)] = new & CCCR_MASK;
+        self.regs[idx(CCCR)] = ((cur & stuck) | (new & !stuck)) & CCCR_MASK;
     }
 
     fn check_layout(&mut self) {
