@@ -268,12 +268,12 @@ impl embedded_can::Error for RxLost {
 pub struct Link<P: Fdcan> {
     hw: P,
     rx: Deque<ClassicFrame, SOFT_RX>,
-    /// RX FIFO1's frames (`ESTOP`) drained before configuration mode reset its status.
-    rx1: Deque<ClassicFrame, RX1_ELEMENTS>,
+    /// RX FIFO1's elements (`ESTOP`) drained before configuration mode reset its status.
+    rx1: Deque<[u32; 4], RX1_ELEMENTS>,
     tx: Deque<ClassicFrame, SOFT_TX>,
     /// The TX FIFO's `ACK`s copied at a bus-off (configuration mode drops their requests),
     /// put back into the FIFO first, in order, after the back-off.
-    owed: Deque<ClassicFrame, TX_FIFO>,
+    owed: Deque<[u32; 4], TX_FIFO>,
     /// Identifier in each TX buffer since it was started (meaningful while pending).
     slot_id: [u16; TX_SLOTS],
     /// Buffers whose cancellation the adapter requested and that are still pending.
@@ -394,6 +394,8 @@ impl<P: Fdcan> Link<P> {
 
     /// The back-off is over: out of bus monitoring (once its recovery has ended: else one
     /// more cycle), or out of `INIT` (recovery: 129 × 11 recessive bits), onto the bus.
+    #[cold]
+    #[inline(never)]
     fn end_backoff(&mut self) {
         if self.monitoring {
             let recovering = !self.hw.in_init() && self.hw.protocol_status() & psr::BO != 0;
@@ -462,6 +464,8 @@ impl<P: Fdcan> Link<P> {
 
     /// A bus-off: counted; old stream frames cancelled; the RX FIFOs drained and the owed
     /// `ACK`s copied; the core into bus monitoring (module docs) for the back-off.
+    #[cold]
+    #[inline(never)]
     fn bus_off(&mut self) {
         let h = &mut self.health;
         h.bus_offs = h.bus_offs.saturating_add(1);
@@ -480,12 +484,8 @@ impl<P: Fdcan> Link<P> {
         // empty) TX FIFO by the first pump after every back-off, before any later ACK reaches
         // the FIFO, and a bus-off needs a transmission, so it is empty here.
         for k in 0..TX_FIFO {
-            if let Some(f) = self
-                .hw
-                .tx_fifo_owed(k)
-                .and_then(|e| ClassicFrame::from_element(&e))
-            {
-                let _ = self.owed.push_back(f);
+            if let Some(e) = self.hw.tx_fifo_owed(k) {
+                let _ = self.owed.push_back(e);
             }
         }
         self.monitoring = self.hw.restart(true);
@@ -496,18 +496,18 @@ impl<P: Fdcan> Link<P> {
     }
 
     /// Both RX FIFOs into the software queues (before configuration mode resets their
-    /// statuses); a frame beyond a queue's room is lost, counted and reported.
+    /// statuses; RX FIFO1's elements as they are, converted when received); a frame beyond a
+    /// queue's room is lost, counted and reported.
+    #[cold]
+    #[inline(never)]
     fn drain_all_rx(&mut self) {
-        self.take_lost();
         let mut lost = false;
         while let Some(e) = self.hw.rx_pop_fifo1() {
-            match ClassicFrame::from_element(&e) {
-                Some(f) => lost |= self.rx1.push_back(f).is_err(),
-                None => self.health.rx_foreign = self.health.rx_foreign.saturating_add(1),
-            }
+            lost |= self.rx1.push_back(e).is_err();
         }
-        while let Some(f) = self.read_hw() {
-            lost |= self.rx.push_back(f).is_err();
+        self.drain_rx();
+        while self.hw.rx_pop().is_some() {
+            lost = true;
         }
         if lost {
             self.health.rx_lost = self.health.rx_lost.saturating_add(1);
@@ -586,8 +586,8 @@ impl<P: Fdcan> Link<P> {
             return;
         }
         // The ACKs owed since a bus-off first, in order.
-        while let Some(f) = self.owed.front() {
-            if !self.hw.tx_fifo_put(&f.to_element()) {
+        while let Some(e) = self.owed.front() {
+            if !self.hw.tx_fifo_put(e) {
                 return;
             }
             self.owed.pop_front();
@@ -680,12 +680,11 @@ impl<P: Fdcan> Can for Link<P> {
     /// once after an overflow, [`RxLost`], then the oldest other frame (the software queue,
     /// then RX FIFO0).
     fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
-        if let Some(f) = self.rx1.pop_front() {
-            return Ok(f);
-        }
-        // RX FIFO1's oldest element, converted by the same code as RX FIFO0's below; one that
-        // is not a classic frame is counted and dropped, and this call goes on as without.
-        let estop = match self.hw.rx_pop_fifo1() {
+        // RX FIFO1's oldest element (drained ones first), converted by the same code as RX
+        // FIFO0's below; one that is not a classic frame is counted and dropped, and this call
+        // goes on as without.
+        let first = self.rx1.pop_front().or_else(|| self.hw.rx_pop_fifo1());
+        let estop = match first {
             Some(e) if !ClassicFrame::is_classic(&e) => {
                 self.health.rx_foreign = self.health.rx_foreign.saturating_add(1);
                 None
