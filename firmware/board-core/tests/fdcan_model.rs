@@ -775,7 +775,10 @@ fn overflow_bus_off_and_silence_over_the_registers() {
     model(&l).st().arrive(heartbeat(1)); // answered: a frame waits in a TX buffer
     node.poll(10, &mut l);
     assert_ne!(model(&l).st().pending(), 0);
-    fdcan::silence(l.peripheral_mut().regs_mut());
+    assert!(
+        fdcan::silence(l.peripheral_mut().regs_mut()),
+        "ENDN answered"
+    );
     model(&l).st().settle();
     assert!(model(&l).st().in_init());
     assert_eq!(model(&l).st().pending(), 0);

@@ -73,9 +73,10 @@ pub fn bring_up(_fdcan1: pac::FDCAN1, timing: &BitTiming) -> Result<(), BringUpE
 
 /// Stops FDCAN1 sending (the safe state's FDCAN step, after PD1 was taken as a recessive
 /// GPIO): the core is asked into its initialisation state and every pending TX buffer is
-/// cancelled. Takes effect only while FDCAN1's clocks run.
-pub fn silence() {
-    fdcan::silence(&mut Fdcan1Regs { _private: () });
+/// cancelled. Takes effect only while FDCAN1's clocks run. `true` if the register block
+/// answered (`ENDN` read back).
+pub fn silence() -> bool {
+    fdcan::silence(&mut Fdcan1Regs { _private: () })
 }
 
 /// FDCAN1 in normal operation after [`bring_up`]: board-core's `RegFdcan` over its

@@ -293,9 +293,12 @@ pub fn join<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
 
 /// Takes the core off the bus at once: `INIT` requested (the output recessive, no error
 /// frames) and every TX buffer's request cancelled. Needs no configuration mode; works in any
-/// state (the fault handler's path).
-pub fn silence<R: FdcanRegs>(regs: &mut R) {
+/// state (the fault handler's path). `true` if the register block answered: `ENDN` read
+/// back its fixed value (it needs no kernel clock; an access that faulted, ignored at fault
+/// priority, reads otherwise).
+pub fn silence<R: FdcanRegs>(regs: &mut R) -> bool {
     let c = regs.read(Reg::Cccr) & !cccr::CSA;
     regs.write(Reg::Cccr, c | cccr::INIT);
     regs.write(Reg::Txbcr, u32::MAX);
+    regs.read(Reg::Endn) == ENDN_VALUE
 }
