@@ -56,27 +56,29 @@
 //! acknowledge bit, no error flag: the bus is not disturbed), so an `ESTOP` sent during the
 //! back-off reaches the node in the cycle it arrives. The sequence at a bus-off:
 //!
-//! 1. the pending dedicated TX buffers (old stream frames) are cancelled;
-//! 2. both RX FIFOs are **drained** into software queues (RX FIFO1, `ESTOP`, into one of its
-//!    own that [`Link::receive`](Can::receive) reads before everything else), and the `ACK`s
-//!    still owed in the TX FIFO are **copied**, in their order, into a shadow queue: the next
-//!    step resets the FIFO statuses and every TX request (RM0433: setting `CCE` resets
-//!    `RXF0S`, `RXF1S`, `TXFQS`, `TXBRP`, …);
+//! 1. the pending dedicated TX buffers and the stream frames in the software queue (old by
+//!    the time the bus is back: the node sends newer ones every cycle) are dropped;
+//! 2. both RX FIFOs are **drained** into the software receive queue, RX FIFO1's `ESTOP`s
+//!    at its front, in order (the newest commands make room for them; [`Link::receive`](Can::receive)
+//!    hands them out even before a loss report), and the `ACK`s still owed in the TX FIFO
+//!    are **copied**, in their order, to the front of the software transmit queue (they are
+//!    older than every frame there): the next step resets the FIFO statuses and every TX
+//!    request (RM0433: setting `CCE` resets `RXF0S`, `RXF1S`, `TXFQS`, `TXBRP`, …);
 //! 3. configuration mode (`CCE`, the core being in `INIT`), `MON` set, `INIT` cleared: the
-//!    core waits for 129 × 11 recessive bits (~1.4 ms at 1 Mbit/s), the bus-off recovery,
+//!    core waits for 129 × 11 recessive bits (~1.42 ms at 1 Mbit/s), the bus-off recovery,
 //!    and then listens.
 //!
-//! At the back-off's end (once the recovery is over) the adapter takes the core into `INIT`
-//! (waiting, bounded, until it reads set), drains the RX FIFOs again, clears `MON` in
-//! configuration mode and clears `INIT`: the core joins after 11 recessive bits. The owed
-//! `ACK`s go into the TX FIFO first, in their order, before any frame queued since; frames
-//! the node sent during the back-off waited in the software queue (stream frames replacing
-//! their older ones). A frame beyond a software queue's room when the FIFOs are drained
-//! (more than [`SOFT_RX`] commands waiting in RX FIFO0 at that moment) is lost, counted
-//! ([`Health::rx_lost`]) and reported as a receive error. If configuration mode cannot be
-//! entered (a core that does not set `CCE`: nothing is reset then), the adapter falls back to
-//! holding the core in `INIT` for the back-off (deaf, with its `ACK`s still in the TX FIFO),
-//! then clearing `INIT`.
+//! At the back-off's end (once the recovery is over; else one cycle more) the adapter takes
+//! the core into `INIT` (waiting, bounded, until it reads set), drains the RX FIFOs again,
+//! clears `MON` in configuration mode and clears `INIT`: the core joins after 11 recessive
+//! bits, and the software transmit queue empties in its order, the owed `ACK`s first, then
+//! those of the commands heard during the back-off. A frame beyond the software receive
+//! queue's room when the FIFOs are drained (more than [`SOFT_RX`] frames waiting) is lost,
+//! counted ([`Health::rx_lost`]) and reported as a receive error. If the owed `ACK`s do not
+//! all fit into the software transmit queue, or configuration mode cannot be entered (a core
+//! that does not set `CCE`: nothing is reset then), the adapter falls back to holding the
+//! core in `INIT` for the back-off (deaf, its `ACK`s still in the TX FIFO), then clearing
+//! `INIT`: no `ACK` is dropped either way.
 //!
 //! A **message RAM access failure** (`IR.MRAF`: the core could not read or write an element in
 //! time; a transmit failure also puts it into restricted operation, `CCCR.ASM`, where it
@@ -268,12 +270,7 @@ impl embedded_can::Error for RxLost {
 pub struct Link<P: Fdcan> {
     hw: P,
     rx: Deque<ClassicFrame, SOFT_RX>,
-    /// RX FIFO1's elements (`ESTOP`) drained before configuration mode reset its status.
-    rx1: Deque<[u32; 4], RX1_ELEMENTS>,
     tx: Deque<ClassicFrame, SOFT_TX>,
-    /// The TX FIFO's `ACK`s copied at a bus-off (configuration mode drops their requests),
-    /// put back into the FIFO first, in order, after the back-off.
-    owed: Deque<[u32; 4], TX_FIFO>,
     /// Identifier in each TX buffer since it was started (meaningful while pending).
     slot_id: [u16; TX_SLOTS],
     /// Buffers whose cancellation the adapter requested and that are still pending.
@@ -292,6 +289,13 @@ pub struct Link<P: Fdcan> {
     /// back-off).
     seen: BusState,
     health: Health,
+}
+
+/// [`ClassicFrame::from_element`], not inlined: one copy for the bus-off path's conversions
+/// (flash; the poll's receive has its own).
+#[inline(never)]
+fn frame_of(e: &[u32; 4]) -> Option<ClassicFrame> {
+    ClassicFrame::from_element(e)
 }
 
 /// `true` for identifiers where a newer frame supersedes a waiting one (all but `ACK`).
@@ -316,9 +320,7 @@ impl<P: Fdcan> Link<P> {
         Self {
             hw,
             rx: Deque::new(),
-            rx1: Deque::new(),
             tx: Deque::new(),
-            owed: Deque::new(),
             slot_id: [0; TX_SLOTS],
             cancelling: 0,
             lost_unreported: false,
@@ -352,9 +354,9 @@ impl<P: Fdcan> Link<P> {
         self.rx.iter()
     }
 
-    /// Frames waiting in the software transmit queue (with the `ACK`s owed since a bus-off).
+    /// Frames waiting in the software transmit queue.
     pub fn tx_waiting(&self) -> usize {
-        self.tx.len() + self.owed.len()
+        self.tx.len()
     }
 
     /// `true` while the core listens in bus monitoring (the back-off after a bus-off).
@@ -473,41 +475,77 @@ impl<P: Fdcan> Link<P> {
         h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
         self.backoff_wait = 1 << (h.backoff - 1);
         self.quiet_cycles = 0;
-        // What waits in the dedicated TX buffers is old by the time the bus is back.
+        // What waits in the dedicated TX buffers is old by the time the bus is back (stream
+        // frames in the software queue are replaced by the newer ones the node sends).
         let pending = self.hw.tx_pending() & ALL_SLOTS;
         if pending != 0 {
             self.hw.tx_cancel(pending);
             self.cancelling |= pending;
         }
         self.drain_all_rx();
-        // The ACKs still owed, in order. Room: the shadow queue is emptied into the (then
-        // empty) TX FIFO by the first pump after every back-off, before any later ACK reaches
-        // the FIFO, and a bus-off needs a transmission, so it is empty here.
-        for k in 0..TX_FIFO {
-            if let Some(e) = self.hw.tx_fifo_owed(k) {
-                let _ = self.owed.push_back(e);
+        // The ACKs still owed in the TX FIFO go in front of the software queue, in order (they
+        // are older than every frame there), last first; if they do not all fit, or the core
+        // refuses configuration mode, they are taken out again and the core stays in INIT
+        // for the back-off (deaf, the ACKs kept in the TX FIFO).
+        let mut copied = 0;
+        for k in (0..TX_FIFO).rev() {
+            let Some(e) = self.hw.tx_fifo_owed(k) else {
+                continue;
+            };
+            let Some(f) = frame_of(&e) else {
+                continue;
+            };
+            if self.tx.push_front(f).is_err() {
+                self.unqueue(copied);
+                return;
             }
+            copied += 1;
         }
         self.monitoring = self.hw.restart(true);
         if !self.monitoring {
-            // Nothing was reset: the ACKs are still in the TX FIFO (sent after the back-off).
-            self.owed.clear();
+            // Nothing was reset: the ACKs are still in the TX FIFO.
+            self.unqueue(copied);
         }
     }
 
-    /// Both RX FIFOs into the software queues (before configuration mode resets their
-    /// statuses; RX FIFO1's elements as they are, converted when received); a frame beyond a
-    /// queue's room is lost, counted and reported.
+    /// Takes `n` frames off the front of the software transmit queue.
+    fn unqueue(&mut self, n: usize) {
+        for _ in 0..n {
+            self.tx.pop_front();
+        }
+    }
+
+    /// Both RX FIFOs into the software queue (before configuration mode resets their
+    /// statuses): RX FIFO1's `ESTOP`s in front, in order (they come first, as from RX FIFO1),
+    /// the newest commands making room for them if it is full; a frame beyond the queue's room
+    /// is lost, counted and reported.
     #[cold]
     #[inline(never)]
     fn drain_all_rx(&mut self) {
-        let mut lost = false;
-        while let Some(e) = self.hw.rx_pop_fifo1() {
-            lost |= self.rx1.push_back(e).is_err();
+        let mut estops = [[0u32; 4]; RX1_ELEMENTS];
+        let mut n = 0;
+        while let Some(slot) = estops.get_mut(n) {
+            let Some(e) = self.hw.rx_pop_fifo1() else {
+                break;
+            };
+            *slot = e;
+            n += 1;
         }
         self.drain_rx();
+        let mut lost = false;
         while self.hw.rx_pop().is_some() {
             lost = true;
+        }
+        for e in estops.iter().take(n).rev() {
+            let Some(f) = frame_of(e) else {
+                self.health.rx_foreign = self.health.rx_foreign.saturating_add(1);
+                continue;
+            };
+            if self.rx.is_full() {
+                self.rx.pop_back();
+                lost = true;
+            }
+            let _ = self.rx.push_front(f); // room: made above
         }
         if lost {
             self.health.rx_lost = self.health.rx_lost.saturating_add(1);
@@ -522,6 +560,9 @@ impl<P: Fdcan> Link<P> {
         }
     }
 
+    /// RX FIFO0 into the software queue, up to its room. Not inlined: one copy for
+    /// [`Link::service`] and the bus-off path (flash).
+    #[inline(never)]
     fn drain_rx(&mut self) {
         self.take_lost();
         while !self.rx.is_full() {
@@ -582,16 +623,6 @@ impl<P: Fdcan> Link<P> {
     }
 
     fn pump_tx(&mut self) {
-        if self.health.state == BusState::BusOff {
-            return;
-        }
-        // The ACKs owed since a bus-off first, in order.
-        while let Some(e) = self.owed.front() {
-            if !self.hw.tx_fifo_put(e) {
-                return;
-            }
-            self.owed.pop_front();
-        }
         while let Some(f) = self.tx.front().copied() {
             if !self.start(&f) {
                 break;
@@ -654,7 +685,7 @@ impl<P: Fdcan> Can for Link<P> {
     /// (the TX FIFO for an `ACK`, the dedicated ones for a stream frame) and the software
     /// queue are taken.
     fn transmit(&mut self, frame: &ClassicFrame) -> nb::Result<Option<ClassicFrame>, RxLost> {
-        if self.tx.is_empty() && self.owed.is_empty() {
+        if self.tx.is_empty() {
             // The common case: nothing waits in software, so only a TX buffer can hold a
             // stale frame of this identifier.
             self.cancel_stale(frame.raw_id());
@@ -666,7 +697,7 @@ impl<P: Fdcan> Can for Link<P> {
                 return Ok(None);
             }
             self.pump_tx();
-            if self.tx.is_empty() && self.owed.is_empty() && self.start(frame) {
+            if self.tx.is_empty() && self.start(frame) {
                 return Ok(None);
             }
         }
@@ -676,15 +707,13 @@ impl<P: Fdcan> Can for Link<P> {
         }
     }
 
-    /// `ESTOP` first (those drained at a bus-off or a back-off's end, then RX FIFO1), then,
-    /// once after an overflow, [`RxLost`], then the oldest other frame (the software queue,
-    /// then RX FIFO0).
+    /// `ESTOP` first (RX FIFO1), then, once after an overflow, [`RxLost`], then the oldest
+    /// other frame (the software queue, then RX FIFO0; `ESTOP`s drained at a bus-off are at
+    /// its front).
     fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
-        // RX FIFO1's oldest element (drained ones first), converted by the same code as RX
-        // FIFO0's below; one that is not a classic frame is counted and dropped, and this call
-        // goes on as without.
-        let first = self.rx1.pop_front().or_else(|| self.hw.rx_pop_fifo1());
-        let estop = match first {
+        // RX FIFO1's oldest element, converted by the same code as RX FIFO0's below; one that
+        // is not a classic frame is counted and dropped, and this call goes on as without.
+        let estop = match self.hw.rx_pop_fifo1() {
             Some(e) if !ClassicFrame::is_classic(&e) => {
                 self.health.rx_foreign = self.health.rx_foreign.saturating_add(1);
                 None
@@ -694,6 +723,12 @@ impl<P: Fdcan> Can for Link<P> {
         if estop.is_none() {
             self.take_lost();
             if self.lost_unreported {
+                // `ESTOP`s drained at a bus-off wait at the queue's front: still first.
+                if self.rx.front().is_some_and(|f| f.raw_id() == ids::ESTOP) {
+                    if let Some(f) = self.rx.pop_front() {
+                        return Ok(f);
+                    }
+                }
                 self.lost_unreported = false;
                 return Err(nb::Error::Other(RxLost));
             }

@@ -140,6 +140,7 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
         self.regs.write(Reg::Cccr, c);
     }
 
+    #[inline(never)]
     fn enter_init(&mut self) -> bool {
         // Only INIT changes (a clock stop request is withdrawn); the write crosses into the
         // CAN clock domain: wait, bounded, until it shows.
@@ -148,6 +149,7 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
         wait_init(&self.regs, true)
     }
 
+    #[inline(never)]
     fn restart(&mut self, monitoring: bool) -> bool {
         let c = self.regs.read(Reg::Cccr) & !(cccr::CSA | cccr::CSR);
         if c & cccr::INIT == 0 {
@@ -171,6 +173,7 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
         true
     }
 
+    #[inline(never)]
     fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
         let first = TX_SLOTS as u32;
         let size = TX_FIFO as u32;
