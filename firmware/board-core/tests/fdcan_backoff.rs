@@ -211,3 +211,31 @@ fn a_core_refusing_configuration_mode_is_held_in_init_with_its_acks_kept() {
     assert_eq!(acks(&l), [(control, 1), (control, 2)]);
     assert_eq!(model(&l).violations(), []);
 }
+
+#[test]
+fn owed_acks_that_do_not_fit_the_software_queue_keep_the_core_in_init() {
+    use embedded_can::nb::Can;
+    use embedded_can::{Frame, StandardId};
+    let mut l = link_over(brought_up());
+    let ack = |seq: u8| {
+        board_core::ClassicFrame::new(StandardId::new(ids::ACK).unwrap(), &[0x20, seq]).unwrap()
+    };
+    // 16 ACKs in the TX FIFO, 20 more waiting in software (the bus takes none).
+    for seq in 0..36 {
+        l.transmit(&ack(seq)).unwrap();
+    }
+    assert_eq!(l.tx_waiting(), 20);
+    model(&l).st().bus_off();
+    l.service();
+    // 16 owed, room for 12: no configuration mode, nothing reset, nothing dropped.
+    assert!(!l.listening());
+    assert!(model(&l).st().in_init());
+    assert_eq!(model(&l).st().pending().count_ones(), 16);
+    assert_eq!(l.tx_waiting(), 20);
+    for _ in 0..4 {
+        rest_of_cycle(&mut l, true);
+    }
+    let seqs: Vec<u8> = acks(&l).iter().map(|a| a.1).collect();
+    assert_eq!(seqs, (0..36).collect::<Vec<u8>>());
+    assert_eq!(model(&l).violations(), []);
+}
