@@ -54,7 +54,9 @@
 //! The node **listens** during the back-off: the adapter puts the core into bus monitoring
 //! (`CCCR.MON`), where it receives and filters as usual but never transmits (no frame, no
 //! acknowledge bit, no error flag: the bus is not disturbed), so an `ESTOP` sent during the
-//! back-off reaches the node in the cycle it arrives. The sequence at a bus-off:
+//! back-off reaches the node in the cycle it arrives, if another node on the bus acknowledges
+//! it (without any acknowledge the sender's error flag destroys the frame, and it is
+//! repeated until the back-off ends). The sequence at a bus-off:
 //!
 //! 1. the pending dedicated TX buffers and the stream frames in the software queue (old by
 //!    the time the bus is back: the node sends newer ones every cycle) are dropped;
