@@ -95,9 +95,102 @@ impl StackGuard {
     }
 }
 
+/// A PMSAv7 MPU **background region** over the external-memory space: the whole 4 GiB with
+/// its eight 512 MiB subregions enabled only for 0x6000_0000-0xDFFF_FFFF (subregions 3-6:
+/// the FMC banks and the QUADSPI window, where the STM32H743 has nothing this board uses),
+/// no access at any privilege, never executable, strongly ordered. The Cortex-M7 may read
+/// speculatively from any Normal memory of the default map, and the default map makes
+/// 0x6000_0000-0x9FFF_FFFF Normal memory ("external RAM"): a speculative read there, with no
+/// memory behind the FMC, can stall the bus matrix. Strongly-ordered no-access memory is never
+/// read speculatively. The other subregions are disabled, so the default map
+/// (`PRIVDEFENA`) applies there, and the region overlaps no other region of the images (the
+/// stack guard lies in subregion 0). Programmed by the board as region 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExternalMemoryGuard {
+    /// `MPU_RBAR`: the base address, 0 (region number taken from `MPU_RNR`).
+    pub rbar: u32,
+    /// `MPU_RASR`: `XN`, `AP = 000`, `TEX = 000`, `C = B = 0` (strongly ordered), `SRD`, the
+    /// size field (4 GiB), enabled.
+    pub rasr: u32,
+}
+
+impl ExternalMemoryGuard {
+    /// First address the region covers (subregion 3).
+    pub const START: u32 = 0x6000_0000;
+    /// Last address the region covers (subregion 6's last byte).
+    pub const END: u32 = 0xDFFF_FFFF;
+    /// The subregion disable mask: 0, 1, 2 (code, SRAM, peripherals) and 7 (the system).
+    const SRD: u32 = 0b1000_0111;
+
+    /// The region.
+    pub const fn new() -> ExternalMemoryGuard {
+        ExternalMemoryGuard {
+            rbar: 0,
+            // XN (28), AP 000 (26:24), TEX 000 (21:19), S C B 0 (18:16), SRD (15:8),
+            // SIZE 31 (5:1: 2^(31+1) = 4 GiB), ENABLE (0).
+            rasr: (1 << 28) | (Self::SRD << 8) | (31 << 1) | 1,
+        }
+    }
+
+    /// `true` if the region makes `addr` inaccessible (an enabled subregion).
+    pub const fn covers(&self, addr: u32) -> bool {
+        let subregion = addr >> 29;
+        (self.rasr >> 8) & (1 << subregion) == 0
+    }
+}
+
+impl Default for ExternalMemoryGuard {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::StackGuard;
+    use super::{ExternalMemoryGuard, StackGuard};
+
+    #[test]
+    fn the_external_memory_guard_covers_the_fmc_and_quadspi_space_only() {
+        let g = ExternalMemoryGuard::new();
+        assert_eq!(g.rbar, 0);
+        assert_eq!(g.rasr, 0x1000_873F);
+        // No access, never executable, strongly ordered (TEX = C = B = 0), 4 GiB.
+        assert_eq!((g.rasr >> 24) & 7, 0);
+        assert_eq!(g.rasr >> 28 & 1, 1);
+        assert_eq!((g.rasr >> 16) & 0x3F, 0);
+        assert_eq!(1u64 << (((g.rasr >> 1) & 0x1F) + 1), 1 << 32);
+        // FMC banks 1-6 and the QUADSPI window: covered.
+        for addr in [
+            0x6000_0000,
+            0x7000_0000,
+            0x8000_0000,
+            0x9000_0000,
+            0xC000_0000,
+        ] {
+            assert!(g.covers(addr), "{addr:#x}");
+        }
+        assert!(g.covers(ExternalMemoryGuard::START));
+        assert!(g.covers(ExternalMemoryGuard::END));
+        // Flash, ITCM, DTCM, the stack guard, the SRAMs, the peripherals (FDCAN1, its message
+        // RAM, RCC, GPIO) and the system space: the default map.
+        for addr in [
+            0x0000_0000,
+            0x0800_0000,
+            0x1FFF_0000,
+            0x2000_0000,
+            0x2400_0000,
+            0x3800_0000,
+            0x4000_A000,
+            0x4000_AC00,
+            0x5802_4400,
+            0x5FFF_FFFF,
+            0xE000_ED00,
+        ] {
+            assert!(!g.covers(addr), "{addr:#x}");
+        }
+        assert!(!g.covers(ExternalMemoryGuard::START - 1));
+        assert!(!g.covers(ExternalMemoryGuard::END + 1));
+    }
 
     #[test]
     fn the_guard_below_the_dtcm_stack_is_64_kib_no_access() {

@@ -21,7 +21,8 @@
 //!   as a GPIO, the reset mark, the fault pin, then the FDCAN, then a reset at once) over a
 //!   small trait of the hardware;
 //! * [`fault_entry`]: the fault handlers' entry, which leaves an overflowed stack behind
-//!   before any Rust code runs, and the MPU guard below the stack ([`StackGuard`]);
+//!   before any Rust code runs, the MPU guard below the stack ([`StackGuard`]) and the MPU
+//!   background region over the external-memory space ([`ExternalMemoryGuard`]);
 //! * [`node`]: the node's contract with the control cycle ([`ControlNode`], implemented for
 //!   planner-core's `Node`), which [`cycle`] and [`control`] both use;
 //! * [`cycle`]: the bookkeeping of one control cycle (overruns told to the node, the
@@ -57,7 +58,7 @@ pub mod safe_state;
 pub mod uninit;
 
 pub use control::{ControlLoop, Io, LogSink, Port, SlotRun};
-pub use fault_entry::StackGuard;
+pub use fault_entry::{ExternalMemoryGuard, StackGuard};
 pub use frame::ClassicFrame;
 pub use link::{BusState, Fdcan, Health, Link, RxLost};
 pub use node::ControlNode;

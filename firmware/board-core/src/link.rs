@@ -3,7 +3,7 @@
 //! counters) and the replacement of stale frames.
 //!
 //! # Message RAM (the board's layout: [`crate::fdcan::layout`])
-//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`crate::fdcan::RX1_ELEMENTS`] (16);
+//! RX FIFO0 has [`RX_ELEMENTS`] (64) elements, RX FIFO1 [`RX1_ELEMENTS`] (16);
 //! there are [`TX_SLOTS`] (16) dedicated TX buffers and a TX FIFO of [`TX_FIFO`] (16)
 //! elements, 8-byte elements. At 1 Mbit/s a
 //! classic frame takes at least 47 bit times (~21
@@ -41,16 +41,46 @@
 //!
 //! # Errors
 //! [`Link::service`] reads the protocol status and error counters each time it runs. When the
-//! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter cancels every pending
-//! dedicated TX buffer (old stream frames; the `ACK`s in the TX FIFO stay, still owed) and
-//! counts the bus-off; the core stays off the bus for a **back-off** of whole control cycles
+//! core has gone bus-off (it then sets `CCCR.INIT` by itself), the adapter counts the bus-off
+//! and keeps the node **off the bus** for a **back-off** of whole control cycles
 //! ([`Link::cycle`], once per cycle): 1 cycle after the first bus-off, doubling at every
 //! further one up to [`BACKOFF_CAP`] (64 cycles, 320 ms), and back to 1 after
-//! [`BACKOFF_RESET_CYCLES`] cycles error-active on the bus. Then the adapter clears `INIT`:
-//! the core waits for 129 occurrences of 11 recessive bits (~1.4 ms at 1 Mbit/s) and is
-//! error-active again. So a node on a faulty bus (a wiring fault, a wrong bit rate) re-joins
-//! at most every 320 ms instead of every ~3 ms, and the joints' traffic sees its error flags
-//! that rarely. Entering error-passive counts one episode.
+//! [`BACKOFF_RESET_CYCLES`] cycles error-active on the bus. So a node on a faulty bus (a
+//! wiring fault, a wrong bit rate) re-joins at most every 320 ms instead of every ~3 ms, and
+//! the joints' traffic sees its error flags that rarely. Entering error-passive counts one
+//! episode. The published state ([`Health::state`]) is bus-off for the whole back-off.
+//!
+//! # Listening during the back-off
+//! The node **listens** during the back-off: the adapter puts the core into bus monitoring
+//! (`CCCR.MON`), where it receives and filters as usual but never transmits (no frame, no
+//! acknowledge bit, no error flag: the bus is not disturbed), so an `ESTOP` sent during the
+//! back-off reaches the node in the cycle it arrives, if another node on the bus acknowledges
+//! it (without any acknowledge the sender's error flag destroys the frame, and it is
+//! repeated until the back-off ends). The sequence at a bus-off:
+//!
+//! 1. the pending dedicated TX buffers and the stream frames in the software queue (old by
+//!    the time the bus is back: the node sends newer ones every cycle) are dropped;
+//! 2. both RX FIFOs are **drained** into the software receive queue, RX FIFO1's `ESTOP`s
+//!    at its front, in order (the newest commands make room for them; [`Link::receive`](Can::receive)
+//!    hands them out even before a loss report), and the `ACK`s still owed in the TX FIFO
+//!    are **copied**, in their order, to the front of the software transmit queue (they are
+//!    older than every frame there): the next step resets the FIFO statuses and every TX
+//!    request (RM0433: setting `CCE` resets `RXF0S`, `RXF1S`, `TXFQS`, `TXBRP`, …);
+//! 3. configuration mode (`CCE`, the core being in `INIT`), `MON` set, `INIT` cleared: the
+//!    core waits for 129 × 11 recessive bits (~1.42 ms at 1 Mbit/s), the bus-off recovery,
+//!    and then listens.
+//!
+//! At the back-off's end (once the recovery is over; else one cycle more) the adapter takes
+//! the core into `INIT` (waiting, bounded, until it reads set), drains the RX FIFOs again,
+//! clears `MON` in configuration mode and clears `INIT`: the core joins after 11 recessive
+//! bits, and the software transmit queue empties in its order, the owed `ACK`s first, then
+//! those of the commands heard during the back-off. A frame beyond the software receive
+//! queue's room when the FIFOs are drained (more than [`SOFT_RX`] frames waiting) is lost,
+//! counted ([`Health::rx_lost`]) and reported as a receive error. If the owed `ACK`s do not
+//! all fit into the software transmit queue, or configuration mode cannot be entered (a core
+//! that does not set `CCE`: nothing is reset then), the adapter falls back to holding the
+//! core in `INIT` for the back-off (deaf, its `ACK`s still in the TX FIFO), then clearing
+//! `INIT`: no `ACK` is dropped either way.
 //!
 //! A **message RAM access failure** (`IR.MRAF`: the core could not read or write an element in
 //! time; a transmit failure also puts it into restricted operation, `CCCR.ASM`, where it
@@ -66,6 +96,9 @@ use crate::frame::ClassicFrame;
 
 /// Elements of RX FIFO0 in the board's message-RAM layout.
 pub const RX_ELEMENTS: usize = 64;
+/// Elements of RX FIFO1, which receives only `ESTOP` (read before everything else at every
+/// receive: more `ESTOP`s than the node takes in a cycle).
+pub const RX1_ELEMENTS: usize = 16;
 /// Dedicated TX buffers in the board's message-RAM layout (buffers 0 … 15; the stream
 /// frames: 9 identifiers, with room for buffers still being cancelled).
 pub const TX_SLOTS: usize = 16;
@@ -131,6 +164,30 @@ pub trait Fdcan {
     /// `true` once after a message RAM access failure (`IR.MRAF`, cleared) or in restricted
     /// operation (`CCCR.ASM`, left): the core is back in normal operation afterwards.
     fn take_ram_failure(&mut self) -> bool;
+    /// Requests the initialisation state (`CCCR.INIT`) and waits for it, bounded; `true` once
+    /// it reads set (the core then neither receives nor sends). Called only after
+    /// [`Fdcan::restart`] succeeded; the default (a device without it) refuses.
+    fn enter_init(&mut self) -> bool {
+        false
+    }
+    /// From the initialisation state: configuration mode (`CCE`), bus monitoring
+    /// (`CCCR.MON`) set to `monitoring` (the other mode bits unchanged), then `INIT` cleared:
+    /// the core joins the bus, receiving only if `monitoring`. Entering configuration mode
+    /// resets the RX FIFOs' and the TX FIFO's statuses and every TX request: drain and copy
+    /// first. `true` if configuration mode was entered (the statuses are reset; should `MON`
+    /// not read back as asked, the core stays in `INIT`); `false` if nothing changed (not in
+    /// `INIT`, or `CCE` refused). The default (a device without bus monitoring) refuses.
+    fn restart(&mut self, monitoring: bool) -> bool {
+        let _ = monitoring;
+        false
+    }
+    /// The element `k` places after the TX FIFO's get index (`k` < [`TX_FIFO`]) if its
+    /// transmission is still pending (`TXBRP`), else `None`: the `ACK`s still owed, in their
+    /// order. The default: none.
+    fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
+        let _ = k;
+        None
+    }
 }
 
 /// The state of the node on the bus (ISO 11898-1 fault confinement).
@@ -162,7 +219,8 @@ pub struct Health {
     pub rec: u8,
     /// The receive error counter reached the error-passive level (`ECR.RP`).
     pub rx_passive: bool,
-    /// Bus state at the last [`Link::service`].
+    /// Bus state at the last [`Link::service`]; bus-off for the whole back-off (also while
+    /// the core listens in bus monitoring: it sends nothing).
     pub state: BusState,
     /// Bus-off events since start-up (each one recovered).
     pub bus_offs: u16,
@@ -227,7 +285,19 @@ pub struct Link<P: Fdcan> {
     quiet_cycles: u16,
     /// `INIT` clear requested after a back-off and not yet seen clear.
     rejoining: bool,
+    /// The core was put into bus monitoring for the back-off (configuration mode entered).
+    monitoring: bool,
+    /// The bus state as the registers last said (the published one is bus-off during the
+    /// back-off).
+    seen: BusState,
     health: Health,
+}
+
+/// [`ClassicFrame::from_element`], not inlined: one copy for the bus-off path's conversions
+/// (flash; the poll's receive has its own).
+#[inline(never)]
+fn frame_of(e: &[u32; 4]) -> Option<ClassicFrame> {
+    ClassicFrame::from_element(e)
 }
 
 /// `true` for identifiers where a newer frame supersedes a waiting one (all but `ACK`).
@@ -259,6 +329,8 @@ impl<P: Fdcan> Link<P> {
             backoff_wait: 0,
             quiet_cycles: 0,
             rejoining: false,
+            monitoring: false,
+            seen: BusState::Active,
             health: Health::default(),
         }
     }
@@ -289,6 +361,11 @@ impl<P: Fdcan> Link<P> {
         self.tx.len()
     }
 
+    /// `true` while the core listens in bus monitoring (the back-off after a bus-off).
+    pub fn listening(&self) -> bool {
+        self.monitoring
+    }
+
     /// Error state machine, then RX FIFO0 into the software queue (RX FIFO1 is left to
     /// [`Link::receive`](Can::receive)) and the software transmit queue into free TX buffers.
     /// Call it often while the loop waits (cheap when idle).
@@ -299,15 +376,13 @@ impl<P: Fdcan> Link<P> {
     }
 
     /// One control cycle has passed (call it once per cycle): the bus-off back-off counts
-    /// down and, at its end, the core leaves `INIT` (bus-off recovery begins); on the bus,
-    /// error-active cycles count towards resetting the back-off.
+    /// down and, at its end, the core leaves bus monitoring (or `INIT`) and joins the bus;
+    /// on the bus, error-active cycles count towards resetting the back-off.
     pub fn cycle(&mut self) {
         if self.backoff_wait > 0 {
             self.backoff_wait -= 1;
             if self.backoff_wait == 0 {
-                // Recovery: the core re-joins after 129 × 11 recessive bits.
-                self.hw.leave_init();
-                self.rejoining = true;
+                self.end_backoff();
             }
             return;
         }
@@ -319,6 +394,30 @@ impl<P: Fdcan> Link<P> {
         if self.quiet_cycles >= BACKOFF_RESET_CYCLES {
             self.health.backoff = 0;
         }
+    }
+
+    /// The back-off is over: out of bus monitoring (once its recovery has ended: else one
+    /// more cycle), or out of `INIT` (recovery: 129 × 11 recessive bits), onto the bus.
+    #[cold]
+    #[inline(never)]
+    fn end_backoff(&mut self) {
+        if self.monitoring {
+            let recovering = !self.hw.in_init() && self.hw.protocol_status() & psr::BO != 0;
+            if recovering || !self.hw.enter_init() {
+                self.backoff_wait = 1;
+                return;
+            }
+            // In INIT nothing arrives any more: what was heard goes to software before
+            // configuration mode resets the FIFO statuses.
+            self.drain_all_rx();
+            self.monitoring = false;
+            if !self.hw.restart(false) {
+                self.hw.leave_init();
+            }
+        } else {
+            self.hw.leave_init();
+        }
+        self.rejoining = true;
     }
 
     /// Control cycles the core still stays off the bus (0: not backing off).
@@ -351,25 +450,109 @@ impl<P: Fdcan> Link<P> {
         }
         // A bus-off event: the state becomes bus-off, or the core has set INIT again (a new
         // bus-off that came before this adapter saw the recovery end); not while the adapter
-        // itself holds the core in INIT (the back-off) or has just asked it out.
+        // itself keeps the core off the bus (the back-off) or has just asked it out.
         let waiting = self.backoff_wait > 0 || self.rejoining;
-        if state == BusState::BusOff && !waiting && (h.state != BusState::BusOff || in_init) {
-            h.bus_offs = h.bus_offs.saturating_add(1);
-            // What waits in the dedicated TX buffers is old by the time the bus is back.
-            let pending = self.hw.tx_pending() & ALL_SLOTS;
-            if pending != 0 {
-                self.hw.tx_cancel(pending);
-                self.cancelling |= pending;
+        if state == BusState::BusOff && !waiting && (self.seen != BusState::BusOff || in_init) {
+            self.bus_off();
+        }
+        if state == BusState::Passive && self.seen != BusState::Passive {
+            self.health.passive_episodes = self.health.passive_episodes.saturating_add(1);
+        }
+        self.seen = state;
+        self.health.state = if self.backoff_wait > 0 {
+            BusState::BusOff
+        } else {
+            state
+        };
+    }
+
+    /// A bus-off: counted; old stream frames cancelled; the RX FIFOs drained and the owed
+    /// `ACK`s copied; the core into bus monitoring (module docs) for the back-off.
+    #[cold]
+    #[inline(never)]
+    fn bus_off(&mut self) {
+        let h = &mut self.health;
+        h.bus_offs = h.bus_offs.saturating_add(1);
+        // The back-off: 1, 2, 4, … cycles, up to the cap.
+        h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
+        self.backoff_wait = 1 << (h.backoff - 1);
+        self.quiet_cycles = 0;
+        // What waits in the dedicated TX buffers is old by the time the bus is back (stream
+        // frames in the software queue are replaced by the newer ones the node sends).
+        let pending = self.hw.tx_pending() & ALL_SLOTS;
+        if pending != 0 {
+            self.hw.tx_cancel(pending);
+            self.cancelling |= pending;
+        }
+        self.drain_all_rx();
+        // The ACKs still owed in the TX FIFO go in front of the software queue, in order (they
+        // are older than every frame there), last first; if they do not all fit, or the core
+        // refuses configuration mode, they are taken out again and the core stays in INIT
+        // for the back-off (deaf, the ACKs kept in the TX FIFO).
+        let mut copied = 0;
+        for k in (0..TX_FIFO).rev() {
+            let Some(e) = self.hw.tx_fifo_owed(k) else {
+                continue;
+            };
+            let Some(f) = frame_of(&e) else {
+                continue;
+            };
+            if self.tx.push_front(f).is_err() {
+                self.unqueue(copied);
+                return;
             }
-            // The back-off: 1, 2, 4, … cycles, up to the cap.
-            h.backoff = h.backoff.saturating_add(1).min(BACKOFF_LEVEL_CAP);
-            self.backoff_wait = 1 << (h.backoff - 1);
-            self.quiet_cycles = 0;
+            copied += 1;
         }
-        if state == BusState::Passive && !matches!(h.state, BusState::Passive) {
-            h.passive_episodes = h.passive_episodes.saturating_add(1);
+        self.monitoring = self.hw.restart(true);
+        if !self.monitoring {
+            // Nothing was reset: the ACKs are still in the TX FIFO.
+            self.unqueue(copied);
         }
-        h.state = state;
+    }
+
+    /// Takes `n` frames off the front of the software transmit queue.
+    fn unqueue(&mut self, n: usize) {
+        for _ in 0..n {
+            self.tx.pop_front();
+        }
+    }
+
+    /// Both RX FIFOs into the software queue (before configuration mode resets their
+    /// statuses): RX FIFO1's `ESTOP`s in front, in order (they come first, as from RX FIFO1),
+    /// the newest commands making room for them if it is full; a frame beyond the queue's room
+    /// is lost, counted and reported.
+    #[cold]
+    #[inline(never)]
+    fn drain_all_rx(&mut self) {
+        let mut estops = [[0u32; 4]; RX1_ELEMENTS];
+        let mut n = 0;
+        while let Some(slot) = estops.get_mut(n) {
+            let Some(e) = self.hw.rx_pop_fifo1() else {
+                break;
+            };
+            *slot = e;
+            n += 1;
+        }
+        self.drain_rx();
+        let mut lost = false;
+        while self.hw.rx_pop().is_some() {
+            lost = true;
+        }
+        for e in estops.iter().take(n).rev() {
+            let Some(f) = frame_of(e) else {
+                self.health.rx_foreign = self.health.rx_foreign.saturating_add(1);
+                continue;
+            };
+            if self.rx.is_full() {
+                self.rx.pop_back();
+                lost = true;
+            }
+            let _ = self.rx.push_front(f); // room: made above
+        }
+        if lost {
+            self.health.rx_lost = self.health.rx_lost.saturating_add(1);
+            self.lost_unreported = true;
+        }
     }
 
     fn take_lost(&mut self) {
@@ -379,6 +562,9 @@ impl<P: Fdcan> Link<P> {
         }
     }
 
+    /// RX FIFO0 into the software queue, up to its room. Not inlined: one copy for
+    /// [`Link::service`] and the bus-off path (flash).
+    #[inline(never)]
     fn drain_rx(&mut self) {
         self.take_lost();
         while !self.rx.is_full() {
@@ -524,7 +710,8 @@ impl<P: Fdcan> Can for Link<P> {
     }
 
     /// `ESTOP` first (RX FIFO1), then, once after an overflow, [`RxLost`], then the oldest
-    /// other frame (the software queue, then RX FIFO0).
+    /// other frame (the software queue, then RX FIFO0; `ESTOP`s drained at a bus-off are at
+    /// its front).
     fn receive(&mut self) -> nb::Result<ClassicFrame, RxLost> {
         // RX FIFO1's oldest element, converted by the same code as RX FIFO0's below; one that
         // is not a classic frame is counted and dropped, and this call goes on as without.
@@ -538,6 +725,12 @@ impl<P: Fdcan> Can for Link<P> {
         if estop.is_none() {
             self.take_lost();
             if self.lost_unreported {
+                // `ESTOP`s drained at a bus-off wait at the queue's front: still first.
+                if self.rx.front().is_some_and(|f| f.raw_id() == ids::ESTOP) {
+                    if let Some(f) = self.rx.pop_front() {
+                        return Ok(f);
+                    }
+                }
                 self.lost_unreported = false;
                 return Err(nb::Error::Other(RxLost));
             }

@@ -30,6 +30,12 @@ pub enum ResetReason {
     /// The HSE did not become ready at start-up within its bound; the start-up reset the MCU
     /// with the fault pin raised (instead of waiting until the watchdog bites).
     HseNotReady = 10,
+    /// A second fault inside the fault path, after its first steps (the CAN TX pin
+    /// recessive, the mark, the fault pin) and before its FDCAN step had ended: either the
+    /// handler saw a bus fault of that step (ignored at fault priority) and reset the MCU, or
+    /// the core locked up there and the independent watchdog reset it. The mark
+    /// ([`MARK_UNFINISHED`]) tells both apart from a plain fault or a plain watchdog reset.
+    NestedFault = 11,
 }
 
 /// `RCC_RSR` flags.
@@ -59,11 +65,21 @@ pub const MARK_FAULT: u32 = FAULT_MARK | 1;
 pub const MARK_CLOCK: u32 = FAULT_MARK | 2;
 /// [`FAULT_MARK`] for an HSE that did not become ready at start-up.
 pub const MARK_HSE: u32 = FAULT_MARK | 3;
+/// Added to the mark from the fault path's second step until its FDCAN step has ended
+/// cleanly (`crate::safe_state`): a reset that finds it (the handler's, or the watchdog's
+/// after a lock-up) reads as [`ResetReason::NestedFault`].
+pub const MARK_UNFINISHED: u32 = 0x0100;
+
+/// `mark` is one of the fault path's marks with [`MARK_UNFINISHED`].
+const fn unfinished(mark: u32) -> bool {
+    let cause = mark & !MARK_UNFINISHED;
+    mark & MARK_UNFINISHED != 0 && (cause == MARK_FAULT || cause == MARK_CLOCK || cause == MARK_HSE)
+}
 
 impl ResetReason {
     /// Every reason, in the order of its code (the `reset` value table of `LINK` in
     /// host-sim/can/walking.dbc is checked against it).
-    pub const ALL: [ResetReason; 11] = [
+    pub const ALL: [ResetReason; 12] = [
         Self::Unknown,
         Self::PowerOn,
         Self::Pin,
@@ -75,15 +91,20 @@ impl ResetReason {
         Self::ClockFailure,
         Self::LowPower,
         Self::HseNotReady,
+        Self::NestedFault,
     ];
 
     /// The reason from `RCC_RSR` and the fault handler's `mark` (the no-init word, garbage
     /// after a power-on). The watchdogs come first (a pin reset flag accompanies every reset
     /// on the STM32H7: the reset circuit drives NRST), then a software reset marked by the
-    /// fault handler, power-on, brown-out, software, pin.
+    /// fault handler, power-on, brown-out, software, pin. A watchdog or software reset whose
+    /// mark says the fault path did not finish its FDCAN step is a nested fault.
     pub fn decode(rsr: u32, mark: u32) -> Self {
         use rsr::*;
-        if rsr & IWDG1RSTF != 0 {
+        let nested = unfinished(mark) && rsr & (PORRSTF | BORRSTF) == 0;
+        if rsr & (IWDG1RSTF | SFTRSTF) != 0 && nested {
+            Self::NestedFault
+        } else if rsr & IWDG1RSTF != 0 {
             Self::IndependentWatchdog
         } else if rsr & WWDG1RSTF != 0 {
             Self::WindowWatchdog
@@ -132,6 +153,35 @@ mod tests {
             (WWDG1RSTF | PINRSTF, 0, ResetReason::WindowWatchdog),
             (LPWRRSTF | PINRSTF, 0, ResetReason::LowPower),
             (0, 0, ResetReason::Unknown),
+            // The fault path did not end its FDCAN step: locked up (the watchdog) or a bus
+            // fault there seen and ignored (the handler's reset).
+            (
+                IWDG1RSTF | PINRSTF,
+                MARK_FAULT | MARK_UNFINISHED,
+                ResetReason::NestedFault,
+            ),
+            (
+                IWDG1RSTF | PINRSTF,
+                MARK_CLOCK | MARK_UNFINISHED,
+                ResetReason::NestedFault,
+            ),
+            (
+                SFTRSTF | PINRSTF,
+                MARK_FAULT | MARK_UNFINISHED,
+                ResetReason::NestedFault,
+            ),
+            // The flag on anything but a fault mark is not one; a pin reset stays a pin reset.
+            (
+                IWDG1RSTF | PINRSTF,
+                MARK_UNFINISHED,
+                ResetReason::IndependentWatchdog,
+            ),
+            (
+                IWDG1RSTF | PINRSTF,
+                0x1234_0101,
+                ResetReason::IndependentWatchdog,
+            ),
+            (PINRSTF, MARK_FAULT | MARK_UNFINISHED, ResetReason::Pin),
         ];
         for (rsr, mark, want) in cases {
             assert_eq!(

@@ -732,35 +732,53 @@ fn overflow_bus_off_and_silence_over_the_registers() {
     node.poll(5, &mut l);
     assert_eq!(node.counters().bus_errors, 1);
     // Bus-off: the core sets INIT itself; the adapter cancels the pending dedicated buffers
-    // (stream frames) and, after the back-off, clears INIT (a CCCR write that changes no
-    // protected bit); the ACKs stay in the TX FIFO (buffers 16 … 31).
+    // (stream frames), copies the ACKs owed in the TX FIFO (buffers 16 … 31) and listens in
+    // bus monitoring (configuration mode resets TXBRP): the ACKs wait in software.
     let dedicated = (1u32 << TX_SLOTS) - 1;
     assert_ne!(
         model(&l).st().pending() & dedicated,
         0,
         "frames wait in the TX buffers"
     );
-    assert_ne!(model(&l).st().pending() & !dedicated, 0, "ACKs in the FIFO");
-    let acks_waiting = model(&l).st().pending() & !dedicated;
+    let acks_waiting = (model(&l).st().pending() & !dedicated).count_ones() as usize;
+    assert_ne!(acks_waiting, 0, "ACKs in the FIFO");
     model(&l).st().bus_off();
     assert_eq!(l.peripheral().protocol_status() & psr::BO, psr::BO);
     l.service();
     assert_eq!(l.health().state, BusState::BusOff);
-    assert_eq!(model(&l).st().pending(), acks_waiting);
-    // The back-off (one cycle the first time), then recovery.
-    model(&l).st().settle();
-    assert!(model(&l).st().in_init(), "backing off");
-    l.cycle();
+    assert!(l.listening());
+    assert_eq!(model(&l).st().pending(), 0);
+    assert_eq!(l.tx_waiting(), acks_waiting);
+    // The recovery (129 × 11 recessive bits) runs during the back-off (one cycle the first
+    // time); bus-off is published throughout.
     model(&l).st().settle();
     assert!(!model(&l).st().in_init(), "recovery started");
+    model(&l).st().idle_bits(regmodel::RECOVERY_BITS - 1);
+    l.service();
+    assert!(model(&l).st().recovering());
+    model(&l).st().idle_bits(1);
+    l.service();
+    assert!(!model(&l).st().recovering());
+    assert_eq!(l.health().state, BusState::BusOff, "backing off, listening");
+    l.cycle();
+    model(&l).st().settle();
+    assert!(!model(&l).st().monitoring() && !model(&l).st().in_init());
     l.service();
     assert_eq!(l.health().bus_offs, 1);
     assert_eq!(l.health().state, BusState::Active);
+    assert_eq!(l.tx_waiting(), 0, "the owed ACKs back in the TX FIFO");
+    assert_eq!(
+        (model(&l).st().pending() & !dedicated).count_ones() as usize,
+        acks_waiting
+    );
     // The fault path: off the bus, every request cancelled, nothing sent.
     model(&l).st().arrive(heartbeat(1)); // answered: a frame waits in a TX buffer
     node.poll(10, &mut l);
     assert_ne!(model(&l).st().pending(), 0);
-    fdcan::silence(l.peripheral_mut().regs_mut());
+    assert!(
+        fdcan::silence(l.peripheral_mut().regs_mut()),
+        "ENDN answered"
+    );
     model(&l).st().settle();
     assert!(model(&l).st().in_init());
     assert_eq!(model(&l).st().pending(), 0);
@@ -910,16 +928,34 @@ fn the_tx_fifo_follows_its_put_index_and_full_flag() {
 
 // --- bus-off back-off and message RAM access failures ---
 
-/// Control cycles (`Link::cycle`, with services between) until the core re-joins the bus
-/// after a bus-off; `None` if it has not within 1,000.
+/// Bit times of a 5 ms control cycle at 1 Mbit/s.
+const CYCLE_BITS: u32 = 5_000;
+
+/// One control cycle of a quiet bus: the cycle's bus time with services between (the loop's
+/// wait), then `Link::cycle` and a service.
+fn quiet_cycle(l: &mut ModelLink) {
+    for _ in 0..4 {
+        model(l).st().idle_bits(CYCLE_BITS / 4);
+        l.service();
+    }
+    l.cycle();
+    l.service();
+}
+
+/// The core takes part in the bus as a sender: on the bus, not monitoring (a pending `INIT`
+/// change applied).
+fn sending(l: &ModelLink) -> bool {
+    let mut s = model(l).st();
+    s.settle();
+    s.on_bus() && !s.monitoring()
+}
+
+/// Control cycles ([`quiet_cycle`]) until the core sends again after a bus-off; `None` if it
+/// has not within 1,000.
 fn cycles_to_rejoin(l: &mut ModelLink) -> Option<u32> {
-    let joins = model(l).st().joins;
     for k in 1..=1000 {
-        l.cycle();
-        for _ in 0..4 {
-            l.service();
-        }
-        if model(l).st().joins > joins {
+        quiet_cycle(l);
+        if sending(l) {
             return Some(k);
         }
     }
@@ -951,16 +987,14 @@ fn bus_off_recovery_backs_off_doubling_to_a_cap_and_resets_after_a_quiet_stretch
     assert_eq!(l.health().bus_offs, 9);
     // Error-active on the bus for a while, but not long enough: the back-off stays.
     for _ in 0..BACKOFF_RESET_CYCLES - 2 {
-        l.cycle();
-        l.service();
+        quiet_cycle(&mut l);
     }
     model(&l).st().bus_off();
     l.service();
     assert_eq!(cycles_to_rejoin(&mut l), Some(64));
     // A whole quiet stretch: back to 1 cycle (and published as none meanwhile).
     for _ in 0..BACKOFF_RESET_CYCLES {
-        l.cycle();
-        l.service();
+        quiet_cycle(&mut l);
     }
     assert_eq!(l.health().backoff, 0);
     model(&l).st().bus_off();

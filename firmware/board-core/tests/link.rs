@@ -273,8 +273,10 @@ fn a_node_keeps_publishing_through_a_bus_off() {
     let hw = link.peripheral_mut();
     hw.psr = psr::BO;
     hw.init = true;
-    // 10 cycles off the bus: nothing sent, the software queue stays bounded by replacement.
+    // 10 cycles off the bus (the back-off, then a recovery that lasts): nothing sent, the
+    // software queue stays bounded by replacement.
     for k in 20..30 {
+        link.cycle();
         node.poll(5 * k, &mut link);
         link.service();
         assert!(link.tx_waiting() <= 8, "cycle {k}: {}", link.tx_waiting());

@@ -9,15 +9,26 @@
 //! pins and registers ([`BoardSafeState`]), in this order: PD1 (FDCAN1 TX) taken from the
 //! FDCAN as a GPIO push-pull output driven recessive (high), which silences the node even
 //! when the FDCAN's kernel clock is gone (a clock-security failure stops PLL1Q, and `INIT` or
-//! `TXBCR` writes then never take effect); a mark in a no-init RAM word saying why; the fault
-//! pin (PB14 = LD3, red, on the NUCLEO-H743ZI2) high; only then FDCAN1 into its
-//! initialisation state with every pending TX buffer cancelled (should that access fault
-//! again, the output, the mark and the pin are already set); then a system reset at once (no
+//! `TXBCR` writes then never take effect); a mark in a no-init RAM word saying why, flagged
+//! "unfinished"; the fault pin (PB14 = LD3, red, on the NUCLEO-H743ZI2) high; only then
+//! FDCAN1 into its initialisation state with every pending TX buffer cancelled (should that
+//! access fault again, the output, the mark and the pin are already set), and the mark's flag
+//! cleared if that step ended cleanly; then a system reset at once (no
 //! hold: after a clock failure the core runs from the 64 MHz HSI, and a delay there would
 //! outlast the 50 ms watchdog and the reason would read "watchdog"). After the reset the mark
 //! and `RCC_RSR` give the reason the node publishes (`LINK`); the pins are back in their reset
 //! state (the fault pin low). The order is board-core's, host-tested
 //! (`board-core/tests/safe_state.rs`).
+//!
+//! **A second fault in the FDCAN step.** The step runs at fault priority (`FAULTMASK`, which
+//! the HardFault and NMI handlers have anyway) with `SCB_CCR.BFHFNMIGN` set: a data bus fault
+//! of its loads and stores is ignored instead of locking the core up. The step then checks
+//! the bus fault status (`CFSR.BFSR`, cleared before it) and that FDCAN1 answered (`ENDN`):
+//! if not, the mark keeps its "unfinished" flag and the reset that follows at once reads as
+//! `nested_fault`. Any other fault there (not a data access of the step) still locks the core
+//! up; the independent watchdog resets it, and the flag in the mark turns that watchdog reset
+//! into `nested_fault` too (board-core's `ResetReason::decode`). Outside the fault handlers
+//! (the off-bus state) `FAULTMASK` and `BFHFNMIGN` are restored after the step.
 //!
 //! The IWDG is not stopped: if the reset request itself failed, the watchdog resets the MCU.
 //!
@@ -89,6 +100,10 @@ const AHB4ENR_GPIOB_GPIOD: u32 = (1 << 1) | (1 << 3);
 const CAN_TX_PIN: u32 = 1;
 /// PB14: the fault pin.
 const FAULT_PIN: u32 = 14;
+/// `SCB_CCR.BFHFNMIGN`: handlers at priority -1 and -2 ignore data bus faults.
+const CCR_BFHFNMIGN: u32 = 1 << 8;
+/// `SCB_CFSR`'s bus fault status (`BFSR`, bits 15:8).
+const CFSR_BFSR: u32 = 0xFF00;
 
 /// Makes pin `n` of `port` a push-pull output driven high: the level first (`BSRR`), then the
 /// output type and the mode, so that it is high from the moment it is an output.
@@ -136,8 +151,35 @@ impl SafeStateHw for BoardSafeState {
         drive_high(unsafe { &*pac::GPIOB::ptr() }, FAULT_PIN);
     }
 
-    fn silence_fdcan(&mut self) {
-        fdcan1::silence();
+    fn silence_fdcan(&mut self) -> bool {
+        let was_masked = cortex_m::register::faultmask::read().is_active();
+        // SAFETY: the System Control Block's CCR and CFSR at their fixed address. CCR gets
+        // BFHFNMIGN set (a data bus fault at priority -1 or -2 is ignored, not a lock-up);
+        // CFSR's bus fault bits are write-1-to-clear (cleared so that only this step's count).
+        // `cpsid f` raises the priority to -1 (HardFault's: a panic or an unexpected interrupt
+        // comes here at thread or interrupt priority); ignored in the NMI, already at -2.
+        let scb = unsafe { &*cortex_m::peripheral::SCB::PTR };
+        let ccr = scb.ccr.read();
+        unsafe {
+            scb.ccr.write(ccr | CCR_BFHFNMIGN);
+            scb.cfsr.write(CFSR_BFSR);
+            core::arch::asm!("cpsid f", options(nomem, nostack, preserves_flags));
+        }
+        cortex_m::asm::dsb();
+        cortex_m::asm::isb();
+        let answered = fdcan1::silence();
+        // Buffered writes complete: an imprecise bus fault of the step is recorded by now.
+        cortex_m::asm::dsb();
+        let faulted = scb.cfsr.read() & CFSR_BFSR != 0;
+        if !was_masked {
+            // SAFETY: back to the priority and the CCR this code was entered with (the
+            // off-bus state, which goes on running).
+            unsafe {
+                core::arch::asm!("cpsie f", options(nomem, nostack, preserves_flags));
+                scb.ccr.write(ccr);
+            }
+        }
+        answered && !faulted
     }
 
     fn reset(&mut self) -> ! {

@@ -73,9 +73,10 @@ pub fn bring_up(_fdcan1: pac::FDCAN1, timing: &BitTiming) -> Result<(), BringUpE
 
 /// Stops FDCAN1 sending (the safe state's FDCAN step, after PD1 was taken as a recessive
 /// GPIO): the core is asked into its initialisation state and every pending TX buffer is
-/// cancelled. Takes effect only while FDCAN1's clocks run.
-pub fn silence() {
-    fdcan::silence(&mut Fdcan1Regs { _private: () });
+/// cancelled. Takes effect only while FDCAN1's clocks run. `true` if the register block
+/// answered (`ENDN` read back).
+pub fn silence() -> bool {
+    fdcan::silence(&mut Fdcan1Regs { _private: () })
 }
 
 /// FDCAN1 in normal operation after [`bring_up`]: board-core's `RegFdcan` over its
@@ -125,5 +126,14 @@ impl Fdcan for Fdcan1 {
     }
     fn take_ram_failure(&mut self) -> bool {
         self.0.take_ram_failure()
+    }
+    fn enter_init(&mut self) -> bool {
+        self.0.enter_init()
+    }
+    fn restart(&mut self, monitoring: bool) -> bool {
+        self.0.restart(monitoring)
+    }
+    fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
+        self.0.tx_fifo_owed(k)
     }
 }

@@ -1,7 +1,7 @@
 //! Start-up register accesses the HAL does not offer: the brown-out level (an option byte,
 //! with the no-init word that remembers a failed change), the clock security system, the
 //! free-running microsecond counter on TIM2, the IWDG's freeze while a debugger halts the
-//! core, and the MPU guard below the stack.
+//! core, and the MPU regions (the guard below the stack, the external-memory background region).
 
 #![allow(unsafe_code)]
 
@@ -197,6 +197,25 @@ extern "C" {
     static _stack_end: u32;
 }
 
+/// MPU region 1: board-core's [`ExternalMemoryGuard`](board_core::ExternalMemoryGuard), the
+/// external-memory space 0x6000_0000-0xDFFF_FFFF (FMC, QUADSPI: nothing there on this board)
+/// strongly ordered and inaccessible, so the Cortex-M7 never reads there speculatively (the
+/// default map makes part of it Normal memory); the MPU on, the default map elsewhere.
+pub fn guard_external_memory(mpu: &mut cortex_m::peripheral::MPU) {
+    let guard = board_core::ExternalMemoryGuard::new();
+    // SAFETY: the MPU's own registers through the owned peripheral; region 1 is otherwise
+    // unused, and the addresses it closes hold nothing of the image's (no FMC or QUADSPI
+    // memory is configured); the barriers make the map apply to what follows.
+    unsafe {
+        mpu.rnr.write(1);
+        mpu.rbar.write(guard.rbar);
+        mpu.rasr.write(guard.rasr);
+        mpu.ctrl.write(board_core::StackGuard::CTRL);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
+}
+
 /// Makes the 64 KiB below the stack region inaccessible (board-core's
 /// [`StackGuard`](board_core::StackGuard), MPU region 0, the default map elsewhere): a stack
 /// overflow then faults precisely on its first store below 0x2000_0000 (MemManage, escalated to
@@ -209,7 +228,8 @@ pub fn guard_below_stack(mpu: &mut cortex_m::peripheral::MPU) -> bool {
         return false;
     };
     // SAFETY: the MPU's own registers through the owned peripheral; region 0 is otherwise
-    // unused (neither the HAL nor this image programs the MPU), only the 64 KiB below the
+    // unused (the HAL does not program the MPU; this image's other region, 1, does not
+    // overlap it), only the 64 KiB below the
     // stack region (reserved addresses, nothing of the image's) become inaccessible, and the
     // barriers make the map apply to what follows.
     unsafe {

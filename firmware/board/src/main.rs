@@ -166,6 +166,8 @@ fn main() -> ! {
         panic!("device peripherals taken twice");
     };
 
+    // No speculative reads of the external-memory space (no memory behind the FMC).
+    hw::guard_external_memory(&mut cp.MPU);
     // Nothing accessible below the stack: an overflow faults at once, into the safe state.
     let guarded = hw::guard_below_stack(&mut cp.MPU);
     // Why we started (before anything can reset again). After a power-on or a brown-out every

@@ -185,8 +185,8 @@ extern "C" fn hard_fault(sp: u32) -> ! {
 
 /// The safe state's steps on the QEMU image: the MPS2 board has no CAN, no fault pin and no
 /// reset mark, so each step prints what it stands for (`SAFE step=tx_recessive`,
-/// `SAFE step=mark mark=0x…`, `SAFE step=fault_pin`, `SAFE step=fdcan`, `SAFE step=reset`), in
-/// the order board-core calls them; the reset ends the run with exit code 1.
+/// `SAFE step=mark mark=0x…`, `SAFE step=fault_pin`, `SAFE step=fdcan`, the mark again
+/// without its "unfinished" flag, `SAFE step=reset`), in the order board-core calls them; the reset ends the run with exit code 1.
 /// `tests/tests/qemu.rs` checks the order after a stack overflow.
 struct QemuSafeState;
 
@@ -200,8 +200,9 @@ impl board_core::safe_state::SafeStateHw for QemuSafeState {
     fn raise_fault_pin(&mut self) {
         cortex_m_semihosting::hprintln!("SAFE step=fault_pin");
     }
-    fn silence_fdcan(&mut self) {
+    fn silence_fdcan(&mut self) -> bool {
         cortex_m_semihosting::hprintln!("SAFE step=fdcan");
+        true
     }
     fn reset(&mut self) -> ! {
         cortex_m_semihosting::hprintln!("SAFE step=reset");

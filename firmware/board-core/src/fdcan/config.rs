@@ -50,9 +50,7 @@ impl BitTiming {
     }
 }
 
-/// Elements of RX FIFO1, which receives only `ESTOP` (read before everything else at every
-/// receive: more `ESTOP`s than the node takes in a cycle).
-pub const RX1_ELEMENTS: usize = 16;
+pub use crate::link::RX1_ELEMENTS;
 
 /// The message RAM layout, in words of FDCAN1's part (from 0x4000_AC00), all elements with
 /// 8-byte data fields (4 words):
@@ -203,9 +201,10 @@ impl BringUpError {
     }
 }
 
-/// Waits (bounded) until `CCCR.INIT` reads `set`. Not inlined: one copy for both waits.
+/// Waits (bounded, [`INIT_WAIT_READS`]) until `CCCR.INIT` reads `set`. Not inlined: one copy
+/// for every wait.
 #[inline(never)]
-fn wait_init<R: FdcanRegs>(regs: &R, set: bool) -> bool {
+pub(crate) fn wait_init<R: FdcanRegs>(regs: &R, set: bool) -> bool {
     let want = if set { cccr::INIT } else { 0 };
     let mut reads = INIT_WAIT_READS;
     while reads > 0 {
@@ -294,9 +293,12 @@ pub fn join<R: FdcanRegs>(regs: &mut R) -> Result<(), BringUpError> {
 
 /// Takes the core off the bus at once: `INIT` requested (the output recessive, no error
 /// frames) and every TX buffer's request cancelled. Needs no configuration mode; works in any
-/// state (the fault handler's path).
-pub fn silence<R: FdcanRegs>(regs: &mut R) {
+/// state (the fault handler's path). `true` if the register block answered: `ENDN` read
+/// back its fixed value (it needs no kernel clock; an access that faulted, ignored at fault
+/// priority, reads otherwise).
+pub fn silence<R: FdcanRegs>(regs: &mut R) -> bool {
     let c = regs.read(Reg::Cccr) & !cccr::CSA;
     regs.write(Reg::Cccr, c | cccr::INIT);
     regs.write(Reg::Txbcr, u32::MAX);
+    regs.read(Reg::Endn) == ENDN_VALUE
 }

@@ -186,6 +186,10 @@ pub mod txfqs {
     pub const fn free(status: u32) -> u32 {
         status & 0x3F
     }
+    /// TX FIFO get index (bits 12:8): the buffer index of the oldest element.
+    pub const fn get(status: u32) -> u32 {
+        (status >> 8) & 0x1F
+    }
     /// TX FIFO put index (bits 20:16): the buffer index the next element goes into.
     pub const fn put(status: u32) -> u32 {
         (status >> 16) & 0x1F

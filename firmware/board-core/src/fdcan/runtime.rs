@@ -1,7 +1,7 @@
 //! The run-time accesses of the link adapter ([`crate::link::Fdcan`]) over the registers and
 //! message RAM of a configured FDCAN ([`RegFdcan`]), in the layout of [`super::layout`].
 
-use super::config::{layout, RX1_ELEMENTS};
+use super::config::{layout, wait_init, RX1_ELEMENTS};
 use super::regs::{cccr, ir, rxfs, txfqs, FdcanRegs, Reg};
 use crate::link::{Fdcan, RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 
@@ -138,5 +138,59 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
         // Only INIT changes (the protected bits are written back as they are).
         let c = self.regs.read(Reg::Cccr) & !(cccr::INIT | cccr::CCE | cccr::CSA);
         self.regs.write(Reg::Cccr, c);
+    }
+
+    #[inline(never)]
+    fn enter_init(&mut self) -> bool {
+        // Only INIT changes (a clock stop request is withdrawn); the write crosses into the
+        // CAN clock domain: wait, bounded, until it shows.
+        let c = self.regs.read(Reg::Cccr) & !(cccr::CSA | cccr::CSR);
+        self.regs.write(Reg::Cccr, c | cccr::INIT);
+        wait_init(&self.regs, true)
+    }
+
+    #[inline(never)]
+    fn restart(&mut self, monitoring: bool) -> bool {
+        let c = self.regs.read(Reg::Cccr) & !(cccr::CSA | cccr::CSR);
+        if c & cccr::INIT == 0 {
+            return false;
+        }
+        // CCE (INIT reads set): RXF0S, RXF1S, TXFQS, TXBRP, … are reset from here on.
+        self.regs.write(Reg::Cccr, c | cccr::CCE);
+        let c = self.regs.read(Reg::Cccr) & !(cccr::CSA | cccr::CSR);
+        if c & cccr::CCE == 0 {
+            return false;
+        }
+        let mon = if monitoring { cccr::MON } else { 0 };
+        self.regs.write(Reg::Cccr, (c & !cccr::MON) | mon);
+        if self.regs.read(Reg::Cccr) & cccr::MON != mon {
+            // Not in the mode asked for: stay off the bus (the caller's fallback).
+            return true;
+        }
+        // INIT (and CCE with it) cleared, MON kept.
+        self.regs
+            .write(Reg::Cccr, (c & !(cccr::MON | cccr::INIT | cccr::CCE)) | mon);
+        true
+    }
+
+    #[inline(never)]
+    fn tx_fifo_owed(&self, k: usize) -> Option<[u32; 4]> {
+        let first = TX_SLOTS as u32;
+        let size = TX_FIFO as u32;
+        let k = u32::try_from(k).ok().filter(|k| *k < size)?;
+        // The get index is a FIFO buffer in hardware; anything else: nothing owed.
+        let off = txfqs::get(self.regs.read(Reg::Txfqs))
+            .checked_sub(first)
+            .filter(|o| *o < size)?;
+        let buffer = first + (off + k) % size;
+        if self.regs.read(Reg::Txbrp) & (1 << buffer) == 0 {
+            return None;
+        }
+        let base = layout::TX_BUFFERS + layout::ELEMENT_WORDS * buffer;
+        let mut e = [0u32; 4];
+        for (w, v) in (base..).zip(e.iter_mut()) {
+            *v = self.regs.ram_read(w);
+        }
+        Some(e)
     }
 }

@@ -82,7 +82,9 @@ impl Verdict {
 impl State {
     /// A frame arrives on the bus: acceptance filtering (RM0433 §56.4.5), then storage.
     pub fn arrive(&mut self, f: BusFrame) -> Verdict {
-        let v = if self.in_init() {
+        // In INIT, or bus-off (its recovery included), the core takes no part in the bus; in
+        // bus monitoring it receives as in normal operation.
+        let v = if !self.on_bus() {
             Verdict::NotOnBus
         } else {
             match self.filter(&f) {
@@ -282,6 +284,17 @@ impl State {
     }
 
     pub(super) fn tx_add(&mut self, v: u32) {
+        if self.monitoring() {
+            // Bus monitoring: TXBRP is held in reset (RM0433 FDCAN "Bus monitoring mode"):
+            // the request is dropped.
+            if v != 0 {
+                self.violations.push(Violation::RequestIgnored {
+                    bits: v,
+                    cccr: self.regs[idx(CCCR)],
+                });
+            }
+            return;
+        }
         let cfg = self.tx_configured();
         if v & !cfg != 0 {
             self.violations
@@ -333,7 +346,8 @@ impl State {
     }
 
     /// The bus carries up to `n` pending frames, highest priority first; none while the core
-    /// is in `INIT`, bus-off or restricted operation (`CCCR.ASM`). Returns how many. RM0433 §56.4.13/14: the candidates are the
+    /// is in `INIT`, bus-off, restricted operation (`CCCR.ASM`) or bus monitoring
+    /// (`CCCR.MON`). Returns how many. RM0433 §56.4.13/14: the candidates are the
     /// pending dedicated buffers and the TX FIFO's element at its get index (the FIFO's
     /// elements leave in put order); among them the lowest identifier wins, then the lowest
     /// buffer number.
@@ -343,8 +357,8 @@ impl State {
         let ew = element_words(self.regs[idx(TXESC)]);
         let (ndtb, tfqs, _) = self.txbc_fields();
         let mut sent = 0;
-        // Restricted operation (ASM): no data frames sent.
-        let restricted = self.regs[idx(CCCR)] & CCCR_ASM != 0;
+        // Restricted operation (ASM) and bus monitoring (MON): no data frames sent.
+        let restricted = self.regs[idx(CCCR)] & (CCCR_ASM | CCCR_MON) != 0;
         while sent < n
             && !restricted
             && !self.in_init()

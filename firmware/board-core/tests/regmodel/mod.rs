@@ -12,6 +12,17 @@
 //! * `IR` is write-1-to-clear; `TXBAR` sets `TXBRP` bits (only of configured buffers),
 //!   `TXBCR` cancels (at once or deferred), the bus clears `TXBRP` and sets `TXBTO`; a TX
 //!   buffer element is not written while its request is pending;
+//! * configuration mode: setting `CCE` (with `INIT`) resets `HPMS`, `RXF0S`, `RXF1S`,
+//!   `TXFQS`, `TXBRP`, `TXBTO`, `TXBCF` and `TXEFS` (the RX FIFOs read empty, every TX
+//!   request is gone); while `CCE` is set, `TXBAR` and `TXBCR` writes are ignored (a `TXBAR`
+//!   write, a frame silently not sent, is recorded);
+//! * bus monitoring (`CCCR.MON`, a protected bit: only with `INIT` and `CCE`): the core
+//!   receives but never transmits (`TXBRP` held in reset: a `TXBAR` write is ignored and
+//!   recorded);
+//! * fault confinement (`errors.rs`): `PSR.EW`/`EP` derived from injected error counters
+//!   (TEC/REC, `ECR.RP`); bus-off sets `INIT`; the recovery after `INIT` is cleared takes 129
+//!   sequences of 11 recessive bits of modelled bus time (≈1.42 ms at 1 Mbit/s), during which
+//!   the core is still bus-off, neither receives nor sends;
 //! * RX FIFOs: fill level, get and put index in `RXFnS`, `RXFnA` releases up to the index
 //!   acknowledged (which must be in the fill), blocking or overwrite mode, `IR.RFnL`;
 //! * the message RAM is FDCAN1's 1,024 words (an access beyond is recorded); leaving `INIT`
@@ -35,7 +46,10 @@ use std::cell::{RefCell, RefMut};
 use board_core::fdcan::{FdcanRegs, Reg};
 
 mod bus;
+mod errors;
 pub use bus::{BusFrame, Verdict};
+#[allow(unused_imports)] // each test binary uses a part
+pub use errors::RECOVERY_BITS;
 
 /// FDCAN1's message RAM words.
 pub const RAM_WORDS: u32 = 1024;
@@ -95,6 +109,8 @@ pub const CSA: u32 = 1 << 3;
 pub const CSR: u32 = 1 << 4;
 pub const CCCR_TEST: u32 = 1 << 7;
 pub const CCCR_ASM: u32 = 1 << 2;
+/// Bus monitoring mode.
+pub const CCCR_MON: u32 = 1 << 5;
 /// ASM, MON, DAR, TEST, FDOE, BRSE, PXHD, EFBI, TXP, NISO.
 pub const CCCR_PROTECTED: u32 = 0b1111_0011_1110_0100;
 /// The implemented CCCR bits.
@@ -112,7 +128,10 @@ pub const IR_TCF: u32 = 1 << 10;
 pub const IR_MRAF: u32 = 1 << 17;
 pub const IR_MASK: u32 = 0x3FFF_FFFF;
 
-// PSR bits.
+// PSR bits (RM0433 FDCAN_PSR): LEC 2:0, EP 5, EW 6, BO 7.
+pub const PSR_LEC: u32 = 0b111;
+pub const PSR_EP: u32 = 1 << 5;
+pub const PSR_EW: u32 = 1 << 6;
 pub const PSR_BO: u32 = 1 << 7;
 /// PSR after reset: LEC = DLEC = 7 ("no change").
 const PSR_RESET: u32 = 0x0000_0707;
@@ -188,6 +207,9 @@ pub enum Violation {
     FifoFull,
     /// The model covers the TX FIFO, not the TX queue (`TXBC.TFQM` = 1).
     QueueModeUnmodelled,
+    /// A `TXBAR` write the core ignores: in configuration mode (`CCE`) or in bus monitoring
+    /// (`MON`, `TXBRP` held in reset). The frame is never sent.
+    RequestIgnored { bits: u32, cccr: u32 },
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -240,6 +262,9 @@ pub struct State {
     pub defer_cancel: bool,
     psr: u32,
     ecr: u32,
+    /// Bus-off recovery: recessive bit times counted since `INIT` was cleared in bus-off
+    /// (`None`: no recovery running).
+    recovery: Option<u32>,
     ir: u32,
     /// Every breach, in order.
     pub violations: Vec<Violation>,
@@ -290,6 +315,7 @@ impl State {
             defer_cancel: false,
             psr: PSR_RESET,
             ecr: 0,
+            recovery: None,
             ir: 0,
             violations: Vec::new(),
             wire: Vec::new(),
@@ -336,17 +362,29 @@ impl State {
     fn apply_init(&mut self, set: bool) {
         if set {
             self.regs[idx(CCCR)] |= INIT;
+            // Back in INIT before the recovery ended: it starts again at the next clear.
+            self.recovery = None;
         } else {
-            // Clearing INIT clears CCE; the core integrates into the bus.
+            // Clearing INIT clears CCE; the core integrates into the bus (after a bus-off:
+            // once the recovery has counted its recessive bits, `errors.rs`).
             self.regs[idx(CCCR)] &= !(INIT | CCE);
             self.joins += 1;
             self.check_layout();
             if self.psr & PSR_BO != 0 {
-                // Bus-off recovery (129 x 11 recessive bits): modelled as done at once.
-                self.psr &= !PSR_BO;
-                self.ecr = 0;
+                self.recovery = Some(0);
             }
         }
+    }
+
+    /// `CCCR.MON` as the core is now.
+    pub fn monitoring(&self) -> bool {
+        self.regs[idx(CCCR)] & CCCR_MON != 0
+    }
+
+    /// The core takes part in the bus now: out of `INIT`, not bus-off (a recovery still
+    /// running counts as bus-off).
+    pub fn on_bus(&self) -> bool {
+        !self.in_init() && self.psr & PSR_BO == 0
     }
 
     /// A message RAM access failure (`IR.MRAF`): of the RX handler (an element not stored),
@@ -357,14 +395,6 @@ impl State {
         if tx {
             self.regs[idx(CCCR)] |= CCCR_ASM;
         }
-    }
-
-    /// The core goes bus-off: `PSR.BO`, TEC at its limit, `CCCR.INIT` set by the core itself.
-    pub fn bus_off(&mut self) {
-        self.psr |= PSR_BO;
-        self.ecr = 0xFF;
-        self.regs[idx(CCCR)] |= INIT;
-        self.pending_init = None;
     }
 
     fn store_masked(&mut self, offset: u32, mask: u32, value: u32) {
@@ -435,6 +465,17 @@ impl State {
             CCCR => self.write_cccr(v),
             // Write 1 to clear.
             IR => self.ir &= !(v & IR_MASK),
+            TXBAR | TXBCR if self.regs[idx(CCCR)] & CCE != 0 => {
+                // Ignored while CCE is set (RM0433 FDCAN_TXBAR / FDCAN_TXBCR descriptions);
+                // a cancellation there has nothing to cancel (TXBRP was reset with CCE), an add
+                // request is a frame lost.
+                if offset == TXBAR && v != 0 {
+                    self.violations.push(Violation::RequestIgnored {
+                        bits: v,
+                        cccr: self.regs[idx(CCCR)],
+                    });
+                }
+            }
             TXBAR => self.tx_add(v),
             TXBCR => self.tx_cancel(v),
             RXF0A => self.ack(0, v),
@@ -454,6 +495,12 @@ impl State {
 
     fn write_cccr(&mut self, v: u32) {
         let cur = self.regs[idx(CCCR)];
+        // Fault injection: bits that keep their value (a CCE that never takes resets nothing).
+        let stuck = self
+            .stuck_bits
+            .iter()
+            .filter(|(o, _)| *o == CCCR)
+            .fold(0, |m, (_, b)| m | b);
         let mut new = cur;
         // ASM (restricted operation) can be cleared by software at any time (RM0433
         // §56.5.6); setting it, like the other protected bits, needs INIT and CCE.
@@ -470,11 +517,15 @@ impl State {
             }
         }
         // CCE: set only once INIT reads set (and stays requested); clearable any time.
-        if v & CCE != 0 && cur & CCE == 0 {
+        if v & CCE != 0 && cur & CCE == 0 && stuck & CCE == 0 {
             if cur & INIT != 0 && v & INIT != 0 {
                 new |= CCE;
-                // RM0433: setting CCE resets HPMS, RXF0S, RXF1S, TXFQS, TXBRP, TXBTO, TXBCF
-                // and TXEFS.
+                // Setting CCE resets HPMS, RXF0S, RXF1S, TXFQS, TXBRP, TXBTO, TXBCF and TXEFS
+                // (RM0433, FDCAN "Software initialization"; the same list in Bosch's M_CAN
+                // user's manual, "Software Initialization"). HPMS and TXEFS read 0 in this
+                // model throughout (no high-priority filters, no TX event FIFO); the RX FIFOs'
+                // fill and indices and every TX request go: elements still in the message RAM
+                // are no longer in any FIFO.
                 self.fifo = [Fifo::default(); 2];
                 self.txbrp = 0;
                 self.txbto = 0;
@@ -511,7 +562,7 @@ impl State {
         } else {
             self.pending_init = None;
         }
-        self.regs[idx(CCCR)] = new & CCCR_MASK;
+        self.regs[idx(CCCR)] = ((cur & stuck) | (new & !stuck)) & CCCR_MASK;
     }
 
     fn check_layout(&mut self) {
