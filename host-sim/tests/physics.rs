@@ -89,6 +89,9 @@ struct Walk {
     cog_drift_max_m: f64,
     foot_drift_max_m: f64,
     simulated_s: f64,
+    walked: bool,
+    slip_max_m: f64,
+    landing_err_max_m: f64,
 }
 
 impl Walk {
@@ -102,6 +105,9 @@ impl Walk {
             cog_drift_max_m: r.cog_drift_max_m,
             foot_drift_max_m: r.foot_drift_max_m,
             simulated_s: r.simulated_s,
+            walked: r.walked(),
+            slip_max_m: r.gait.slip_max_m,
+            landing_err_max_m: r.gait.landing_err_max_m,
         }
     }
 
@@ -116,6 +122,11 @@ impl Walk {
             cog_drift_max_m: num("cog_drift_max_m"),
             foot_drift_max_m: num("foot_drift_max_m"),
             simulated_s: num("simulated_s"),
+            walked: j["walked"]
+                .as_bool()
+                .unwrap_or_else(|| panic!("walked in {j}")),
+            slip_max_m: num("slip_max_m"),
+            landing_err_max_m: num("landing_err_max_m"),
         }
     }
 }
@@ -126,6 +137,7 @@ fn assert_walked(name: &str, r: &Walk) {
     assert!(r.cop_err_mean_m < COP_MEAN_BOUND_M, "{name}: {r:?}");
     assert!(r.cop_err_max_m < COP_MAX_BOUND_M, "{name}: {r:?}");
     assert!(r.foot_drift_max_m < 0.02, "{name}: the feet slid: {r:?}");
+    assert!(r.walked, "{name}: a gait measure beyond its bound: {r:?}");
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -315,9 +327,21 @@ fn the_documents_quote_the_built_in_scenarios_as_measured() {
                 &row,
                 "foot drift",
                 &spell(&|x| mm(x), w.foot_drift_max_m, dm),
+            )
+            .cell(BOOK, &row, "walked", yes_no(w.walked))
+            .cell_any(
+                BOOK,
+                &row,
+                "slip / landing error",
+                &spell(
+                    &|x| format!("{:.1} / {}", x * 1e3, mm(w.landing_err_max_m)),
+                    w.slip_max_m,
+                    dm,
+                ),
             );
     }
     let falls = b.walks.iter().filter(|(_, w)| w.fell).count();
+    let walked = b.walks.iter().filter(|(_, w)| w.walked).count();
     let tilt = b
         .walks
         .iter()
@@ -333,7 +357,11 @@ fn the_documents_quote_the_built_in_scenarios_as_measured() {
         "README.md",
         "| the built-in scenarios in MuJoCo under the stabilizer |",
         "figure",
-        &format!("{falls} falls, tilt at most {tilt:.2}°"),
+        &format!(
+            "{walked} of {} walked (no fall; slip, flight, CoP and landings within bounds), \
+             tilt at most {tilt:.2}°",
+            b.walks.len()
+        ),
     )
     .cell(BOOK, "`physics straight --out out/t`", "engine runs", "1")
     .cell(

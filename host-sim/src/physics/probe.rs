@@ -416,7 +416,7 @@ mod tests {
             "stabilizer × 1, servo damping 600 N m s/rad, noisy sensors 7 ms late, \
              contact from the reference, gains designed for 7 ms"
         );
-        // The gains designed for the sensors' 7 ms (every feedback gain × 2 / 7), or for a
+        // The gains designed for the sensors' 7 ms (every feedback gain × 1 / 7), or for a
         // delay stated apart; the noise's seed recorded.
         let full = Gains::default();
         let k = noisy.cfg.gains.k_cog / full.k_cog;

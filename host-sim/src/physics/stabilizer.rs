@@ -113,7 +113,7 @@ impl Default for Gains {
 
 /// The largest loop delay for which the stated gains ([`Gains::default`]) are kept \[s\]:
 /// above it [`Gains::for_delay`] lowers them.
-pub const FULL_GAIN_DELAY_S: f64 = 0.002;
+pub const FULL_GAIN_DELAY_S: f64 = 0.001;
 
 /// A foot is on the ground when its sensor's vertical ground force is above this share of
 /// the robot's weight (and off it below half of it: the hysteresis keeps a touchdown from
@@ -170,10 +170,11 @@ impl Gains {
     /// Why: a feedback loop of rate `k` \[1/s\] closed through a delay `τ` loses the phase
     /// `k τ` at its crossover, so keeping `k τ` bounded keeps its phase margin. The fast loops
     /// here (the foot damping control, whose rate is the ankle's stiffness over `D`, and the
-    /// COG modification) are tuned for no delay; a delay sweep of HRP-2's `straight` walk
-    /// (the book's physics page, measured by `host-sim/tests/delay.rs`) shows the stated
-    /// gains within every bound up to τ₀ and the feet sliding beyond it, and the scaled gains
-    /// within every bound at 5 and 10 ms. The filters, return times and limits are unchanged.
+    /// COG modification) are tuned for no delay. τ₀ comes from a delay sweep of the stated
+    /// gains on HRP-2's `straight` walk (the book's physics page): every gait measure within
+    /// half its bound at 1 ms, the landing error at 90 % of its bound and the longest flight
+    /// at its bound at 2 ms, the feet sliding beyond it from 3 ms. The filters, return times
+    /// and limits are unchanged.
     pub fn for_delay(self, delay_s: f64) -> Self {
         let s = if delay_s > FULL_GAIN_DELAY_S {
             FULL_GAIN_DELAY_S / delay_s
