@@ -700,6 +700,7 @@ fn physics_faults_heavy_row() {
         assert_eq!(r["fault"], "mixed");
         assert_eq!(r["kinematic_fell"], false, "{text}");
         assert_eq!(r["fell"], false, "{text}");
+        assert_eq!(r["walked"], true, "a gait measure beyond its bound: {text}");
         assert!(r["fall_time_s"].is_null());
         let e = r["cop_err_max_m"].as_f64().expect("cop error");
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
@@ -1090,6 +1091,8 @@ fn physics_faults_every_row_long() {
             assert_eq!(r["seed"], 1);
             assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
             assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+            // No fault row makes the engine's walk slip, hop or land off.
+            assert_eq!(r["walked"], true, "{r}");
             assert_eq!(r["ended_standing"], true, "{r}");
         }
     }
