@@ -529,7 +529,8 @@ fn reduced_grid() -> Option<&'static serde_json::Value> {
 const REDUCED: [(usize, usize); 2] = [(5, 1), (1, 5)];
 
 /// `physics_tables.json` of the reduced grid: 7 × 7 `fell_plain` / `fell_proposed` with these
-/// cells filled in, the others null; under the stabilizer neither falls.
+/// cells filled in, the others null; under the stabilizer neither falls, and both walk
+/// (`walked_plain` / `walked_proposed`).
 #[test]
 fn physics_tables_reduced_grid() {
     let Some(j) = reduced_grid() else { return };
@@ -548,6 +549,13 @@ fn physics_tables_reduced_grid() {
                 }
             }
         }
+    }
+    // Both walk by the verdict (no fall; slip, flight, CoP and landings within bounds).
+    for key in ["walked_plain", "walked_proposed"] {
+        for (r, c) in REDUCED {
+            assert_eq!(j[key][r][c], serde_json::Value::Bool(true), "{key}: {text}");
+        }
+        assert!(j[key][0][0].is_null(), "{key}: {text}");
     }
     for (r, c) in REDUCED {
         let mb_plain = j["mb_zmp_error_plain_m"][r][c].as_f64().expect("mb plain");

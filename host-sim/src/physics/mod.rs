@@ -555,3 +555,67 @@ pub fn run(
     report.cop_err_max_t_s = tracking.max_t;
     Ok(PhysicsRun { report, samples })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(fell: bool, gait: gait::GaitQuality) -> PhysicsReport {
+        PhysicsReport {
+            fell,
+            fall_time_s: fell.then_some(3.0),
+            fall_cause: fell.then_some(FallCause::Tilt),
+            fell_after_end: false,
+            fall_after_end_time_s: None,
+            fall_after_end_cause: None,
+            reference_stop_s: 9.0,
+            ended_standing: true,
+            max_tilt_deg: 0.2,
+            cop_err_mean_m: 0.01,
+            cop_err_max_m: 0.03,
+            cop_err_max_t_s: 1.0,
+            cog_drift_max_m: 0.01,
+            foot_drift_max_m: 0.004,
+            simulated_s: 10.0,
+            gait,
+            engine: "3.2.7".into(),
+        }
+    }
+
+    /// A run that stayed up with a slide and a hop did not walk, and every verdict says why.
+    #[test]
+    fn verdicts_of_a_walk_a_slide_and_a_fall() {
+        let good = report(false, gait::GaitQuality::default());
+        assert!(good.walked());
+        assert_eq!(
+            (good.verdict(), good.verdict_words(), good.walked_text()),
+            ("ok".into(), "walked".into(), "yes".into())
+        );
+        let slid = report(
+            false,
+            gait::GaitQuality {
+                slip_max_m: 0.0231,
+                flight_max_s: 0.012,
+                ..Default::default()
+            },
+        );
+        assert!(!slid.walked() && !slid.fell);
+        assert_eq!(slid.verdict(), "**slip+flight**");
+        assert_eq!(slid.verdict_words(), "did not walk (slip, flight)");
+        assert_eq!(slid.walked_text(), "**no** (slip 23.1 mm, flight 12 ms)");
+        let j = serde_json::Value::Object(
+            slid.end_fields()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+        );
+        assert_eq!(j["walked"], false);
+        assert_eq!(j["gait_violations"], serde_json::json!(["slip", "flight"]));
+        let fell = report(true, gait::GaitQuality::default());
+        assert!(!fell.walked());
+        assert_eq!(
+            (fell.verdict(), fell.verdict_words()),
+            ("**fell**".into(), "fell (tilt)".into())
+        );
+    }
+}
