@@ -89,6 +89,9 @@ struct Walk {
     cog_drift_max_m: f64,
     foot_drift_max_m: f64,
     simulated_s: f64,
+    walked: bool,
+    slip_max_m: f64,
+    landing_err_max_m: f64,
 }
 
 impl Walk {
@@ -102,6 +105,9 @@ impl Walk {
             cog_drift_max_m: r.cog_drift_max_m,
             foot_drift_max_m: r.foot_drift_max_m,
             simulated_s: r.simulated_s,
+            walked: r.walked(),
+            slip_max_m: r.gait.slip_max_m,
+            landing_err_max_m: r.gait.landing_err_max_m,
         }
     }
 
@@ -116,6 +122,11 @@ impl Walk {
             cog_drift_max_m: num("cog_drift_max_m"),
             foot_drift_max_m: num("foot_drift_max_m"),
             simulated_s: num("simulated_s"),
+            walked: j["walked"]
+                .as_bool()
+                .unwrap_or_else(|| panic!("walked in {j}")),
+            slip_max_m: num("slip_max_m"),
+            landing_err_max_m: num("landing_err_max_m"),
         }
     }
 }
@@ -126,6 +137,7 @@ fn assert_walked(name: &str, r: &Walk) {
     assert!(r.cop_err_mean_m < COP_MEAN_BOUND_M, "{name}: {r:?}");
     assert!(r.cop_err_max_m < COP_MAX_BOUND_M, "{name}: {r:?}");
     assert!(r.foot_drift_max_m < 0.02, "{name}: the feet slid: {r:?}");
+    assert!(r.walked, "{name}: a gait measure beyond its bound: {r:?}");
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -315,9 +327,21 @@ fn the_documents_quote_the_built_in_scenarios_as_measured() {
                 &row,
                 "foot drift",
                 &spell(&|x| mm(x), w.foot_drift_max_m, dm),
+            )
+            .cell(BOOK, &row, "walked", yes_no(w.walked))
+            .cell_any(
+                BOOK,
+                &row,
+                "slip / landing error",
+                &spell(
+                    &|x| format!("{:.1} / {}", x * 1e3, mm(w.landing_err_max_m)),
+                    w.slip_max_m,
+                    dm,
+                ),
             );
     }
     let falls = b.walks.iter().filter(|(_, w)| w.fell).count();
+    let walked = b.walks.iter().filter(|(_, w)| w.walked).count();
     let tilt = b
         .walks
         .iter()
@@ -333,7 +357,11 @@ fn the_documents_quote_the_built_in_scenarios_as_measured() {
         "README.md",
         "| the built-in scenarios in MuJoCo under the stabilizer |",
         "figure",
-        &format!("{falls} falls, tilt at most {tilt:.2}°"),
+        &format!(
+            "{walked} of {} walked (no fall; slip, flight, CoP and landings within bounds), \
+             tilt at most {tilt:.2}°",
+            b.walks.len()
+        ),
     )
     .cell(BOOK, "`physics straight --out out/t`", "engine runs", "1")
     .cell(
@@ -501,7 +529,8 @@ fn reduced_grid() -> Option<&'static serde_json::Value> {
 const REDUCED: [(usize, usize); 2] = [(5, 1), (1, 5)];
 
 /// `physics_tables.json` of the reduced grid: 7 × 7 `fell_plain` / `fell_proposed` with these
-/// cells filled in, the others null; under the stabilizer neither falls.
+/// cells filled in, the others null; under the stabilizer neither falls, and both walk
+/// (`walked_plain` / `walked_proposed`).
 #[test]
 fn physics_tables_reduced_grid() {
     let Some(j) = reduced_grid() else { return };
@@ -520,6 +549,13 @@ fn physics_tables_reduced_grid() {
                 }
             }
         }
+    }
+    // Both walk by the verdict (no fall; slip, flight, CoP and landings within bounds).
+    for key in ["walked_plain", "walked_proposed"] {
+        for (r, c) in REDUCED {
+            assert_eq!(j[key][r][c], serde_json::Value::Bool(true), "{key}: {text}");
+        }
+        assert!(j[key][0][0].is_null(), "{key}: {text}");
     }
     for (r, c) in REDUCED {
         let mb_plain = j["mb_zmp_error_plain_m"][r][c].as_f64().expect("mb plain");
@@ -672,6 +708,7 @@ fn physics_faults_heavy_row() {
         assert_eq!(r["fault"], "mixed");
         assert_eq!(r["kinematic_fell"], false, "{text}");
         assert_eq!(r["fell"], false, "{text}");
+        assert_eq!(r["walked"], true, "a gait measure beyond its bound: {text}");
         assert!(r["fall_time_s"].is_null());
         let e = r["cop_err_max_m"].as_f64().expect("cop error");
         assert!(e > 0.0 && e < COP_MAX_BOUND_M, "{text}");
@@ -1062,6 +1099,8 @@ fn physics_faults_every_row_long() {
             assert_eq!(r["seed"], 1);
             assert!(r["fell"].is_boolean() && r["cop_err_max_m"].as_f64().is_some());
             assert_eq!(r["fell"], r["kinematic_fell"], "{r}");
+            // No fault row makes the engine's walk slip, hop or land off.
+            assert_eq!(r["walked"], true, "{r}");
             assert_eq!(r["ended_standing"], true, "{r}");
         }
     }

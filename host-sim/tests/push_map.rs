@@ -289,6 +289,7 @@ fn a_failed_cell_is_reported_not_counted() {
         bw_fraction: bw,
         steps_adjusted: 0,
         runs: 3,
+        gait: Default::default(),
         error: None,
     };
     let cause = "left ankle out of reach: 0.6980 m, reach 0.6983 m";

@@ -13,7 +13,7 @@
 #   observation: f64 time, nsensordata f64 sensordata, then the ground truth for the
 #   evaluation (never for the controller): base position (3), base quaternion w x y z (4),
 #   floor-contact CoP x y, total floor normal force, 1.0 if a geom other than the two soles
-#   touches the floor else 0.0.
+#   touches the floor else 0.0, the floor's normal force on the left sole, on the right sole.
 import struct
 import sys
 
@@ -45,10 +45,9 @@ def main():
         return
     d = mujoco.MjData(m)
     floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
-    soles = {
-        mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "l_sole"),
-        mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "r_sole"),
-    }
+    left = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "l_sole")
+    right = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "r_sole")
+    soles = {left, right}
     base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "waist")
     trunk = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "trunk")
     out.write(("OK %s %d %d %d\n" % (mujoco.__version__, m.nq, m.nu, m.nsensordata)).encode())
@@ -60,6 +59,8 @@ def main():
         px = 0.0
         py = 0.0
         other = 0.0
+        f_left = 0.0
+        f_right = 0.0
         for i in range(d.ncon):
             c = d.contact[i]
             if c.geom1 != floor and c.geom2 != floor:
@@ -71,6 +72,10 @@ def main():
             # Normal force along the contact frame's first axis (the floor normal, +z).
             fz = f6[0] * abs(c.frame[2])
             fz_sum += fz
+            if g == left:
+                f_left += fz
+            elif g == right:
+                f_right += fz
             px += fz * c.pos[0]
             py += fz * c.pos[1]
         if fz_sum > 1e-9:
@@ -81,7 +86,7 @@ def main():
             py = float("nan")
         head = np.array([d.time])
         truth = np.concatenate(
-            [d.xpos[base], d.xquat[base], [px, py, fz_sum, other]]
+            [d.xpos[base], d.xquat[base], [px, py, fz_sum, other, f_left, f_right]]
         )
         out.write(head.astype("<f8").tobytes())
         out.write(np.asarray(d.sensordata, dtype="<f8").tobytes())

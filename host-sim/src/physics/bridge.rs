@@ -74,6 +74,8 @@ pub struct Observation {
     pub normal_force: f64,
     /// Ground truth: a geom other than the two soles touches the floor.
     pub other_contact: bool,
+    /// Ground truth: the floor's normal force on the left and the right sole \[N\].
+    pub sole_force: [f64; 2],
 }
 
 /// A running MuJoCo engine behind the bridge.
@@ -188,7 +190,7 @@ impl Engine {
     }
 
     fn observe(&mut self) -> Result<Observation, String> {
-        let n = 1 + self.nsensor + 11;
+        let n = 1 + self.nsensor + 13;
         let mut buf = vec![0u8; 8 * n];
         self.stdout.read_exact(&mut buf).map_err(|e| {
             format!("MuJoCo bridge ended: {e} (see the Python error above, if any)")
@@ -206,6 +208,7 @@ impl Engine {
             cop: [t[7], t[8]],
             normal_force: t[9],
             other_contact: t[10] != 0.0,
+            sole_force: [t[11], t[12]],
         })
     }
 

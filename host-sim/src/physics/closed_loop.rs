@@ -37,8 +37,10 @@ use planner_core::wire::{Adjust, ControlOp, Measured, RawFrame, Session, StepBoo
 
 use super::bridge::Engine;
 use super::metrics::{fall_check, fall_counts};
+use super::model::sensor;
 use super::stabilizer::Stabilizer;
-use super::{initial_pose, reference_at, PhysicsConfig, PHYSICS_DT};
+use super::{initial_pose, quat_to_mat, reference_at, PhysicsConfig, PHYSICS_DT};
+use crate::robot::model::Pose;
 use crate::scenario::wire::Controller;
 
 /// How the node may change the steps.
@@ -185,6 +187,16 @@ pub struct ClosedOutcome {
     /// Every control cycle of the walk: time from the first command \[s\], the measured DCM
     /// deviation sent \[m\], and the node's shift \[m\].
     pub trace: Vec<(f64, [f64; 2], [f64; 2])>,
+    /// Slip, flight, the CoP outside the support polygon and the landing error from the first
+    /// command to the end of the run ([`super::gait`]).
+    pub gait: super::gait::GaitQuality,
+}
+
+impl ClosedOutcome {
+    /// The robot walked: no fall and the gait within its bounds ([`super::gait`]).
+    pub fn walked(&self) -> bool {
+        !self.fell && self.gait.within_bounds()
+    }
 }
 
 /// An in-memory CAN device between the loop and the node.
@@ -264,6 +276,10 @@ pub fn run(
     let (waist0, qpos) = initial_pose(&robot, &r0)?;
     let mut obs = engine.reset(&qpos)?;
     let mut sensed = super::sensors::Sensors::new(cfg.sensors);
+    let mut monitor = super::gait::GaitMonitor::new(
+        robot.total_mass() * robot.gravity(),
+        [robot.sole_half()[0], robot.sole_half()[1]],
+    );
 
     let settle_cycles = (cfg.settle_s / (f64::from(CYCLE_MS) * 1e-3)).round() as u32;
     let tail_cycles = (cfg.tail_s / (f64::from(CYCLE_MS) * 1e-3)).round() as u32;
@@ -391,6 +407,28 @@ pub fn run(
                 }
             }
             obs = engine.step(1, &ctrl, wrench)?;
+            if t_walk.is_some() {
+                let mut q = [[0.0; 6]; 2];
+                for (i, leg) in q.iter_mut().enumerate() {
+                    leg.copy_from_slice(
+                        &obs.sensors[sensor::QPOS + 6 * i..sensor::QPOS + 6 * i + 6],
+                    );
+                }
+                let base = Pose {
+                    p: obs.base_pos,
+                    r: quat_to_mat(obs.base_quat),
+                };
+                let (soles, _, _) = robot.fk(&base, &q);
+                monitor.push(&super::gait::GaitSample {
+                    dt: PHYSICS_DT,
+                    feet_ref: r.feet,
+                    soles,
+                    sole_force: obs.sole_force,
+                    normal_force: obs.normal_force,
+                    cop: obs.cop,
+                });
+                out.gait = monitor.quality();
+            }
             if let Some(cause) = fall_check(
                 obs.base_quat,
                 obs.base_pos[2],

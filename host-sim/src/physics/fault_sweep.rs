@@ -194,7 +194,7 @@ pub fn json(runs: &[FaultRun]) -> Value {
 /// The runs as a Markdown table (the scenario named with its walk when it adjusts).
 pub fn markdown(runs: &[FaultRun]) -> String {
     let mut md = String::from(
-        "| fault | rate | scenario | kinematic fall | engine: fell | max tilt (°) | CoP error mean / worst (mm) |\n|---|---|---|---|---|---|---|\n",
+        "| fault | rate | scenario | kinematic fall | engine: fell | engine: walked | max tilt (°) | CoP error mean / worst (mm) | slip (mm) |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in runs {
         let scenario = match r.walk {
@@ -202,15 +202,17 @@ pub fn markdown(runs: &[FaultRun]) -> String {
             Walk::Adjusting => format!("{} (adjusting, {} adjustments)", r.scenario, r.adjustments),
         };
         md += &format!(
-            "| {} | {} | {} | {} | {} | {:.2} | {:.1} / {:.1} |\n",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.1} / {:.1} | {:.1} |\n",
             r.kind.name(),
             r.kind.rate_label(r.rate),
             scenario,
             if r.kinematic_fell { "yes" } else { "no" },
             r.report.fell_text(),
+            r.report.walked_text(),
             r.report.max_tilt_deg,
             r.report.cop_err_mean_m * 1e3,
-            r.report.cop_err_max_m * 1e3
+            r.report.cop_err_max_m * 1e3,
+            r.report.gait.slip_max_m * 1e3
         );
     }
     md

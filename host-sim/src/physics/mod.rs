@@ -7,6 +7,8 @@
 //! * [`stabilizer`]: the DCM/ZMP stabilizer between the pattern and the servos (Kajita et al.
 //!   2010), fed with the simulated sensors only;
 //! * [`metrics`]: the definitions of a fall and of the CoP tracking;
+//! * [`gait`]: what "walked" means besides no fall: slip, flight, the CoP outside the support
+//!   polygon and the landing error, each within a stated bound;
 //! * [`output`]: the `physics` command and its files (`physics.json` …);
 //! * [`tables`]: the paper's Tables I and II in the engine (`physics-tables`);
 //! * [`fault_sweep`]: the fault sweep's rows in the engine (`physics-faults`);
@@ -36,6 +38,7 @@
 pub mod bridge;
 pub mod closed_loop;
 pub mod fault_sweep;
+pub mod gait;
 pub mod metrics;
 pub mod model;
 pub mod output;
@@ -179,6 +182,8 @@ pub struct PhysicsReport {
     pub foot_drift_max_m: f64,
     /// Simulated trajectory time \[s\].
     pub simulated_s: f64,
+    /// Slip, flight, the CoP outside the support polygon and the landing error ([`gait`]).
+    pub gait: gait::GaitQuality,
     /// The MuJoCo version.
     pub engine: String,
 }
@@ -191,14 +196,53 @@ pub const AFTER_END_NOTE: &str =
     "†: fell more than 1 s (`SETTLE_AFTER_S`) after the reference stopped: not counted as a fall";
 
 impl PhysicsReport {
-    /// The verdict as the tables write it: `**fell**`, `ok`, or `ok†` for a fall after the end.
+    /// The robot walked: no fall and every gait measure within its bound ([`gait`]).
+    pub fn walked(&self) -> bool {
+        !self.fell && self.gait.within_bounds()
+    }
+
+    /// The verdict as the tables write it: `**fell**`; `**slip**`, `**flight**`, `**cop**`,
+    /// `**landing**` (joined by `+`) for a run that stayed up with a gait measure beyond its
+    /// bound; `ok` for a walk, `ok†` for a walk followed by a fall after the end.
     pub fn verdict(&self) -> String {
         if self.fell {
             "**fell**".into()
+        } else if !self.gait.within_bounds() {
+            format!("**{}**", self.gait_short())
         } else if self.fell_after_end {
             format!("ok{AFTER_END_MARK}")
         } else {
             "ok".into()
+        }
+    }
+
+    /// The gait measures beyond their bounds in short: `slip+flight` (empty within bounds).
+    pub fn gait_short(&self) -> String {
+        let q = &self.gait;
+        let mut v = Vec::new();
+        if q.slip_max_m > gait::SLIP_MAX_M {
+            v.push("slip");
+        }
+        if q.flight_max_s > gait::FLIGHT_MAX_S + 1e-9 {
+            v.push("flight");
+        }
+        if q.cop_outside_max_s > gait::COP_OUTSIDE_MAX_S + 1e-9 {
+            v.push("cop");
+        }
+        if q.landing_err_max_m > gait::LANDING_MAX_M {
+            v.push("landing");
+        }
+        v.join("+")
+    }
+
+    /// The verdict in words: `walked`, `fell (tilt)`, `did not walk (slip, flight)`.
+    pub fn verdict_words(&self) -> String {
+        if self.fell {
+            format!("fell ({})", self.fall_cause.map_or("?", |c| c.name()))
+        } else if self.walked() {
+            "walked".into()
+        } else {
+            format!("did not walk ({})", self.gait.violations().join(", "))
         }
     }
 
@@ -212,12 +256,45 @@ impl PhysicsReport {
         }
     }
 
-    /// The end of the run as every command's JSON gives it: `fell_after_end`,
-    /// `fall_after_end_time_s`, `fall_after_end_cause`, `reference_stop_s`,
-    /// `fall_window_end_s` (until when a fall counts) and `ended_standing`.
+    /// "Walked" as the sequence and fault tables write it: `yes`, `**no** (fell)`, or
+    /// `**no** (slip 23.1 mm, flight 12 ms)` with the measures beyond their bounds.
+    pub fn walked_text(&self) -> String {
+        let q = &self.gait;
+        if self.fell {
+            return "**no** (fell)".into();
+        }
+        if self.walked() {
+            return "yes".into();
+        }
+        let mut v = Vec::new();
+        if q.slip_max_m > gait::SLIP_MAX_M {
+            v.push(format!("slip {:.1} mm", q.slip_max_m * 1e3));
+        }
+        if q.flight_max_s > gait::FLIGHT_MAX_S + 1e-9 {
+            v.push(format!("flight {:.0} ms", q.flight_max_s * 1e3));
+        }
+        if q.cop_outside_max_s > gait::COP_OUTSIDE_MAX_S + 1e-9 {
+            v.push(format!("CoP outside {:.0} ms", q.cop_outside_max_s * 1e3));
+        }
+        if q.landing_err_max_m > gait::LANDING_MAX_M {
+            v.push(format!("landing {:.1} mm", q.landing_err_max_m * 1e3));
+        }
+        format!("**no** ({})", v.join(", "))
+    }
+
+    /// The verdict and the end of the run as every command's JSON gives them: `walked`
+    /// ([`Self::walked`]), `verdict` ([`Self::verdict_words`]), the gait measures
+    /// ([`gait::GaitQuality::fields`]), `fell_after_end`, `fall_after_end_time_s`,
+    /// `fall_after_end_cause`, `reference_stop_s`, `fall_window_end_s` (until when a fall
+    /// counts) and `ended_standing`.
     pub fn end_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         use serde_json::json;
-        vec![
+        let mut v = vec![
+            ("walked", json!(self.walked())),
+            ("verdict", json!(self.verdict_words())),
+        ];
+        v.extend(self.gait.fields());
+        v.extend([
             ("fell_after_end", json!(self.fell_after_end)),
             ("fall_after_end_time_s", json!(self.fall_after_end_time_s)),
             (
@@ -230,7 +307,8 @@ impl PhysicsReport {
                 json!(self.reference_stop_s + metrics::SETTLE_AFTER_S),
             ),
             ("ended_standing", json!(self.ended_standing)),
-        ]
+        ]);
+        v
     }
 
     /// Adds [`Self::end_fields`] to the JSON object `j`.
@@ -385,8 +463,13 @@ pub fn run(
         cog_drift_max_m: 0.0,
         foot_drift_max_m: 0.0,
         simulated_s: 0.0,
+        gait: gait::GaitQuality::default(),
         engine: engine.version.clone(),
     };
+    let mut monitor = gait::GaitMonitor::new(
+        robot.total_mass() * robot.gravity(),
+        [robot.sole_half()[0], robot.sole_half()[1]],
+    );
     for k in 0..steps {
         let t = k as f64 * PHYSICS_DT - cfg.settle_s;
         let r = reference_at(trajectory, dt, t);
@@ -421,6 +504,16 @@ pub fn run(
                 let d = (s.p[0] - f.x).hypot(s.p[1] - f.y);
                 report.foot_drift_max_m = report.foot_drift_max_m.max(d);
             }
+        }
+        if t1 > 0.0 {
+            monitor.push(&gait::GaitSample {
+                dt: PHYSICS_DT,
+                feet_ref: r1.feet,
+                soles,
+                sole_force: obs.sole_force,
+                normal_force: obs.normal_force,
+                cop: obs.cop,
+            });
         }
         if (k + 1) % 5 == 0 {
             samples.push(PhysicsSample {
@@ -457,8 +550,73 @@ pub fn run(
             break;
         }
     }
+    report.gait = monitor.quality();
     report.cop_err_mean_m = tracking.mean();
     report.cop_err_max_m = tracking.max;
     report.cop_err_max_t_s = tracking.max_t;
     Ok(PhysicsRun { report, samples })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(fell: bool, gait: gait::GaitQuality) -> PhysicsReport {
+        PhysicsReport {
+            fell,
+            fall_time_s: fell.then_some(3.0),
+            fall_cause: fell.then_some(FallCause::Tilt),
+            fell_after_end: false,
+            fall_after_end_time_s: None,
+            fall_after_end_cause: None,
+            reference_stop_s: 9.0,
+            ended_standing: true,
+            max_tilt_deg: 0.2,
+            cop_err_mean_m: 0.01,
+            cop_err_max_m: 0.03,
+            cop_err_max_t_s: 1.0,
+            cog_drift_max_m: 0.01,
+            foot_drift_max_m: 0.004,
+            simulated_s: 10.0,
+            gait,
+            engine: "3.2.7".into(),
+        }
+    }
+
+    /// A run that stayed up with a slide and a hop did not walk, and every verdict says why.
+    #[test]
+    fn verdicts_of_a_walk_a_slide_and_a_fall() {
+        let good = report(false, gait::GaitQuality::default());
+        assert!(good.walked());
+        assert_eq!(
+            (good.verdict(), good.verdict_words(), good.walked_text()),
+            ("ok".into(), "walked".into(), "yes".into())
+        );
+        let slid = report(
+            false,
+            gait::GaitQuality {
+                slip_max_m: 0.0231,
+                flight_max_s: 0.012,
+                ..Default::default()
+            },
+        );
+        assert!(!slid.walked() && !slid.fell);
+        assert_eq!(slid.verdict(), "**slip+flight**");
+        assert_eq!(slid.verdict_words(), "did not walk (slip, flight)");
+        assert_eq!(slid.walked_text(), "**no** (slip 23.1 mm, flight 12 ms)");
+        let j = serde_json::Value::Object(
+            slid.end_fields()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect(),
+        );
+        assert_eq!(j["walked"], false);
+        assert_eq!(j["gait_violations"], serde_json::json!(["slip", "flight"]));
+        let fell = report(true, gait::GaitQuality::default());
+        assert!(!fell.walked());
+        assert_eq!(
+            (fell.verdict(), fell.verdict_words()),
+            ("**fell**".into(), "fell (tilt)".into())
+        );
+    }
 }

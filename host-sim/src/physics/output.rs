@@ -6,7 +6,10 @@
 //!   `fall_cause`, a fall after the end ([`super::metrics::SETTLE_AFTER_S`]) apart:
 //!   `fell_after_end`, `fall_after_end_time_s`, `fall_after_end_cause`, `reference_stop_s`,
 //!   `fall_window_end_s`, `ended_standing` (the trajectory's last reference standing, both
-//!   feet down); `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
+//!   feet down); `walked` and `verdict` (no fall and the gait within its bounds,
+//!   [`super::gait`]), the gait measures `slip_max_m`, `flight_s`, `flight_max_s`,
+//!   `cop_outside_s`, `cop_outside_max_s`, `cop_outside_max_m`, `landing_err_max_m`,
+//!   `landings`, `gait_violations` and the bounds `gait_bounds`; `max_tilt_deg`, `cop_err_mean_m`, `cop_err_max_m` (see
 //!   [`super::metrics`]), `cop_err_max_t_s`, `cog_drift_max_m`, `foot_drift_max_m`,
 //!   `simulated_s`, `stabilizer`, `stabilizer_gains`, `servo_kp_kd`, `engine` (the MuJoCo
 //!   version), `scenario`, `robot` (its name), `sole_half_m` (the sole box's half-extents),
@@ -51,6 +54,7 @@ pub fn report_json(name: &str, robot: &str, cfg: &PhysicsConfig, r: &PhysicsRun)
         "servo_kp_kd": cfg.robot.servo(),
         "engine": format!("MuJoCo {}", p.engine),
         "physics_dt_s": super::PHYSICS_DT,
+        "gait_bounds": super::gait::GaitQuality::bounds_json(),
         "push": cfg.push.map(|p| json!({"t_s": p.t_s, "duration_s": p.duration_s, "force_n": p.force})),
     });
     p.add_end_fields(&mut j);
@@ -114,15 +118,22 @@ fn mode(cfg: &PhysicsConfig) -> String {
     }
     let gains = super::stabilizer::Gains {
         contact_from_sensors: full.contact_from_sensors,
+        design_delay_s: full.design_delay_s,
         ..g
     };
     let mut m = if gains == full {
         "stabilized".to_string()
     } else {
-        format!("stabilizer × {}", g.k_cog / full.k_cog)
+        format!(
+            "stabilizer × {}",
+            (g.k_cog / full.k_cog * 1e3).round() / 1e3
+        )
     };
     if !g.contact_from_sensors {
         m += ", contact from the reference";
+    }
+    if g.design_delay_s > 0.0 {
+        m += &format!(", gains designed for {} ms", g.design_delay_s * 1e3);
     }
     m
 }
@@ -357,14 +368,31 @@ pub fn cli(
                 num("fall_time_s"),
                 j["fall_cause"].as_str().unwrap_or("?")
             )
-        } else if j["fell_after_end"].as_bool() == Some(true) {
-            format!(
-                "walked through, no fall (fell after the end, at {:.3} s: {})",
-                num("fall_after_end_time_s"),
-                j["fall_after_end_cause"].as_str().unwrap_or("?")
-            )
         } else {
-            "walked through, no fall".to_string()
+            let gait = if j["walked"].as_bool() == Some(true) {
+                "walked (no fall, gait within bounds)".to_string()
+            } else {
+                format!(
+                    "DID NOT WALK (no fall, but beyond bounds: {})",
+                    j["gait_violations"]
+                        .as_array()
+                        .map(|v| v
+                            .iter()
+                            .filter_map(|x| x.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", "))
+                        .unwrap_or_default()
+                )
+            };
+            if j["fell_after_end"].as_bool() == Some(true) {
+                format!(
+                    "{gait}; fell after the end, at {:.3} s: {}",
+                    num("fall_after_end_time_s"),
+                    j["fall_after_end_cause"].as_str().unwrap_or("?")
+                )
+            } else {
+                gait
+            }
         },
         mode(&cfg),
         num("simulated_s"),
@@ -378,6 +406,23 @@ pub fn cli(
         num("cop_err_max_m") * 1e3,
         num("cog_drift_max_m") * 1e3,
         num("foot_drift_max_m") * 1e3
+    );
+    crate::outln!(
+        "  slip {:.1} mm (bound {:.0}); flight {:.0} ms, longest {:.0} ms (bound {:.0}); CoP \
+         outside the support polygon {:.0} ms, longest {:.0} ms (bound {:.0}), farthest {:.1} mm; \
+         landing error {:.1} mm (bound {:.0}) over {} landings",
+        num("slip_max_m") * 1e3,
+        super::gait::SLIP_MAX_M * 1e3,
+        num("flight_s") * 1e3,
+        num("flight_max_s") * 1e3,
+        super::gait::FLIGHT_MAX_S * 1e3,
+        num("cop_outside_s") * 1e3,
+        num("cop_outside_max_s") * 1e3,
+        super::gait::COP_OUTSIDE_MAX_S * 1e3,
+        num("cop_outside_max_m") * 1e3,
+        num("landing_err_max_m") * 1e3,
+        super::gait::LANDING_MAX_M * 1e3,
+        j["landings"].as_u64().unwrap_or(0)
     );
     if j["ended_standing"].as_bool() == Some(false) {
         crate::outln!("  the scenario's walk did not end standing (cut at its max_time_s?)");
@@ -460,11 +505,14 @@ pub fn tables_cli(
     let late = |r: &Option<super::PhysicsReport>| r.as_ref().is_some_and(|r| r.fell_after_end);
     let cut = |r: &Option<super::PhysicsReport>| r.as_ref().is_some_and(|r| !r.ended_standing);
     md += &format!(
-        "\n{} cells simulated; falls: plain {}, proposed {}; falls after the end (not counted): \
+        "\n{} cells simulated; falls: plain {}, proposed {}; not walked (a fall or a gait \
+         measure beyond its bound): plain {}, proposed {}; falls after the end (not counted): \
          plain {}, proposed {}; trajectories not ending standing: {}.\n\n{}\n",
         done.len(),
         count(&|c| c.plain.as_ref().is_some_and(|r| r.fell)),
         count(&|c| c.proposed.as_ref().is_some_and(|r| r.fell)),
+        count(&|c| c.plain.as_ref().is_some_and(|r| !r.walked())),
+        count(&|c| c.proposed.as_ref().is_some_and(|r| !r.walked())),
         count(&|c| late(&c.plain)),
         count(&|c| late(&c.proposed)),
         count(&|c| cut(&c.plain)) + count(&|c| cut(&c.proposed)),

@@ -90,6 +90,13 @@ pub struct ProbeArgs {
     /// reference's phase.
     #[arg(long, value_name = "reference|sensors", default_value = "sensors", value_parser = parse_contact)]
     pub contact: Contact,
+    /// The loop delay the stabilizer's gains are designed for [ms] [default: the sensors'
+    /// latency].
+    #[arg(long, value_name = "MS")]
+    pub design_delay_ms: Option<f64>,
+    /// The seed of the sensors' noise [default: 1].
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
 }
 
 /// Where the stabilizer takes the contact phase from (`--contact`).
@@ -121,6 +128,8 @@ impl Default for ProbeArgs {
             sensors: SensorModel::IDEAL,
             latency_ms: None,
             contact: Contact::Sensors,
+            design_delay_ms: None,
+            seed: None,
         }
     }
 }
@@ -162,6 +171,15 @@ impl ProbeArgs {
         if let Some(ms) = self.latency_ms {
             cfg.sensors.latency_ticks = ms;
         }
+        if let Some(seed) = self.seed {
+            cfg.sensors.seed = seed;
+        }
+        let design_ms = match self.design_delay_ms {
+            Some(ms) if ms.is_finite() && ms >= 0.0 => ms,
+            Some(ms) => return Err(format!("--design-delay-ms {ms}: expected a delay ≥ 0")),
+            None => cfg.sensors.latency_ticks as f64,
+        };
+        cfg.gains = cfg.gains.for_delay(design_ms * 1e-3);
         Ok(Probe {
             cfg,
             scale,
@@ -193,6 +211,10 @@ impl Probe {
         if !self.cfg.gains.contact_from_sensors {
             m += ", contact from the reference";
         }
+        let d = self.cfg.gains.design_delay_s;
+        if d > 0.0 {
+            m += &format!(", gains designed for {} ms", d * 1e3);
+        }
         m
     }
 
@@ -215,7 +237,9 @@ impl Probe {
             "force_n": m.force_n,
             "torque_nm": m.torque_nm,
             "latency_ms": m.latency_ticks,
+            "seed": m.seed,
         });
+        json["design_delay_ms"] = (self.cfg.gains.design_delay_s * 1e3).into();
         json["contact"] = if self.cfg.gains.contact_from_sensors {
             "sensors"
         } else {
@@ -390,8 +414,25 @@ mod tests {
         assert_eq!(
             noisy.mode(),
             "stabilizer × 1, servo damping 600 N m s/rad, noisy sensors 7 ms late, \
-             contact from the reference"
+             contact from the reference, gains designed for 7 ms"
         );
+        // The gains designed for the sensors' 7 ms (every feedback gain × 1 / 7), or for a
+        // delay stated apart; the noise's seed recorded.
+        let full = Gains::default();
+        let k = noisy.cfg.gains.k_cog / full.k_cog;
+        assert!((k - super::super::stabilizer::FULL_GAIN_DELAY_S / 0.007).abs() < 1e-12);
+        assert_eq!(j["design_delay_ms"], json!(7.0));
+        assert_eq!(j["sensors"]["seed"], json!(1));
+        let stated = ProbeArgs {
+            latency_ms: Some(7),
+            design_delay_ms: Some(0.0),
+            seed: Some(9),
+            ..ProbeArgs::default()
+        }
+        .resolve(&Robot::hrp2())
+        .unwrap();
+        assert_eq!(stated.cfg.gains.k_cog, full.k_cog);
+        assert_eq!(stated.cfg.sensors.seed, 9);
         let open = ProbeArgs {
             open_loop: true,
             ..ProbeArgs::default()

@@ -80,6 +80,10 @@ pub struct Cell {
     pub steps_adjusted: usize,
     /// Engine runs of the bisection.
     pub runs: usize,
+    /// The gait measures of the run at the largest force walked through (of the unpushed
+    /// run when none was): slip, flight, the CoP outside the support polygon and the landing
+    /// error ([`super::gait`]); the bisection's survival is the fall's.
+    pub gait: super::gait::GaitQuality,
     /// Why the cell could not be measured (its force fields are then 0).
     pub error: Option<String>,
 }
@@ -95,6 +99,8 @@ impl Cell {
             "dv_mps": self.dv_mps,
             "bw_fraction": self.bw_fraction,
             "steps_adjusted": self.steps_adjusted,
+            "gait_within_bounds": self.gait.within_bounds(),
+            "gait": self.gait.fields().into_iter().map(|(k, v)| (k.to_string(), v)).collect::<serde_json::Map<_, _>>(),
         });
         if let Some(e) = &self.error {
             j["error"] = Value::String(e.clone());
@@ -123,6 +129,7 @@ impl Cell {
             bw_fraction: 0.0,
             steps_adjusted: 0,
             runs: 0,
+            gait: Default::default(),
             error: Some(error),
         }
     }
@@ -182,6 +189,7 @@ pub fn bisect(
     let weight = m * cfg.robot.gravity();
     let (mut lo, mut hi) = (0.0, MAX_BW);
     let mut steps_adjusted = 0;
+    let mut gait = super::gait::GaitQuality::default();
     let mut runs = 0;
     while hi - lo > resolution_bw {
         let mid = 0.5 * (lo + hi);
@@ -204,6 +212,7 @@ pub fn bisect(
         } else {
             lo = mid;
             steps_adjusted = o.steps_adjusted;
+            gait = o.gait;
         }
     }
     let f = lo * weight;
@@ -216,6 +225,7 @@ pub fn bisect(
         bw_fraction: lo,
         steps_adjusted,
         runs,
+        gait,
         error: None,
     })
 }

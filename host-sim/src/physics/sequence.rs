@@ -128,8 +128,8 @@ pub fn markdown(before: f64, afters: &[f64], mode: &str, runs: &[(&str, &Sequenc
     let mut md = format!(
         "Steps of {before:.2} m, steps {}–{} changed to {} m one control cycle before each \
          lift-off, in MuJoCo ({mode})\n\n\
-         | pattern | fell | max tilt (°) | CoP error mean / worst (mm) | worst in the modified steps (mm) | kinematic multi-body error (mm) | adjustments (s) |\n\
-         |---|---|---|---|---|---|---|\n",
+         | pattern | fell | walked | max tilt (°) | CoP error mean / worst (mm) | worst in the modified steps (mm) | kinematic multi-body error (mm) | adjustments (s) |\n\
+         |---|---|---|---|---|---|---|---|\n",
         paper::SEQUENCE_FIRST_STEP,
         usize::from(paper::SEQUENCE_FIRST_STEP) + afters.len() - 1,
         lengths.join(", ")
@@ -149,8 +149,9 @@ pub fn markdown(before: f64, afters: &[f64], mode: &str, runs: &[(&str, &Sequenc
             })
             .collect();
         md += &format!(
-            "| {name} | {} | {:.2} | {:.1} / {:.1} | {:.1} | {} | {} |\n",
+            "| {name} | {} | {} | {:.2} | {:.1} / {:.1} | {:.1} | {} | {} |\n",
             p.fell_text(),
+            p.walked_text(),
             p.max_tilt_deg,
             p.cop_err_mean_m * 1e3,
             p.cop_err_max_m * 1e3,

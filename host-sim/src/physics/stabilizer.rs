@@ -86,6 +86,8 @@ pub struct Gains {
     /// Where the contact phase comes from: the ankle force sensors (`true`, the default,
     /// [`contact_phase`]), or the reference's phase (`false`).
     pub contact_from_sensors: bool,
+    /// The loop delay the gains were designed for ([`Gains::for_delay`]) \[s\].
+    pub design_delay_s: f64,
 }
 
 impl Default for Gains {
@@ -104,9 +106,14 @@ impl Default for Gains {
             cog_return_s: 1.0,
             cog_limit_m: 0.04,
             contact_from_sensors: true,
+            design_delay_s: 0.0,
         }
     }
 }
+
+/// The largest loop delay for which the stated gains ([`Gains::default`]) are kept \[s\]:
+/// above it [`Gains::for_delay`] lowers them.
+pub const FULL_GAIN_DELAY_S: f64 = 0.001;
 
 /// A foot is on the ground when its sensor's vertical ground force is above this share of
 /// the robot's weight (and off it below half of it: the hysteresis keeps a touchdown from
@@ -150,6 +157,33 @@ impl Gains {
             k_force: self.k_force * s,
             k_cog: self.k_cog * s,
             ..self
+        }
+    }
+}
+
+impl Gains {
+    /// The gains designed for the loop delay `delay_s` (sensing to actuation): every feedback
+    /// gain times `min(1, τ₀ / delay)`, τ₀ = [`FULL_GAIN_DELAY_S`] ([`Gains::scaled`]), so
+    /// that each loop's gain × delay product stays at most what it is with the stated gains at
+    /// τ₀.
+    ///
+    /// Why: a feedback loop of rate `k` \[1/s\] closed through a delay `τ` loses the phase
+    /// `k τ` at its crossover, so keeping `k τ` bounded keeps its phase margin. The fast loops
+    /// here (the foot damping control, whose rate is the ankle's stiffness over `D`, and the
+    /// COG modification) are tuned for no delay. τ₀ comes from a delay sweep of the stated
+    /// gains on HRP-2's `straight` walk (the book's physics page): every gait measure within
+    /// half its bound at 1 ms, the landing error at 90 % of its bound and the longest flight
+    /// at its bound at 2 ms, the feet sliding beyond it from 3 ms. The filters, return times
+    /// and limits are unchanged.
+    pub fn for_delay(self, delay_s: f64) -> Self {
+        let s = if delay_s > FULL_GAIN_DELAY_S {
+            FULL_GAIN_DELAY_S / delay_s
+        } else {
+            1.0
+        };
+        Self {
+            design_delay_s: delay_s.max(0.0),
+            ..self.scaled(s)
         }
     }
 }

@@ -11,7 +11,8 @@
 //! legs cannot reach the other 9) and writes
 //! `DIR/physics_tables.json`: `fell_plain` and `fell_proposed` (7 × 7, rows "after", columns
 //! "before", in the order of `tables.json`; `null` for a cell not simulated or whose footsteps
-//! the legs cannot reach), the falls after the end apart (`fell_after_end_plain`, …, see
+//! the legs cannot reach), `walked_plain` and `walked_proposed` (no fall and the gait within
+//! its bounds, [`super::gait`]) with `gait_violations_*` and `slip_max_*_m`, the falls after the end apart (`fell_after_end_plain`, …, see
 //! [`super::metrics::SETTLE_AFTER_S`]), whether each trajectory ended standing
 //! (`ended_standing_plain`, `ended_standing_proposed`: each cell's walk is played to standing)
 //! and the per-cell figures; `--cells r,c;r,c` restricts the run to
@@ -149,6 +150,9 @@ pub fn tables_json(cells: &[Cell]) -> Value {
     let late = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.fell_after_end);
     let late_t = |r: &Option<PhysicsReport>| r.as_ref().and_then(|r| r.fall_after_end_time_s);
     let standing = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.ended_standing);
+    let walked = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.walked());
+    let slip = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.gait.slip_max_m);
+    let violations = |r: &Option<PhysicsReport>| r.as_ref().map(|r| r.gait.violations());
     json!({
         "step_lengths_m": STEP_LENGTHS,
         "rows": "length after the modification",
@@ -156,6 +160,13 @@ pub fn tables_json(cells: &[Cell]) -> Value {
         "cells_simulated": cells.len(),
         "fell_plain": grid(cells, |c| fell(&c.plain)),
         "fell_proposed": grid(cells, |c| fell(&c.proposed)),
+        "walked_plain": grid(cells, |c| walked(&c.plain)),
+        "walked_proposed": grid(cells, |c| walked(&c.proposed)),
+        "gait_violations_plain": grid(cells, |c| violations(&c.plain)),
+        "gait_violations_proposed": grid(cells, |c| violations(&c.proposed)),
+        "slip_max_plain_m": grid(cells, |c| slip(&c.plain)),
+        "slip_max_proposed_m": grid(cells, |c| slip(&c.proposed)),
+        "gait_bounds": super::gait::GaitQuality::bounds_json(),
         "fall_time_plain_s": grid(cells, |c| fall_t(&c.plain)),
         "fall_time_proposed_s": grid(cells, |c| fall_t(&c.proposed)),
         "fell_after_end_plain": grid(cells, |c| late(&c.plain)),
@@ -193,7 +204,8 @@ pub fn markdown(title: &str, cells: &[Cell], f: impl Fn(&Cell) -> String) -> Str
     })
 }
 
-/// One cell as text: `fell` or `ok` (`ok†`: a fall after the end), the worst CoP error of the modified step and the
+/// One cell as text: `fell`, a gait measure beyond its bound (`slip`, `flight`, `cop`,
+/// `landing`: [`PhysicsReport::verdict`]) or `ok` (`ok†`: a fall after the end), the worst CoP error of the modified step and the
 /// kinematic multi-body error, in cm: `ok 3.1 / 7.5`.
 pub fn cell_text(r: &Option<PhysicsReport>, window: Option<f64>, mb: Option<f64>) -> String {
     match (r, window, mb) {
