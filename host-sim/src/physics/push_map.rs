@@ -548,8 +548,6 @@ pub fn cli(
     robot: &crate::robot::Robot,
     probe: &super::probe::ProbeArgs,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    // An engine that cannot start fails the command, not each cell.
-    super::bridge::installed_version(&super::bridge::python())?;
     let probe = probe.resolve(robot)?;
     let cfg = probe.cfg;
     let mut spec = MapSpec::new(args.quick);
@@ -559,11 +557,13 @@ pub fn cli(
     if let Some(d) = args.directions {
         spec.directions = parse_directions(d)?;
     }
+    let cell_asked = args.cell.map(parse_cell).transpose()?;
+    // An engine that cannot start fails the command, not each cell.
+    super::bridge::installed_version(&super::bridge::python())?;
     let mut node = robot.node_config();
     node.adjust.from_measured = args.from_measured;
     let mass = cfg.robot.total_mass();
-    if let Some(c) = args.cell {
-        let (s, p, d) = parse_cell(c)?;
+    if let Some((s, p, d)) = cell_asked {
         let c = cell(&node, &cfg, s, p, d, spec.resolution_bw);
         crate::outln!("{}", cell_line(robot.name(), mass, spec.resolution_bw, &c));
         return match c.error {
