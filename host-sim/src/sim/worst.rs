@@ -1,5 +1,6 @@
 //! The worst admissible control cycle, generated and recorded: the log that puts the most
-//! work the node accepts into one cycle, for the target's replay (the QEMU images), without a
+//! work the node takes into one cycle (what its work budget, `planner_core::node::WORK_BUDGET`,
+//! lets through), for the target's replay (the QEMU images), without a
 //! physics engine.
 //!
 //! A straight walk of [`WALK_STEPS`] steps of [`STEP_M`] with HRP-2's node (`Node<16>`, the
@@ -63,7 +64,8 @@ pub struct WorstRun {
     pub from_measured: bool,
     /// Plans the node made in the burst cycle.
     pub plans: u32,
-    /// Frames of the burst the node refused (the out-of-reach versions).
+    /// Frames of the burst the node refused (the out-of-reach versions, and `Busy` what its
+    /// work budget leaves out).
     pub refused: u8,
     /// Frames the node received in the burst cycle.
     pub received: u8,
@@ -286,9 +288,9 @@ fn run(
 mod tests {
     use super::*;
 
-    /// Both worst cycles fill the half cycle before the poll with work the node acts on (every
-    /// queued step modified, out-of-reach versions refused after their checks), in a cycle
-    /// that re-plans at a start of single support, and the robot walks on.
+    /// Both worst cycles fill the half cycle before the poll with footstep commands (every
+    /// queued step modified, out-of-reach versions), in a cycle that re-plans at a start of
+    /// single support, and the robot walks on.
     #[test]
     fn the_burst_is_all_accepted_work_in_a_replanning_cycle() {
         let cfg = NodeConfig::hrp2();
@@ -305,7 +307,8 @@ mod tests {
             assert!(mods >= 5, "{adjusting}: {mods} modifications");
             assert_eq!(measured, usize::from(adjusting));
             assert!(w.replanned, "{adjusting}: no re-plan in the burst cycle");
-            assert_eq!(usize::from(w.refused), versions, "{adjusting}");
+            // The out-of-reach versions, and what the node's work budget leaves out (`Busy`).
+            assert!(usize::from(w.refused) >= versions, "{adjusting}: {w:?}");
             assert!(!w.fallen, "{adjusting}");
         }
     }
