@@ -361,7 +361,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.gait.next_side().is_some_and(|side| side != step.side) {
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
-        self.spend(WORK_STEP)?;
+        self.spend(WORK_APPEND)?;
         self.check_reach(&step, None)?;
         let gid = self.appended as u16;
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;

@@ -143,19 +143,23 @@ use crate::wire::{
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
 
-/// The command work a cycle may do, in estimated Cortex-M7 instructions: every footstep
-/// command's reach check costs [`WORK_STEP`], a plan it causes (a `Start`, a `STEP_MODIFY` of
+/// The command work a cycle may do, in estimated Cortex-M7 instructions: every modification's
+/// checks cost [`WORK_STEP`], every append's [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of
 /// the next swing target while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment
 /// from the measured state [`WORK_ADJUST`]. A command whose work does not fit what is left of
 /// the cycle's budget is refused `Busy` with nothing changed (the controller sends it again
 /// in a later cycle); the step adjustment waits for a cycle with room. With the tick, the
 /// re-plan and the frames sent, this bounds the worst cycle whatever is received (the
 /// firmware's timing chapter states the bound and the log that reaches it). The budget takes
-/// nine modifications of distinct steps, one of them planning, in one cycle.
+/// nine modifications of distinct steps, one of them planning, in one cycle, or the 20 appends
+/// of a walk sent at once.
 pub const WORK_BUDGET: u32 = 33_000;
-/// See [`WORK_BUDGET`]: one footstep command's checks (reach against the feet before it and,
-/// for a modification, its two successors; the step records).
+/// See [`WORK_BUDGET`]: one modification's checks (reach against the feet before it and its
+/// two successors; the step records).
 pub const WORK_STEP: u32 = 2_100;
+/// See [`WORK_BUDGET`]: one append's checks (reach against the feet before it; the step
+/// records).
+pub const WORK_APPEND: u32 = 1_400;
 /// See [`WORK_BUDGET`]: a plan of a window (a `Start`, eq. 17's check of a modified next
 /// swing target).
 pub const WORK_PLAN: u32 = 14_000;
