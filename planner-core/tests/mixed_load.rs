@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use planner_core::gait::Side;
-use planner_core::node::{NodeConfig, NodeState};
+use planner_core::node::{NodeConfig, NodeState, WORK_BUDGET, WORK_PLAN, WORK_STEP};
 use planner_core::wire::{Command, ControlOp, Measured, RawFrame, Reason};
 
 fn queue_walk(r: &mut Rig, k: u16) {
@@ -158,4 +158,71 @@ fn a_receive_bound_below_the_commands_held_is_refused() {
     let mut cfg = NodeConfig::hrp2();
     cfg.max_frames = cfg.max_rx - 1;
     assert!(N::new(cfg).is_err());
+}
+
+/// The cycle's command work is counted against its budget (`WORK_BUDGET`): a modification of
+/// every queued step in one cycle, the next swing target first (it plans, eq. 17), is taken
+/// as far as the budget goes; the rest are refused `Busy` with nothing changed, and taken
+/// when sent again in the next cycle.
+#[test]
+fn the_cycles_command_work_stays_within_its_budget() {
+    let mut r = walking();
+    let g = r.n.gait();
+    let front = g.next_target().unwrap();
+    let queued = g.queued() as u16;
+    assert!(queued >= 12, "{queued} steps queued");
+    let first = r.n.next_step().wrapping_sub(queued);
+    let moved: Vec<(u16, f64, f64)> = (0..queued)
+        .map(|i| {
+            let s = g.queued_step(front.wrapping_add(i)).unwrap();
+            (first.wrapping_add(i), s.x + 0.02, s.y)
+        })
+        .collect();
+    let epoch = r.session.epoch;
+    let frames: Vec<(u16, Command)> = moved
+        .iter()
+        .map(|&(id, x, y)| (id, r.book.modify(id, x, y, 0.0).unwrap()))
+        .collect();
+    for (_, c) in &frames {
+        r.bus.rx.push_back(c.encode_in(epoch));
+    }
+    let before = r.n.clone();
+    let acks = r.cycle();
+    let answer = |id: u16, acks: &[planner_core::wire::Ack]| {
+        let a = acks
+            .iter()
+            .find(|a| a.command == 0x01 && a.seq == id as u8)
+            .unwrap_or_else(|| panic!("no answer for step {id}: {acks:?}"));
+        a.reason
+    };
+    // The budget takes the planning modification and as many others as fit.
+    let taken = 1 + (WORK_BUDGET - WORK_PLAN - WORK_STEP) / WORK_STEP;
+    let reasons: Vec<Option<Reason>> = frames.iter().map(|(id, _)| answer(*id, &acks)).collect();
+    let accepted = reasons.iter().filter(|a| a.is_none()).count() as u32;
+    assert_eq!(accepted, taken, "{reasons:?}");
+    assert!(taken < u32::from(queued), "the budget must leave some out");
+    for (i, reason) in reasons.iter().enumerate() {
+        let id = front.wrapping_add(i as u16);
+        if (i as u32) < taken {
+            assert_eq!(*reason, None, "step {i}");
+        } else {
+            // Refused `Busy`: the step is where it was.
+            assert_eq!(*reason, Some(Reason::Busy), "step {i}");
+            assert_eq!(
+                r.n.gait().queued_step(id),
+                before.gait().queued_step(id),
+                "step {i}"
+            );
+        }
+    }
+    // Sent again in the next cycle: taken.
+    for (i, (_, c)) in frames.iter().enumerate() {
+        if i as u32 >= taken {
+            r.bus.rx.push_back(c.encode_in(epoch));
+        }
+    }
+    let acks = r.cycle();
+    for (id, _) in frames.iter().skip(taken as usize) {
+        assert_eq!(answer(*id, &acks), None, "step {id} sent again");
+    }
 }

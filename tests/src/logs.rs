@@ -2,7 +2,7 @@
 //! `tests/tests/qemu_m4.rs` for the M4F): every built-in scenario and every TOML scenario of
 //! `host-sim/scenarios/` through `sim::simulate`, a pushed walk with the node's step
 //! adjustment (`sim::pushed`: `start_adjusting` and the estimator's `MEASURED` every cycle),
-//! and one fault-sweep run (fig4, seed 1) per
+//! the worst admissible cycle ([`WORST`], `sim::worst`), and one fault-sweep run (fig4, seed 1) per
 //! fault kind that the in-memory device replays as host-sim's bus does (not the flood at
 //! 100 % load: see `tests/tests/qemu.rs`), each with its candump log; [`binary`] encodes one
 //! for the image's `replay.wlog` (a file of such logs, one after the other); [`play`] plays
@@ -19,6 +19,7 @@ use host_sim::eval::faults::{run_case_logged, FaultKind, HEAVY};
 use host_sim::scenario::{self, built_in, BUILT_IN};
 use host_sim::sim::pushed::pushed_walk;
 use host_sim::sim::replay;
+use host_sim::sim::worst::worst_cycle;
 use host_sim::sim::{simulate, start_config, SimConfig};
 use planner_core::gait::{Footstep, Reference, PREVIEW};
 use planner_core::node::{Node, NodeConfig};
@@ -38,6 +39,9 @@ pub const PUSHED_STEPS: u16 = 10;
 pub const PUSHED_LENGTH_M: f64 = 0.2;
 /// See [`PUSHED_STEPS`].
 pub const PUSHED_DV: [f64; 2] = [0.35, 0.0];
+
+/// The worst-admissible-cycle logs (`host_sim::sim::worst`): name, started adjusting.
+pub const WORST: [(&str, bool); 2] = [("worst-start", false), ("worst-adjusting", true)];
 
 /// One host run to replay on the target.
 pub struct Case {
@@ -120,6 +124,19 @@ pub fn cases() -> Vec<Case> {
         log: pushed.can_log,
         adjusts: false,
     });
+    // The worst admissible cycle (`sim::worst`): every queued step modified, the queue
+    // filled, the node's command frames all used, in a cycle that re-plans; started with
+    // `start` and with `start_adjusting` (the estimator's state every cycle, a push).
+    for (name, adjusting) in WORST {
+        let w = worst_cycle(&cfg, adjusting).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(w.replanned && !w.fallen, "{name}: {w:?}");
+        out.push(Case {
+            name: name.to_string(),
+            cfg,
+            log: w.can_log,
+            adjusts: false,
+        });
+    }
     let fig4 = built_in("fig4").unwrap();
     for (name, kind, rate) in fault_runs() {
         let (_, log) =

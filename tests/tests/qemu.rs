@@ -11,7 +11,9 @@
 //!
 //! The runs: every built-in scenario (`host_sim::scenario::BUILT_IN`) and every TOML scenario
 //! of `host-sim/scenarios/` through `sim::simulate`, a pushed walk with the node's step
-//! adjustment (`sim::pushed`), and one fault-sweep run
+//! adjustment (`sim::pushed`), the worst admissible cycle with `start` and with
+//! `start_adjusting` (`sim::worst`: every queued step modified in a cycle that re-plans, the
+//! node's work budget spent), and one fault-sweep run
 //! (`faults::run_case_logged`, fig4, seed 1) per fault kind that the in-memory device can
 //! replay as host-sim's bus does: none, drop, duplicate, corrupt, delay, silence, flood at
 //! 20 % load, burst and the heavier mixed rows. **Not the flood at 100 % load**: it puts more
@@ -31,6 +33,7 @@
 //!   fed, the same re-plans adjusted by the same amounts, with the same node counters;
 //! * the instruction counts are repeatable: both runs print the same report, line for line;
 //! * the instructions-per-timer-tick factor (40) holds, and the stack stays inside its region;
+//! * the generated worst admissible cycle is the worst of every log and within its bound;
 //! * the worst control cycle over every log (a whole `Node::poll`) fits 5 % of a 5 ms cycle at
 //!   480 MHz (120,000 instructions);
 //! * the documents quote what was measured: the timing table of `docs/src/timing.md` and the
@@ -53,6 +56,10 @@ use walk_tests::{build_firmware, qemu_available};
 
 /// 5 % of a 5 ms control cycle at 480 MHz, in cycles (compared with instruction counts).
 const BUDGET: u64 = 120_000;
+/// The bound of the worst admissible control cycle on the M7 (instructions): the node's work
+/// budget (`planner_core::node::WORK_BUDGET`) spent, with the tick, the re-plan with eq. 18 and
+/// the frames sent; asserted for the generated worst cycles (`walk_tests::logs::WORST`).
+const WORST_CEILING: u64 = 62_000;
 /// The QEMU machine of the M7 image.
 const MACHINE: &str = "mps2-an500";
 /// `firmware/qemu`'s report: instructions per CMSDK timer tick under `-icount shift=0`.
@@ -303,6 +310,32 @@ fn worst_cycle_within_budget() {
     );
 }
 
+/// The worst admissible cycle (`host_sim::sim::worst`: every queued step modified in a cycle
+/// that re-plans, the queue filled, the node's budget spent, with and without the measured
+/// state) is the worst cycle of every replayed log, and within its bound.
+#[test]
+fn worst_admissible_cycle_is_bounded() {
+    let Some(runs) = runs() else {
+        return;
+    };
+    let q = &runs.first;
+    let all: u64 = q.timing("all", "cycle").expect("all").num("max");
+    let mut worst = 0;
+    for (name, _) in logs::WORST {
+        let max: u64 = q
+            .timing(name, "cycle")
+            .unwrap_or_else(|| panic!("no TIMING line for {name}"))
+            .num("max");
+        println!("worst admissible cycle, {name}: {max} instructions (bound {WORST_CEILING})");
+        assert!(max <= WORST_CEILING, "{name}: {max} > {WORST_CEILING}");
+        worst = worst.max(max);
+    }
+    assert_eq!(
+        worst, all,
+        "a recorded log's cycle is worse than the generated ones"
+    );
+}
+
 /// The image refuses a log cut short (the decoder's `Truncated`) after replaying the whole log
 /// before it, and fails the run.
 #[test]
@@ -412,9 +445,10 @@ fn a_stack_overflow_reaches_the_fault_handler() {
     assert_eq!(marks, ["0xfa170101", "0xfa170001"]);
 }
 
-/// The image's instruction and stack targets, over every replayed log, all met and asserted:
-/// `Node::new` (the node configured in place) ≤ 100,000 instructions, the worst control cycle
-/// ≤ 40,000, the re-plan at the start of single support ≤ 20,000 (plain and adjusted), the
+/// The image's instruction and stack targets, over every replayed log, asserted (each printed
+/// with whether it is met): `Node::new` (the node configured in place) ≤ 100,000
+/// instructions, the worst control cycle ≤ the worst admissible cycle's bound (the target
+/// 20,000 is not met), the re-plan at the start of single support ≤ 20,000 (plain and adjusted), the
 /// control loop's stack ≤ 12 KiB, the steady cycle's mean and maximum ≤ 3,000 (steady: at
 /// least 90 % of the walking cycles, 95 % in every fault-free log; the other walking cycles
 /// without command bounded as well), the start-up stack
@@ -478,7 +512,14 @@ fn timing_targets() {
         // takes the measured state, checks its plausibility and evaluates the capture law and
         // the shift bound every cycle: 4,720.)
         ("steady (max)", max("steady") as f64, 5_000.0, 5_000.0),
-        ("worst cycle", max("cycle") as f64, 40_000.0, 40_000.0),
+        // The worst cycle is the worst admissible one (`worst_admissible_cycle_is_bounded`):
+        // the target 20,000 is not met; the ceiling is its bound.
+        (
+            "worst cycle",
+            max("cycle") as f64,
+            20_000.0,
+            WORST_CEILING as f64,
+        ),
         (
             "adjusted re-plan (max)",
             max("adjust") as f64,

@@ -30,6 +30,7 @@ pub mod replay;
 pub mod report;
 #[cfg(feature = "socketcan")]
 pub mod socketcan;
+pub mod worst;
 
 use planner_core::gait::{Footstep, Reference, Side};
 use planner_core::node::{Broken, Counters, Node, NodeConfig};

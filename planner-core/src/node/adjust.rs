@@ -332,7 +332,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return;
         };
         let number = front.wrapping_add(self.first);
-        if self.plans_left == 0 {
+        if self.plans_left == 0 || self.spend(WORK_ADJUST).is_err() {
             return;
         }
         let Some(ticks) = self.gait.ticks_to_next_landing() else {

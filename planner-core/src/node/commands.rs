@@ -199,6 +199,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(())
     }
 
+    /// Takes `work` from the cycle's budget ([`WORK_BUDGET`]); `Busy` (nothing taken) if it
+    /// does not fit.
+    pub(super) fn spend(&mut self, work: u32) -> Result<(), Reason> {
+        if self.work_left < work {
+            return Err(Reason::Busy);
+        }
+        self.work_left -= work;
+        Ok(())
+    }
+
     pub(super) fn estop(&mut self) -> Result<(), Reason> {
         if self.estopped {
             return Err(Reason::Duplicate);
@@ -235,6 +245,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     return Err(Reason::WrongState);
                 }
                 self.plan()?;
+                self.spend(WORK_PLAN)?;
                 let started = self.gait.start().map_err(reason_of);
                 self.plans_left = self.plans_left.saturating_sub(1);
                 started?;
@@ -350,6 +361,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.gait.next_side().is_some_and(|side| side != step.side) {
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
+        self.spend(WORK_APPEND)?;
         self.check_reach(&step, None)?;
         let gid = self.appended as u16;
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
@@ -385,11 +397,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let walked = steps::shifted(&s, self.adj.shift).ok_or(Reason::OutOfRange)?;
         let step = Self::footstep(&walked);
         let id = self.gait_id(m.id);
+        self.spend(WORK_STEP)?;
         self.check_reach(&step, Some(id))?;
         // A modification of the next swing target while walking plans (eq. 17).
         let plans = !self.gait.is_standing() && self.gait.next_target() == Some(id);
         if plans {
             self.plan()?;
+            self.spend(WORK_PLAN)?;
         }
         let modified = self.gait.modify(id, step).map_err(reason_of);
         if plans {

@@ -216,6 +216,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         self.plans_left = self.cfg.max_plans;
+        self.work_left = WORK_BUDGET;
         let mut act = Acting {
             refused: 0,
             stop_at: None,
@@ -241,6 +242,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.adjust_step();
         // (`Node::handle` outside a cycle: the budget of one.)
         self.plans_left = self.cfg.max_plans;
+        self.work_left = WORK_BUDGET;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
         let streaming = self.open;

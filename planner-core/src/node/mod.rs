@@ -29,7 +29,10 @@
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
 //!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
 //!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
-//!    are carried out a cycle; the rest are refused `Busy`. Priority keeps what arrival order
+//!    are carried out a cycle; the rest are refused `Busy`. And the cycle's command work is
+//!    counted against a budget in estimated instructions ([`WORK_BUDGET`]: each footstep
+//!    command's checks, each plan, the step adjustment): a command that does not fit is
+//!    refused `Busy` with nothing changed, so the worst cycle is bounded whatever arrives. Priority keeps what arrival order
 //!    means: a footstep frame that arrived before a `StopNow` carried out in the cycle was
 //!    dropped by it (refused `Stale`), and a `Reset` received with an `ESTOP` in one cycle is
 //!    refused `EmergencyStopped` (the stop stands, whatever the order). Modifications of one step that arrive in one cycle are
@@ -139,6 +142,30 @@ use crate::wire::{
 
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
+
+/// The command work a cycle may do, in estimated Cortex-M7 instructions: every modification's
+/// checks cost [`WORK_STEP`], every append's [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of
+/// the next swing target while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment
+/// from the measured state [`WORK_ADJUST`]. A command whose work does not fit what is left of
+/// the cycle's budget is refused `Busy` with nothing changed (the controller sends it again
+/// in a later cycle); the step adjustment waits for a cycle with room. With the tick, the
+/// re-plan and the frames sent, this bounds the worst cycle whatever is received (the
+/// firmware's timing chapter states the bound and the log that reaches it). The budget takes
+/// nine modifications of distinct steps, one of them planning, in one cycle, or the 20 appends
+/// of a walk sent at once.
+pub const WORK_BUDGET: u32 = 33_000;
+/// See [`WORK_BUDGET`]: one modification's checks (reach against the feet before it and its
+/// two successors; the step records).
+pub const WORK_STEP: u32 = 2_100;
+/// See [`WORK_BUDGET`]: one append's checks (reach against the feet before it; the step
+/// records).
+pub const WORK_APPEND: u32 = 1_400;
+/// See [`WORK_BUDGET`]: a plan of a window (a `Start`, eq. 17's check of a modified next
+/// swing target).
+pub const WORK_PLAN: u32 = 14_000;
+/// See [`WORK_BUDGET`]: the step adjustment's work on a move (the reach's bisection to the
+/// footstep unit and eq. 17's check).
+pub const WORK_ADJUST: u32 = 23_000;
 
 /// The most command frames the node receives in one cycle (the bound of
 /// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
@@ -367,6 +394,9 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     /// Planning commands that may still plan in this cycle ([`NodeConfig::max_plans`] at
     /// the start of each cycle's acting).
     plans_left: usize,
+    /// What is left of the cycle's [`WORK_BUDGET`] (the whole budget at the start of each
+    /// cycle's acting).
+    work_left: u32,
     /// An emergency stop was received in the cycle being acted on: no `Reset` leaves it (set
     /// and cleared within [`Node::poll`]).
     estop_now: bool,
@@ -491,6 +521,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             clock_fault: false,
             estop_now: false,
             plans_left: 0,
+            work_left: 0,
             last_heard: None,
             heard_cycle: 0,
             window: (0, 0),
@@ -571,6 +602,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.window = (0, 0);
         self.timeout_cycles = timeout_cycles;
         self.plans_left = cfg.max_plans;
+        self.work_left = WORK_BUDGET;
         self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
         self.counters = Counters::ZERO;
         self.cycle = 0;

@@ -1,0 +1,315 @@
+//! The worst admissible control cycle, generated and recorded: the log that puts the most
+//! work the node takes into one cycle (what its work budget, `planner_core::node::WORK_BUDGET`,
+//! lets through), for the target's replay (the QEMU images), without a
+//! physics engine.
+//!
+//! A straight walk of [`WALK_STEPS`] steps of [`STEP_M`] with HRP-2's node (`Node<16>`, the
+//! images' queue), started with `start` or `start_adjusting`; the robot is the pushed walk's
+//! pendulum ([`super::pushed`]), its estimator's `MEASURED` every cycle when adjusting, pushed
+//! once as that walk is. In the cycle whose tick re-plans at the start of the
+//! [`BURST_SUPPORT`]-th single support (found by a first run without the burst), the controller
+//! sends, in one cycle:
+//! * a modification of **every queued step** (distinct steps, each moved [`MOVE_M`] forward,
+//!   each checked for reach against its neighbours and its two successors), the next swing
+//!   target first (it plans the re-plan it causes, eq. 17; the later ones change that re-plan's
+//!   landings, so the tick plans again, with eq. 18's adjustment);
+//! * appends until the queue is full or the cycle holds the node's `max_rx` command frames (the
+//!   estimator's `MEASURED` among them when adjusting);
+//! * with the queue full, a newer version of later steps (one each), [`FAR_M`] forward: out
+//!   of reach, refused after its check, and the older version then acted on;
+//!
+//! and the `stop` a cycle later. The burst is sent at the start of its cycle, as every
+//! controller of host-sim sends (and as the replay rule, `planner_core::playback`, plays a
+//! log): it holds as many frames as the bus carries before the poll (at most `max_rx`).
+//! Appends go out before the modifications (the bus sends the lower identifier first). The start cycle is loaded too: the `start` comes with appends that
+//! fill the queue.
+
+use planner_core::gait::Phase;
+use planner_core::node::{Node, NodeConfig};
+use planner_core::wire::{ControlOp, Measured, RawFrame, Session, StepBook};
+
+use super::bus::{Bus, Faults};
+use super::pushed::{Pendulum, PUSH_DELAY_TICKS};
+use crate::scenario::wire::Controller;
+use embedded_can::nb::Can;
+
+/// The walk's steps appended before the start.
+pub const WALK_STEPS: u16 = 8;
+/// Their length \[m\].
+pub const STEP_M: f64 = 0.1;
+/// How far forward the burst moves every queued step \[m\].
+pub const MOVE_M: f64 = 0.05;
+/// How far forward the burst's out-of-reach versions move a step \[m\].
+pub const FAR_M: f64 = 0.6;
+/// The single support (counted from the first) whose start's re-plan meets the burst.
+pub const BURST_SUPPORT: usize = 3;
+/// The push (x, y) \[m/s\] of the adjusting walk.
+pub const PUSH_DV: [f64; 2] = [0.2, 0.0];
+
+/// What a worst-cycle run gave.
+#[derive(Clone, Debug)]
+pub struct WorstRun {
+    /// The node's configuration.
+    pub cfg: NodeConfig,
+    /// The bus, as candump lines (`sim::bus::log_line`).
+    pub can_log: Vec<String>,
+    /// The cycle of the burst (counted from the scenario's tick 0).
+    pub burst_tick: u64,
+    /// Command frames sent for that cycle: modifications of distinct steps, newer
+    /// out-of-reach versions, appends, the measured state.
+    pub burst: (usize, usize, usize, usize),
+    /// Whether the node re-planned in the burst cycle.
+    pub replanned: bool,
+    /// Whether that re-plan started from the measured state (`from_measured`).
+    pub from_measured: bool,
+    /// Plans the node made in the burst cycle.
+    pub plans: u32,
+    /// Frames of the burst the node refused (the out-of-reach versions, and `Busy` what its
+    /// work budget leaves out).
+    pub refused: u8,
+    /// Frames the node received in the burst cycle.
+    pub received: u8,
+    /// The pendulum fell.
+    pub fallen: bool,
+}
+
+/// The generator of the module docs: `adjusting` starts the walk with `start_adjusting` and
+/// sends the estimator's state every cycle, and the robot is pushed.
+pub fn worst_cycle(cfg: &NodeConfig, adjusting: bool) -> Result<WorstRun, String> {
+    // A first run without the burst: the cycles that re-plan at a start of single support.
+    let probe = run(cfg, adjusting, None, 0)?;
+    let at = probe
+        .1
+        .get(BURST_SUPPORT.saturating_sub(1))
+        .copied()
+        .ok_or("the walk has too few single supports")?;
+    // As many command frames as reach the poll (the node's `max_rx` at most).
+    for cap in (1..=cfg.max_rx).rev() {
+        let (out, _) = run(cfg, adjusting, Some(at), cap)?;
+        let (m, v, a, e) = out.burst;
+        if usize::from(out.received) == m + v + a + e {
+            return Ok(out);
+        }
+    }
+    Err("no burst reaches the poll".into())
+}
+
+/// One run; `burst`: the cycle of the burst. Returns the run and the cycles whose poll
+/// re-planned at the start of a single support.
+fn run(
+    cfg: &NodeConfig,
+    adjusting: bool,
+    burst: Option<u64>,
+    cap: usize,
+) -> Result<(WorstRun, Vec<u64>), String> {
+    let mut node: Node<16> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
+    bus.record();
+    let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
+    let ms = 1_000_000u64;
+    bus.advance(0);
+    bus.advance(5 * ms / 2);
+    node.poll(2, &mut nport);
+    bus.advance(5 * ms);
+    let mut c = Controller::default();
+    while let Ok(f) = ctl.receive() {
+        if let Some(s) = Session::decode(&f) {
+            c = Controller {
+                epoch: s.epoch,
+                seq: s.last_seq,
+            };
+        }
+    }
+    let _ = ctl.transmit(&c.control(ControlOp::Reset).encode());
+    c.epoch = c.epoch.wrapping_add(1);
+    let mut book = StepBook::new();
+    // The controller's steps: (wire id, left, x, y), in order.
+    let mut steps: Vec<(u16, bool, f64, f64)> = Vec::new();
+    let first_id = node.next_step();
+    let epoch = c.epoch;
+    let append = |book: &mut StepBook, steps: &mut Vec<(u16, bool, f64, f64)>, dx: f64| {
+        let i = steps.len() as u16;
+        let left = i % 2 == 1;
+        let foot = if left { cfg.left } else { cfg.right };
+        let x = steps.last().map_or(foot.x, |s| s.2) + STEP_M + dx;
+        let id = first_id.wrapping_add(i);
+        let command = book.append(id, left, x, foot.y, 0.0)?;
+        steps.push((id, left, x, foot.y));
+        Some(command.encode_in(epoch))
+    };
+    let mut first = Vec::new();
+    for _ in 0..WALK_STEPS {
+        first.push(append(&mut book, &mut steps, 0.0).ok_or("a step does not fit the bus")?);
+    }
+    let op = if adjusting {
+        ControlOp::StartAdjusting
+    } else {
+        ControlOp::Start
+    };
+    let p = cfg.params;
+    let mut robot = Pendulum::at(node.gait().last());
+    let mut out = WorstRun {
+        cfg: *cfg,
+        can_log: Vec::new(),
+        burst_tick: burst.unwrap_or(0),
+        burst: (0, 0, 0, 0),
+        replanned: false,
+        from_measured: false,
+        plans: 0,
+        refused: 0,
+        received: 0,
+        fallen: false,
+    };
+    let mut replans = Vec::new();
+    let mut last_replan = None;
+    let (mut swinging, mut liftoffs, mut push_at) = (None, 0u32, None);
+    let mut tracked: Option<(u32, [f64; 2])> = None;
+    // The gait's id of the controller's first step (known once it is queued).
+    let mut gid0: Option<u16> = None;
+    for k in 0..4000u64 {
+        let t0 = (k + 1) * 5 * ms;
+        bus.advance(t0);
+        let mut frames: Vec<RawFrame> = Vec::new();
+        if k == 0 {
+            frames.extend(first.iter().copied());
+        }
+        if k == 1 {
+            // The start, with appends that fill the queue.
+            frames.push(c.control(op).encode());
+            let room = 16usize
+                .saturating_sub(node.gait().queued())
+                .min(cfg.max_rx - 1);
+            for _ in 0..room {
+                frames.push(append(&mut book, &mut steps, 0.0).ok_or("append")?);
+            }
+        }
+        if k % 20 == 0 && Some(k) != burst {
+            frames.push(c.control(ControlOp::Heartbeat).encode());
+        }
+        if burst.is_some_and(|b| k == b + 1) {
+            frames.push(c.control(ControlOp::Stop).encode());
+        }
+        let measured = if adjusting {
+            tracked.and_then(|(stamp, e)| Measured::from_si(stamp, e))
+        } else {
+            None
+        };
+        if let Some(m) = measured {
+            frames.push(m.encode(c.epoch));
+        }
+        if Some(k) == burst {
+            let g = node.gait();
+            let (Some(front), Some(g0)) = (g.next_target(), gid0) else {
+                return Err("nothing queued at the burst".into());
+            };
+            let queued = g.queued();
+            let mut burst_frames = Vec::new();
+            let slots = cap.min(cfg.max_rx) - usize::from(adjusting);
+            let from = usize::from(front.wrapping_sub(g0));
+            let mods: Vec<usize> = (from..steps.len()).take(queued.min(slots)).collect();
+            let room = 16usize.saturating_sub(queued).min(slots - mods.len());
+            // Every step from the front on moves forward, the appends after them too.
+            for _ in 0..room {
+                burst_frames.push(append(&mut book, &mut steps, MOVE_M).ok_or("append")?);
+            }
+            for &i in &mods {
+                let (id, _, x, y) = steps[i];
+                let m = book.modify(id, x + MOVE_M, y, 0.0).ok_or("modify")?;
+                burst_frames.push(m.encode_in(c.epoch));
+            }
+            // The frames left: a newer version of a later step, out of reach (refused after
+            // its reach check; the older one then has its turn).
+            let extra = slots - mods.len() - room;
+            for &i in mods.iter().skip(1).cycle().take(extra) {
+                let (id, _, x, y) = steps[i];
+                let m = book.modify(id, x + FAR_M, y, 0.0).ok_or("modify")?;
+                burst_frames.push(m.encode_in(c.epoch));
+            }
+            out.burst = (mods.len(), extra, room, usize::from(adjusting));
+            frames.extend(burst_frames);
+        }
+        for f in &frames {
+            let _ = ctl.transmit(f);
+        }
+        bus.advance(t0 + 5 * ms / 2);
+        let now_ms = (t0 / ms) as u32 + 2;
+        let plans = node.gait().plans();
+        let report = node.poll(now_ms, &mut nport);
+        if gid0.is_none() {
+            gid0 = node.gait().next_target();
+        }
+        let replan = node.gait().last_replan().map(|r| r.tick);
+        if replan != last_replan {
+            last_replan = replan;
+            if matches!(report.reference.phase, Phase::Single(_)) {
+                replans.push(k);
+            }
+        }
+        if Some(k) == burst {
+            out.replanned = replans.last() == Some(&k);
+            out.from_measured = node.gait().replanned_from_measured();
+            out.plans = node.gait().plans().wrapping_sub(plans);
+            out.refused = report.refused;
+            out.received = report.received;
+        }
+        let reference = report.reference;
+        let stamp = node.cycles();
+        let e = robot.deviation(&reference, p.omega);
+        if e[0].hypot(e[1]) > super::pushed::FALLEN_M {
+            out.fallen = true;
+        }
+        robot.track(&reference, e, &p);
+        tracked = Some((stamp, e));
+        let s = node.gait().swinging();
+        if s.is_some() && s != swinging {
+            liftoffs += 1;
+            if liftoffs == 2 && adjusting {
+                push_at = Some(k + PUSH_DELAY_TICKS);
+            }
+        }
+        swinging = s;
+        if push_at == Some(k) {
+            robot.push(PUSH_DV);
+        }
+        bus.advance(t0 + 5 * ms);
+        while ctl.receive().is_ok() {}
+        let done = burst.map_or(liftoffs as usize > BURST_SUPPORT + 1, |b| {
+            k > b + 1 && node.gait().is_standing()
+        });
+        if out.fallen || done {
+            break;
+        }
+    }
+    out.can_log = bus.log();
+    Ok((out, replans))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both worst cycles fill the half cycle before the poll with footstep commands (every
+    /// queued step modified, out-of-reach versions), in a cycle that re-plans at a start of
+    /// single support, and the robot walks on.
+    #[test]
+    fn the_burst_is_all_accepted_work_in_a_replanning_cycle() {
+        let cfg = NodeConfig::hrp2();
+        for adjusting in [false, true] {
+            let w = worst_cycle(&cfg, adjusting).unwrap();
+            let (mods, versions, appends, measured) = w.burst;
+            let sent = mods + versions + appends + measured;
+            assert_eq!(usize::from(w.received), sent, "{adjusting}");
+            // At 1 Mbit/s the half cycle before the poll carries 17 or more frames.
+            assert!(
+                (17..=cfg.max_rx).contains(&sent),
+                "{adjusting}: {sent} frames"
+            );
+            assert!(mods >= 5, "{adjusting}: {mods} modifications");
+            assert_eq!(measured, usize::from(adjusting));
+            assert!(w.replanned, "{adjusting}: no re-plan in the burst cycle");
+            // The out-of-reach versions, and what the node's work budget leaves out (`Busy`).
+            assert!(usize::from(w.refused) >= versions, "{adjusting}: {w:?}");
+            assert!(!w.fallen, "{adjusting}");
+        }
+    }
+}
