@@ -67,14 +67,18 @@
 //!    older than every frame there): the next step resets the FIFO statuses and every TX
 //!    request (RM0433: setting `CCE` resets `RXF0S`, `RXF1S`, `TXFQS`, `TXBRP`, …);
 //! 3. configuration mode (`CCE`, the core being in `INIT`), `MON` set, `INIT` cleared: the
-//!    core waits for 129 × 11 recessive bits (~1.42 ms at 1 Mbit/s), the bus-off recovery,
-//!    and then listens.
+//!    core waits for 129 occurrences of 11 recessive bits, the bus-off recovery (~1.42 ms on
+//!    an idle bus at 1 Mbit/s; on a busy bus such a run comes about once per frame, so up to
+//!    some 129 frames, ~15 ms), hearing nothing, and then listens.
 //!
-//! At the back-off's end (once the recovery is over; else one cycle more) the adapter takes
-//! the core into `INIT` (waiting, bounded, until it reads set), drains the RX FIFOs again,
-//! clears `MON` in configuration mode and clears `INIT`: the core joins after 11 recessive
-//! bits, and the software transmit queue empties in its order, the owed `ACK`s first, then
-//! those of the commands heard during the back-off. A frame beyond the software receive
+//! At the back-off's end (once `INIT` reads clear and the recovery is over; else one cycle
+//! more) the adapter clears `MON` directly (software may reset it at any time; no `INIT`,
+//! which could cut off a frame being received, and no configuration mode: the FIFOs keep what
+//! they hold) and reads it back: the core is in normal operation at once, and the software
+//! transmit queue empties in its order, the owed `ACK`s first, then those of the commands
+//! heard during the back-off. Should `MON` not clear, the core stays listening, the link
+//! stays reported bus-off (so the node's link supervision holds) and the adapter tries again
+//! every cycle: the node is never mute while reported on the bus. A frame beyond the software receive
 //! queue's room when the FIFOs are drained (more than [`SOFT_RX`] frames waiting) is lost,
 //! counted ([`Health::rx_lost`]) and reported as a receive error. If the owed `ACK`s do not
 //! all fit into the software transmit queue, or configuration mode cannot be entered (a core
@@ -164,12 +168,6 @@ pub trait Fdcan {
     /// `true` once after a message RAM access failure (`IR.MRAF`, cleared) or in restricted
     /// operation (`CCCR.ASM`, left): the core is back in normal operation afterwards.
     fn take_ram_failure(&mut self) -> bool;
-    /// Requests the initialisation state (`CCCR.INIT`) and waits for it, bounded; `true` once
-    /// it reads set (the core then neither receives nor sends). Called only after
-    /// [`Fdcan::restart`] succeeded; the default (a device without it) refuses.
-    fn enter_init(&mut self) -> bool {
-        false
-    }
     /// From the initialisation state: configuration mode (`CCE`), bus monitoring
     /// (`CCCR.MON`) set to `monitoring` (the other mode bits unchanged), then `INIT` cleared:
     /// the core joins the bus, receiving only if `monitoring`. Entering configuration mode
@@ -180,6 +178,12 @@ pub trait Fdcan {
     fn restart(&mut self, monitoring: bool) -> bool {
         let _ = monitoring;
         false
+    }
+    /// Leaves bus monitoring (clears `CCCR.MON`, which software may reset at any time, outside
+    /// configuration mode too: the FIFOs and TX requests keep their state); `true` once `MON`
+    /// reads clear. The default (a device without bus monitoring) is never in it.
+    fn leave_monitoring(&mut self) -> bool {
+        true
     }
     /// The element `k` places after the TX FIFO's get index (`k` < [`TX_FIFO`]) if its
     /// transmission is still pending (`TXBRP`), else `None`: the `ACK`s still owed, in their
@@ -402,18 +406,19 @@ impl<P: Fdcan> Link<P> {
     #[inline(never)]
     fn end_backoff(&mut self) {
         if self.monitoring {
-            let recovering = !self.hw.in_init() && self.hw.protocol_status() & psr::BO != 0;
-            if recovering || !self.hw.enter_init() {
+            // MON is cleared directly (no INIT, which could cut off a frame being received,
+            // and no configuration mode): the core goes from listening to normal operation
+            // with its FIFOs as they are. Should MON not clear, the core stays listening, the
+            // link stays reported bus-off (and so the node's link supervision holds) and the
+            // adapter tries again next cycle: never mute while reported on the bus.
+            // Not before the core listens: INIT's clear has taken (MON's write must not
+            // write INIT back) and the recovery's recessive bits are counted.
+            let not_listening = self.hw.in_init() || self.hw.protocol_status() & psr::BO != 0;
+            if not_listening || !self.hw.leave_monitoring() {
                 self.backoff_wait = 1;
                 return;
             }
-            // In INIT nothing arrives any more: what was heard goes to software before
-            // configuration mode resets the FIFO statuses.
-            self.drain_all_rx();
             self.monitoring = false;
-            if !self.hw.restart(false) {
-                self.hw.leave_init();
-            }
         } else {
             self.hw.leave_init();
         }

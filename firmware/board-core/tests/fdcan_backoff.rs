@@ -239,3 +239,44 @@ fn owed_acks_that_do_not_fit_the_software_queue_keep_the_core_in_init() {
     assert_eq!(seqs, (0..36).collect::<Vec<u8>>());
     assert_eq!(model(&l).violations(), []);
 }
+
+/// Leaving bus monitoring clears `MON` directly (no `INIT`, no configuration mode: a frame
+/// being received is not cut off and the FIFOs keep what they hold). A `MON` that does not
+/// clear keeps the link reported bus-off, cycle after cycle, with nothing transmitted: never
+/// mute while reported on the bus; once it clears, the owed `ACK`s leave.
+#[test]
+fn a_monitoring_mode_that_does_not_clear_keeps_the_link_reported_off_the_bus() {
+    let mut node = Node::<16>::new(NodeConfig::hrp2()).unwrap();
+    let mut l = link_over(brought_up());
+    model(&l).st().arrive(heartbeat(1));
+    node.poll(0, &mut l);
+    l.service();
+    model(&l).st().bus_off();
+    l.service();
+    assert!(l.listening());
+    // MON stuck at 1 from here on.
+    model(&l)
+        .st()
+        .stuck_bits
+        .push((regmodel::CCCR, regmodel::CCCR_MON));
+    let sent_before = model(&l).st().wire.len();
+    for k in 1..=10 {
+        node.poll(5 * k, &mut l);
+        rest_of_cycle(&mut l, true);
+        assert_eq!(l.health().state, board_core::BusState::BusOff, "cycle {k}");
+        assert!(l.listening(), "cycle {k}");
+    }
+    assert_eq!(model(&l).st().wire.len(), sent_before, "nothing sent");
+    // A frame heard while the adapter retries is still delivered (the FIFOs were never reset).
+    assert!(model(&l).st().arrive(heartbeat(2)).stored());
+    model(&l).st().stuck_bits.clear();
+    for k in 11..=14 {
+        node.poll(5 * k, &mut l);
+        rest_of_cycle(&mut l, true);
+    }
+    assert!(!l.listening());
+    assert_ne!(l.health().state, board_core::BusState::BusOff);
+    let control = ids::CONTROL as u8;
+    assert_eq!(acks(&l), [(control, 1), (control, 2)]);
+    assert_eq!(model(&l).violations(), []);
+}

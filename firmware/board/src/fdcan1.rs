@@ -127,8 +127,8 @@ impl Fdcan for Fdcan1 {
     fn take_ram_failure(&mut self) -> bool {
         self.0.take_ram_failure()
     }
-    fn enter_init(&mut self) -> bool {
-        self.0.enter_init()
+    fn leave_monitoring(&mut self) -> bool {
+        self.0.leave_monitoring()
     }
     fn restart(&mut self, monitoring: bool) -> bool {
         self.0.restart(monitoring)

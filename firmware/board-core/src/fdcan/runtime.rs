@@ -1,7 +1,7 @@
 //! The run-time accesses of the link adapter ([`crate::link::Fdcan`]) over the registers and
 //! message RAM of a configured FDCAN ([`RegFdcan`]), in the layout of [`super::layout`].
 
-use super::config::{layout, wait_init, RX1_ELEMENTS};
+use super::config::{layout, RX1_ELEMENTS};
 use super::regs::{cccr, ir, rxfs, txfqs, FdcanRegs, Reg};
 use crate::link::{Fdcan, RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 
@@ -141,12 +141,11 @@ impl<R: FdcanRegs> Fdcan for RegFdcan<R> {
     }
 
     #[inline(never)]
-    fn enter_init(&mut self) -> bool {
-        // Only INIT changes (a clock stop request is withdrawn); the write crosses into the
-        // CAN clock domain: wait, bounded, until it shows.
+    fn leave_monitoring(&mut self) -> bool {
+        // Only MON changes (a clock stop request is withdrawn).
         let c = self.regs.read(Reg::Cccr) & !(cccr::CSA | cccr::CSR);
-        self.regs.write(Reg::Cccr, c | cccr::INIT);
-        wait_init(&self.regs, true)
+        self.regs.write(Reg::Cccr, c & !cccr::MON);
+        self.regs.read(Reg::Cccr) & cccr::MON == 0
     }
 
     #[inline(never)]

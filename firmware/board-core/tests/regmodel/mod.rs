@@ -507,6 +507,11 @@ impl State {
         if cur & CCCR_ASM != 0 && v & CCCR_ASM == 0 {
             new &= !CCCR_ASM;
         }
+        // MON likewise: set only with INIT and CCE, reset by software at any time (Bosch's
+        // M_CAN user's manual, CCCR.MON; the FDCAN of RM0433 is that core).
+        if cur & CCCR_MON != 0 && v & CCCR_MON == 0 {
+            new &= !CCCR_MON;
+        }
         let changed = (v ^ new) & CCCR_PROTECTED;
         if changed != 0 {
             if self.config_enabled() {
