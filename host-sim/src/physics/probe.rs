@@ -13,7 +13,7 @@
 //! * **servo damping** `kd` (`--servo-damping`): the joint damping of every servo, in place of
 //!   the robot's (HRP-2: [`super::model::SERVO_KD`] = 600 N m s/rad); softer joints let the
 //!   feet and the trunk rock, as the compliant ankles of a real HRP-2 do;
-//! * **`weakest`**: the smallest `s` of [`LADDER`] with which every built-in scenario walks
+//! * **`weakest`**: the smallest `s` of [`LADDER`] with which no built-in scenario falls
 //!   through in the engine (0 falls) with that servo damping ([`weakest`]): the stabilizer
 //!   just strong enough for ordinary walking, so that a modification the pattern handles
 //!   badly is the first thing to fall. The search goes up the ladder and stops at the first
@@ -47,7 +47,7 @@ pub const LADDER: [f64; 8] = [0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0];
 pub enum Setting {
     /// Every feedback gain times this scale.
     Scale(f64),
-    /// The smallest scale of [`LADDER`] that walks every built-in scenario.
+    /// The smallest scale of [`LADDER`] with which no built-in scenario falls.
     Weakest,
 }
 
@@ -73,7 +73,7 @@ pub struct ProbeArgs {
     #[arg(long)]
     pub open_loop: bool,
     /// The stabilizer: `full`, `off` (no feedback acts), a scale S ≥ 0 of every feedback gain,
-    /// or `weakest` (the smallest scale with which every built-in scenario walks).
+    /// or `weakest` (the smallest scale with which no built-in scenario falls).
     #[arg(long, value_name = "full|off|weakest|S", default_value = "full", value_parser = parse_setting)]
     pub stabilizer: Setting,
     /// The joint damping of every servo [N m s/rad] [default: the robot's].
@@ -149,7 +149,7 @@ pub struct Probe {
 
 impl ProbeArgs {
     /// The configuration of `robot` with these options; `weakest` runs the ladder
-    /// ([`weakest`]). Errors: the engine failed, or no scale walks every built-in scenario.
+    /// ([`weakest`]). Errors: the engine failed, or with every scale a built-in scenario falls.
     pub fn resolve(&self, robot: &Robot) -> Result<Probe, String> {
         let (scale, ladder) = match self.stabilizer {
             Setting::Scale(s) => (s, None),
@@ -310,14 +310,15 @@ pub struct Rung {
 }
 
 impl Rung {
-    /// Every built-in scenario walked through.
+    /// Every built-in scenario run without a fall (the ladder's criterion; the gait measures
+    /// are the grid's).
     pub fn walked(&self) -> bool {
         self.runs.len() == BUILT_IN.len() && self.runs.iter().all(|(_, r)| !r.fell)
     }
 }
 
-/// Goes up [`LADDER`] with the servo damping `kd` until a scale walks every built-in
-/// scenario; returns that scale (`None`: not even the full stabilizer did) and the rungs
+/// Goes up [`LADDER`] with the servo damping `kd` until a scale with which no built-in
+/// scenario falls; returns that scale (`None`: not even the full stabilizer did) and the rungs
 /// tried. Errors: the engine failed.
 pub fn weakest(robot: &Robot, kd: Option<f64>) -> Result<(Option<f64>, Vec<Rung>), String> {
     let mut rungs = Vec::new();
@@ -340,7 +341,7 @@ pub fn weakest(robot: &Robot, kd: Option<f64>) -> Result<(Option<f64>, Vec<Rung>
         crate::errln!(
             "stabilizer scale {scale}: {}",
             if walked {
-                "every built-in scenario walks".to_string()
+                "no built-in scenario falls".to_string()
             } else {
                 format!("{} fell", rung.runs.last().map_or("?", |r| r.0.as_str()))
             }
