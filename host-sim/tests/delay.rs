@@ -43,7 +43,7 @@ fn config(
         sensors,
         latency_ms: Some(latency_ms),
         design_delay_ms: design_ms,
-        seed: Some(seed),
+        noise_seed: Some(seed),
         ..ProbeArgs::default()
     }
     .resolve(robot)

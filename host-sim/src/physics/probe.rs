@@ -96,7 +96,7 @@ pub struct ProbeArgs {
     pub design_delay_ms: Option<f64>,
     /// The seed of the sensors' noise [default: 1].
     #[arg(long, value_name = "N")]
-    pub seed: Option<u64>,
+    pub noise_seed: Option<u64>,
 }
 
 /// Where the stabilizer takes the contact phase from (`--contact`).
@@ -129,7 +129,7 @@ impl Default for ProbeArgs {
             latency_ms: None,
             contact: Contact::Sensors,
             design_delay_ms: None,
-            seed: None,
+            noise_seed: None,
         }
     }
 }
@@ -171,7 +171,7 @@ impl ProbeArgs {
         if let Some(ms) = self.latency_ms {
             cfg.sensors.latency_ticks = ms;
         }
-        if let Some(seed) = self.seed {
+        if let Some(seed) = self.noise_seed {
             cfg.sensors.seed = seed;
         }
         let design_ms = match self.design_delay_ms {
@@ -427,7 +427,7 @@ mod tests {
         let stated = ProbeArgs {
             latency_ms: Some(7),
             design_delay_ms: Some(0.0),
-            seed: Some(9),
+            noise_seed: Some(9),
             ..ProbeArgs::default()
         }
         .resolve(&Robot::hrp2())
