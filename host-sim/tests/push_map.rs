@@ -3,9 +3,10 @@
 //!
 //! * The contract of `push-map --quick`: `push_map.json` with `robot`, `mass_kg`,
 //!   `push_duration_s` and the three configurations, each a list of `{phase, direction_deg,
-//!   max_force_n, dv_mps, bw_fraction, steps_adjusted}` over the quick map's two phases and
-//!   four directions; `Δv = F Δt / m` and `F / (m g)` as stated; the stabilizer-only walks
-//!   never move a step; a polar plot per phase.
+//!   max_force_n, impulse_ns, dv_mps, bw_fraction, steps_adjusted}` over the quick map's two
+//!   phases and two of its directions; `Δv = F Δt / m`, `F Δt` and `F / (m g)` as stated; the
+//!   stabilizer-only walks never move a step; a polar plot per phase; one cell run alone
+//!   (`--cell`) gives the map's cell.
 //! * The bisection's claim, checked again for one cell: the reported force is walked through,
 //!   one resolution step more fells the robot.
 //! * The closed loop: without a push no configuration moves a step or falls; with
@@ -45,9 +46,12 @@ fn quick_map_keeps_its_contract() {
     if !engine_here("quick_map_keeps_its_contract") {
         return;
     }
+    // The quick map's two phases, two of its directions (half its engine runs).
+    const DIRECTIONS: [f64; 2] = [0.0, 180.0];
+    assert!(DIRECTIONS.iter().all(|d| QUICK_DIRECTIONS.contains(d)));
     let out = out_dir("quick");
     let status = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(["push-map", "--quick", "--out"])
+        .args(["push-map", "--quick", "--directions", "0,180", "--out"])
         .arg(&out)
         .status()
         .expect("host-sim runs");
@@ -64,11 +68,11 @@ fn quick_map_keeps_its_contract() {
         let cells = j["configs"][config].as_array().expect(config);
         assert_eq!(
             cells.len(),
-            QUICK_PHASES.len() * QUICK_DIRECTIONS.len(),
+            QUICK_PHASES.len() * DIRECTIONS.len(),
             "{config}"
         );
         for p in QUICK_PHASES {
-            for d in QUICK_DIRECTIONS {
+            for d in DIRECTIONS {
                 let c = cells
                     .iter()
                     .find(|c| c["phase"] == p.name() && c["direction_deg"].as_f64() == Some(d))
@@ -79,6 +83,8 @@ fn quick_map_keeps_its_contract() {
                 assert!((0.0..=m * g).contains(&f), "{c}");
                 assert!((dv - f * PUSH_S / m).abs() < 1e-9, "{c}");
                 assert!((bw - f / (m * g)).abs() < 1e-9, "{c}");
+                let impulse = c["impulse_ns"].as_f64().unwrap();
+                assert!((impulse - f * PUSH_S).abs() < 1e-9, "{c}");
                 let adjusted = c["steps_adjusted"].as_u64().unwrap();
                 if config == "stabilizer_only" {
                     assert_eq!(adjusted, 0, "{c}");
@@ -92,6 +98,37 @@ fn quick_map_keeps_its_contract() {
         assert_eq!(&bytes[1..4], b"PNG");
     }
     assert!(out.join("push_map.md").exists());
+    // One cell in a process of its own (`--cell`): one JSON line, the map's cell.
+    let one = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["push-map", "--quick", "--cell", "stabilizer_only,double,0"])
+        .output()
+        .expect("host-sim runs");
+    assert!(
+        one.status.success(),
+        "{}",
+        String::from_utf8_lossy(&one.stderr)
+    );
+    let text = String::from_utf8_lossy(&one.stdout);
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    let line: Value = serde_json::from_str(lines[0]).expect("one JSON line");
+    let in_map = j["configs"]["stabilizer_only"]
+        .as_array()
+        .and_then(|cells| {
+            cells
+                .iter()
+                .find(|c| c["phase"] == "double" && c["direction_deg"].as_f64() == Some(0.0))
+        })
+        .expect("the map's cell");
+    assert_eq!(line["config"].as_str(), Some("stabilizer_only"));
+    assert_eq!(line["robot"].as_str(), Some(robot.name()));
+    assert!(
+        line["engine_runs"].as_u64().is_some_and(|n| n > 0),
+        "{line}"
+    );
+    for key in ["max_force_n", "impulse_ns", "dv_mps", "bw_fraction"] {
+        assert_eq!(line[key], in_map[key], "{key}: {line} against {in_map}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -319,10 +356,10 @@ fn a_failed_cell_is_reported_not_counted() {
     assert!((plain[0]["impulse_ns"].as_f64().unwrap() - 500.0 * PUSH_S).abs() < 1e-12);
 }
 
-/// `push-map --cell` measures one cell in its own process: one JSON line, the same cell the
-/// map's bisection gives; a malformed `--cell` is refused with the expected form.
+/// A malformed `push-map --cell` is refused with the expected form (the cell itself is
+/// checked against the quick map in `quick_map_keeps_its_contract`).
 #[test]
-fn one_cell_per_process() {
+fn a_malformed_cell_is_refused() {
     let bad = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args(["push-map", "--cell", "proposed,double"])
         .output()
@@ -330,36 +367,4 @@ fn one_cell_per_process() {
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("CONFIG,PHASE,DIRECTION"), "{err}");
-    if !engine_here("one_cell_per_process") {
-        return;
-    }
-    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(["push-map", "--quick", "--cell", "stabilizer_only,double,0"])
-        .output()
-        .expect("host-sim runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{text}");
-    let j: Value = serde_json::from_str(lines[0]).expect("one JSON line");
-    let robot = Robot::hrp2();
-    let cfg = PhysicsConfig::for_robot(&robot);
-    let cell = bisect(
-        &robot.node_config(),
-        &cfg,
-        Stepping::Fixed,
-        PushPhase::Double,
-        0.0,
-        host_sim::physics::push_map::QUICK_RESOLUTION_BW,
-    )
-    .unwrap();
-    assert_eq!(j["config"].as_str(), Some("stabilizer_only"));
-    assert_eq!(j["robot"].as_str(), Some(robot.name()));
-    assert_eq!(j["max_force_n"].as_f64(), Some(cell.max_force_n));
-    assert_eq!(j["engine_runs"].as_u64(), Some(cell.runs as u64));
-    assert!((j["impulse_ns"].as_f64().unwrap() - cell.max_force_n * PUSH_S).abs() < 1e-9);
 }
