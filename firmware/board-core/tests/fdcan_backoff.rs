@@ -5,20 +5,16 @@
 //! `ESTOP` waiting in RX FIFO1 at the bus-off is not lost. And the fallback for a core that
 //! refuses configuration mode: held in `INIT`, deaf, its `ACK`s kept in the TX FIFO.
 
+mod common;
 mod regmodel;
 
-use board_core::fdcan::{self, RegFdcan};
+use common::*;
+
+use board_core::fdcan::RegFdcan;
 use board_core::Link;
 use planner_core::node::{Node, NodeConfig, NodeState};
-use planner_core::wire::{ids, Command, ControlOp};
-use regmodel::{BusFrame, FdcanModel, Verdict};
-
-const TIMING: fdcan::BitTiming = fdcan::BitTiming {
-    prescaler: 2,
-    seg1: 34,
-    seg2: 5,
-    sjw: 5,
-};
+use planner_core::wire::ids;
+use regmodel::{FdcanModel, Verdict};
 
 /// Bit times of a 5 ms control cycle at 1 Mbit/s.
 const CYCLE_BITS: u32 = 5_000;
@@ -29,29 +25,8 @@ fn link_over(m: FdcanModel) -> ModelLink {
     Link::new(RegFdcan::new(m))
 }
 
-fn brought_up() -> FdcanModel {
-    let mut m = FdcanModel::after_reset();
-    assert_eq!(fdcan::bring_up(&mut m, &TIMING), Ok(()));
-    m
-}
-
 fn model(l: &ModelLink) -> &FdcanModel {
     l.peripheral().regs()
-}
-
-fn heartbeat(seq: u32) -> BusFrame {
-    BusFrame::raw(
-        &Command::Control {
-            session: 0,
-            seq,
-            op: ControlOp::Heartbeat,
-        }
-        .encode(),
-    )
-}
-
-fn estop(seq: u8) -> BusFrame {
-    BusFrame::raw(&Command::EmergencyStop { seq }.encode())
 }
 
 /// (command byte, sequence number) of the `ACK`s on the modelled wire, in order.

@@ -3,45 +3,16 @@
 //! error-passive, bus-off and its recovery window, all read from `PSR`/`ECR` as the model
 //! derives them from injected error counters.
 
+mod common;
 mod regmodel;
 
-use board_core::fdcan::{self, layout, FdcanRegs, Reg, RegFdcan};
+use common::*;
+
+use board_core::fdcan::{layout, FdcanRegs, Reg, RegFdcan};
 use board_core::link::{BACKOFF_RESET_CYCLES, TX_SLOTS};
 use board_core::{BusState, Link};
-use embedded_can::Frame;
-use planner_core::wire::{ids, Command, ControlOp};
+use planner_core::wire::{ids, Command};
 use regmodel::{BusFrame, FdcanModel, Verdict, Violation, RECOVERY_BITS};
-
-const TIMING: fdcan::BitTiming = fdcan::BitTiming {
-    prescaler: 2,
-    seg1: 34,
-    seg2: 5,
-    sjw: 5,
-};
-
-fn brought_up() -> FdcanModel {
-    let mut m = FdcanModel::after_reset();
-    assert_eq!(fdcan::bring_up(&mut m, &TIMING), Ok(()));
-    assert_eq!(m.violations(), []);
-    m
-}
-
-fn heartbeat(seq: u32) -> BusFrame {
-    BusFrame::raw(
-        &Command::Control {
-            session: 0,
-            seq,
-            op: ControlOp::Heartbeat,
-        }
-        .encode(),
-    )
-}
-
-fn element(id: u16, data: &[u8]) -> [u32; 4] {
-    board_core::ClassicFrame::new(embedded_can::StandardId::new(id).unwrap(), data)
-        .unwrap()
-        .to_element()
-}
 
 /// Requests `INIT` and reads `CCCR` until it shows.
 fn enter_init(m: &mut FdcanModel) {

@@ -4,34 +4,18 @@
 //! before everything else, and the sequence the `fdcan` crate ran before (caught letting
 //! every standard frame in).
 
+mod common;
 mod regmodel;
+
+use common::*;
 
 use board_core::fdcan::{self, layout, BringUpError, FdcanRegs, Reg, RegFdcan};
 use board_core::link::{psr, RX_ELEMENTS, TX_FIFO, TX_SLOTS};
 use board_core::{BusState, Fdcan, Link};
 use embedded_can::Frame;
 use planner_core::node::{Node, NodeConfig, NodeState};
-use planner_core::wire::{ids, Ack, Command, ControlOp, RawFrame};
+use planner_core::wire::{ids, Ack, Command, RawFrame};
 use regmodel::{BusFrame, FdcanModel, Verdict, Violation};
-
-/// The board's nominal bit timing (its setting in `board/src/main.rs`): 1 Mbit/s from 80 MHz,
-/// 40 time quanta, sample point 87.5 %.
-const TIMING: fdcan::BitTiming = fdcan::BitTiming {
-    prescaler: 2,
-    seg1: 34,
-    seg2: 5,
-    sjw: 5,
-};
-
-/// A model brought up by board-core, with no violation.
-fn brought_up() -> FdcanModel {
-    let mut m = FdcanModel::after_reset();
-    assert_eq!(fdcan::bring_up(&mut m, &TIMING), Ok(()));
-    assert_eq!(m.violations(), []);
-    assert!(!m.st().in_init());
-    assert_eq!(m.st().joins, 1);
-    m
-}
 
 /// Frames that are not the node's commands, of every kind: a foreign data frame, remote
 /// frames (foreign, and on a command's identifier), extended frames (one whose low 11 bits
@@ -60,18 +44,6 @@ fn foreign_accepted(m: &FdcanModel) -> Vec<(BusFrame, Verdict)> {
         .map(|f| (f, m.st().arrive(f)))
         .filter(|(_, v)| v.stored())
         .collect()
-}
-
-fn command(c: Command) -> BusFrame {
-    BusFrame::raw(&c.encode())
-}
-
-fn heartbeat(seq: u32) -> BusFrame {
-    command(Command::Control {
-        session: 0,
-        seq,
-        op: ControlOp::Heartbeat,
-    })
 }
 
 /// A `STEP_APPEND` / `STEP_MODIFY` identifier with 8 bytes (decoded or not, the filters
@@ -787,12 +759,6 @@ fn overflow_bus_off_and_silence_over_the_registers() {
 }
 
 // --- the TX FIFO and the order of the ACKs ---
-
-fn element(id: u16, data: &[u8]) -> [u32; 4] {
-    board_core::ClassicFrame::new(embedded_can::StandardId::new(id).unwrap(), data)
-        .unwrap()
-        .to_element()
-}
 
 /// The sequence numbers of the ACKs on the modelled wire, in order.
 fn ack_seqs(m: &FdcanModel) -> Vec<u8> {
