@@ -132,6 +132,35 @@ fn send(port: &mut crate::sim::bus::Port, f: RawFrame) {
     let _ = port.transmit(&f);
 }
 
+/// The session handshake on a virtual bus at time 0: the node's first cycle (at 2.5 ms)
+/// publishes its session epoch, the controller reads it and sends the `Reset` that opens the
+/// next session (it reaches the node with whatever the caller sends before the next poll).
+/// Returns the controller in that new session; the bus stands at 5 ms.
+pub(crate) fn handshake<const Q: usize>(
+    bus: &Bus,
+    node: &mut Node<Q>,
+    ctl: &mut bus::Port,
+    nport: &mut bus::Port,
+) -> Controller {
+    let ms = 1_000_000u64;
+    bus.advance(0);
+    bus.advance(5 * ms / 2);
+    node.poll(2, nport);
+    bus.advance(5 * ms);
+    let mut c = Controller::default();
+    while let Ok(f) = ctl.receive() {
+        if let Some(session) = wire::Session::decode(&f) {
+            c = Controller {
+                epoch: session.epoch,
+                seq: session.last_seq,
+            };
+        }
+    }
+    send(ctl, c.control(ControlOp::Reset).encode());
+    c.epoch = c.epoch.wrapping_add(1);
+    c
+}
+
 /// The node's configuration for a run of `s`: `node`, standing where the scenario's feet
 /// start ([`Scenario::start_feet`]).
 pub fn start_config(s: &Scenario, node: &NodeConfig) -> NodeConfig {
@@ -168,24 +197,9 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     let mut last_replan = None;
     let last_command = s.timeline.last().map(|(t, _)| *t).unwrap_or(0);
     let ms = 1_000_000u64;
-    // The handshake: the node's first cycle (before the scenario's tick 0, 5 ms earlier)
-    // publishes its session; the controller opens it with a `Reset` sent with the commands of
-    // tick 0, which are in the session that opens (the epoch one more).
-    bus.advance(0);
-    bus.advance(5 * ms / 2);
-    node.poll(2, &mut nport);
-    bus.advance(5 * ms);
-    let mut ctl_state = Controller::default();
-    while let Ok(f) = ctl.receive() {
-        if let Some(session) = wire::Session::decode(&f) {
-            ctl_state = Controller {
-                epoch: session.epoch,
-                seq: session.last_seq,
-            };
-        }
-    }
-    send(&mut ctl, ctl_state.control(ControlOp::Reset).encode());
-    ctl_state.epoch = ctl_state.epoch.wrapping_add(1);
+    // The handshake, 5 ms before the scenario's tick 0; the `Reset` goes out with tick 0's
+    // commands, which are in the session it opens.
+    let mut ctl_state = handshake(&bus, &mut node, &mut ctl, &mut nport);
     let first_step = node.next_step();
     for k in 0..s.max_ticks {
         let t0 = (k + 1) * 5 * ms;

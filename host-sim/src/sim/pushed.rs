@@ -14,10 +14,9 @@
 
 use planner_core::gait::{GaitParams, Phase, Reference, Side};
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{Adjust, ControlOp, Measured, Session, StepBook};
+use planner_core::wire::{Adjust, ControlOp, Measured, StepBook};
 
 use super::bus::{Bus, Faults};
-use crate::scenario::wire::Controller;
 use embedded_can::nb::Can;
 
 /// The stabilizer's DCM gain `k` \[1/s\].
@@ -134,22 +133,8 @@ pub fn pushed_walk(
     bus.record();
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let ms = 1_000_000u64;
-    // The handshake, as `simulate` does it: the node's first cycle publishes its session.
-    bus.advance(0);
-    bus.advance(5 * ms / 2);
-    node.poll(2, &mut nport);
-    bus.advance(5 * ms);
-    let mut c = Controller::default();
-    while let Ok(f) = ctl.receive() {
-        if let Some(s) = Session::decode(&f) {
-            c = Controller {
-                epoch: s.epoch,
-                seq: s.last_seq,
-            };
-        }
-    }
-    let _ = ctl.transmit(&c.control(ControlOp::Reset).encode());
-    c.epoch = c.epoch.wrapping_add(1);
+    // The handshake, as `simulate` does it.
+    let mut c = super::handshake(&bus, &mut node, &mut ctl, &mut nport);
     // The walk, sent at tick 0.
     let mut book = StepBook::new();
     let mut first = Vec::new();
