@@ -154,6 +154,42 @@ struct Worst {
 }
 
 impl Worst {
+    /// The book's row `anchor` of these runs (printed, and quoted against the book):
+    /// `straight` in the first column, `slip` in the slip column.
+    fn book_row(&self, q: Quotes, anchor: &str, straight: String, slip: String) -> Quotes {
+        let cells = [
+            ("gains for no delay: `straight`", straight),
+            (
+                "gains for the delay: walked",
+                format!("{} of {}", self.walked, self.runs),
+            ),
+            ("slip", slip),
+            ("flight", ms(self.flight)),
+            ("CoP outside", ms(self.outside)),
+            ("landing error", mm(self.landing)),
+            (
+                "CoP error mean / worst",
+                format!(
+                    "{:.1} / {:.1} mm",
+                    1e3 * self.cop_mean_sum / self.runs as f64,
+                    1e3 * self.cop_max
+                ),
+            ),
+        ];
+        println!(
+            "{anchor} {} | not walked: {:?}",
+            cells
+                .iter()
+                .map(|c| c.1.as_str())
+                .collect::<Vec<_>>()
+                .join(" | "),
+            self.fell
+        );
+        cells
+            .iter()
+            .fold(q, |q, (column, value)| q.cell(BOOK, anchor, column, value))
+    }
+
     fn add(&mut self, name: &str, r: &PhysicsReport) {
         self.runs += 1;
         self.walked += usize::from(r.walked());
@@ -196,37 +232,7 @@ fn delay_sweep_as_the_book_says() {
                 w.add(scenario, &r);
             }
             let anchor = format!("| {name} | {delay} ms |");
-            let cells = [
-                ("gains for no delay: `straight`", old.walked_text()),
-                (
-                    "gains for the delay: walked",
-                    format!("{} of {}", w.walked, w.runs),
-                ),
-                ("slip", mm(w.slip)),
-                ("flight", ms(w.flight)),
-                ("CoP outside", ms(w.outside)),
-                ("landing error", mm(w.landing)),
-                (
-                    "CoP error mean / worst",
-                    format!(
-                        "{:.1} / {:.1} mm",
-                        1e3 * w.cop_mean_sum / w.runs as f64,
-                        1e3 * w.cop_max
-                    ),
-                ),
-            ];
-            println!(
-                "{anchor} {} | not walked: {:?}",
-                cells
-                    .iter()
-                    .map(|c| c.1.as_str())
-                    .collect::<Vec<_>>()
-                    .join(" | "),
-                w.fell
-            );
-            for (column, value) in &cells {
-                q = q.cell(BOOK, &anchor, column, value);
-            }
+            q = w.book_row(q, &anchor, old.walked_text(), mm(w.slip));
             if name == "HRP-2" {
                 hrp2_walked.push((delay, w.walked == w.runs));
             }
@@ -259,37 +265,8 @@ fn realistic_sensors_over_seeds_as_the_book_says() {
         }
         let anchor = format!("| {name} | realistic, seeds 1–{} |", SEEDS.len());
         let slip_mean = slips.iter().sum::<f64>() / slips.len() as f64;
-        let cells = [
-            ("gains for no delay: `straight`", "–".to_string()),
-            (
-                "gains for the delay: walked",
-                format!("{} of {}", w.walked, w.runs),
-            ),
-            ("slip", format!("{:.1} / {}", 1e3 * slip_mean, mm(w.slip))),
-            ("flight", ms(w.flight)),
-            ("CoP outside", ms(w.outside)),
-            ("landing error", mm(w.landing)),
-            (
-                "CoP error mean / worst",
-                format!(
-                    "{:.1} / {:.1} mm",
-                    1e3 * w.cop_mean_sum / w.runs as f64,
-                    1e3 * w.cop_max
-                ),
-            ),
-        ];
-        println!(
-            "{anchor} {} | not walked: {:?}",
-            cells
-                .iter()
-                .map(|c| c.1.as_str())
-                .collect::<Vec<_>>()
-                .join(" | "),
-            w.fell
-        );
-        for (column, value) in &cells {
-            q = q.cell(BOOK, &anchor, column, value);
-        }
+        let slip = format!("{:.1} / {}", 1e3 * slip_mean, mm(w.slip));
+        q = w.book_row(q, &anchor, "–".to_string(), slip);
     }
     q.assert();
 }
