@@ -12,7 +12,7 @@
 //!                                  faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
-//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D] [PROBE] [--robot FILE]
+//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D] [--push force|velocity] [PROBE] [--robot FILE]
 //!                                  the push-recovery map in MuJoCo, with and without step adjustment
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //!
@@ -221,6 +221,9 @@ enum Cmd {
             allow_hyphen_values = true
         )]
         cell: Option<String>,
+        /// How a push is given: a force for 0.1 s, or the base's velocity set at one instant.
+        #[arg(long, value_name = "force|velocity", default_value = "force", value_parser = ["force", "velocity"])]
+        push: String,
         #[command(flatten)]
         probe: ProbeArgs,
     },
@@ -414,6 +417,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             robot,
             replan_from,
             cell,
+            push,
             probe,
         }) => host_sim::physics::push_map::cli(
             &host_sim::physics::push_map::MapArgs {
@@ -423,6 +427,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 directions: directions.as_deref(),
                 from_measured: replan_from == "measured",
                 cell: cell.as_deref(),
+                push: &push,
             },
             &engine_robot(robot.as_deref())?,
             &probe,

@@ -9,6 +9,11 @@
 //!   (`--cell`) gives the map's cell.
 //! * The bisection's claim, checked again for one cell: the reported force is walked through,
 //!   one resolution step more fells the robot.
+//! * A velocity push (the base's horizontal velocity set at one instant): the engine's base
+//!   moves at the velocity set in the next millisecond, in the direction given; a small one is
+//!   walked through and a large one fells the robot; a velocity cell's JSON line has `v_mps`
+//!   and no force fields. With `WALK_LONG=1`, the quick map of velocity pushes against the
+//!   book's summary of it.
 //! * The closed loop: without a push no configuration moves a step or falls; with
 //!   `StartAdjusting` and a push, every landing is its commanded position plus the shift the
 //!   node published in `ADJUST` (the controller's book stays true).
@@ -26,10 +31,10 @@ use std::process::Command;
 mod engine;
 
 use engine::engine_here;
-use host_sim::physics::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
+use host_sim::physics::closed_loop::{run, PushKind, PushPhase, PushSpec, Stepping, Walk};
 use host_sim::physics::push_map::{
-    bisect, compare, map, markdown, summary_lines, Cell, MapSpec, PUSH_S, QUICK_DIRECTIONS,
-    QUICK_PHASES,
+    bisect, compare, map, markdown, summary_lines, Cell, Convention, MapSpec, PUSH_S,
+    QUICK_DIRECTIONS, QUICK_PHASES,
 };
 use host_sim::physics::PhysicsConfig;
 use host_sim::robot::Robot;
@@ -144,13 +149,24 @@ fn a_cells_force_is_walked_through_and_one_step_more_is_not() {
     let node = robot.node_config();
     let res = 0.125;
     let phase = PushPhase::SingleMiddle;
-    let cell = bisect(&node, &cfg, Stepping::Fixed, phase, 90.0, res).unwrap();
+    let cell = bisect(
+        &node,
+        &cfg,
+        Stepping::Fixed,
+        phase,
+        90.0,
+        res,
+        Convention::Force,
+    )
+    .unwrap();
     let weight = cfg.robot.total_mass() * cfg.robot.gravity();
     let push = |bw: f64| PushSpec {
         phase,
         direction_deg: 90.0,
-        force_n: bw * weight,
-        duration_s: PUSH_S,
+        kind: PushKind::Force {
+            force_n: bw * weight,
+            duration_s: PUSH_S,
+        },
     };
     let walked = run(
         &node,
@@ -203,8 +219,10 @@ fn the_closed_loop_lands_where_adjust_says() {
     let push = PushSpec {
         phase: PushPhase::SingleMiddle,
         direction_deg: 0.0,
-        force_n: 0.3 * cfg.robot.total_mass() * cfg.robot.gravity(),
-        duration_s: PUSH_S,
+        kind: PushKind::Force {
+            force_n: 0.3 * cfg.robot.total_mass() * cfg.robot.gravity(),
+            duration_s: PUSH_S,
+        },
     };
     // The node's default, and capture steps re-planned from the measured state.
     let mut measured = node;
@@ -316,11 +334,13 @@ fn a_failed_cell_is_reported_not_counted() {
         resolution_bw: 0.125,
         steppings: Stepping::ALL.to_vec(),
         threads: 1,
+        convention: Convention::Force,
     };
     let ok = |s: Stepping, d: f64, bw: f64| Cell {
         stepping: s,
         phase: PushPhase::Double,
         direction_deg: d,
+        convention: Convention::Force,
         max_force_n: bw * 1000.0,
         dv_mps: bw,
         bw_fraction: bw,
@@ -367,4 +387,121 @@ fn a_malformed_cell_is_refused() {
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("CONFIG,PHASE,DIRECTION"), "{err}");
+}
+
+/// The engine's velocity push sets the floating base's horizontal velocity in the world frame:
+/// over the next millisecond the base moves by `v dt` in x and y (the floor's friction and the
+/// servos change the velocity by far less than `v` within a millisecond).
+#[test]
+fn a_velocity_push_sets_the_base_velocity() {
+    if !engine_here("a_velocity_push_sets_the_base_velocity") {
+        return;
+    }
+    use host_sim::physics::bridge::Engine;
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let node = planner_core::node::Node::<16>::new(robot.node_config()).unwrap();
+    let r0 = *node.gait().last();
+    let (_, qpos) = host_sim::physics::initial_pose(&cfg.robot, &r0).unwrap();
+    let mut engine = Engine::start(&cfg.robot.mjcf()).unwrap();
+    let hold = qpos[7..7 + engine.nu()].to_vec();
+    let before = engine.reset(&qpos).unwrap();
+    let v = [0.4, -0.3];
+    let pushed = engine.set_base_velocity(v).unwrap();
+    assert_eq!(
+        pushed.base_pos, before.base_pos,
+        "a velocity set moves nothing at once"
+    );
+    // (An observation after a step reads the positions the step started from.)
+    let first = engine.step(1, &hold, [0.0; 6]).unwrap();
+    let after = engine.step(1, &hold, [0.0; 6]).unwrap();
+    let dt = after.time - first.time;
+    for (k, v) in v.into_iter().enumerate() {
+        let moved = after.base_pos[k] - first.base_pos[k];
+        assert!(
+            (moved - v * dt).abs() < 0.2 * v.abs() * dt,
+            "axis {k}: moved {moved} m in {dt} s, set {v} m/s"
+        );
+    }
+}
+
+/// A velocity push that the stabilizer takes, and one that fells the robot; `--cell` with
+/// `--push velocity` gives a velocity cell (`v_mps`, no force fields).
+#[test]
+fn a_small_velocity_push_is_walked_through_and_a_large_one_fells() {
+    if !engine_here("a_small_velocity_push_is_walked_through_and_a_large_one_fells") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let node = robot.node_config();
+    let push = |v_mps: f64| PushSpec {
+        phase: PushPhase::Double,
+        direction_deg: 90.0,
+        kind: PushKind::Velocity { v_mps },
+    };
+    let small = run(
+        &node,
+        &cfg,
+        Walk::default(),
+        Stepping::Fixed,
+        Some(push(0.05)),
+    )
+    .unwrap();
+    assert!(small.pushed && !small.fell, "{small:?}");
+    let large = run(
+        &node,
+        &cfg,
+        Walk::default(),
+        Stepping::Fixed,
+        Some(push(1.5)),
+    )
+    .unwrap();
+    assert!(large.pushed && large.fell, "{large:?}");
+    let cell = Cell {
+        convention: Convention::Velocity,
+        dv_mps: 0.25,
+        ..Cell::failed(Stepping::Fixed, PushPhase::Double, 90.0, String::new())
+    };
+    let j = Cell {
+        error: None,
+        ..cell
+    }
+    .json();
+    assert_eq!(j["push"], "velocity");
+    assert_eq!(j["v_mps"], 0.25);
+    assert!(
+        j.get("max_force_n").is_none() && j.get("impulse_ns").is_none(),
+        "{j}"
+    );
+}
+
+/// The quick map of velocity pushes (`WALK_LONG=1`; 72 engine runs), against its summary in
+/// the book (`docs/src/adjust.md`).
+#[test]
+fn the_quick_velocity_map_is_the_books() {
+    if std::env::var("WALK_LONG").as_deref() != Ok("1") {
+        eprintln!("push_map: the velocity map runs with WALK_LONG=1");
+        return;
+    }
+    if !engine_here("the_quick_velocity_map_is_the_books") {
+        return;
+    }
+    let robot = Robot::hrp2();
+    let cfg = PhysicsConfig::for_robot(&robot);
+    let spec = MapSpec {
+        convention: Convention::Velocity,
+        ..MapSpec::new(true)
+    };
+    let cells = map(&robot.node_config(), &cfg, &spec);
+    assert!(cells.iter().all(|c| c.ok()), "failed cells: {cells:?}");
+    let book = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../docs/src/adjust.md"),
+    )
+    .expect("the book");
+    let sums = summary_lines(&spec, &cells);
+    eprintln!("{sums}");
+    for line in sums.lines().filter(|l| !l.is_empty()) {
+        assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
+    }
 }

@@ -9,6 +9,8 @@
 #                            ctrl := the nu values, xfrc_applied of the body "trunk" := the six
 #                            values (force, torque, world frame), k calls of mj_step; answer an
 #                            observation
+#     b'V' + 2 f64           the floating base's linear velocity x, y (world frame) := the two
+#                            values, mj_forward; answer an observation
 #     b'Q'                   exit
 #   observation: f64 time, nsensordata f64 sensordata, then the ground truth for the
 #   evaluation (never for the controller): base position (3), base quaternion w x y z (4),
@@ -50,6 +52,11 @@ def main():
     soles = {left, right}
     base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "waist")
     trunk = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "trunk")
+    # The base's free joint: its first three velocities are the linear velocity, world frame.
+    base_joint = m.body_jntadr[base] if base >= 0 else -1
+    free_dof = -1
+    if base_joint >= 0 and m.jnt_type[base_joint] == mujoco.mjtJoint.mjJNT_FREE:
+        free_dof = m.jnt_dofadr[base_joint]
     out.write(("OK %s %d %d %d\n" % (mujoco.__version__, m.nq, m.nu, m.nsensordata)).encode())
     out.flush()
     f6 = np.zeros(6)
@@ -107,6 +114,13 @@ def main():
             d.xfrc_applied[trunk, :] = np.frombuffer(read(48), dtype="<f8")
             for _ in range(k):
                 mujoco.mj_step(m, d)
+            observe()
+        elif op == b"V":
+            v = np.frombuffer(read(16), dtype="<f8")
+            if free_dof < 0:
+                sys.exit(1)
+            d.qvel[free_dof : free_dof + 2] = v
+            mujoco.mj_forward(m, d)
             observe()
         else:
             return

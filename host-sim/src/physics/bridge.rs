@@ -253,6 +253,17 @@ impl Engine {
         self.send(&b)?;
         self.observe()
     }
+
+    /// Sets the floating base's horizontal linear velocity (world frame) \[m/s\], everything
+    /// else of the state unchanged: a velocity push.
+    pub fn set_base_velocity(&mut self, v: [f64; 2]) -> Result<Observation, String> {
+        let mut b = vec![b'V'];
+        for x in v {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+        self.send(&b)?;
+        self.observe()
+    }
 }
 
 impl Drop for Engine {

@@ -117,17 +117,45 @@ impl PushPhase {
     }
 }
 
-/// A horizontal push on the trunk's centre of mass.
+/// A horizontal push: when, in which direction, and what it does ([`PushKind`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PushSpec {
     /// When.
     pub phase: PushPhase,
     /// Direction in the walking frame \[deg\]: 0 forward, 90 to the left.
     pub direction_deg: f64,
-    /// Force \[N\].
-    pub force_n: f64,
-    /// Duration \[s\].
-    pub duration_s: f64,
+    /// The push.
+    pub kind: PushKind,
+}
+
+/// What a push does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PushKind {
+    /// A force on the trunk's centre of mass for a time (the convention of push-recovery
+    /// tests on hardware, IHMC's Atlas among them).
+    Force {
+        /// Force \[N\].
+        force_n: f64,
+        /// Duration \[s\].
+        duration_s: f64,
+    },
+    /// The base's horizontal velocity set, at one instant, to `v_mps` in the push's direction,
+    /// everything else of the state unchanged (the convention of learning-based locomotion
+    /// benchmarks: the floating base's linear velocity overwritten).
+    Velocity {
+        /// The base's horizontal speed after the push \[m/s\].
+        v_mps: f64,
+    },
+}
+
+impl PushKind {
+    /// How long the push acts \[s\] (0 for a velocity set at one instant).
+    pub fn duration_s(&self) -> f64 {
+        match self {
+            PushKind::Force { duration_s, .. } => *duration_s,
+            PushKind::Velocity { .. } => 0.0,
+        }
+    }
 }
 
 /// The commanded walk: `steps` straight steps of `length` \[m\] from the robot's stance.
@@ -357,8 +385,8 @@ pub fn run(
                 if let (Some(push), Some(t)) = (push, t_walk) {
                     let offset = match push.phase {
                         PushPhase::SingleStart => Some(0.0),
-                        PushPhase::SingleMiddle => Some(0.5 * (t_ss - push.duration_s)),
-                        PushPhase::SingleEnd => Some(t_ss - push.duration_s),
+                        PushPhase::SingleMiddle => Some(0.5 * (t_ss - push.kind.duration_s())),
+                        PushPhase::SingleEnd => Some(t_ss - push.kind.duration_s()),
                         PushPhase::Double => None,
                     };
                     if let Some(o) = offset {
@@ -398,12 +426,23 @@ pub fn run(
             let mut wrench = [0.0; 6];
             if let (Some(push), Some(t0), Some(t)) = (push, push_start, t_walk) {
                 let t = t + (j as f64) * PHYSICS_DT;
-                if t >= t0 && t < t0 + push.duration_s {
-                    let a = push.direction_deg.to_radians();
-                    wrench[0] = push.force_n * a.cos();
-                    wrench[1] = push.force_n * a.sin();
-                    out.pushed = true;
-                    out.push_at_s.get_or_insert(t0);
+                let a = push.direction_deg.to_radians();
+                match push.kind {
+                    PushKind::Force {
+                        force_n,
+                        duration_s,
+                    } if t >= t0 && t < t0 + duration_s => {
+                        wrench[0] = force_n * a.cos();
+                        wrench[1] = force_n * a.sin();
+                        out.pushed = true;
+                        out.push_at_s.get_or_insert(t0);
+                    }
+                    PushKind::Velocity { v_mps } if t >= t0 && !out.pushed => {
+                        engine.set_base_velocity([v_mps * a.cos(), v_mps * a.sin()])?;
+                        out.pushed = true;
+                        out.push_at_s.get_or_insert(t0);
+                    }
+                    _ => {}
                 }
             }
             obs = engine.step(1, &ctrl, wrench)?;

@@ -16,7 +16,16 @@
 //! through, and `steps_adjusted` the steps that this run landed away from their commanded
 //! positions.
 //!
-//! Each cell is also given as the impulse `F Δt` \[N·s\]. A cell whose engine run cannot be
+//! Each cell is also given as the impulse `F Δt` \[N·s\].
+//!
+//! `--push velocity` maps the convention of learning-based locomotion benchmarks instead: at
+//! the same instant, the floating base's horizontal velocity is **set** to `v` in the push's
+//! direction (the rest of the state unchanged), and each cell is the largest `v` walked
+//! through, bisected between 0 and [`V_MAX_MPS`] down to the same fraction of it. Such a push
+//! replaces the walk's own velocity rather than adding to it, and it acts on the base's
+//! velocity, not on the whole body's momentum, so its `v` is not the `Δv` of a force push.
+//!
+//! A cell whose engine run cannot be
 //! carried out (a leg out of reach in the inverse kinematics, the walk never reaching the push)
 //! is reported as failed with its cause; it never stops the rest of the map, and the command
 //! ends with an error naming the failed cells after writing everything else.
@@ -32,7 +41,7 @@ use std::sync::Mutex;
 
 use serde_json::{json, Value};
 
-use super::closed_loop::{run, PushPhase, PushSpec, Stepping, Walk};
+use super::closed_loop::{run, PushKind, PushPhase, PushSpec, Stepping, Walk};
 use super::PhysicsConfig;
 use planner_core::node::NodeConfig;
 
@@ -44,6 +53,35 @@ pub const RESOLUTION_BW: f64 = 0.02;
 pub const QUICK_RESOLUTION_BW: f64 = 0.125;
 /// The largest push tried \[fraction of body weight\].
 pub const MAX_BW: f64 = 1.0;
+/// The largest base velocity tried by a velocity push \[m/s\].
+pub const V_MAX_MPS: f64 = 1.5;
+
+/// How a push is given: a force for [`PUSH_S`], or the base's velocity set at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Convention {
+    /// A force on the trunk for [`PUSH_S`], bisected in fractions of body weight.
+    #[default]
+    Force,
+    /// The base's horizontal velocity set to `v`, bisected in fractions of [`V_MAX_MPS`].
+    Velocity,
+}
+
+impl Convention {
+    /// The name on the command line and in `push_map.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Force => "force",
+            Convention::Velocity => "velocity",
+        }
+    }
+
+    /// The convention named `s`.
+    pub fn parse(s: &str) -> Option<Self> {
+        [Convention::Force, Convention::Velocity]
+            .into_iter()
+            .find(|c| c.name() == s)
+    }
+}
 
 /// The phases of `--quick`.
 pub const QUICK_PHASES: [PushPhase; 2] = [PushPhase::Double, PushPhase::SingleMiddle];
@@ -70,11 +108,14 @@ pub struct Cell {
     pub phase: PushPhase,
     /// The direction \[deg\].
     pub direction_deg: f64,
-    /// The largest force walked through \[N\].
+    /// How the push was given.
+    pub convention: Convention,
+    /// The largest force walked through \[N\] (0 for a velocity push).
     pub max_force_n: f64,
-    /// Its velocity change \[m/s\].
+    /// Its velocity change \[m/s\]; for a velocity push, the largest base velocity set and
+    /// walked through.
     pub dv_mps: f64,
-    /// Its fraction of body weight.
+    /// Its fraction of body weight (for a velocity push: of [`V_MAX_MPS`]).
     pub bw_fraction: f64,
     /// Steps landed away from their commanded positions in that run.
     pub steps_adjusted: usize,
@@ -90,18 +131,25 @@ pub struct Cell {
 
 impl Cell {
     /// The cell's entry in `push_map.json` (`error` only for a failed cell).
+    /// A velocity push's cell has `v_mps` and `dv_mps` (the velocity set) and no force fields.
     pub fn json(&self) -> Value {
         let mut j = json!({
             "phase": self.phase.name(),
             "direction_deg": self.direction_deg,
-            "max_force_n": self.max_force_n,
-            "impulse_ns": self.impulse_ns(),
+            "push": self.convention.name(),
             "dv_mps": self.dv_mps,
-            "bw_fraction": self.bw_fraction,
             "steps_adjusted": self.steps_adjusted,
             "gait_within_bounds": self.gait.within_bounds(),
             "gait": self.gait.fields().into_iter().map(|(k, v)| (k.to_string(), v)).collect::<serde_json::Map<_, _>>(),
         });
+        match self.convention {
+            Convention::Force => {
+                j["max_force_n"] = json!(self.max_force_n);
+                j["impulse_ns"] = json!(self.impulse_ns());
+                j["bw_fraction"] = json!(self.bw_fraction);
+            }
+            Convention::Velocity => j["v_mps"] = json!(self.dv_mps),
+        }
         if let Some(e) = &self.error {
             j["error"] = Value::String(e.clone());
         }
@@ -124,6 +172,7 @@ impl Cell {
             stepping,
             phase,
             direction_deg,
+            convention: Convention::Force,
             max_force_n: 0.0,
             dv_mps: 0.0,
             bw_fraction: 0.0,
@@ -148,6 +197,8 @@ pub struct MapSpec {
     pub steppings: Vec<Stepping>,
     /// Engine runs at once.
     pub threads: usize,
+    /// How the pushes are given.
+    pub convention: Convention,
 }
 
 impl MapSpec {
@@ -163,6 +214,7 @@ impl MapSpec {
                 resolution_bw: QUICK_RESOLUTION_BW,
                 steppings: Stepping::ALL.to_vec(),
                 threads,
+                convention: Convention::Force,
             }
         } else {
             Self {
@@ -171,12 +223,14 @@ impl MapSpec {
                 resolution_bw: RESOLUTION_BW,
                 steppings: Stepping::ALL.to_vec(),
                 threads,
+                convention: Convention::Force,
             }
         }
     }
 }
 
-/// The bisection of one cell.
+/// The bisection of one cell (`resolution_bw`: of body weight, or of [`V_MAX_MPS`] for a
+/// velocity push).
 pub fn bisect(
     node: &NodeConfig,
     cfg: &PhysicsConfig,
@@ -184,9 +238,19 @@ pub fn bisect(
     phase: PushPhase,
     direction_deg: f64,
     resolution_bw: f64,
+    convention: Convention,
 ) -> Result<Cell, String> {
     let m = cfg.robot.total_mass();
     let weight = m * cfg.robot.gravity();
+    let kind = |x: f64| match convention {
+        Convention::Force => PushKind::Force {
+            force_n: x * weight,
+            duration_s: PUSH_S,
+        },
+        Convention::Velocity => PushKind::Velocity {
+            v_mps: x * V_MAX_MPS,
+        },
+    };
     let (mut lo, mut hi) = (0.0, MAX_BW);
     let mut steps_adjusted = 0;
     let mut gait = super::gait::GaitQuality::default();
@@ -196,8 +260,7 @@ pub fn bisect(
         let push = PushSpec {
             phase,
             direction_deg,
-            force_n: mid * weight,
-            duration_s: PUSH_S,
+            kind: kind(mid),
         };
         let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
         runs += 1;
@@ -215,13 +278,17 @@ pub fn bisect(
             gait = o.gait;
         }
     }
-    let f = lo * weight;
+    let (f, dv) = match convention {
+        Convention::Force => (lo * weight, lo * weight * PUSH_S / m),
+        Convention::Velocity => (0.0, lo * V_MAX_MPS),
+    };
     Ok(Cell {
         stepping,
         phase,
         direction_deg,
+        convention,
         max_force_n: f,
-        dv_mps: f * PUSH_S / m,
+        dv_mps: dv,
         bw_fraction: lo,
         steps_adjusted,
         runs,
@@ -238,9 +305,21 @@ pub fn cell(
     phase: PushPhase,
     direction_deg: f64,
     resolution_bw: f64,
+    convention: Convention,
 ) -> Cell {
-    bisect(node, cfg, stepping, phase, direction_deg, resolution_bw)
-        .unwrap_or_else(|e| Cell::failed(stepping, phase, direction_deg, e))
+    bisect(
+        node,
+        cfg,
+        stepping,
+        phase,
+        direction_deg,
+        resolution_bw,
+        convention,
+    )
+    .unwrap_or_else(|e| Cell {
+        convention,
+        ..Cell::failed(stepping, phase, direction_deg, e)
+    })
 }
 
 /// Every cell of `spec`, the bisections spread over `spec.threads` threads (in the order of
@@ -265,7 +344,7 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Vec<Cell> 
                 let Some(&(s, p, d)) = jobs.get(i) else {
                     break;
                 };
-                let r = cell(node, cfg, s, p, d, spec.resolution_bw);
+                let r = cell(node, cfg, s, p, d, spec.resolution_bw, spec.convention);
                 bar.inc(format!("{}, {}, {d}°", s.name(), p.name()));
                 if let Ok(mut v) = results.lock() {
                     v[i] = Some(r);
@@ -281,7 +360,10 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Vec<Cell> 
         .into_iter()
         .zip(&jobs)
         .map(|(r, &(s, p, d))| {
-            r.unwrap_or_else(|| Cell::failed(s, p, d, "the cell's engine run did not end".into()))
+            r.unwrap_or_else(|| Cell {
+                convention: spec.convention,
+                ..Cell::failed(s, p, d, "the cell's engine run did not end".into())
+            })
         })
         .collect()
 }
@@ -326,8 +408,8 @@ pub fn summary(spec: &MapSpec, cells: &[Cell]) -> Vec<Summary> {
             for c in mine {
                 if let Some(b) = base(c) {
                     out.cells += 1;
-                    out.raised += usize::from(c.max_force_n > b.max_force_n);
-                    out.lowered += usize::from(c.max_force_n < b.max_force_n);
+                    out.raised += usize::from(c.dv_mps > b.dv_mps);
+                    out.lowered += usize::from(c.dv_mps < b.dv_mps);
                 }
             }
             out
@@ -343,8 +425,8 @@ pub fn compare(cells: &[Cell], a: Stepping, b: Stepping) -> (usize, usize, usize
             d.stepping == b && d.ok() && d.phase == c.phase && d.direction_deg == c.direction_deg
         }) {
             n += 1;
-            larger += usize::from(c.max_force_n > d.max_force_n);
-            smaller += usize::from(c.max_force_n < d.max_force_n);
+            larger += usize::from(c.dv_mps > d.dv_mps);
+            smaller += usize::from(c.dv_mps < d.dv_mps);
         }
     }
     (larger, smaller, n)
@@ -367,8 +449,12 @@ fn summary_of(spec: &MapSpec, cells: &[Cell]) -> String {
         .iter()
         .map(|s| {
             format!(
-                "{}: mean Δv {:.3} m/s; larger than the stabilizer only in {} of {} cells, smaller in {}\n",
+                "{}: mean {} {:.3} m/s; larger than the stabilizer only in {} of {} cells, smaller in {}\n",
                 s.stepping.name(),
+                match spec.convention {
+                    Convention::Force => "Δv",
+                    Convention::Velocity => "v",
+                },
                 s.mean_dv_mps,
                 s.raised,
                 s.cells,
@@ -394,9 +480,11 @@ pub fn map_json(robot: &str, mass_kg: f64, spec: &MapSpec, cells: &[Cell]) -> Va
     json!({
         "robot": robot,
         "mass_kg": mass_kg,
+        "push": spec.convention.name(),
         "push_duration_s": PUSH_S,
         "resolution_bw": spec.resolution_bw,
         "max_bw": MAX_BW,
+        "max_v_mps": V_MAX_MPS,
         "walk": {"steps": Walk::default().steps, "length_m": Walk::default().length},
         "engine_runs": cells.iter().map(|c| c.runs).sum::<usize>(),
         "configs": Value::Object(configs),
@@ -416,9 +504,14 @@ pub fn map_json(robot: &str, mass_kg: f64, spec: &MapSpec, cells: &[Cell]) -> Va
 
 /// The table of `push_map.md`: one row per phase and direction, Δv of each configuration.
 pub fn markdown(spec: &MapSpec, cells: &[Cell]) -> String {
+    let velocity = spec.convention == Convention::Velocity;
     let mut s = String::from("| phase | direction [deg] |");
     for st in &spec.steppings {
-        s += &format!(" {} Δv [m/s] (BW) |", st.name());
+        if velocity {
+            s += &format!(" {} v [m/s] |", st.name());
+        } else {
+            s += &format!(" {} Δv [m/s] (BW) |", st.name());
+        }
     }
     s += " steps adjusted (proposed) |\n|---|---|";
     for _ in &spec.steppings {
@@ -436,7 +529,11 @@ pub fn markdown(spec: &MapSpec, cells: &[Cell]) -> String {
                 {
                     Some(Cell { error: Some(e), .. }) => s += &format!(" failed: {e} |"),
                     Some(c) => {
-                        s += &format!(" {:.3} ({:.2}) |", c.dv_mps, c.bw_fraction);
+                        if velocity {
+                            s += &format!(" {:.3} |", c.dv_mps);
+                        } else {
+                            s += &format!(" {:.3} ({:.2}) |", c.dv_mps, c.bw_fraction);
+                        }
                         if st == Stepping::Proposed {
                             adjusted = c.steps_adjusted.to_string();
                         }
@@ -503,6 +600,8 @@ pub struct MapArgs<'a> {
     pub from_measured: bool,
     /// `--cell CONFIG,PHASE,DIRECTION`: that cell only, one JSON line on standard output.
     pub cell: Option<&'a str>,
+    /// `--push force|velocity`.
+    pub push: &'a str,
 }
 
 /// Parses `--cell CONFIG,PHASE,DIRECTION` (for example `proposed,double,90`).
@@ -534,7 +633,9 @@ pub fn cell_line(robot: &str, mass_kg: f64, resolution_bw: f64, c: &Cell) -> Val
     j["robot"] = Value::String(robot.into());
     j["mass_kg"] = json!(mass_kg);
     j["config"] = Value::String(c.stepping.name().into());
-    j["push_duration_s"] = json!(PUSH_S);
+    if c.convention == Convention::Force {
+        j["push_duration_s"] = json!(PUSH_S);
+    }
     j["resolution_bw"] = json!(resolution_bw);
     j["engine_runs"] = json!(c.runs);
     j
@@ -557,6 +658,8 @@ pub fn cli(
     if let Some(d) = args.directions {
         spec.directions = parse_directions(d)?;
     }
+    spec.convention = Convention::parse(args.push)
+        .ok_or_else(|| format!("--push {:?}: force or velocity", args.push))?;
     let cell_asked = args.cell.map(parse_cell).transpose()?;
     // An engine that cannot start fails the command, not each cell.
     super::bridge::installed_version(&super::bridge::python())?;
@@ -564,7 +667,7 @@ pub fn cli(
     node.adjust.from_measured = args.from_measured;
     let mass = cfg.robot.total_mass();
     if let Some((s, p, d)) = cell_asked {
-        let c = cell(&node, &cfg, s, p, d, spec.resolution_bw);
+        let c = cell(&node, &cfg, s, p, d, spec.resolution_bw, spec.convention);
         crate::outln!("{}", cell_line(robot.name(), mass, spec.resolution_bw, &c));
         return match c.error {
             Some(e) => Err(format!("the cell failed: {e}").into()),
