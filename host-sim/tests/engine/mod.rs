@@ -28,3 +28,20 @@ pub fn engine_here(test: &str) -> bool {
         }
     }
 }
+
+/// Asserts that every summary line of a push map (`push_map::summary_lines`) is in the book's
+/// `docs/src/adjust.md`, after printing them. (Used by the push-map tests only.)
+#[allow(dead_code)]
+pub fn map_summary_is_the_books(
+    spec: &host_sim::physics::push_map::MapSpec,
+    cells: &[host_sim::physics::push_map::Cell],
+) {
+    assert!(cells.iter().all(|c| c.ok()), "failed cells: {cells:?}");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/src/adjust.md");
+    let book = std::fs::read_to_string(&path).expect("the book");
+    let sums = host_sim::physics::push_map::summary_lines(spec, cells);
+    eprintln!("{sums}");
+    for line in sums.lines().filter(|l| !l.is_empty()) {
+        assert!(book.contains(line), "docs/src/adjust.md lacks: {line}");
+    }
+}
