@@ -190,3 +190,82 @@ fn a_pitch_roll_yaw_hip_round_trips() {
     let e = m.leg_ik(Side::Left, &waist, &far).unwrap_err();
     assert!(e.distance > e.reach, "{e:?}");
 }
+
+/// Near the knee's singularity: with the leg almost straight (the ankle up to 0.05 % short of
+/// the leg's full reach, as a capture step's long stride asks), the numerical inverse
+/// kinematics still finds the closed form's angles wherever the closed form has them.
+#[test]
+fn numerical_ik_converges_with_the_leg_almost_straight() {
+    let closed = Model::hrp2();
+    let mut numeric = closed.clone();
+    numeric.closed_form = None;
+    let (waist, soles) = closed.stance_pose(0.2);
+    numeric.stance = [
+        closed.leg_ik(Side::Left, &waist, &soles[0]).unwrap(),
+        closed.leg_ik(Side::Right, &waist, &soles[1]).unwrap(),
+    ];
+    let mut tried = 0;
+    for &forward in &[0.0, 0.1, 0.2, 0.3, -0.2] {
+        for &short in &[1e-2, 3e-3, 1e-3, 5e-4, 2e-4, 1e-4, 3e-5] {
+            // The waist lowered until the sole, `forward` ahead, is `short` of full reach.
+            let side = Side::Left;
+            let mut lo = closed.waist_height - 0.3;
+            let mut hi = closed.waist_height + 0.3;
+            let sole = Pose {
+                p: [forward, soles[0].p[1], 0.0],
+                r: soles[0].r,
+            };
+            let at = |h: f64| Pose {
+                p: [waist.p[0], waist.p[1], h],
+                r: waist.r,
+            };
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                match closed.leg_ik(side, &at(mid), &sole) {
+                    Ok(_) => lo = mid,
+                    Err(e) if e.distance > e.reach => hi = mid,
+                    Err(_) => hi = mid,
+                }
+            }
+            let reach = closed.reach(side);
+            // Lower the waist until the ankle is `short · reach` nearer than full reach.
+            let mut h = lo;
+            for _ in 0..80 {
+                let e = match closed.leg_ik(side, &at(h), &sole) {
+                    Ok(_) => {
+                        let ankle = closed.leg_fk(
+                            side,
+                            &at(h),
+                            &closed.leg_ik(side, &at(h), &sole).unwrap(),
+                        );
+                        let hip = ankle.links[0].p;
+                        let d = ((ankle.links[5].p[0] - hip[0]).powi(2)
+                            + (ankle.links[5].p[1] - hip[1]).powi(2)
+                            + (ankle.links[5].p[2] - hip[2]).powi(2))
+                        .sqrt();
+                        reach - d
+                    }
+                    Err(_) => 0.0,
+                };
+                if e >= short * reach {
+                    break;
+                }
+                h -= 0.25 * short * reach;
+            }
+            let Ok(want) = closed.leg_ik(side, &at(h), &sole) else {
+                continue;
+            };
+            tried += 1;
+            let got = numeric
+                .leg_ik(side, &at(h), &sole)
+                .unwrap_or_else(|e| panic!("forward {forward}, {short} short of reach: {e}"));
+            for (a, b) in got.iter().zip(want) {
+                assert!(
+                    (a - b).abs() < 1e-7,
+                    "forward {forward}, short {short}: {got:?} vs {want:?}"
+                );
+            }
+        }
+    }
+    assert!(tried >= 15, "{tried} poses tried");
+}

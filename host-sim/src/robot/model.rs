@@ -30,7 +30,9 @@
 //! `J_i = (a_i × (p − p_i), a_i)` (world axis `a_i` through the joint's origin `p_i`),
 //! damped (`(JᵀJ + λ²I) Δq = Jᵀe`, λ = [`IK_DAMPING`]) while the error is above a millimetre
 //! and undamped after, from the standing posture ([`Model::stance`]); it converges to the
-//! pose within [`IK_TOLERANCE`] or fails with [`IkError`] (out of reach).
+//! pose within [`IK_TOLERANCE`] or fails with [`IkError`]: out of reach where the ankle is
+//! farther from the hip than the sum of the joint-to-joint distances, else not reached (with
+//! offsets between a leg's axes its reach in a direction is shorter than that sum).
 
 use core::fmt;
 
@@ -298,8 +300,15 @@ impl fmt::Display for IkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{:?} ankle out of reach: {:.4} m from the hip, reach {:.4} m",
-            self.side, self.distance, self.reach
+            "{:?} ankle {}: {:.4} m from the hip, reach {:.4} m",
+            self.side,
+            if self.distance > self.reach {
+                "out of reach"
+            } else {
+                "not reached by the inverse kinematics"
+            },
+            self.distance,
+            self.reach
         )
     }
 }
