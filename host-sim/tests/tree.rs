@@ -221,10 +221,11 @@ fn numerical_ik_converges_with_the_leg_almost_straight() {
             };
             for _ in 0..80 {
                 let mid = 0.5 * (lo + hi);
-                match closed.leg_ik(side, &at(mid), &sole) {
-                    Ok(_) => lo = mid,
-                    Err(e) if e.distance > e.reach => hi = mid,
-                    Err(_) => hi = mid,
+                // The highest waist from which the closed form reaches the sole.
+                if closed.leg_ik(side, &at(mid), &sole).is_ok() {
+                    lo = mid;
+                } else {
+                    hi = mid;
                 }
             }
             let reach = closed.reach(side);
@@ -232,12 +233,8 @@ fn numerical_ik_converges_with_the_leg_almost_straight() {
             let mut h = lo;
             for _ in 0..80 {
                 let e = match closed.leg_ik(side, &at(h), &sole) {
-                    Ok(_) => {
-                        let ankle = closed.leg_fk(
-                            side,
-                            &at(h),
-                            &closed.leg_ik(side, &at(h), &sole).unwrap(),
-                        );
+                    Ok(q) => {
+                        let ankle = closed.leg_fk(side, &at(h), &q);
                         let hip = ankle.links[0].p;
                         let d = ((ankle.links[5].p[0] - hip[0]).powi(2)
                             + (ankle.links[5].p[1] - hip[1]).powi(2)
