@@ -60,8 +60,8 @@ fn import_biped(name: &str, knee: f64) -> Result<Imported, String> {
 /// The knee's static single-support torque of an imported robot \[N m\].
 fn knee_torque(i: &Imported) -> f64 {
     let m = &i.robot.model;
-    let (_, tau) = single_support(m, i.robot.planner.params.step_width, Side::Left)
-        .expect("single support");
+    let (_, tau) =
+        single_support(m, i.robot.planner.params.step_width, Side::Left).expect("single support");
     tau[3]
 }
 

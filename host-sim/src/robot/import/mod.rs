@@ -638,7 +638,7 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
         t.urdf.name.clone()
     };
     let mut imported = write(&name, path, &parts)?;
-    imported.warnings = warnings;
+    imported.warnings.splice(0..0, warnings);
     Ok(imported)
 }
 
@@ -685,7 +685,7 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
     let hip = z.links[0].p;
     let leg = norm(sub(z.ankle().p, hip));
     // The standing height: the largest drop within the legs' limits ([`posture`]).
-    let mut last = String::new();
+    let (mut last, mut first) = (String::new(), None);
     let mut chosen = None;
     for drop in posture::DROPS {
         let waist_height = (-z.sole.p[2] - drop * leg).mul_add(1e4, 0.0).round() / 1e4;
@@ -693,15 +693,18 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
         match tree_of(&mb)?.model(gravity, step_width) {
             Err(e) => last = format!("the standing posture: {e}"),
             Ok(m) => match posture::outside_limits(&m, step_width) {
-                Some(why) => last = why,
+                Some(why) => {
+                    first.get_or_insert_with(|| why.clone());
+                    last = why;
+                }
                 None => {
-                    chosen = Some((waist_height, mb, m));
+                    chosen = Some((waist_height, mb, m, drop));
                     break;
                 }
             },
         }
     }
-    let Some((waist_height, mb, model)) = chosen else {
+    let Some((waist_height, mb, model, drop)) = chosen else {
         return err(format!(
             "no standing height keeps the legs within their limits (the waist {} down to {} \
              of the leg below the straight-legged height); at the straightest: {last}",
@@ -743,10 +746,23 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
     let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
     let robot =
         Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
+    let warnings = first
+        .map(|why| {
+            let here = posture::heaviest(&model, step_width).unwrap_or_default();
+            format!(
+                "the waist stands {:.1} % of the leg below the straight-legged height, not \
+                 HRP-2's {:.1} %: at {:.1} %, {why}; here {here}",
+                100.0 * drop,
+                100.0 * KNEE_DROP,
+                100.0 * KNEE_DROP
+            )
+        })
+        .into_iter()
+        .collect();
     Ok(Imported {
         toml,
         robot,
-        warnings: Vec::new(),
+        warnings,
     })
 }
 

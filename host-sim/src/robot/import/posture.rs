@@ -138,3 +138,24 @@ pub fn outside_limits(m: &Model, step_width: f64) -> Option<String> {
     }
     None
 }
+
+/// The pitch joint of the left leg in single support nearest its effort limit (by share),
+/// said as `<joint name="…">: τ N m of its effort limit E N m`; `None` without limits.
+pub fn heaviest(m: &Model, step_width: f64) -> Option<String> {
+    let (q, tau) = single_support(m, step_width, Side::Left).ok()?;
+    let frames = m.leg_fk(Side::Left, &Pose::IDENTITY, &q);
+    m.legs[0]
+        .links
+        .iter()
+        .zip(tau)
+        .zip(frames.links)
+        .filter(|((l, _), f)| mul_mv(&f.r, l.joint.axis)[1].abs() > ACROSS)
+        .filter_map(|((l, t), _)| Some((l, t, l.joint.effort?)))
+        .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))
+        .map(|(l, t, e)| {
+            format!(
+                "<joint name=\"{}\">: {t:.1} N m of its effort limit {e} N m",
+                l.joint.name
+            )
+        })
+}
