@@ -44,6 +44,7 @@ pub mod model;
 pub mod output;
 pub mod probe;
 pub mod push_map;
+pub mod push_scan;
 pub mod sensors;
 pub mod sequence;
 pub mod stabilizer;

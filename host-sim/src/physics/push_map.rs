@@ -185,6 +185,20 @@ pub fn bisect(
     direction_deg: f64,
     resolution_bw: f64,
 ) -> Result<Cell, String> {
+    bisect_tried(node, cfg, stepping, phase, direction_deg, resolution_bw).map(|(c, _)| c)
+}
+
+/// The bisection of one cell, with its pushes (fraction of body weight, survived), for a scan
+/// above it ([`super::push_scan`]).
+pub fn bisect_tried(
+    node: &NodeConfig,
+    cfg: &PhysicsConfig,
+    stepping: Stepping,
+    phase: PushPhase,
+    direction_deg: f64,
+    resolution_bw: f64,
+) -> Result<(Cell, Vec<(f64, bool)>), String> {
+    let mut tried = Vec::new();
     let m = cfg.robot.total_mass();
     let weight = m * cfg.robot.gravity();
     let (mut lo, mut hi) = (0.0, MAX_BW);
@@ -207,6 +221,7 @@ pub fn bisect(
                 phase.name()
             ));
         }
+        tried.push((mid, !o.fell));
         if o.fell {
             hi = mid;
         } else {
@@ -216,7 +231,7 @@ pub fn bisect(
         }
     }
     let f = lo * weight;
-    Ok(Cell {
+    let cell = Cell {
         stepping,
         phase,
         direction_deg,
@@ -227,7 +242,8 @@ pub fn bisect(
         runs,
         gait,
         error: None,
-    })
+    };
+    Ok((cell, tried))
 }
 
 /// One cell, failed (with its cause) rather than an error.
