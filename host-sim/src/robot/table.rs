@@ -64,6 +64,8 @@
 //! | shank ×2 | 2.5 kg, COM (0, 0, −0.15) from the knee, cylinder r 0.05, l 0.30 | assumed (length published) |
 //! | foot ×2 | 1.5 kg, COM (0, 0, −0.065) from the ankle (4 cm above the sole), box 0.24 × 0.14 × 0.08 | assumed (sole: the planner's) |
 //! | total | 58.0 kg (legs 10 kg each, trunk + waist 38 kg) | Kaneko 2004 |
+//! | joint ranges (left leg) | hip yaw −30…45°, hip roll −20…35°, hip pitch −125…42°, knee 0…150°, ankle pitch −75…42°, ankle roll −35…20° (`[multibody.limits]`) | Kaneko 2004, movable ranges |
+//! | joint torque limits | none (the servos of `physics::model` unsaturated) | assumed: not published there |
 //!
 //! The waist height is chosen (by bisection, rounded to 0.1 mm) so that the whole-body COG is
 //! 0.814 m high standing with the feet at (0, ±0.1) and the waist between them; the knees are
