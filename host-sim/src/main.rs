@@ -12,7 +12,7 @@
 //!                                  faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
-//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D] [PROBE] [--robot FILE]
+//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D [--scan]] [PROBE] [--robot FILE]
 //!                                  the push-recovery map in MuJoCo, with and without step adjustment
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //!
@@ -221,6 +221,11 @@ enum Cmd {
             allow_hyphen_values = true
         )]
         cell: Option<String>,
+        /// With `--cell`: also push around the bisected force (4 forces above, 4 below, 0.05
+        /// body weight apart) and give, under `scan`, the largest force below which every
+        /// tried push survived, the fraction survived above it and the cell's spread.
+        #[arg(long, requires = "cell")]
+        scan: bool,
         #[command(flatten)]
         probe: ProbeArgs,
     },
@@ -414,6 +419,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             robot,
             replan_from,
             cell,
+            scan,
             probe,
         }) => host_sim::physics::push_map::cli(
             &host_sim::physics::push_map::MapArgs {
@@ -423,6 +429,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
                 directions: directions.as_deref(),
                 from_measured: replan_from == "measured",
                 cell: cell.as_deref(),
+                scan,
             },
             &engine_robot(robot.as_deref())?,
             &probe,

@@ -519,6 +519,8 @@ pub struct MapArgs<'a> {
     pub from_measured: bool,
     /// `--cell CONFIG,PHASE,DIRECTION`: that cell only, one JSON line on standard output.
     pub cell: Option<&'a str>,
+    /// `--scan`: the cell's scan around its bisected force ([`super::push_scan`]).
+    pub scan: bool,
 }
 
 /// Parses `--cell CONFIG,PHASE,DIRECTION` (for example `proposed,double,90`).
@@ -580,8 +582,19 @@ pub fn cli(
     node.adjust.from_measured = args.from_measured;
     let mass = cfg.robot.total_mass();
     if let Some((s, p, d)) = cell_asked {
-        let c = cell(&node, &cfg, s, p, d, spec.resolution_bw);
-        crate::outln!("{}", cell_line(robot.name(), mass, spec.resolution_bw, &c));
+        let (c, scan) = if args.scan {
+            match super::push_scan::scan_cell(&node, &cfg, s, p, d, spec.resolution_bw) {
+                Ok((c, scan)) => (c, Some(scan)),
+                Err(e) => (Cell::failed(s, p, d, e), None),
+            }
+        } else {
+            (cell(&node, &cfg, s, p, d, spec.resolution_bw), None)
+        };
+        let mut line = cell_line(robot.name(), mass, spec.resolution_bw, &c);
+        if let Some(scan) = scan {
+            line["scan"] = scan.json();
+        }
+        crate::outln!("{line}");
         return match c.error {
             Some(e) => Err(format!("the cell failed: {e}").into()),
             None => Ok(()),
