@@ -246,6 +246,31 @@ pub fn bisect_tried(
     Ok((cell, tried))
 }
 
+/// One cell in the engine: its bisection ([`bisect_tried`]) and the scan
+/// around the bisected force.
+pub fn scan_cell(
+    node: &NodeConfig,
+    cfg: &PhysicsConfig,
+    stepping: Stepping,
+    phase: PushPhase,
+    direction_deg: f64,
+    resolution_bw: f64,
+) -> Result<(Cell, super::push_scan::Scan), String> {
+    let (cell, tried) = bisect_tried(node, cfg, stepping, phase, direction_deg, resolution_bw)?;
+    let weight = cfg.robot.total_mass() * cfg.robot.gravity();
+    let scan = super::push_scan::scan_with(cell.bw_fraction, tried, |bw| {
+        let push = PushSpec {
+            phase,
+            direction_deg,
+            force_n: bw * weight,
+            duration_s: PUSH_S,
+        };
+        let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
+        Ok(!o.fell)
+    })?;
+    Ok((cell, scan))
+}
+
 /// One cell, failed (with its cause) rather than an error.
 pub fn cell(
     node: &NodeConfig,
@@ -583,7 +608,7 @@ pub fn cli(
     let mass = cfg.robot.total_mass();
     if let Some((s, p, d)) = cell_asked {
         let (c, scan) = if args.scan {
-            match super::push_scan::scan_cell(&node, &cfg, s, p, d, spec.resolution_bw) {
+            match scan_cell(&node, &cfg, s, p, d, spec.resolution_bw) {
                 Ok((c, scan)) => (c, Some(scan)),
                 Err(e) => (Cell::failed(s, p, d, e), None),
             }
