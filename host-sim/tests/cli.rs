@@ -724,3 +724,13 @@ fn push_map_refuses_directions_out_of_range() {
         assert_has(&t, &["is not a direction in degrees (-180 … 360"]);
     }
 }
+
+/// `push-map --scan` scans one cell: without `--cell` it is a usage error naming `--cell`
+/// (before any engine run).
+#[test]
+fn push_map_scan_needs_a_cell() {
+    let o = host_sim(&["push-map", "--scan"]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(t.contains("--cell"), "{t}");
+}

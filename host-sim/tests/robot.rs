@@ -375,3 +375,76 @@ fn the_command_line_takes_a_robot_file() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains(missing.to_str().unwrap()), "{err}");
 }
+
+/// HRP-2's leg joints in the generated MJCF carry the movable ranges of Kaneko et al., ICRA
+/// 2004 (left leg, degrees: hip yaw −30 … 45, hip roll −20 … 35, hip pitch −125 … 42, knee
+/// 0 … 150, ankle pitch −75 … 42, ankle roll −35 … 20; the right leg mirrored) and no effort
+/// limit (none is published there: the assumption the book states).
+#[test]
+fn hrp2s_mjcf_has_the_published_joint_ranges() {
+    let xml = host_sim::physics::model::Robot::default().mjcf();
+    let left = [
+        ("hip_yaw", -30.0, 45.0, false),
+        ("hip_roll", -20.0, 35.0, false),
+        ("hip_pitch", -125.0, 42.0, true),
+        ("knee", 0.0, 150.0, true),
+        ("ankle_pitch", -75.0, 42.0, true),
+        ("ankle_roll", -35.0, 20.0, false),
+    ];
+    for (name, lo, hi, pitch) in left {
+        for (side, [lo, hi]) in [
+            ("l", [lo, hi]),
+            ("r", if pitch { [lo, hi] } else { [-hi, -lo] }),
+        ] {
+            let tag = format!("<joint name=\"{side}_{name}\"");
+            let at = xml
+                .find(&tag)
+                .unwrap_or_else(|| panic!("{tag} in the MJCF"));
+            let joint = &xml[at..at + xml[at..].find("/>").expect("closed")];
+            let range = joint
+                .split_once("range=\"")
+                .and_then(|(_, r)| r.split_once('"'))
+                .map(|(r, _)| r)
+                .unwrap_or_else(|| panic!("{joint}: no range"));
+            let v: Vec<f64> = range
+                .split_whitespace()
+                .map(|x| x.parse().expect("a number"))
+                .collect();
+            let want = [f64::to_radians(lo), f64::to_radians(hi)];
+            assert!(
+                v.len() == 2 && (v[0] - want[0]).abs() < 1e-5 && (v[1] - want[1]).abs() < 1e-5,
+                "{joint}: want {want:?}"
+            );
+            assert!(!joint.contains("damping=\"0\""), "{joint}: an effort limit");
+        }
+    }
+    assert!(
+        !xml.contains("forcerange"),
+        "HRP-2 has no published torque limits"
+    );
+}
+
+/// A `[multibody.limits]` entry must name one of the six joints, with an ordered range.
+#[test]
+fn hrp2_limits_table_is_checked() {
+    for (edit, want) in [
+        (
+            "[multibody.limits.elbow]\nrange = [0.0, 1.0]\n",
+            "\"elbow\": not a joint",
+        ),
+        (
+            "[multibody.limits.knee]\nrange = [1.0, 0.0]\n",
+            "knee: range must be",
+        ),
+        (
+            "[multibody.limits.knee]\neffort = -3.0\n",
+            "knee: effort must be",
+        ),
+    ] {
+        let text = HRP2_TOML.replace("[multibody.limits.knee]\nrange = [0.0, 2.617994]\n", "")
+            + "\n"
+            + edit;
+        let e = Robot::from_toml(&text).expect_err("refused").to_string();
+        assert!(e.contains("multibody.limits") && e.contains(want), "{e}");
+    }
+}

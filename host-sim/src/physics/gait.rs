@@ -7,10 +7,10 @@
 //!
 //! | measure | definition | bound |
 //! |---|---|---|
-//! | **slip** | the largest horizontal displacement of a sole centre, while the reference has it on the floor, from where it was when it first carried [`LOAD_SHARE`] of the weight in that support (loaded or not afterwards: a foot that hops and slides is slipping) | [`SLIP_MAX_M`] = 10 mm |
+//! | **slip** | the largest horizontal displacement of a sole centre, and the largest turn of the sole about the vertical, while the reference has it on the floor, from where it was when it first touched the floor in that support (with [`FLIGHT_SHARE`] of the weight: a foot that skids under a light load is slipping, and so is one that hops and slides, or turns in place) | [`SLIP_MAX_M`] = 10 mm, [`SLIP_YAW_MAX_RAD`] = 0.05 rad |
 //! | **flight** | the time with no floor contact at all (total normal force below [`FLIGHT_SHARE`] of the weight): the references of a walk never plan a flight | longest interval [`FLIGHT_MAX_S`] = 5 ms |
 //! | **CoP outside the support polygon** | the engine's CoP (1 ms, all floor contacts) more than [`COP_MARGIN_M`] = 5 mm outside the planned support polygon (the convex hull of the sole rectangles the reference has on the floor) | longest interval [`COP_OUTSIDE_MAX_S`] = 50 ms |
-//! | **landing error** | at each landing (the first tick at which the reference has the foot on the floor and its sole carries load, after a swing), the horizontal distance of the sole centre from the reference's | [`LANDING_MAX_M`] = 20 mm |
+//! | **landing error** | at each landing (the first tick at which the reference has the foot on the floor and its sole carries load, after a swing), the horizontal distance of the sole centre from the reference's, and the sole's heading from the reference's | [`LANDING_MAX_M`] = 20 mm, [`LANDING_YAW_MAX_RAD`] = 0.05 rad |
 //!
 //! Why these values: HRP-2's built-in walks with ideal sensors slip at most 2.2 mm, leave the
 //! floor for at most one physics tick, keep the CoP in the planned polygon but for a tick and
@@ -40,12 +40,33 @@ pub const COP_MARGIN_M: f64 = 0.005;
 pub const COP_OUTSIDE_MAX_S: f64 = 0.050;
 /// Largest landing error \[m\].
 pub const LANDING_MAX_M: f64 = 0.020;
+/// Largest turn of a supporting sole about the vertical \[rad\] (about 3°).
+pub const SLIP_YAW_MAX_RAD: f64 = 0.05;
+/// Largest heading error of a landing \[rad\].
+pub const LANDING_YAW_MAX_RAD: f64 = 0.05;
+
+/// The heading of a pose (its x axis about the vertical) \[rad\].
+pub fn yaw_of(p: &Pose) -> f64 {
+    p.r[1][0].atan2(p.r[0][0])
+}
+
+/// `a − b` wrapped into (−π, π] \[rad\].
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    if d > std::f64::consts::PI {
+        d - std::f64::consts::TAU
+    } else {
+        d
+    }
+}
 
 /// The gait measures of a run (see the module documentation).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GaitQuality {
     /// Largest slip of a supporting sole \[m\].
     pub slip_max_m: f64,
+    /// Largest turn of a supporting sole about the vertical \[rad\].
+    pub slip_yaw_max_rad: f64,
     /// Time without floor contact, in all \[s\].
     pub flight_s: f64,
     /// Longest interval without floor contact \[s\].
@@ -58,6 +79,8 @@ pub struct GaitQuality {
     pub cop_outside_max_m: f64,
     /// Largest landing error \[m\].
     pub landing_err_max_m: f64,
+    /// Largest heading error of a landing \[rad\].
+    pub landing_yaw_err_max_rad: f64,
     /// Landings measured.
     pub landings: usize,
 }
@@ -66,7 +89,7 @@ impl GaitQuality {
     /// The measures beyond their bounds, by name (empty: the gait is within every bound).
     pub fn violations(&self) -> Vec<&'static str> {
         let mut v = Vec::new();
-        if self.slip_max_m > SLIP_MAX_M {
+        if self.slipped() {
             v.push("slip");
         }
         if self.flight_max_s > FLIGHT_MAX_S + 1e-9 {
@@ -75,10 +98,20 @@ impl GaitQuality {
         if self.cop_outside_max_s > COP_OUTSIDE_MAX_S + 1e-9 {
             v.push("CoP outside the support polygon");
         }
-        if self.landing_err_max_m > LANDING_MAX_M {
+        if self.landed_off() {
             v.push("landing error");
         }
         v
+    }
+
+    /// Slip beyond its bounds (distance or turn).
+    pub fn slipped(&self) -> bool {
+        self.slip_max_m > SLIP_MAX_M || self.slip_yaw_max_rad > SLIP_YAW_MAX_RAD
+    }
+
+    /// A landing beyond its bounds (distance or heading).
+    pub fn landed_off(&self) -> bool {
+        self.landing_err_max_m > LANDING_MAX_M || self.landing_yaw_err_max_rad > LANDING_YAW_MAX_RAD
     }
 
     /// Whether the gait is within every bound.
@@ -86,20 +119,25 @@ impl GaitQuality {
         self.violations().is_empty()
     }
 
-    /// The measures as every engine command's JSON gives them: `slip_max_m`, `flight_s`,
-    /// `flight_max_s`, `cop_outside_s`, `cop_outside_max_s`, `cop_outside_max_m`,
-    /// `landing_err_max_m`, `landings`, and `gait_violations` (the names of the measures
+    /// The measures as every engine command's JSON gives them: `slip_max_m`,
+    /// `slip_yaw_max_rad`, `flight_s`, `flight_max_s`, `cop_outside_s`, `cop_outside_max_s`,
+    /// `cop_outside_max_m`, `landing_err_max_m`, `landing_yaw_err_max_rad`, `landings`, and `gait_violations` (the names of the measures
     /// beyond their bounds).
     pub fn fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         use serde_json::json;
         vec![
             ("slip_max_m", json!(self.slip_max_m)),
+            ("slip_yaw_max_rad", json!(self.slip_yaw_max_rad)),
             ("flight_s", json!(self.flight_s)),
             ("flight_max_s", json!(self.flight_max_s)),
             ("cop_outside_s", json!(self.cop_outside_s)),
             ("cop_outside_max_s", json!(self.cop_outside_max_s)),
             ("cop_outside_max_m", json!(self.cop_outside_max_m)),
             ("landing_err_max_m", json!(self.landing_err_max_m)),
+            (
+                "landing_yaw_err_max_rad",
+                json!(self.landing_yaw_err_max_rad),
+            ),
             ("landings", json!(self.landings)),
             ("gait_violations", json!(self.violations())),
         ]
@@ -113,6 +151,8 @@ impl GaitQuality {
             "cop_margin_m": COP_MARGIN_M,
             "cop_outside_max_s": COP_OUTSIDE_MAX_S,
             "landing_err_max_m": LANDING_MAX_M,
+            "slip_yaw_max_rad": SLIP_YAW_MAX_RAD,
+            "landing_yaw_err_max_rad": LANDING_YAW_MAX_RAD,
             "load_share": LOAD_SHARE,
             "flight_share": FLIGHT_SHARE,
         })
@@ -142,7 +182,7 @@ pub struct GaitMonitor {
     weight: f64,
     sole_half: [f64; 2],
     q: GaitQuality,
-    anchor: [Option<[f64; 2]>; 2],
+    anchor: [Option<[f64; 3]>; 2],
     swung: [bool; 2],
     flight_run: f64,
     outside_run: f64,
@@ -171,9 +211,11 @@ impl GaitMonitor {
     /// Adds one sample.
     pub fn push(&mut self, s: &GaitSample) {
         let load = LOAD_SHARE * self.weight;
+        let touch = FLIGHT_SHARE * self.weight;
         for k in 0..2 {
             let on_floor = s.feet_ref[k].z == 0.0;
             let p = [s.soles[k].p[0], s.soles[k].p[1]];
+            let yaw = yaw_of(&s.soles[k]);
             if !on_floor {
                 self.swung[k] = true;
             }
@@ -187,14 +229,18 @@ impl GaitMonitor {
                 let r = &s.feet_ref[k];
                 let e = (p[0] - r.x).hypot(p[1] - r.y);
                 self.q.landing_err_max_m = self.q.landing_err_max_m.max(e);
+                let ey = angle_diff(yaw, r.yaw).abs();
+                self.q.landing_yaw_err_max_rad = self.q.landing_yaw_err_max_rad.max(ey);
                 self.q.landings += 1;
             }
-            if loaded && self.anchor[k].is_none() {
-                self.anchor[k] = Some(p);
+            if s.sole_force[k] > touch && self.anchor[k].is_none() {
+                self.anchor[k] = Some([p[0], p[1], yaw]);
             }
             if let Some(a) = self.anchor[k] {
                 let d = (p[0] - a[0]).hypot(p[1] - a[1]);
                 self.q.slip_max_m = self.q.slip_max_m.max(d);
+                let t = angle_diff(yaw, a[2]).abs();
+                self.q.slip_yaw_max_rad = self.q.slip_yaw_max_rad.max(t);
             }
         }
         if s.normal_force < FLIGHT_SHARE * self.weight {
@@ -393,6 +439,57 @@ mod tests {
         let q = m.quality();
         assert_eq!(q.landings, 1);
         assert!((q.landing_err_max_m - 0.025).abs() < 1e-12);
+        assert_eq!(q.violations(), ["landing error"]);
+    }
+
+    fn turned(x: f64, y: f64, yaw: f64) -> Pose {
+        Pose::upright(x, y, 0.0, yaw)
+    }
+
+    /// A sole turning in place, a sole skidding under a light load before it carries the
+    /// weight, and a landing turned from its reference: each a violation.
+    #[test]
+    fn turns_and_light_skids_are_seen() {
+        let (w, half) = (600.0, [0.12, 0.07]);
+        let feet = [foot(0.0, 0.1, 0.0, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
+        let still = [pose(0.0, 0.1), pose(0.0, -0.1)];
+        // The left sole turns 0.06 rad about its centre while loaded: no distance, a slip.
+        let mut m = GaitMonitor::new(w, half);
+        m.push(&sample(still, feet));
+        m.push(&sample([turned(0.0, 0.1, 0.06), pose(0.0, -0.1)], feet));
+        let q = m.quality();
+        assert!(q.slip_max_m < 1e-12 && (q.slip_yaw_max_rad - 0.06).abs() < 1e-9);
+        assert_eq!(q.violations(), ["slip"]);
+        // Within the bound (0.04 rad): walked.
+        let mut m = GaitMonitor::new(w, half);
+        m.push(&sample(still, feet));
+        m.push(&sample([turned(0.0, 0.1, -0.04), pose(0.0, -0.1)], feet));
+        assert!(m.quality().within_bounds());
+        // The left foot touches with 3 % of the weight (below the load share), slides 15 mm,
+        // then takes the weight where it slid to: a slip.
+        let mut m = GaitMonitor::new(w, half);
+        for k in 0..16 {
+            let mut s = sample([pose(0.001 * k as f64, 0.1), pose(0.0, -0.1)], feet);
+            s.sole_force = [0.03 * w, 0.97 * w];
+            m.push(&s);
+        }
+        m.push(&sample([pose(0.015, 0.1), pose(0.0, -0.1)], feet));
+        let q = m.quality();
+        assert!((q.slip_max_m - 0.015).abs() < 1e-12, "{q:?}");
+        assert_eq!(q.violations(), ["slip"]);
+        // The left foot lands where planned but turned 0.08 rad from its reference.
+        let mut m = GaitMonitor::new(w, half);
+        let up = [foot(0.1, 0.1, 0.05, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
+        let down = [foot(0.2, 0.1, 0.0, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
+        let mut s = sample(still, up);
+        s.sole_force = [0.0, 600.0];
+        s.cop = [0.0, -0.1];
+        m.push(&s);
+        let mut s = sample([turned(0.2, 0.1, 0.08), pose(0.0, -0.1)], down);
+        s.cop = [0.1, 0.0];
+        m.push(&s);
+        let q = m.quality();
+        assert!(q.landing_err_max_m < 1e-12 && (q.landing_yaw_err_max_rad - 0.08).abs() < 1e-9);
         assert_eq!(q.violations(), ["landing error"]);
     }
 }

@@ -44,6 +44,7 @@ pub mod model;
 pub mod output;
 pub mod probe;
 pub mod push_map;
+pub mod push_scan;
 pub mod sensors;
 pub mod sequence;
 pub mod stabilizer;
@@ -220,7 +221,7 @@ impl PhysicsReport {
     pub fn gait_short(&self) -> String {
         let q = &self.gait;
         let mut v = Vec::new();
-        if q.slip_max_m > gait::SLIP_MAX_M {
+        if q.slipped() {
             v.push("slip");
         }
         if q.flight_max_s > gait::FLIGHT_MAX_S + 1e-9 {
@@ -229,7 +230,7 @@ impl PhysicsReport {
         if q.cop_outside_max_s > gait::COP_OUTSIDE_MAX_S + 1e-9 {
             v.push("cop");
         }
-        if q.landing_err_max_m > gait::LANDING_MAX_M {
+        if q.landed_off() {
             v.push("landing");
         }
         v.join("+")
@@ -270,6 +271,9 @@ impl PhysicsReport {
         if q.slip_max_m > gait::SLIP_MAX_M {
             v.push(format!("slip {:.1} mm", q.slip_max_m * 1e3));
         }
+        if q.slip_yaw_max_rad > gait::SLIP_YAW_MAX_RAD {
+            v.push(format!("sole turned {:.3} rad", q.slip_yaw_max_rad));
+        }
         if q.flight_max_s > gait::FLIGHT_MAX_S + 1e-9 {
             v.push(format!("flight {:.0} ms", q.flight_max_s * 1e3));
         }
@@ -278,6 +282,12 @@ impl PhysicsReport {
         }
         if q.landing_err_max_m > gait::LANDING_MAX_M {
             v.push(format!("landing {:.1} mm", q.landing_err_max_m * 1e3));
+        }
+        if q.landing_yaw_err_max_rad > gait::LANDING_YAW_MAX_RAD {
+            v.push(format!(
+                "landing heading {:.3} rad",
+                q.landing_yaw_err_max_rad
+            ));
         }
         format!("**no** ({})", v.join(", "))
     }

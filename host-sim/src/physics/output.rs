@@ -408,11 +408,13 @@ pub fn cli(
         num("foot_drift_max_m") * 1e3
     );
     crate::outln!(
-        "  slip {:.1} mm (bound {:.0}); flight {:.0} ms, longest {:.0} ms (bound {:.0}); CoP \
+        "  slip {:.1} mm, {:.3} rad (bounds {:.0}, {}); flight {:.0} ms, longest {:.0} ms (bound {:.0}); CoP \
          outside the support polygon {:.0} ms, longest {:.0} ms (bound {:.0}), farthest {:.1} mm; \
-         landing error {:.1} mm (bound {:.0}) over {} landings",
+         landing error {:.1} mm, {:.3} rad (bounds {:.0}, {}) over {} landings",
         num("slip_max_m") * 1e3,
+        num("slip_yaw_max_rad"),
         super::gait::SLIP_MAX_M * 1e3,
+        super::gait::SLIP_YAW_MAX_RAD,
         num("flight_s") * 1e3,
         num("flight_max_s") * 1e3,
         super::gait::FLIGHT_MAX_S * 1e3,
@@ -421,7 +423,9 @@ pub fn cli(
         super::gait::COP_OUTSIDE_MAX_S * 1e3,
         num("cop_outside_max_m") * 1e3,
         num("landing_err_max_m") * 1e3,
+        num("landing_yaw_err_max_rad"),
         super::gait::LANDING_MAX_M * 1e3,
+        super::gait::LANDING_YAW_MAX_RAD,
         j["landings"].as_u64().unwrap_or(0)
     );
     if j["ended_standing"].as_bool() == Some(false) {

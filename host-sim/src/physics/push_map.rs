@@ -240,6 +240,31 @@ pub fn bisect(
     resolution_bw: f64,
     convention: Convention,
 ) -> Result<Cell, String> {
+    bisect_tried(
+        node,
+        cfg,
+        stepping,
+        phase,
+        direction_deg,
+        resolution_bw,
+        convention,
+    )
+    .map(|(c, _)| c)
+}
+
+/// The bisection of one cell, with its pushes (fraction of body weight, survived), for a scan
+/// above it ([`super::push_scan`]).
+#[allow(clippy::too_many_arguments)]
+pub fn bisect_tried(
+    node: &NodeConfig,
+    cfg: &PhysicsConfig,
+    stepping: Stepping,
+    phase: PushPhase,
+    direction_deg: f64,
+    resolution_bw: f64,
+    convention: Convention,
+) -> Result<(Cell, Vec<(f64, bool)>), String> {
+    let mut tried = Vec::new();
     let m = cfg.robot.total_mass();
     let weight = m * cfg.robot.gravity();
     let kind = |x: f64| match convention {
@@ -270,6 +295,7 @@ pub fn bisect(
                 phase.name()
             ));
         }
+        tried.push((mid, !o.fell));
         if o.fell {
             hi = mid;
         } else {
@@ -282,7 +308,7 @@ pub fn bisect(
         Convention::Force => (lo * weight, lo * weight * PUSH_S / m),
         Convention::Velocity => (0.0, lo * V_MAX_MPS),
     };
-    Ok(Cell {
+    let cell = Cell {
         stepping,
         phase,
         direction_deg,
@@ -294,7 +320,8 @@ pub fn bisect(
         runs,
         gait,
         error: None,
-    })
+    };
+    Ok((cell, tried))
 }
 
 /// One cell, failed (with its cause) rather than an error.
@@ -602,6 +629,8 @@ pub struct MapArgs<'a> {
     pub cell: Option<&'a str>,
     /// `--push force|velocity`.
     pub push: &'a str,
+    /// `--scan`: the cell's scan around its bisected force ([`super::push_scan`]).
+    pub scan: bool,
 }
 
 /// Parses `--cell CONFIG,PHASE,DIRECTION` (for example `proposed,double,90`).
@@ -667,8 +696,25 @@ pub fn cli(
     node.adjust.from_measured = args.from_measured;
     let mass = cfg.robot.total_mass();
     if let Some((s, p, d)) = cell_asked {
-        let c = cell(&node, &cfg, s, p, d, spec.resolution_bw, spec.convention);
-        crate::outln!("{}", cell_line(robot.name(), mass, spec.resolution_bw, &c));
+        let (c, scan) = if args.scan {
+            if spec.convention != Convention::Force {
+                return Err("--scan pushes with forces: not with --push velocity".into());
+            }
+            match super::push_scan::scan_cell(&node, &cfg, s, p, d, spec.resolution_bw) {
+                Ok((c, scan)) => (c, Some(scan)),
+                Err(e) => (Cell::failed(s, p, d, e), None),
+            }
+        } else {
+            (
+                cell(&node, &cfg, s, p, d, spec.resolution_bw, spec.convention),
+                None,
+            )
+        };
+        let mut line = cell_line(robot.name(), mass, spec.resolution_bw, &c);
+        if let Some(scan) = scan {
+            line["scan"] = scan.json();
+        }
+        crate::outln!("{line}");
         return match c.error {
             Some(e) => Err(format!("the cell failed: {e}").into()),
             None => Ok(()),

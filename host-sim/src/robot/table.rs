@@ -7,6 +7,7 @@
 //! | `hip_offset` | lateral distance of each hip joint centre from the waist origin \[m\] |
 //! | `ankle_height` | ankle joint centre above the sole \[m\] |
 //! | `waist_height` | waist origin above the floor while walking \[m\] |
+//! | `[multibody.limits.<joint>]`, optional, for hip_yaw, hip_roll, hip_pitch, knee, ankle_pitch, ankle_roll | `range = [lower, upper]` \[rad\] of the left leg's joint (the right leg's mirrored: yaw and roll ranges change sign and swap ends), optional `effort` \[N m\]: MuJoCo limits the joint and saturates its servo there |
 //! | `[multibody.<body>]` for trunk, waist, hip, thigh, shank, foot | `mass` \[kg\], `com` \[m\] in the body's link frame (below), and one of `box = [x, y, z]` (sides of a homogeneous box), `cylinder = [radius, length]` (a solid cylinder along z) or `inertia` (principal moments `[Ixx, Iyy, Izz]` about the COM, or the tensor `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`) |
 //!
 //! # The shape
@@ -63,6 +64,8 @@
 //! | shank ×2 | 2.5 kg, COM (0, 0, −0.15) from the knee, cylinder r 0.05, l 0.30 | assumed (length published) |
 //! | foot ×2 | 1.5 kg, COM (0, 0, −0.065) from the ankle (4 cm above the sole), box 0.24 × 0.14 × 0.08 | assumed (sole: the planner's) |
 //! | total | 58.0 kg (legs 10 kg each, trunk + waist 38 kg) | Kaneko 2004 |
+//! | joint ranges (left leg) | hip yaw −30…45°, hip roll −20…35°, hip pitch −125…42°, knee 0…150°, ankle pitch −75…42°, ankle roll −35…20° (`[multibody.limits]`) | Kaneko 2004, movable ranges |
+//! | joint torque limits | none (the servos of `physics::model` unsaturated) | assumed: not published there |
 //!
 //! The waist height is chosen (by bisection, rounded to 0.1 mm) so that the whole-body COG is
 //! 0.814 m high standing with the feet at (0, ±0.1) and the waist between them; the knees are
@@ -74,6 +77,8 @@
 //! not swing); the joints follow the references exactly (no compliance, no ankle flexibility,
 //! no tracking error); the stance feet stay flat on the floor, so the ZMP formula applies
 //! whenever it falls inside the support polygon.
+
+use std::collections::BTreeMap;
 
 use planner_core::robot::{Robot as PlannerRobot, RobotError};
 use serde::Deserialize;
@@ -95,7 +100,28 @@ pub(super) struct Links {
     thigh: BodySpec,
     shank: BodySpec,
     foot: BodySpec,
+    /// Optional joint limits of the left leg by joint name (the right mirrored).
+    #[serde(default)]
+    limits: BTreeMap<String, LimitSpec>,
 }
+
+/// A joint's limits as a robot file gives them (`[multibody.limits.<joint>]`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct LimitSpec {
+    range: Option<[f64; 2]>,
+    effort: Option<f64>,
+}
+
+/// The joints a `[multibody.limits]` table names.
+const JOINT_NAMES: [&str; 6] = [
+    "hip_yaw",
+    "hip_roll",
+    "hip_pitch",
+    "knee",
+    "ankle_pitch",
+    "ankle_roll",
+];
 
 /// A body as a robot file gives it.
 #[derive(Deserialize)]
@@ -222,9 +248,43 @@ impl Links {
         let thigh = self.thigh.body("multibody.thigh", false)?;
         let shank = self.shank.body("multibody.shank", false)?;
         let foot = self.foot.body("multibody.foot", false)?;
+        for (name, l) in &self.limits {
+            if !JOINT_NAMES.contains(&name.as_str()) {
+                return Err(invalid(
+                    "multibody.limits",
+                    format!("{name:?}: not a joint (one of {})", JOINT_NAMES.join(", ")),
+                ));
+            }
+            if l.range
+                .is_some_and(|[lo, hi]| !(lo.is_finite() && hi.is_finite() && lo < hi))
+            {
+                return Err(invalid(
+                    "multibody.limits",
+                    format!("{name}: range must be [lower, upper] with lower < upper [rad]"),
+                ));
+            }
+            if l.effort.is_some_and(|e| !(e.is_finite() && e > 0.0)) {
+                return Err(invalid(
+                    "multibody.limits",
+                    format!("{name}: effort must be finite and > 0 [N m]"),
+                ));
+            }
+        }
         let leg = |p: &str, sign: f64, mirror: fn(&Body) -> Body| {
             let j = |name: &str, origin: Vec3, axis: Vec3| {
-                Joint::new(&format!("{p}_{name}"), at(origin), axis)
+                let mut joint = Joint::new(&format!("{p}_{name}"), at(origin), axis);
+                if let Some(l) = self.limits.get(name) {
+                    // The right leg mirrors the left: rotations about x and z change sign.
+                    joint.range = l.range.map(|[lo, hi]| {
+                        if sign < 0.0 && axis[1] == 0.0 {
+                            [-hi, -lo]
+                        } else {
+                            [lo, hi]
+                        }
+                    });
+                    joint.effort = l.effort;
+                }
+                joint
             };
             let link = |name: &str, joint: Joint, bodies: Vec<Body>| Link {
                 name: format!("{p}_{name}"),

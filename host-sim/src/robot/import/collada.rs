@@ -8,12 +8,22 @@
 //! transform of its node. A document without a visual scene gives every geometry's positions
 //! unmoved. Then the asset's `<unit meter>` scales the result, and a `Y_UP` (or `X_UP`)
 //! document is turned to z up, as the COLLADA specification defines the axes.
+//!
+//! Instancing multiplies: a node instanced ten times, each instancing another ten times, is a
+//! hundred placements, and a few kilobytes can expand beyond any memory. A document is refused
+//! when its scene expands to more than [`MAX_NODES`] placed nodes or [`MAX_POSITIONS`] placed
+//! vertex positions (a foot mesh has thousands), or nests nodes more than 64 deep.
 
 use std::collections::BTreeMap;
 
 use quick_xml::events::Event;
 
 use crate::robot::model::Vec3;
+
+/// The most nodes a scene may place, counting every instancing \[nodes\].
+pub const MAX_NODES: usize = 100_000;
+/// The most vertex positions a scene may place, counting every instancing.
+pub const MAX_POSITIONS: usize = 5_000_000;
 
 /// An element of the document: its name (without a namespace prefix), attributes, text and
 /// children.
@@ -253,10 +263,17 @@ fn walk(
     lib: &BTreeMap<String, &El>,
     geoms: &BTreeMap<String, Vec<Vec3>>,
     depth: usize,
+    placed: &mut usize,
     out: &mut Vec<Vec3>,
 ) -> Result<(), String> {
     if depth > 64 {
         return Err("nodes nested more than 64 deep (an <instance_node> cycle?)".into());
+    }
+    *placed += 1;
+    if *placed > MAX_NODES {
+        return Err(format!(
+            "the scene places more than {MAX_NODES} nodes through its <instance_node>s: refused"
+        ));
     }
     let mut m = *parent;
     for k in &node.kids {
@@ -270,15 +287,21 @@ fn walk(
                 let g = geoms.get(url(k)).ok_or_else(|| {
                     format!("<instance_geometry url=\"#{}\">: no such mesh", url(k))
                 })?;
+                if out.len() + g.len() > MAX_POSITIONS {
+                    return Err(format!(
+                        "the scene places more than {MAX_POSITIONS} vertex positions through \
+                         its <instance_node>s and <instance_geometry>s: refused"
+                    ));
+                }
                 out.extend(g.iter().map(|p| apply4(&m, *p)));
             }
             "instance_node" => {
                 let n = lib
                     .get(url(k))
                     .ok_or_else(|| format!("<instance_node url=\"#{}\">: no such node", url(k)))?;
-                walk(n, &m, lib, geoms, depth + 1, out)?;
+                walk(n, &m, lib, geoms, depth + 1, placed, out)?;
             }
-            "node" => walk(k, &m, lib, geoms, depth + 1, out)?,
+            "node" => walk(k, &m, lib, geoms, depth + 1, placed, out)?,
             _ => {}
         }
     }
@@ -322,10 +345,11 @@ pub fn vertices(text: &str) -> Result<Vec<Vec3>, String> {
         None => scenes.first(),
     };
     let mut out = Vec::new();
+    let mut placed = 0;
     match scene {
         Some(s) => {
             for n in s.all("node") {
-                walk(n, &ID4, &lib, &geoms, 0, &mut out)?;
+                walk(n, &ID4, &lib, &geoms, 0, &mut placed, &mut out)?;
             }
         }
         None => out.extend(geoms.values().flatten().copied()),
@@ -404,5 +428,46 @@ mod tests {
         let e = vertices(&doc(r##"<node><lookat>0 0 1 0 0 0 0 1 0</lookat></node>"##))
             .expect_err("refused");
         assert!(e.contains("<lookat>"), "{e}");
+    }
+
+    /// Nine levels of a node instancing the next ten times (10⁹ placements from a document of
+    /// a few kilobytes): refused once the scene places more than [`MAX_NODES`] nodes, without
+    /// expanding it; a mesh of 100 positions placed 6·10⁴ times (fewer nodes than the cap):
+    /// refused by [`MAX_POSITIONS`]; 10⁴ placements of it are read.
+    #[test]
+    fn instancing_fan_out_is_capped() {
+        // n0 places the mesh, e0 nothing; nK and eK instance the level below.
+        let mut lib =
+            String::from(r##"<node id="n0"><instance_geometry url="#g"/></node><node id="e0"/>"##);
+        for k in 1..10 {
+            let times = if k == 5 { 6 } else { 10 };
+            let below = if k == 5 { 4 } else { k - 1 };
+            for n in ["n", "e"] {
+                lib += &format!(r##"<node id="{n}{k}">"##);
+                for _ in 0..times {
+                    lib += &format!(r##"<instance_node url="#{n}{below}"/>"##);
+                }
+                lib += "</node>";
+            }
+        }
+        let mesh: Vec<String> = (0..300).map(|i| format!("{}", i % 7)).collect();
+        let mesh = mesh.join(" ");
+        let doc = |top: &str| {
+            format!(
+                r##"<COLLADA><asset><up_axis>Z_UP</up_axis></asset>
+            <library_geometries><geometry id="g"><mesh>
+            <source id="p"><float_array id="pa" count="300">{mesh}</float_array></source>
+            <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+            </mesh></geometry></library_geometries>
+            <library_nodes>{lib}</library_nodes>
+            <library_visual_scenes><visual_scene id="s"><node><instance_node url="#{top}"/></node>
+            </visual_scene></library_visual_scenes></COLLADA>"##
+            )
+        };
+        let e = vertices(&doc("e9")).expect_err("refused");
+        assert!(e.contains("more than 100000 nodes"), "{e}");
+        let e = vertices(&doc("n5")).expect_err("refused");
+        assert!(e.contains("more than 5000000 vertex positions"), "{e}");
+        assert_eq!(vertices(&doc("n4")).expect("read").len(), 1_000_000);
     }
 }

@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 use urdf_rs::JointType;
 
 use super::{sole, ImportError, Tree};
-use crate::robot::model::{cross, mul_mv, norm, sub, Pose};
+use crate::robot::model::{cross, mul_mv, norm, sub, transpose, Pose};
 
 /// The end bodies below `base`: each as its first link (moved by a joint) and its links
 /// with their poses in that link's frame.
@@ -80,7 +80,8 @@ pub(crate) fn by_geometry(
         } else {
             continue;
         };
-        let pts = match sole::foot_points(t, &body) {
+        let down = mul_mv(&transpose(&at.r), [0.0, 0.0, -1.0]);
+        let pts = match sole::foot_points(t, &body, down) {
             Ok((pts, _)) => pts,
             Err(e) => {
                 if unread[side].as_ref().is_none_or(|(z, _)| at.p[2] < *z) {

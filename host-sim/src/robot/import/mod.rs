@@ -29,14 +29,17 @@
 //! * **The standing posture**: the feet straight below the hips (`step_width` the distance of
 //!   the sole centres at zero angles), the waist lowered by [`KNEE_DROP`] of the leg length
 //!   (hip to ankle) from the straight-legged height, so that the knees bend as HRP-2's do
-//!   (HRP-2: 8.8 %); the LIPM `cog_height` the whole-body COG height there.
+//!   (HRP-2: 8.8 %), or less where a static check of single support finds a pitch joint's
+//!   torque above its share of the effort limit or a joint outside its range ([`posture`];
+//!   refused naming the joint if no drop down to 3 % passes); the LIPM `cog_height` the
+//!   whole-body COG height there.
 //! * **The reach limits**: HRP-2's limits scaled by the ratio `k` of the legs' workspace
 //!   radius at the walking height, `r = √((0.97 L)² − h²)` (`L` the leg length, `h` hip to
 //!   ankle height, a 3 % knee margin), to HRP-2's; then shrunk by 10 % steps until the
 //!   numerical inverse kinematics reaches the longest step (forward and backward) and the
-//!   widest stance in double support with the waist midway. The limits that mix lengths
-//!   along and across the walk allow for a stance wider than `k` HRP-2's 0.2 m: the feet
-//!   distance at least `√(max_forward² + step_width²)`, the stride HRP-2's scaled plus the
+//!   widest stance in double support with the waist midway, within the joint ranges. The
+//!   limits that mix lengths along and across the walk allow for a stance wider than `k`
+//!   HRP-2's 0.2 m: the feet distance at least `√(max_forward² + step_width²)`, the stride HRP-2's scaled plus the
 //!   excess width.
 //! * **The gait**: HRP-2's timing, preview weights and eq. 18 limits (the built-in scenarios
 //!   are timed for them); the swing height HRP-2's 0.05 m scaled as the reach.
@@ -52,11 +55,12 @@
 pub mod cli;
 pub mod collada;
 mod feet;
+pub mod posture;
 pub mod sole;
 mod text;
 pub mod xml;
 
-use text::{multibody, num};
+use text::{multibody, planner_part, Planner};
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -64,7 +68,7 @@ use std::path::{Path, PathBuf};
 use planner_core::gait::Side;
 use urdf_rs::JointType;
 
-use super::model::{norm, rot_rpy, sub, Body, Model, Pose, Vec3, IDENTITY};
+use super::model::{norm, rot_rpy, side_index, sub, Body, Model, Pose, Vec3, IDENTITY};
 use super::Robot;
 
 /// The waist is lowered from the straight-legged height by this fraction of the leg length.
@@ -634,7 +638,7 @@ pub fn import(path: &Path, soles: Option<[&str; 2]>) -> Result<Imported, ImportE
         t.urdf.name.clone()
     };
     let mut imported = write(&name, path, &parts)?;
-    imported.warnings = warnings;
+    imported.warnings.splice(0..0, warnings);
     Ok(imported)
 }
 
@@ -649,58 +653,7 @@ struct Parts<'a> {
     sole_from: Vec<String>,
 }
 
-/// HRP-2's robot file's planner part, with the values of this robot.
-struct Planner {
-    cog_height: f64,
-    gravity: f64,
-    sole: [f64; 2],
-    step_width: f64,
-    step_height: f64,
-    scale: f64,
-}
-
-fn planner_part(name: &str, urdf: &Path, p: &Planner) -> String {
-    let h = super::Robot::hrp2();
-    let r = h.planner.reach;
-    let k = p.scale;
-    let hw = p.step_width;
-    format!(
-        "# {name}: imported from {urdf} by `host-sim robot import`.\n\
-         # The import's derivations and margins: host-sim/src/robot/import/mod.rs. Gait timing,\n\
-         # preview weights and eq. 18 limits are HRP-2's; lengths are this robot's.\n\
-         name = {name:?}\n\n\
-         [pendulum]\ncog_height = {}\ngravity = {}\n\n\
-         [timing]\ncontrol_period = 0.005\nsingle_support = 0.7\ndouble_support = 0.1\nstart = 0.8\n\
-         settle = 0.7\nstand = 0.005\nrest = 0.5\n\n\
-         [adjustment]\nmin = -0.2\nmax = 0.35\n\n\
-         [feet]\nsole_length = {}\nsole_width = {}\nstep_width = {}\nstep_height = {}\n\n\
-         [reach]                 # HRP-2's scaled by {} (the legs' workspace at the walking height)\n\
-         max_forward = {}\nmax_backward = {}\nmin_width = {}\nmax_width = {}\nmax_yaw = {}\n\
-         max_feet_distance = {}\nyaw_cost = {}\nmax_stride = {}\nmax_growth = {}\n\n\
-         [preview]\nqe = 1.0\nr = 1e-6\nshaping = true\n\n",
-        num(p.cog_height),
-        num(p.gravity),
-        num(p.sole[0]),
-        num(p.sole[1]),
-        num(hw),
-        num(p.step_height),
-        num(k),
-        num(round_mm(r.max_forward * k)),
-        num(round_mm(r.max_backward * k)),
-        num(round_mm((hw - (0.2 - r.min_width) * k).max(p.sole[1] + 0.01))),
-        num(round_mm(hw + (r.max_width - 0.2) * k)),
-        num(r.max_yaw),
-        num(round_mm(
-            (r.max_feet_distance * k).max((r.max_forward * k).hypot(hw) + 0.0005)
-        )),
-        num(r.yaw_cost * k),
-        num(round_mm(r.max_stride * k + (hw - 0.2 * k).max(0.0))),
-        num(round_mm(r.max_growth * k)),
-        urdf = urdf.display(),
-    )
-}
-
-fn round_mm(v: f64) -> f64 {
+pub(super) fn round_mm(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 
@@ -731,11 +684,34 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
     let step_width = round_mm(z.sole.p[1] - zr.sole.p[1]);
     let hip = z.links[0].p;
     let leg = norm(sub(z.ankle().p, hip));
-    let waist_height = (-z.sole.p[2] - KNEE_DROP * leg).mul_add(1e4, 0.0).round() / 1e4;
-    let mb = multibody(g, waist_height);
-    let model = tree_of(&mb)?
-        .model(gravity, step_width)
-        .map_err(|e| ImportError(format!("the standing posture: {e}")))?;
+    // The standing height: the largest drop within the legs' limits ([`posture`]).
+    let (mut last, mut first) = (String::new(), None);
+    let mut chosen = None;
+    for drop in posture::DROPS {
+        let waist_height = (-z.sole.p[2] - drop * leg).mul_add(1e4, 0.0).round() / 1e4;
+        let mb = multibody(g, waist_height);
+        match tree_of(&mb)?.model(gravity, step_width) {
+            Err(e) => last = format!("the standing posture: {e}"),
+            Ok(m) => match posture::outside_limits(&m, step_width) {
+                Some(why) => {
+                    first.get_or_insert_with(|| why.clone());
+                    last = why;
+                }
+                None => {
+                    chosen = Some((waist_height, mb, m, drop));
+                    break;
+                }
+            },
+        }
+    }
+    let Some((waist_height, mb, model, drop)) = chosen else {
+        return err(format!(
+            "no standing height keeps the legs within their limits (the waist {} down to {} \
+             of the leg below the straight-legged height); at the straightest: {last}",
+            posture::DROPS[0],
+            posture::DROPS[posture::DROPS.len() - 1],
+        ));
+    };
     let cog = round_mm(
         model
             .stance_cog_height(step_width)
@@ -770,10 +746,23 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
     let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
     let robot =
         Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
+    let warnings = first
+        .map(|why| {
+            let here = posture::heaviest(&model, step_width).unwrap_or_default();
+            format!(
+                "the waist stands {:.1} % of the leg below the straight-legged height, not \
+                 HRP-2's {:.1} %: at {:.1} %, {why}; here {here}",
+                100.0 * drop,
+                100.0 * KNEE_DROP,
+                100.0 * KNEE_DROP
+            )
+        })
+        .into_iter()
+        .collect();
     Ok(Imported {
         toml,
         robot,
-        warnings: Vec::new(),
+        warnings,
     })
 }
 
@@ -784,5 +773,9 @@ fn reaches(m: &Model, dx: f64, w: f64) -> bool {
         Pose::upright(dx / 2.0, w / 2.0, 0.0, 0.0),
         Pose::upright(-dx / 2.0, -w / 2.0, 0.0, 0.0),
     ];
-    m.cog(&waist, &soles).is_ok()
+    m.cog(&waist, &soles).is_ok_and(|(_, q)| {
+        [Side::Left, Side::Right]
+            .iter()
+            .all(|&s| posture::out_of_range(m, s, &q[side_index(s)], "").is_none())
+    })
 }

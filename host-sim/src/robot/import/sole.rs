@@ -67,13 +67,17 @@ fn circle(pose: &Pose, radius: f64, z: f64, out: &mut Vec<Vec3>) {
     }
 }
 
-/// The points of one shape placed at `pose`.
+/// The points of one shape placed at `pose`; `down`: the floor's downward unit vector in the
+/// frame `pose` places the shape in (a sphere's, a capsule's end's lowest point lies along it,
+/// whatever the frame's tilt).
 pub(crate) fn points(
     t: &Tree,
     g: &Geometry,
     pose: &Pose,
+    down: Vec3,
     out: &mut Vec<Vec3>,
 ) -> Result<(), ImportError> {
+    let lowest = |c: Vec3, r: f64| [c[0] + r * down[0], c[1] + r * down[1], c[2] + r * down[2]];
     match g {
         Geometry::Box { size } => {
             for k in 0..8 {
@@ -81,18 +85,14 @@ pub(crate) fn points(
                 out.push(pose.apply([c(0), c(1), c(2)]));
             }
         }
-        Geometry::Sphere { radius } => {
-            let c = pose.apply([0.0; 3]);
-            out.push([c[0], c[1], c[2] - radius]);
-        }
+        Geometry::Sphere { radius } => out.push(lowest(pose.apply([0.0; 3]), *radius)),
         Geometry::Cylinder { radius, length } => {
             circle(pose, *radius, 0.5 * length, out);
             circle(pose, *radius, -0.5 * length, out);
         }
         Geometry::Capsule { radius, length } => {
             for z in [0.5 * length, -0.5 * length] {
-                let c = pose.apply([0.0, 0.0, z]);
-                out.push([c[0], c[1], c[2] - radius]);
+                out.push(lowest(pose.apply([0.0, 0.0, z]), *radius));
                 circle(pose, *radius, z, out);
             }
         }
@@ -178,8 +178,13 @@ fn xyz(v: Vec3) -> String {
 pub(crate) type FootPoints = (Vec<(Vec3, usize)>, Vec<String>);
 
 /// The points of a foot's shapes (its collision shapes, or its visual ones if it has none)
-/// in the ankle frame, each with the index of its shape in the descriptions returned.
-pub(crate) fn foot_points(t: &Tree, links: &[(String, Pose)]) -> Result<FootPoints, ImportError> {
+/// in the ankle frame, each with the index of its shape in the descriptions returned; `down`
+/// as for [`points`], in the ankle frame.
+pub(crate) fn foot_points(
+    t: &Tree,
+    links: &[(String, Pose)],
+    down: Vec3,
+) -> Result<FootPoints, ImportError> {
     let mut pts = Vec::new();
     let mut shapes = Vec::new();
     for kind in ["collision", "visual"] {
@@ -196,7 +201,7 @@ pub(crate) fn foot_points(t: &Tree, links: &[(String, Pose)]) -> Result<FootPoin
             for (origin, g) in list {
                 let at = pose.then(&pose_of(origin));
                 let mut v = Vec::new();
-                points(t, g, &at, &mut v)?;
+                points(t, g, &at, down, &mut v)?;
                 pts.extend(v.into_iter().map(|p| (p, shapes.len())));
                 shapes.push(format!(
                     "the <{kind}> {} of <link name=\"{name}\"> (origin xyz=\"{}\" rpy=\"{}\", \
@@ -227,7 +232,8 @@ pub(crate) fn sole(
     level: &Mat3,
     leg: f64,
 ) -> Result<Sole, ImportError> {
-    let (pts, shapes) = foot_points(t, links)?;
+    let down = mul_mv(&transpose(level), [0.0, 0.0, -1.0]);
+    let (pts, shapes) = foot_points(t, links, down)?;
     let names = links
         .iter()
         .map(|(n, _)| format!("<link name=\"{n}\">"))
@@ -376,6 +382,40 @@ mod tests {
         assert_eq!(
             obj("# c\nv 1 2 3\nvn 0 0 1\nv 4 5 6 1\n"),
             vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]
+        );
+    }
+
+    /// A foot of four balls under an ankle frame pitched by 0.4 rad at zero angles: the sole
+    /// plane is the balls' lowest points on the floor's vertical, 0.07 m below the ankle, and
+    /// the sole centre straight below it (taking a ball's lowest point along the tilted
+    /// frame's z put the plane 1.6 mm high and the centre 7.8 mm behind).
+    #[test]
+    fn balls_under_a_tilted_ankle_frame_touch_straight_below_their_centres() {
+        use crate::robot::model::{rot_rpy, sub};
+        let level = rot_rpy([0.0, 0.4, 0.0]);
+        let back = transpose(&level);
+        let mut foot = String::from("<robot name=\"r\"><link name=\"foot\">");
+        for (x, y) in [(0.1, 0.05), (0.1, -0.05), (-0.1, 0.05), (-0.1, -0.05)] {
+            let c = mul_mv(&back, [x, y, -0.05]);
+            foot += &format!(
+                "<collision><origin xyz=\"{} {} {}\"/><geometry><sphere radius=\"0.02\"/>\
+                 </geometry></collision>",
+                c[0], c[1], c[2]
+            );
+        }
+        foot += "</link></robot>";
+        let urdf = urdf_rs::read_from_string(&foot).expect("URDF");
+        let t = Tree::new(urdf, ".".into()).expect("tree");
+        let s = sole(&t, &[("foot".into(), Pose::IDENTITY)], &[], &level, 0.6).expect("sole");
+        let want = mul_mv(&back, [0.0, 0.0, -0.07]);
+        assert!(
+            crate::robot::model::norm(sub(s.centre, want)) < 1e-9,
+            "{:?} vs {want:?}",
+            s.centre
+        );
+        assert!(
+            (s.size[0] - 0.2).abs() < 1e-9 && (s.size[1] - 0.1).abs() < 1e-9,
+            "{s:?}"
         );
     }
 }

@@ -1,8 +1,9 @@
 //! The robot file's text: numbers, the `[multibody]` table.
 
 use std::fmt::Write;
+use std::path::Path;
 
-use super::Parts;
+use super::{round_mm, Parts};
 use crate::robot::model::{Body, Pose, IDENTITY};
 
 pub(super) fn num(v: f64) -> String {
@@ -94,4 +95,55 @@ pub(super) fn rpy(p: &Pose) -> (f64, f64, f64) {
     let roll = r[2][1].atan2(r[2][2]);
     let yaw = r[1][0].atan2(r[0][0]);
     (roll, pitch, yaw)
+}
+
+/// HRP-2's robot file's planner part, with the values of this robot.
+pub(super) struct Planner {
+    pub(super) cog_height: f64,
+    pub(super) gravity: f64,
+    pub(super) sole: [f64; 2],
+    pub(super) step_width: f64,
+    pub(super) step_height: f64,
+    pub(super) scale: f64,
+}
+
+pub(super) fn planner_part(name: &str, urdf: &Path, p: &Planner) -> String {
+    let h = super::Robot::hrp2();
+    let r = h.planner.reach;
+    let k = p.scale;
+    let hw = p.step_width;
+    format!(
+        "# {name}: imported from {urdf} by `host-sim robot import`.\n\
+         # The import's derivations and margins: host-sim/src/robot/import/mod.rs. Gait timing,\n\
+         # preview weights and eq. 18 limits are HRP-2's; lengths are this robot's.\n\
+         name = {name:?}\n\n\
+         [pendulum]\ncog_height = {}\ngravity = {}\n\n\
+         [timing]\ncontrol_period = 0.005\nsingle_support = 0.7\ndouble_support = 0.1\nstart = 0.8\n\
+         settle = 0.7\nstand = 0.005\nrest = 0.5\n\n\
+         [adjustment]\nmin = -0.2\nmax = 0.35\n\n\
+         [feet]\nsole_length = {}\nsole_width = {}\nstep_width = {}\nstep_height = {}\n\n\
+         [reach]                 # HRP-2's scaled by {} (the legs' workspace at the walking height)\n\
+         max_forward = {}\nmax_backward = {}\nmin_width = {}\nmax_width = {}\nmax_yaw = {}\n\
+         max_feet_distance = {}\nyaw_cost = {}\nmax_stride = {}\nmax_growth = {}\n\n\
+         [preview]\nqe = 1.0\nr = 1e-6\nshaping = true\n\n",
+        num(p.cog_height),
+        num(p.gravity),
+        num(p.sole[0]),
+        num(p.sole[1]),
+        num(hw),
+        num(p.step_height),
+        num(k),
+        num(round_mm(r.max_forward * k)),
+        num(round_mm(r.max_backward * k)),
+        num(round_mm((hw - (0.2 - r.min_width) * k).max(p.sole[1] + 0.01))),
+        num(round_mm(hw + (r.max_width - 0.2) * k)),
+        num(r.max_yaw),
+        num(round_mm(
+            (r.max_feet_distance * k).max((r.max_forward * k).hypot(hw) + 0.0005)
+        )),
+        num(r.yaw_cost * k),
+        num(round_mm(r.max_stride * k + (hw - 0.2 * k).max(0.0))),
+        num(round_mm(r.max_growth * k)),
+        urdf = urdf.display(),
+    )
 }
