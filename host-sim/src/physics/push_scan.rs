@@ -17,14 +17,10 @@
 //!   every fall).
 //!
 //! Two configurations compare in a cell only where their `sure_bw` differ by more than the
-//! larger of their spreads (and of the resolution): [`beyond_spread`].
+//! larger of their spreads (and of the resolution): [`beyond_spread`]. The engine's side, a
+//! cell's bisection and its scan, is `super::push_map::scan_cell`.
 
 use std::cmp::Ordering;
-
-use super::closed_loop::{run, PushKind, PushPhase, PushSpec, Stepping, Walk};
-use super::push_map::PUSH_S;
-use super::PhysicsConfig;
-use planner_core::node::NodeConfig;
 
 /// Forces tried above the bisected threshold.
 pub const SCAN_FORCES: usize = 4;
@@ -140,41 +136,6 @@ pub fn scan_with(
         tried.push((below, survives(below)?));
     }
     Ok(Scan::of(tried))
-}
-
-/// One cell in the engine: its bisection ([`super::push_map::bisect_tried`]) and the scan
-/// around the bisected force.
-pub fn scan_cell(
-    node: &NodeConfig,
-    cfg: &PhysicsConfig,
-    stepping: Stepping,
-    phase: PushPhase,
-    direction_deg: f64,
-    resolution_bw: f64,
-) -> Result<(super::push_map::Cell, Scan), String> {
-    let (cell, tried) = super::push_map::bisect_tried(
-        node,
-        cfg,
-        stepping,
-        phase,
-        direction_deg,
-        resolution_bw,
-        super::push_map::Convention::Force,
-    )?;
-    let weight = cfg.robot.total_mass() * cfg.robot.gravity();
-    let scan = scan_with(cell.bw_fraction, tried, |bw| {
-        let push = PushSpec {
-            phase,
-            direction_deg,
-            kind: PushKind::Force {
-                force_n: bw * weight,
-                duration_s: PUSH_S,
-            },
-        };
-        let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
-        Ok(!o.fell)
-    })?;
-    Ok((cell, scan))
 }
 
 #[cfg(test)]
