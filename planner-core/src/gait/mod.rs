@@ -146,6 +146,9 @@ pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     /// The worst first-interval excursion (eq. 17) of the predicted plan, for the re-plan
     /// that takes it (valid while `predicted` is `Some`).
     predicted_worst: [T; 2],
+    /// Walking windows planned since the (re)start, wrapping: every prediction of eq. 17 and
+    /// every re-plan that does not take a predicted plan ([`Gait::walk_plans`]).
+    walk_plans: u32,
     /// The measured state the next re-plan of a capture step starts from (zero: the
     /// reference's own state); set every cycle by the node's step adjustment
     /// ([`Gait::set_measured`]).
@@ -230,6 +233,7 @@ impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
                 zmp: [State::ZERO; 2],
             }),
             predicted_worst: [T::ZERO; 2],
+            walk_plans: 0,
             measured: Deviation::ZERO,
             from_measured: false,
             target: None,
@@ -330,6 +334,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.serial = 0;
         self.predicted = None;
         self.predicted_worst = [T::ZERO; 2];
+        self.walk_plans = 0;
         self.measured = Deviation::ZERO;
         self.from_measured = false;
         self.target = None;
@@ -366,6 +371,14 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// ticks means the tick in between planned one.
     pub fn plans(&self) -> u32 {
         self.serial
+    }
+
+    /// How many walking windows have been planned since the last (re)start, wrapping: every
+    /// check of eq. 17 (the re-plan a modification or a move of the next swing target will
+    /// cause, planned ahead) and every re-plan at a start of single support that does not take
+    /// the plan predicted for it. What a cycle's planning costs is counted by it.
+    pub fn walk_plans(&self) -> u32 {
+        self.walk_plans
     }
 
     /// Where the foot of the other side than `side` will be just before a step of `side` is

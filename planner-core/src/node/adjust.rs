@@ -282,6 +282,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         [x, y]
     }
 
+    /// `true` while the step adjustment works on the walk: one started with `StartAdjusting`,
+    /// in an open session, neither emergency-stopped nor with the controller lost.
+    pub(super) fn adjusts(&self) -> bool {
+        self.adj.enabled && self.open && !self.estopped && !self.lost && !self.gait.is_standing()
+    }
+
     /// The step adjustment of this cycle (see the module docs): after the commands, before the
     /// supervision and the tick. Kept out of `poll` (which it would otherwise crowd).
     #[inline(never)]
@@ -291,11 +297,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if fresh.is_some() {
             self.adj.flags |= Adjust::FRESH;
         }
-        let adjusting = self.adj.enabled
-            && self.open
-            && !self.estopped
-            && !self.lost
-            && !self.gait.is_standing();
+        let adjusting = self.adjusts();
         if adjusting {
             self.move_steps(fresh);
         }
@@ -332,9 +334,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return;
         };
         let number = front.wrapping_add(self.first);
-        if self.plans_left == 0 || self.spend(WORK_ADJUST).is_err() {
+        if self.plans_left == 0 || self.afford(WORK_ADJUST).is_err() {
             return;
         }
+        self.spend(WORK_ADJUST);
         let Some(ticks) = self.gait.ticks_to_next_landing() else {
             return;
         };

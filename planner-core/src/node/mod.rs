@@ -171,7 +171,7 @@ pub const WORK_ADJUST: u32 = 23_000;
 /// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
 /// among them is carried out first.
 pub const MAX_RX: usize = 32;
-const _: () = assert!(MAX_RX < 64, "a cycle's frames are a 64-bit mask");
+const _: () = assert!(MAX_RX < 255, "a cycle's frames are numbered in a byte");
 
 /// Control cycles in a row that the firmware may report its link bus-off (off the bus: it
 /// neither sends nor takes part) before a moving robot stops as for a lost controller: more
@@ -219,6 +219,9 @@ pub struct NodeConfig<T = f64> {
     /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
     /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
+    /// The command work a cycle may do, in estimated Cortex-M7 instructions ([`WORK_BUDGET`]
+    /// by default; see there for what each command costs).
+    pub work_budget: u32,
     /// Reach limits.
     pub reach: Reach<T>,
     /// The step adjustment from the measured state (see `adjust`).
@@ -254,6 +257,7 @@ impl NodeConfig {
             max_rx: 20,
             max_frames: 160,
             max_plans: 1,
+            work_budget: WORK_BUDGET,
             reach,
             adjust: AdjustConfig::DEFAULT,
             entropy: 0,
@@ -294,6 +298,7 @@ impl NodeConfig {
             max_rx: self.max_rx,
             max_frames: self.max_frames,
             max_plans: self.max_plans,
+            work_budget: self.work_budget,
             reach: self.reach.cast(),
             adjust: self.adjust.cast(),
             entropy: self.entropy,
@@ -394,8 +399,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     /// Planning commands that may still plan in this cycle ([`NodeConfig::max_plans`] at
     /// the start of each cycle's acting).
     plans_left: usize,
-    /// What is left of the cycle's [`WORK_BUDGET`] (the whole budget at the start of each
-    /// cycle's acting).
+    /// What is left of the cycle's [`NodeConfig::work_budget`] (the whole budget at the start
+    /// of each cycle's acting).
     work_left: u32,
     /// An emergency stop was received in the cycle being acted on: no `Reset` leaves it (set
     /// and cleared within [`Node::poll`]).
@@ -497,6 +502,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 max_rx: 0,
                 max_frames: 0,
                 max_plans: 0,
+                work_budget: 0,
                 reach: Reach::PARKED,
                 adjust: AdjustConfig {
                     max_age: 0,
@@ -602,7 +608,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.window = (0, 0);
         self.timeout_cycles = timeout_cycles;
         self.plans_left = cfg.max_plans;
-        self.work_left = WORK_BUDGET;
+        self.work_left = cfg.work_budget;
         self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
         self.counters = Counters::ZERO;
         self.cycle = 0;
@@ -625,6 +631,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The counters.
     pub fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// What is left of the budget of the cycle being acted on ([`NodeConfig::work_budget`]),
+    /// or, between cycles, of the budget [`Node::handle`] spends from (renewed by every
+    /// [`Node::poll`]).
+    pub fn work_left(&self) -> u32 {
+        self.work_left
     }
 
     /// Cycles run.
