@@ -43,8 +43,11 @@
 //! * eq. 17 checks the moved next swing target as it checks a modification (the ZMP stays in
 //!   the sole): a shift it refuses is put back and the next attempt in this window takes half
 //!   of it (flag *ZMP limited*);
-//! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`])
-//!   after the commands: a cycle whose budget a command spent does not adjust.
+//! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`]):
+//!   it runs after the commands that do not plan and before a modification of the next swing
+//!   target (which is then refused `Busy` if the adjustment planned), and in a walk that
+//!   adjusts its work ([`super::WORK_ADJUST`]) is kept from the commands' budget, so footstep
+//!   frames never crowd it out; only a `Start` in the same cycle (which planned) defers it.
 //!
 //! # From the measured state (an option)
 //! With [`AdjustConfig::from_measured`] the re-plan that lifts a capture step's foot starts

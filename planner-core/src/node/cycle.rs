@@ -1,6 +1,8 @@
 //! One control cycle ([`Node::poll`]): receive a bounded batch, act on it in priority order
-//! (`ESTOP`, `StopNow`, the rest; one step's modifications newest version first), supervise
-//! (the controller's silence by clock and by cycles, the clock itself), tick the gait, publish.
+//! (`ESTOP`, `StopNow`, the rest; one step's modifications newest version first; the step
+//! adjustment, then the modifications that plan, so that eq. 17 is planned once on the final
+//! steps), supervise (the controller's silence by clock and by cycles, the clock itself), tick
+//! the gait, publish.
 
 use super::*;
 

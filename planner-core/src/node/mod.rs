@@ -27,12 +27,21 @@
 //!    are then taken whole, with room for emergency stops of other senders.
 //!    Commands that plan — a
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
-//!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
-//!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
-//!    are carried out a cycle; the rest are refused `Busy`. And the cycle's command work is
-//!    counted against a budget in estimated instructions ([`WORK_BUDGET`]: each footstep
-//!    command's checks, each plan, the step adjustment): a command that does not fit is
-//!    refused `Busy` with nothing changed, so the worst cycle is bounded whatever arrives. Priority keeps what arrival order
+//!    (eq. 17 plans the re-plan it will cause) — cost a window's plan against a few hundred
+//!    instructions for the others, so at most [`NodeConfig::max_plans`] of them are carried
+//!    out a cycle; the rest are refused `Busy`. A modification that plans is acted on **after
+//!    the cycle's other commands and the step adjustment**: eq. 17 is then planned once, on
+//!    the final steps (the later modifications of the steps it lands with included), and the
+//!    tick's re-plan at a start of single support in the same cycle takes that plan instead
+//!    of planning again; if the step adjustment planned (a capture step comes first), it is
+//!    refused `Busy`. And the cycle's command work is counted against a budget in estimated
+//!    instructions ([`NodeConfig::work_budget`], [`WORK_BUDGET`]: each footstep command's
+//!    checks, each plan, the step adjustment): a command is taken only if its work fits what
+//!    is left, else refused `Busy` with nothing changed, and only a command carried out takes
+//!    its work (a refusal spends nothing: the checks of refused frames are bounded by
+//!    `max_rx` instead). In a walk that adjusts its steps, the step adjustment's share
+//!    ([`WORK_ADJUST`]) is kept from the commands, so no number of footstep frames defers a
+//!    capture step. So the worst cycle is bounded whatever arrives. Priority keeps what arrival order
 //!    means: a footstep frame that arrived before a `StopNow` carried out in the cycle was
 //!    dropped by it (refused `Stale`), and a `Reset` received with an `ESTOP` in one cycle is
 //!    refused `EmergencyStopped` (the stop stands, whatever the order). Modifications of one step that arrive in one cycle are
@@ -143,16 +152,16 @@ use crate::wire::{
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
 
-/// The command work a cycle may do, in estimated Cortex-M7 instructions: every modification's
-/// checks cost [`WORK_STEP`], every append's [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of
-/// the next swing target while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment
-/// from the measured state [`WORK_ADJUST`]. A command whose work does not fit what is left of
-/// the cycle's budget is refused `Busy` with nothing changed (the controller sends it again
-/// in a later cycle); the step adjustment waits for a cycle with room. With the tick, the
-/// re-plan and the frames sent, this bounds the worst cycle whatever is received (the
-/// firmware's timing chapter states the bound and the log that reaches it). The budget takes
-/// nine modifications of distinct steps, one of them planning, in one cycle, or the 20 appends
-/// of a walk sent at once.
+/// The command work a cycle may do by default ([`NodeConfig::work_budget`]), in estimated
+/// Cortex-M7 instructions: every modification's checks cost [`WORK_STEP`], every append's
+/// [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of the next swing target
+/// while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment from the measured state
+/// [`WORK_ADJUST`] (kept from the commands in a walk that adjusts). A command whose work does
+/// not fit what is left of the cycle's budget is refused `Busy` with nothing changed (the
+/// controller sends it again in a later cycle); a refused command spends nothing. With the
+/// tick, the re-plan, the frames sent and the checks of refused frames (at most
+/// [`NodeConfig::max_rx`]), this bounds the worst cycle whatever is received (the firmware's
+/// timing chapter states the bound and the log that reaches it).
 pub const WORK_BUDGET: u32 = 33_000;
 /// See [`WORK_BUDGET`]: one modification's checks (reach against the feet before it and its
 /// two successors; the step records).
