@@ -444,6 +444,17 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.queue.front().map(|q| q.id)
     }
 
+    /// The footstep at queue position `pos` (0: the next swing target), if any.
+    pub fn queued_at(&self, pos: usize) -> Option<Footstep<T>> {
+        self.queue.get(pos).map(|q| q.step)
+    }
+
+    /// A number that changes whenever the footsteps or the stop request change (wrapping): what
+    /// is computed from the queued steps may be kept while it stays the same.
+    pub fn generation(&self) -> u32 {
+        self.gen
+    }
+
     /// The footstep queued as `id` (not yet swung), if any.
     pub fn queued_step(&self, id: u16) -> Option<Footstep<T>> {
         self.index_of(id)

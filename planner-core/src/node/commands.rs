@@ -37,20 +37,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
-    /// Reach and crossing check of a footstep: appended (`before` = `None`), or replacing the
-    /// queued step `before`, with its two successors then checked against it.
-    pub(super) fn check_reach(
-        &self,
-        step: &Footstep<T>,
-        before: Option<u16>,
-    ) -> Result<(), Reason> {
-        match self.reach_broken(step, before) {
-            None => Ok(()),
-            Some(b) if b.limit == Limit::Crossing => Err(Reason::Crossing),
-            Some(_) => Err(Reason::Reach),
-        }
-    }
-
     /// The limit that the node's reach check finds broken for a footstep command now
     /// (`Crossing` and `Reach` refusals): appended (`before` = `None`), or replacing the queued
     /// step `before` (then its two successors are checked against it too); `None` if the
@@ -367,10 +353,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.gait.next_side().is_some_and(|side| side != step.side) {
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
-        self.check_reach(&step, None)?;
+        let gen = self.gait.generation();
+        let kept = self.check_reach_kept(&step, None)?;
         self.afford(WORK_APPEND)?;
         let gid = self.appended as u16;
+        let pos = self.gait.queued();
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
+        self.kept_step(gen, pos, kept, step.side);
         self.spend(WORK_APPEND);
         self.steps.push(Record {
             append: *s,
@@ -419,7 +408,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let walked = steps::shifted(&s, self.adj.shift).ok_or(Reason::OutOfRange)?;
         let step = Self::footstep(&walked);
         let id = self.gait_id(m.id);
-        self.check_reach(&step, Some(id))?;
+        let gen = self.gait.generation();
+        let kept = self.check_reach_kept(&step, Some(id))?;
         // A modification of the next swing target while walking plans (eq. 17).
         let plans = self.plans_modify(id);
         let work = if plans {
@@ -436,6 +426,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.plans_left = self.plans_left.saturating_sub(1);
         }
         modified?;
+        if let Some(pos) = self.gait.position(id) {
+            self.kept_step(gen, pos, kept, step.side);
+        }
         self.spend(work);
         if let Some(r) = self.steps.queued_at_mut(at, m.id) {
             r.version = m.version;

@@ -242,6 +242,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         self.plans_left = self.cfg.max_plans;
         self.work_left = budget.saturating_sub(reserve);
+        // The frames kept for the reach checks are this phase's (the tick moved the feet).
+        self.feet.clear();
         let mut act = Acting {
             refused: 0,
             stop_at: None,
@@ -279,6 +281,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         let refused = act.refused;
         self.estop_now = false;
+        self.feet.clear();
         // (`Node::handle` outside a cycle: the budget of one.)
         self.plans_left = self.cfg.max_plans;
         self.work_left = self.cfg.work_budget;

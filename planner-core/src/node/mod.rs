@@ -125,6 +125,7 @@
 mod adjust;
 mod commands;
 mod cycle;
+mod feet;
 mod reach;
 mod report;
 mod steps;
@@ -431,6 +432,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     off_bus: u32,
     /// The step adjustment (see `adjust`).
     adj: Adjusting<T>,
+    /// The frames of the queued steps kept for the reach checks (see `feet`).
+    feet: feet::FeetFrames<T, Q>,
 }
 
 /// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
@@ -547,6 +550,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             link: Some(LinkHealth::ZERO),
             off_bus: 0,
             adj: Adjusting::ZERO,
+            feet: feet::FeetFrames::EMPTY,
         }
     }
 }
@@ -624,6 +628,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.link = None;
         self.off_bus = 0;
         self.adj = Adjusting::ZERO;
+        self.feet.clear();
         Ok(())
     }
 

@@ -129,6 +129,15 @@ pub(super) struct Frame<T> {
 }
 
 impl<T: Real> Frame<T> {
+    /// Every field zero (a frame not computed: see `feet`).
+    pub(super) const ZERO: Self = Self {
+        x: T::ZERO,
+        y: T::ZERO,
+        yaw: T::ZERO,
+        sin: T::ZERO,
+        cos: T::ZERO,
+    };
+
     pub(super) fn of(f: &Footstep<T>) -> Self {
         Self::like(f, &[])
     }
