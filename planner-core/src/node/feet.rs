@@ -45,6 +45,17 @@ impl<T: Real, const Q: usize> FeetFrames<T, Q> {
     }
 }
 
+/// The frames a move of the queued step `id` and the steps after it is checked on (the step
+/// adjustment's reach cut, see `adjust`): the feet before it, it and its successor, unmoved.
+pub(super) struct MoveFrames<T> {
+    other: Frame<T>,
+    same: Frame<T>,
+    step: Frame<T>,
+    side: Side,
+    next: Option<(Frame<T>, Side)>,
+    from_rest: bool,
+}
+
 /// Bit `i` of a mask over queue positions (`Q` ≤ 128).
 const fn bit(i: usize) -> u128 {
     1u128 << (i & 127)
@@ -237,5 +248,41 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             Some(f) => self.keep(pos, f, side),
             None => self.feet.known &= !bit(pos),
         }
+    }
+
+    /// The kept frames for a move of the queued step `id` ([`Node::reach_broken_move`]); `None`
+    /// where they do not apply (the move is then checked afresh).
+    pub(super) fn move_frames(&mut self, id: u16) -> Option<MoveFrames<T>> {
+        let pos = self.gait.position(id)?;
+        let (step, side) = self.frame_at(pos)?;
+        let other = self.frame_before(pos, side.other())?;
+        let same = self.frame_before(pos, side)?;
+        let next = match self.gait.position(id.wrapping_add(1)) {
+            Some(p) if p == pos + 1 => Some(self.frame_at(p)?),
+            Some(_) => return None,
+            None => None,
+        };
+        let from_rest = pos == 0 && self.gait.next_swing_from_rest();
+        Some(MoveFrames {
+            other,
+            same,
+            step,
+            side,
+            next,
+            from_rest,
+        })
+    }
+
+    /// [`Node::reach_broken_moved`] on the kept frames `m` of the step: bit for bit the same.
+    pub(super) fn reach_broken_move(&self, m: &MoveFrames<T>, delta: [T; 2]) -> Option<Broken<T>> {
+        let r = &self.cfg.reach;
+        let soles = Soles::of(&self.cfg.params);
+        let f = m.step.shifted(delta);
+        if let Some(b) = r.broken_frames(&m.other, &m.same, &f, m.side, m.from_rest, &soles) {
+            return Some(b);
+        }
+        let (next, side) = m.next?;
+        let f1 = next.shifted(delta);
+        r.broken_frames(&f, &m.other, &f1, side, false, &soles)
     }
 }

@@ -628,7 +628,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.link = None;
         self.off_bus = 0;
         self.adj = Adjusting::ZERO;
-        self.feet.clear();
+        self.feet = feet::FeetFrames::EMPTY;
         Ok(())
     }
 

@@ -138,6 +138,15 @@ impl<T: Real> Frame<T> {
         cos: T::ZERO,
     };
 
+    /// This frame moved by `d` (the heading kept): the frame of the footstep moved by `d`.
+    pub(super) fn shifted(&self, d: [T; 2]) -> Self {
+        Self {
+            x: self.x + d[0],
+            y: self.y + d[1],
+            ..*self
+        }
+    }
+
     pub(super) fn of(f: &Footstep<T>) -> Self {
         Self::like(f, &[])
     }
