@@ -17,9 +17,9 @@ pub(super) struct FeetFrames<T, const Q: usize> {
     /// Anything is kept, for the gait's footsteps of generation `gen`.
     valid: bool,
     gen: u32,
-    /// Queue positions whose frame is kept, and of those the left steps.
-    known: u128,
-    left: u128,
+    /// By queue position: 0 nothing kept, else the side of the step whose frame is kept
+    /// ([`LEFT`] or [`RIGHT`]).
+    known: [u8; Q],
     frames: [Frame<T>; Q],
     /// The frames of the feet before the queue (by side: the swing target of that side, else
     /// the foot), when kept.
@@ -27,13 +27,24 @@ pub(super) struct FeetFrames<T, const Q: usize> {
     base: [Frame<T>; 2],
 }
 
+/// See [`FeetFrames::known`].
+const LEFT: u8 = 1;
+/// See [`FeetFrames::known`].
+const RIGHT: u8 = 2;
+
+fn code(side: Side) -> u8 {
+    match side {
+        Side::Left => LEFT,
+        Side::Right => RIGHT,
+    }
+}
+
 impl<T: Real, const Q: usize> FeetFrames<T, Q> {
     /// Nothing kept.
     pub(super) const EMPTY: Self = Self {
         valid: false,
         gen: 0,
-        known: 0,
-        left: 0,
+        known: [0; Q],
         frames: [Frame::ZERO; Q],
         base_known: [false; 2],
         base: [Frame::ZERO; 2],
@@ -43,6 +54,21 @@ impl<T: Real, const Q: usize> FeetFrames<T, Q> {
     pub(super) fn clear(&mut self) {
         self.valid = false;
     }
+
+    /// The kept frame at `at`.
+    fn get(&self, at: At) -> Option<&Frame<T>> {
+        match at {
+            At::Queued(p) => self.frames.get(p),
+            At::Base(k) => self.base.get(k),
+        }
+    }
+}
+
+/// Where a kept frame is: at a queue position, or the foot of a side before the queue.
+#[derive(Clone, Copy)]
+enum At {
+    Queued(usize),
+    Base(usize),
 }
 
 /// The frames a move of the queued step `id` and the steps after it is checked on (the step
@@ -56,93 +82,74 @@ pub(super) struct MoveFrames<T> {
     from_rest: bool,
 }
 
-/// Bit `i` of a mask over queue positions (`Q` ≤ 128).
-const fn bit(i: usize) -> u128 {
-    1u128 << (i & 127)
-}
-
 impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
-    /// The kept frames, for the gait as it is now (emptied if its footsteps changed).
-    fn feet_frames(&mut self) -> &mut FeetFrames<T, Q> {
+    /// Empties the kept frames if the gait's footsteps changed.
+    fn sync_frames(&mut self) {
         let gen = self.gait.generation();
         let c = &mut self.feet;
         if !c.valid || c.gen != gen {
             c.valid = true;
             c.gen = gen;
-            c.known = 0;
-            c.left = 0;
+            c.known = [0; Q];
             c.base_known = [false; 2];
         }
-        c
     }
 
-    /// The frame of the queued step at position `pos` and its side, if there is one.
-    fn frame_at(&mut self, pos: usize) -> Option<(Frame<T>, Side)> {
-        let c = self.feet_frames();
-        if c.known & bit(pos) != 0 {
-            let side = if c.left & bit(pos) != 0 {
-                Side::Left
-            } else {
-                Side::Right
-            };
-            return c.frames.get(pos).map(|f| (*f, side));
+    /// Keeps the frame of the queued step at position `pos` (if there is one) and returns its
+    /// side.
+    fn ensure_at(&mut self, pos: usize) -> Option<Side> {
+        match self.feet.known.get(pos) {
+            Some(&LEFT) => return Some(Side::Left),
+            Some(&RIGHT) => return Some(Side::Right),
+            Some(_) => {}
+            None => return None,
         }
         let step = self.gait.queued_at(pos)?;
         // The neighbour before it often shares the heading.
-        let before = pos
-            .checked_sub(1)
-            .and_then(|p| {
-                let c = &self.feet;
-                (c.known & bit(p) != 0).then(|| c.frames.get(p).copied())
-            })
-            .flatten();
-        let f = match &before {
+        let c = &self.feet;
+        let before = match pos.checked_sub(1) {
+            Some(p) if c.known.get(p).is_some_and(|&k| k != 0) => c.frames.get(p),
+            _ => None,
+        };
+        let f = match before {
             Some(b) => Frame::like(&step, &[b]),
             None => Frame::of(&step),
         };
         self.keep(pos, f, step.side);
-        Some((f, step.side))
+        Some(step.side)
     }
 
     /// Keeps `f`, the frame of the queued step at `pos` of `side`.
     fn keep(&mut self, pos: usize, f: Frame<T>, side: Side) {
         let c = &mut self.feet;
-        if let Some(slot) = c.frames.get_mut(pos) {
+        if let (Some(slot), Some(k)) = (c.frames.get_mut(pos), c.known.get_mut(pos)) {
             *slot = f;
-            c.known |= bit(pos);
-            if side == Side::Left {
-                c.left |= bit(pos);
-            } else {
-                c.left &= !bit(pos);
+            *k = code(side);
+        }
+    }
+
+    /// Keeps the frame of the foot of `side` before the queue.
+    fn ensure_base(&mut self, side: Side) -> At {
+        let k = side.index();
+        if self.feet.base_known.get(k) != Some(&true) {
+            let feet = self.gait.previous_feet(self.gait.next_target());
+            let f = Frame::of(&feet[k]);
+            let c = &mut self.feet;
+            if let (Some(known), Some(slot)) = (c.base_known.get_mut(k), c.base.get_mut(k)) {
+                *known = true;
+                *slot = f;
             }
         }
+        At::Base(k)
     }
 
-    /// The frame of the foot of `side` before the queue.
-    fn base_frame(&mut self, side: Side) -> Frame<T> {
-        let k = side.index();
-        let c = self.feet_frames();
-        if let (Some(true), Some(f)) = (c.base_known.get(k), c.base.get(k)) {
-            return *f;
-        }
-        let feet = self.gait.previous_feet(self.gait.next_target());
-        let f = Frame::of(&feet[k]);
-        let c = &mut self.feet;
-        if let (Some(known), Some(slot)) = (c.base_known.get_mut(k), c.base.get_mut(k)) {
-            *known = true;
-            *slot = f;
-        }
-        f
-    }
-
-    /// The foot of `side` before queue position `pos`: the queued step at `pos − 1` or `pos − 2`
-    /// (the queue alternates sides), else the foot before the queue.
-    fn frame_before(&mut self, pos: usize, side: Side) -> Option<Frame<T>> {
+    /// Keeps the frame of the foot of `side` before queue position `pos`: the queued step at
+    /// `pos − 1` or `pos − 2` (the queue alternates sides), else the foot before the queue.
+    fn ensure_before(&mut self, pos: usize, side: Side) -> Option<At> {
         for back in 1..=2 {
             if let Some(p) = pos.checked_sub(back) {
-                let (f, s) = self.frame_at(p)?;
-                if s == side {
-                    return Some(f);
+                if self.ensure_at(p)? == side {
+                    return Some(At::Queued(p));
                 }
             }
         }
@@ -150,7 +157,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if pos >= 2 {
             return None;
         }
-        Some(self.base_frame(side))
+        Some(self.ensure_base(side))
     }
 
     /// [`Node::reach_broken`] with the kept frames (see the module docs), and the frame of
@@ -160,44 +167,50 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         step: &Footstep<T>,
         before: Option<u16>,
     ) -> Result<(Option<Broken<T>>, Frame<T>), ()> {
+        self.sync_frames();
         let pos = match before {
             Some(id) => self.gait.position(id).ok_or(())?,
             None => self.gait.queued(),
         };
-        let other = self.frame_before(pos, step.side.other()).ok_or(())?;
-        let same = self.frame_before(pos, step.side).ok_or(())?;
-        let f = Frame::like(step, &[&other, &same]);
+        let other = self.ensure_before(pos, step.side.other()).ok_or(())?;
+        let same = self.ensure_before(pos, step.side).ok_or(())?;
+        // The successors by number, as `reach_broken` takes them: the node's queued numbers
+        // are consecutive, so they are the next positions; anything else is checked afresh.
+        let mut next = [None; 2];
+        if let Some(id) = before {
+            for (k, n) in next.iter_mut().enumerate() {
+                let p = pos + k + 1;
+                match self.gait.position(id.wrapping_add(k as u16 + 1)) {
+                    Some(q) if q == p => *n = Some((p, self.ensure_at(p).ok_or(())?)),
+                    Some(_) => return Err(()),
+                    None => break,
+                }
+            }
+        }
         let from_rest = pos == 0 && self.gait.next_swing_from_rest();
+        let c = &self.feet;
+        let (Some(other), Some(same)) = (c.get(other), c.get(same)) else {
+            return Err(());
+        };
+        let f = Frame::like(step, &[other, same]);
         let soles = Soles::of(&self.cfg.params);
-        let r = self.cfg.reach;
-        let broken = r.broken_frames(&other, &same, &f, step.side, from_rest, &soles);
-        if broken.is_some() || before.is_none() {
+        let r = &self.cfg.reach;
+        let broken = r.broken_frames(other, same, &f, step.side, from_rest, &soles);
+        if broken.is_some() {
             return Ok((broken, f));
         }
-        // (The successors by number, as `reach_broken` takes them: the node's queued numbers
-        // are consecutive, so they are the next positions; anything else is checked afresh.)
-        let id = before.ok_or(())?;
-        let next = |node: &Self, k: u16| match node.gait.position(id.wrapping_add(k)) {
-            Some(p) if p == pos + usize::from(k) => Ok(true),
-            Some(_) => Err(()),
-            None => Ok(false),
-        };
-        if !next(self, 1)? {
-            return Ok((None, f));
-        }
-        let Some((f1, s1)) = self.frame_at(pos + 1) else {
+        let Some((p1, s1)) = next[0] else {
             return Ok((None, f));
         };
-        if let Some(b) = r.broken_frames(&f, &other, &f1, s1, false, &soles) {
+        let f1 = c.frames.get(p1).ok_or(())?;
+        if let Some(b) = r.broken_frames(&f, other, f1, s1, false, &soles) {
             return Ok((Some(b), f));
         }
-        if !next(self, 2)? {
-            return Ok((None, f));
-        }
-        let Some((f2, s2)) = self.frame_at(pos + 2) else {
+        let Some((p2, s2)) = next[1] else {
             return Ok((None, f));
         };
-        Ok((r.broken_frames(&f1, &f, &f2, s2, false, &soles), f))
+        let f2 = c.frames.get(p2).ok_or(())?;
+        Ok((r.broken_frames(f1, &f, f2, s2, false, &soles), f))
     }
 
     /// The reach check of a footstep command on the kept frames (`Crossing` or `Reach` for a
@@ -246,27 +259,37 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.feet.gen = now;
         match frame {
             Some(f) => self.keep(pos, f, side),
-            None => self.feet.known &= !bit(pos),
+            None => {
+                if let Some(k) = self.feet.known.get_mut(pos) {
+                    *k = 0;
+                }
+            }
         }
     }
 
     /// The kept frames for a move of the queued step `id` ([`Node::reach_broken_move`]); `None`
     /// where they do not apply (the move is then checked afresh).
     pub(super) fn move_frames(&mut self, id: u16) -> Option<MoveFrames<T>> {
+        self.sync_frames();
         let pos = self.gait.position(id)?;
-        let (step, side) = self.frame_at(pos)?;
-        let other = self.frame_before(pos, side.other())?;
-        let same = self.frame_before(pos, side)?;
+        let side = self.ensure_at(pos)?;
+        let other = self.ensure_before(pos, side.other())?;
+        let same = self.ensure_before(pos, side)?;
         let next = match self.gait.position(id.wrapping_add(1)) {
-            Some(p) if p == pos + 1 => Some(self.frame_at(p)?),
+            Some(p) if p == pos + 1 => Some((p, self.ensure_at(p)?)),
             Some(_) => return None,
             None => None,
         };
         let from_rest = pos == 0 && self.gait.next_swing_from_rest();
+        let c = &self.feet;
+        let next = match next {
+            Some((p, s)) => Some((*c.frames.get(p)?, s)),
+            None => None,
+        };
         Some(MoveFrames {
-            other,
-            same,
-            step,
+            other: *c.get(other)?,
+            same: *c.get(same)?,
+            step: *c.frames.get(pos)?,
             side,
             next,
             from_rest,
