@@ -25,6 +25,8 @@ pub(super) struct FeetFrames<T, const Q: usize> {
     /// the foot), when kept.
     base_known: [bool; 2],
     base: [Frame<T>; 2],
+    /// The frame of the step of the last reach check on the kept frames.
+    step: Frame<T>,
 }
 
 /// See [`FeetFrames::known`].
@@ -48,6 +50,7 @@ impl<T: Real, const Q: usize> FeetFrames<T, Q> {
         frames: [Frame::ZERO; Q],
         base_known: [false; 2],
         base: [Frame::ZERO; 2],
+        step: Frame::ZERO,
     };
 
     /// Forgets every frame (the gait may change without a new generation: a tick).
@@ -160,13 +163,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Some(self.ensure_base(side))
     }
 
-    /// [`Node::reach_broken`] with the kept frames (see the module docs), and the frame of
-    /// `step`: `Err(())` where the kept frames do not apply (the caller checks afresh).
+    /// [`Node::reach_broken`] with the kept frames (see the module docs); the frame of `step`
+    /// is left in [`FeetFrames::step`]. `Err(())` where the kept frames do not apply (the
+    /// caller checks afresh).
     pub(super) fn reach_broken_kept(
         &mut self,
         step: &Footstep<T>,
         before: Option<u16>,
-    ) -> Result<(Option<Broken<T>>, Frame<T>), ()> {
+    ) -> Result<Option<Broken<T>>, ()> {
         self.sync_frames();
         let pos = match before {
             Some(id) => self.gait.position(id).ok_or(())?,
@@ -195,35 +199,39 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let f = Frame::like(step, &[other, same]);
         let soles = Soles::of(&self.cfg.params);
         let r = &self.cfg.reach;
-        let broken = r.broken_frames(other, same, &f, step.side, from_rest, &soles);
-        if broken.is_some() {
-            return Ok((broken, f));
-        }
-        let Some((p1, s1)) = next[0] else {
-            return Ok((None, f));
-        };
-        let f1 = c.frames.get(p1).ok_or(())?;
-        if let Some(b) = r.broken_frames(&f, other, f1, s1, false, &soles) {
-            return Ok((Some(b), f));
-        }
-        let Some((p2, s2)) = next[1] else {
-            return Ok((None, f));
-        };
-        let f2 = c.frames.get(p2).ok_or(())?;
-        Ok((r.broken_frames(f1, &f, f2, s2, false, &soles), f))
+        let broken = (|| {
+            if let Some(b) = r.broken_frames(other, same, &f, step.side, from_rest, &soles) {
+                return Ok(Some(b));
+            }
+            let Some((p1, s1)) = next[0] else {
+                return Ok(None);
+            };
+            let f1 = c.frames.get(p1).ok_or(())?;
+            if let Some(b) = r.broken_frames(&f, other, f1, s1, false, &soles) {
+                return Ok(Some(b));
+            }
+            let Some((p2, s2)) = next[1] else {
+                return Ok(None);
+            };
+            let f2 = c.frames.get(p2).ok_or(())?;
+            Ok(r.broken_frames(f1, &f, f2, s2, false, &soles))
+        })()?;
+        // (Kept in place, not returned: no copies of frames through the results.)
+        self.feet.step = f;
+        Ok(broken)
     }
 
     /// The reach check of a footstep command on the kept frames (`Crossing` or `Reach` for a
-    /// broken limit, as [`Node::reach_broken`] finds it); the
-    /// frame of `step`, to keep once the command is carried out ([`Node::kept_step`]).
+    /// broken limit, as [`Node::reach_broken`] finds it); `Ok(true)` if the frame of `step`
+    /// was computed, to keep once the command is carried out ([`Node::kept_step`]).
     pub(super) fn check_reach_kept(
         &mut self,
         step: &Footstep<T>,
         before: Option<u16>,
-    ) -> Result<Option<Frame<T>>, Reason> {
-        let (broken, frame) = match self.reach_broken_kept(step, before) {
-            Ok((b, f)) => (b, Some(f)),
-            Err(()) => (self.reach_broken(step, before), None),
+    ) -> Result<bool, Reason> {
+        let (broken, kept) = match self.reach_broken_kept(step, before) {
+            Ok(b) => (b, true),
+            Err(()) => (self.reach_broken(step, before), false),
         };
         #[cfg(debug_assertions)]
         {
@@ -241,28 +249,28 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             debug_assert!(agree, "kept frames {broken:?}, fresh {fresh:?}");
         }
         match broken {
-            None => Ok(frame),
+            None => Ok(kept),
             Some(b) => Err(b.reason()),
         }
     }
 
     /// The gait's footsteps changed by the node's own command, from generation `gen`: the
-    /// step at queue position `pos` is now the one of `frame` (its check's), of `side`; the
-    /// other kept frames stay.
-    pub(super) fn kept_step(&mut self, gen: u32, pos: usize, frame: Option<Frame<T>>, side: Side) {
-        let c = &self.feet;
+    /// step at queue position `pos` is now the one of the last check (its frame is kept if
+    /// `kept`), of `side`; the other kept frames stay.
+    pub(super) fn kept_step(&mut self, gen: u32, pos: usize, kept: bool, side: Side) {
+        let c = &mut self.feet;
         let now = self.gait.generation();
         if !(c.valid && c.gen == gen && now == gen.wrapping_add(1)) {
-            self.feet.clear();
+            c.clear();
             return;
         }
-        self.feet.gen = now;
-        match frame {
-            Some(f) => self.keep(pos, f, side),
-            None => {
-                if let Some(k) = self.feet.known.get_mut(pos) {
-                    *k = 0;
-                }
+        c.gen = now;
+        if let (Some(slot), Some(k)) = (c.frames.get_mut(pos), c.known.get_mut(pos)) {
+            if kept {
+                *slot = c.step;
+                *k = code(side);
+            } else {
+                *k = 0;
             }
         }
     }
