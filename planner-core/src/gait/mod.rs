@@ -425,6 +425,13 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.index_of(id).is_some()
     }
 
+    /// `true` if the queued ids are consecutive (each the one before it plus one, modulo
+    /// 2¹⁶): the step `id + k` is then `k` places after the step `id`. Always `false` with
+    /// nothing queued.
+    pub fn consecutive_ids(&self) -> bool {
+        self.consecutive
+    }
+
     /// The position of the first queued step `id`. With consecutive ids (every walk the node
     /// drives) the position is `id − front` (modulo 2¹⁶), checked; otherwise a search of the
     /// queue.

@@ -178,17 +178,20 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         let other = self.ensure_before(pos, step.side.other()).ok_or(())?;
         let same = self.ensure_before(pos, step.side).ok_or(())?;
-        // The successors by number, as `reach_broken` takes them: the node's queued numbers
-        // are consecutive, so they are the next positions; anything else is checked afresh.
+        // The successors by number, as `reach_broken` takes them: with consecutive numbers
+        // (the node's always are) the next positions; anything else is checked afresh.
         let mut next = [None; 2];
-        if let Some(id) = before {
+        if before.is_some() {
+            if !self.gait.consecutive_ids() {
+                return Err(());
+            }
+            let len = self.gait.queued();
             for (k, n) in next.iter_mut().enumerate() {
                 let p = pos + k + 1;
-                match self.gait.position(id.wrapping_add(k as u16 + 1)) {
-                    Some(q) if q == p => *n = Some((p, self.ensure_at(p).ok_or(())?)),
-                    Some(_) => return Err(()),
-                    None => break,
+                if p >= len {
+                    break;
                 }
+                *n = Some((p, self.ensure_at(p).ok_or(())?));
             }
         }
         let from_rest = pos == 0 && self.gait.next_swing_from_rest();
@@ -283,10 +286,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let side = self.ensure_at(pos)?;
         let other = self.ensure_before(pos, side.other())?;
         let same = self.ensure_before(pos, side)?;
-        let next = match self.gait.position(id.wrapping_add(1)) {
-            Some(p) if p == pos + 1 => Some((p, self.ensure_at(p)?)),
-            Some(_) => return None,
-            None => None,
+        if !self.gait.consecutive_ids() {
+            return None;
+        }
+        let next = if pos + 1 < self.gait.queued() {
+            Some((pos + 1, self.ensure_at(pos + 1)?))
+        } else {
+            None
         };
         let from_rest = pos == 0 && self.gait.next_swing_from_rest();
         let c = &self.feet;
