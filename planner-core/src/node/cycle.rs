@@ -378,3 +378,83 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The order as the node took it before the one-pass sort: by class, in the order of
+    /// arrival, each step's modifications together where the first arrived, newest version
+    /// first (of equal versions the first to arrive), found by scanning the batch.
+    fn scanned(batch: &[RawFrame]) -> Vec<u8> {
+        let mut order = vec![];
+        let mut placed = vec![false; batch.len()];
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate() {
+                if rank(f) != pass || placed[i] {
+                    continue;
+                }
+                let same_step = |g: &RawFrame| g.id == ids::STEP_MODIFY && g.data[0] == f.data[0];
+                if f.id != ids::STEP_MODIFY {
+                    placed[i] = true;
+                    order.push(i as u8);
+                    continue;
+                }
+                loop {
+                    let mut newest: Option<(usize, u8)> = None;
+                    for (j, g) in batch.iter().enumerate().skip(i) {
+                        let version = g.data[1] & 0x7F;
+                        if !placed[j] && same_step(g) && newest.is_none_or(|(_, v)| version > v) {
+                            newest = Some((j, version));
+                        }
+                    }
+                    let Some((j, _)) = newest else {
+                        break;
+                    };
+                    placed[j] = true;
+                    order.push(j as u8);
+                }
+            }
+        }
+        order
+    }
+
+    /// Random batches of every class (emergency stops, stops now, other control commands,
+    /// appends, measured states, modifications of a few steps in a few versions): the sorted
+    /// order is the scanned one.
+    #[test]
+    fn the_acting_order_is_the_scanned_one() {
+        let mut seed = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        for _ in 0..2000 {
+            let len = next(MAX_RX as u64 + 1) as usize;
+            let batch: Vec<RawFrame> = (0..len)
+                .map(|_| {
+                    let mut data = [0u8; 8];
+                    let id = match next(6) {
+                        0 => ids::ESTOP,
+                        1 => {
+                            data[6] = if next(2) == 0 { 3 } else { 1 };
+                            ids::CONTROL
+                        }
+                        2 => ids::STEP_APPEND,
+                        3 => ids::MEASURED,
+                        _ => {
+                            data[0] = next(4) as u8;
+                            data[1] = next(256) as u8;
+                            ids::STEP_MODIFY
+                        }
+                    };
+                    RawFrame::new(id, &data).unwrap()
+                })
+                .collect();
+            let sorted: Vec<u8> = act_order(&batch).iter().copied().collect();
+            assert_eq!(sorted, scanned(&batch), "{batch:?}");
+        }
+    }
+}
