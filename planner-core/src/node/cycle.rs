@@ -29,6 +29,9 @@ pub(super) fn keep_rank(f: &RawFrame) -> u8 {
 /// `LinkHealth::bus_state` of a link off the bus.
 const BUS_OFF: u8 = 3;
 
+/// A frame's command as validated ([`Command::decode`]).
+type Decoded = Result<Command, (Reason, u8)>;
+
 /// What the acting of a cycle keeps (see [`Node::poll`]).
 pub(super) struct Acting {
     /// Commands refused.
@@ -250,8 +253,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         // A modification that plans (eq. 17: the next swing target while walking) waits for
         // the end of the command phase: it is then checked once on the final steps.
-        let mut later: heapless::Vec<(u8, Result<Command, (Reason, u8)>), MAX_RX> =
-            heapless::Vec::new();
+        let mut later: heapless::Vec<(u8, Decoded), MAX_RX> = heapless::Vec::new();
         for &i in &order {
             let Some(f) = batch.get(usize::from(i)) else {
                 continue;
