@@ -276,7 +276,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // modifications that plan, if the adjustment did not plan.
         self.work_left = self.work_left.saturating_add(reserve);
         self.adjust_step();
-        for (i, decoded) in later {
+        for &(i, decoded) in later.iter() {
             if let Some(f) = batch.get(usize::from(i)) {
                 self.act(usize::from(i), f, decoded, &mut act, now_ms);
             }
