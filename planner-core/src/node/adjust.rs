@@ -390,6 +390,44 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // does, to the footstep unit (bisection on k/n of the move, n its longer component in
         // 0.5 mm: at most 16 halvings; the limits are checked on the moved step and its
         // successor, the steps after them keeping their places relative to both).
+        let (k, n) = self.reach_cut(front, old, delta);
+        if k < n {
+            flags |= Adjust::REACH_LIMITED;
+        }
+        let part = |k: i64| {
+            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
+            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
+            [at(old[0], delta[0]), at(old[1], delta[1])]
+        };
+        let to = part(k);
+        if k == 0 || !self.place_shift(to) {
+            self.adj.flags = flags | Adjust::REACH_LIMITED;
+            return;
+        }
+        // Eq. 17 (plans: the cycle's budget).
+        self.plans_left = self.plans_left.saturating_sub(1);
+        if self.gait.check_next_target().is_err() {
+            let _ = self.place_shift(old);
+            self.adj.halvings = self.adj.halvings.saturating_add(1);
+            self.adj.flags = flags | Adjust::ZMP_LIMITED;
+            return;
+        }
+        self.adj.shift = to;
+        self.adj.from = number;
+        self.adj.count = self.adj.count.saturating_add(1);
+        self.adj.flags = flags;
+        self.adj.due = true;
+    }
+
+    /// The reach cut of a move of the steps from the shift `old` by `delta` \[0.5 mm\] (see
+    /// `move_steps`): `(k, n)`, the move's largest part `k/n` that keeps the limits, `n` its
+    /// longer component (the whole move if it keeps them, else a bisection to the footstep
+    /// unit: at most 16 halvings; the limits are checked on the moved step and its successor,
+    /// the steps after them keeping their places relative to both). Out of line, so that the
+    /// frames it checks on are off the stack before eq. 17 plans.
+    #[inline(never)]
+    fn reach_cut(&mut self, front: u16, old: [i32; 2], delta: [i32; 2]) -> (i64, i64) {
+        let unit = T::of(STEP_UNIT);
         let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
         let part = |k: i64| {
             // (`n` ≥ 1: the checked division only keeps a panic out of the code)
@@ -417,39 +455,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             );
             broken.is_none()
         };
-        let k = if keeps(self, n) {
-            n
-        } else {
-            flags |= Adjust::REACH_LIMITED;
-            let (mut lo, mut hi) = (0, n);
-            while hi - lo > 1 {
-                let mid = (lo + hi) / 2;
-                if keeps(self, mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        if keeps(self, n) {
+            return (n, n);
+        }
+        let (mut lo, mut hi) = (0, n);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if keeps(self, mid) {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            lo
-        };
-        let to = part(k);
-        if k == 0 || !self.place_shift(to) {
-            self.adj.flags = flags | Adjust::REACH_LIMITED;
-            return;
         }
-        // Eq. 17 (plans: the cycle's budget).
-        self.plans_left = self.plans_left.saturating_sub(1);
-        if self.gait.check_next_target().is_err() {
-            let _ = self.place_shift(old);
-            self.adj.halvings = self.adj.halvings.saturating_add(1);
-            self.adj.flags = flags | Adjust::ZMP_LIMITED;
-            return;
-        }
-        self.adj.shift = to;
-        self.adj.from = number;
-        self.adj.count = self.adj.count.saturating_add(1);
-        self.adj.flags = flags;
-        self.adj.due = true;
+        (lo, n)
     }
 
     /// The end of a walk (the gait stands): the shift ends with it, so that the next walk's

@@ -29,9 +29,6 @@ pub(super) fn keep_rank(f: &RawFrame) -> u8 {
 /// `LinkHealth::bus_state` of a link off the bus.
 const BUS_OFF: u8 = 3;
 
-/// A frame's command as validated ([`Command::decode`]).
-type Decoded = Result<Command, (Reason, u8)>;
-
 /// What the acting of a cycle keeps (see [`Node::poll`]).
 pub(super) struct Acting {
     /// Commands refused.
@@ -46,6 +43,9 @@ pub(super) struct Acting {
 /// of them arrived, newest version first (of equal versions, the first to arrive). One pass
 /// gives each frame a key (rank, place of its group, version, arrival) and an insertion sort
 /// orders the keys: the frames arrive nearly in that order, so the sort is about linear.
+///
+/// Out of line: its table is off the stack before the cycle acts.
+#[inline(never)]
 pub(super) fn act_order(batch: &[RawFrame]) -> heapless::Vec<u8, MAX_RX> {
     // The place of each step's first modification (by the low byte of its number).
     let mut first = [u8::MAX; 256];
@@ -253,7 +253,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         // A modification that plans (eq. 17: the next swing target while walking) waits for
         // the end of the command phase: it is then checked once on the final steps.
-        let mut later: heapless::Vec<(u8, Decoded), MAX_RX> = heapless::Vec::new();
+        // (By a mask and the next step number each was read with: read again then, as it was.)
+        let mut later: u64 = 0;
+        let mut later_next = [0u16; MAX_RX];
         for &i in &order {
             let Some(f) = batch.get(usize::from(i)) else {
                 continue;
@@ -263,8 +265,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.estop_now = true;
             }
             if self.plans_later(&decoded) {
-                let _ = later.push((i, decoded));
-                continue;
+                if let Some(n) = later_next.get_mut(usize::from(i)) {
+                    *n = self.next_step();
+                    later |= 1 << (i & 63);
+                    continue;
+                }
             }
             let stop_now = rank(f) == 1;
             let accepted = self.act(usize::from(i), f, decoded, &mut act, now_ms);
@@ -276,10 +281,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // modifications that plan, if the adjustment did not plan.
         self.work_left = self.work_left.saturating_add(reserve);
         self.adjust_step();
-        for &(i, decoded) in later.iter() {
-            if let Some(f) = batch.get(usize::from(i)) {
-                self.act(usize::from(i), f, decoded, &mut act, now_ms);
+        for &i in &order {
+            let (Some(f), Some(&next_step)) =
+                (batch.get(usize::from(i)), later_next.get(usize::from(i)))
+            else {
+                continue;
+            };
+            if later & (1 << (i & 63)) == 0 {
+                continue;
             }
+            let expect = Expect {
+                next_step,
+                epoch: self.epoch,
+            };
+            let decoded = Command::decode(f, expect);
+            self.act(usize::from(i), f, decoded, &mut act, now_ms);
         }
         let refused = act.refused;
         self.estop_now = false;
