@@ -47,6 +47,18 @@ pub(super) struct Acting {
 /// Out of line: its table is off the stack before the cycle acts.
 #[inline(never)]
 pub(super) fn act_order(batch: &[RawFrame]) -> heapless::Vec<u8, MAX_RX> {
+    let mut order = heapless::Vec::new();
+    // (A cycle without modifications, the common one, in its order of arrival by class.)
+    if !batch.iter().any(|f| f.id == ids::STEP_MODIFY) {
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate().take(MAX_RX) {
+                if rank(f) == pass {
+                    let _ = order.push(i as u8);
+                }
+            }
+        }
+        return order;
+    }
     // The place of each step's first modification (by the low byte of its number).
     let mut first = [u8::MAX; 256];
     let mut keys: heapless::Vec<u32, MAX_RX> = heapless::Vec::new();
@@ -84,7 +96,6 @@ pub(super) fn act_order(batch: &[RawFrame]) -> heapless::Vec<u8, MAX_RX> {
             j -= 1;
         }
     }
-    let mut order = heapless::Vec::new();
     for k in &keys {
         let _ = order.push(*k as u8);
     }
@@ -281,7 +292,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // modifications that plan, if the adjustment did not plan.
         self.work_left = self.work_left.saturating_add(reserve);
         self.adjust_step();
-        for &i in &order {
+        for &i in order.iter().filter(|_| later != 0) {
             let (Some(f), Some(&next_step)) =
                 (batch.get(usize::from(i)), later_next.get(usize::from(i)))
             else {
