@@ -162,10 +162,10 @@ fn a_receive_bound_below_the_commands_held_is_refused() {
 
 /// The cycle's command work is counted against its budget (`NodeConfig::work_budget`): a
 /// modification of every queued step in one cycle, the next swing target first, is taken as
-/// far as the budget goes: the modifications that do not plan in their order, then the one
-/// that plans (eq. 17: it waits for the end of the command phase) if the rest of the budget
-/// holds it; the rest are refused `Busy` with nothing changed, and taken when sent again in
-/// the next cycle.
+/// far as the budget goes: the one that plans keeps its work when it arrives (it is acted on
+/// at the end of the command phase, eq. 17 on the final steps), the later ones take what is
+/// left in their order; the rest are refused `Busy` with nothing changed, and taken when sent
+/// again in the next cycle.
 #[test]
 fn the_cycles_command_work_stays_within_its_budget() {
     let mut r = walking();
@@ -199,9 +199,10 @@ fn the_cycles_command_work_stays_within_its_budget() {
             .unwrap_or_else(|| panic!("no answer for step {id}: {acks:?}"));
         a.reason
     };
-    // The later steps as far as the budget goes, then the next swing target if it fits.
-    let others = (u32::from(queued) - 1).min(budget / WORK_STEP);
-    let plans = budget - others * WORK_STEP >= WORK_STEP + WORK_PLAN;
+    // The next swing target's work is kept when it arrives (first), the later steps take
+    // what is left as far as it goes.
+    let plans = budget >= WORK_STEP + WORK_PLAN;
+    let others = (u32::from(queued) - 1).min((budget - WORK_STEP - WORK_PLAN) / WORK_STEP);
     let taken = others + u32::from(plans);
     let reasons: Vec<Option<Reason>> = frames.iter().map(|(id, _)| answer(*id, &acks)).collect();
     let accepted = reasons.iter().filter(|a| a.is_none()).count() as u32;

@@ -263,10 +263,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             stop_at: None,
         };
         // A modification that plans (eq. 17: the next swing target while walking) waits for
-        // the end of the command phase: it is then checked once on the final steps.
+        // the end of the command phase, with its work kept: it is then checked once on the
+        // final steps.
         // (By a mask and the next step number each was read with: read again then, as it was.)
         let mut later: u64 = 0;
         let mut later_next = [0u16; MAX_RX];
+        // The first of them keeps its work from the commands after it (the next swing target
+        // is the one whose change cannot wait).
+        let mut kept_for_later = 0;
         for &i in &order {
             let Some(f) = batch.get(usize::from(i)) else {
                 continue;
@@ -278,6 +282,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             if self.plans_later(&decoded) {
                 if let Some(n) = later_next.get_mut(usize::from(i)) {
                     *n = self.next_step();
+                    if later == 0 && self.afford(WORK_STEP + WORK_PLAN).is_ok() {
+                        kept_for_later = WORK_STEP + WORK_PLAN;
+                        self.spend(kept_for_later);
+                    }
                     later |= 1 << (i & 63);
                     continue;
                 }
@@ -292,6 +300,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // modifications that plan, if the adjustment did not plan.
         self.work_left = self.work_left.saturating_add(reserve);
         self.adjust_step();
+        self.work_left = self.work_left.saturating_add(kept_for_later);
         for &i in order.iter().filter(|_| later != 0) {
             let (Some(f), Some(&next_step)) =
                 (batch.get(usize::from(i)), later_next.get(usize::from(i)))

@@ -30,8 +30,8 @@
 //!    (eq. 17 plans the re-plan it will cause) — cost a window's plan against a few hundred
 //!    instructions for the others, so at most [`NodeConfig::max_plans`] of them are carried
 //!    out a cycle; the rest are refused `Busy`. A modification that plans is acted on **after
-//!    the cycle's other commands and the step adjustment**: eq. 17 is then planned once, on
-//!    the final steps (the later modifications of the steps it lands with included), and the
+//!    the cycle's other commands and the step adjustment**, its work kept from the commands
+//!    that arrived after it: eq. 17 is then planned once, on the final steps (the later modifications of the steps it lands with included), and the
 //!    tick's re-plan at a start of single support in the same cycle takes that plan instead
 //!    of planning again; if the step adjustment planned (a capture step comes first), it is
 //!    refused `Busy`. And the cycle's command work is counted against a budget in estimated
