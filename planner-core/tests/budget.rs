@@ -70,9 +70,8 @@ fn a_refused_frame_spends_no_budget() {
 
 /// In the cycle whose tick re-plans at a start of single support, a modification of the next
 /// swing target (sent first) and of the three steps after it: eq. 17 is planned once, from
-/// the final steps, and the re-plan takes that plan (one walking window planned in all;
-/// before, the check planned the first modification's re-plan and the tick planned again
-/// for the later ones).
+/// the final steps, and the re-plan takes that plan (one walking window planned in all, not
+/// a check of the first modification's re-plan and another plan for the later ones).
 #[test]
 fn eq17_is_planned_once_in_a_cycle_with_many_modifications() {
     let mut r = walking(ControlOp::Start, 12);

@@ -421,9 +421,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 mod tests {
     use super::*;
 
-    /// The order as the node took it before the one-pass sort: by class, in the order of
-    /// arrival, each step's modifications together where the first arrived, newest version
-    /// first (of equal versions the first to arrive), found by scanning the batch.
+    /// The acting order by its definition: by class, in the order of arrival, each step's
+    /// modifications together where the first arrived, newest version first (of equal
+    /// versions the first to arrive), found by scanning the batch.
     fn scanned(batch: &[RawFrame]) -> Vec<u8> {
         let mut order = vec![];
         let mut placed = vec![false; batch.len()];
