@@ -434,18 +434,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
             [at(old[0], delta[0]), at(old[1], delta[1])]
         };
-        // (On the frames kept for the cycle's reach checks, fetched once for the bisection.)
-        let kept = self.move_frames(front);
+        // (On the frames kept for the cycle's reach checks, fetched once for the bisection.
+        // They always apply to the node's queue, whose sides alternate and whose numbers are
+        // consecutive; where they would not, nothing moves.)
+        let Some(kept) = self.move_frames(front) else {
+            return (0, n);
+        };
         let keeps = |node: &Self, k: i64| {
             let to = part(k);
             let d = [
                 T::of_i32(to[0] - old[0]) * unit,
                 T::of_i32(to[1] - old[1]) * unit,
             ];
-            let broken = match &kept {
-                Some(m) => node.reach_broken_move(m, d),
-                None => node.reach_broken_moved(front, d),
-            };
+            let broken = node.reach_broken_move(&kept, d);
             debug_assert!(
                 broken.map(|b| (b.limit, b.value.bits()))
                     == node

@@ -100,6 +100,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// Keeps the frame of the queued step at position `pos` (if there is one) and returns its
     /// side.
+    #[inline(never)]
     fn ensure_at(&mut self, pos: usize) -> Option<Side> {
         match self.feet.known.get(pos) {
             Some(&LEFT) => return Some(Side::Left),
@@ -132,6 +133,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// Keeps the frame of the foot of `side` before the queue.
+    #[inline(never)]
     fn ensure_base(&mut self, side: Side) -> At {
         let k = side.index();
         if self.feet.base_known.get(k) != Some(&true) {
@@ -148,6 +150,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// Keeps the frame of the foot of `side` before queue position `pos`: the queued step at
     /// `pos − 1` or `pos − 2` (the queue alternates sides), else the foot before the queue.
+    #[inline(never)]
     fn ensure_before(&mut self, pos: usize, side: Side) -> Option<At> {
         for back in 1..=2 {
             if let Some(p) = pos.checked_sub(back) {
@@ -227,6 +230,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The reach check of a footstep command on the kept frames (`Crossing` or `Reach` for a
     /// broken limit, as [`Node::reach_broken`] finds it); `Ok(true)` if the frame of `step`
     /// was computed, to keep once the command is carried out ([`Node::kept_step`]).
+    #[inline(never)]
     pub(super) fn check_reach_kept(
         &mut self,
         step: &Footstep<T>,
@@ -260,6 +264,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The gait's footsteps changed by the node's own command, from generation `gen`: the
     /// step at queue position `pos` is now the one of the last check (its frame is kept if
     /// `kept`), of `side`; the other kept frames stay.
+    #[inline(never)]
     pub(super) fn kept_step(&mut self, gen: u32, pos: usize, kept: bool, side: Side) {
         let c = &mut self.feet;
         let now = self.gait.generation();
