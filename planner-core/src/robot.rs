@@ -469,6 +469,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
     max_rx: {max_rx},
     max_frames: {max_frames},
     max_plans: {max_plans},
+    work_budget: {work_budget},
     reach: ::planner_core::node::Reach {{
         max_forward: {mf},
         max_backward: {mb},
@@ -516,6 +517,7 @@ pub fn node_config_source<T: Literal>(cfg: &NodeConfig<T>) -> String {
         max_rx = cfg.max_rx,
         max_frames = cfg.max_frames,
         max_plans = cfg.max_plans,
+        work_budget = cfg.work_budget,
         mf = r.max_forward.literal(),
         mb = r.max_backward.literal(),
         minw = r.min_width.literal(),

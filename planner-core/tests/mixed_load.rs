@@ -160,13 +160,17 @@ fn a_receive_bound_below_the_commands_held_is_refused() {
     assert!(N::new(cfg).is_err());
 }
 
-/// The cycle's command work is counted against its budget (`WORK_BUDGET`): a modification of
-/// every queued step in one cycle, the next swing target first (it plans, eq. 17), is taken
-/// as far as the budget goes; the rest are refused `Busy` with nothing changed, and taken
-/// when sent again in the next cycle.
+/// The cycle's command work is counted against its budget (`NodeConfig::work_budget`): a
+/// modification of every queued step in one cycle, the next swing target first, is taken as
+/// far as the budget goes: the one that plans keeps its work when it arrives (it is acted on
+/// at the end of the command phase, eq. 17 on the final steps), the later ones take what is
+/// left in their order; the rest are refused `Busy` with nothing changed, and taken when sent
+/// again in the next cycle.
 #[test]
 fn the_cycles_command_work_stays_within_its_budget() {
     let mut r = walking();
+    let budget = r.n.config().work_budget;
+    assert_eq!(budget, WORK_BUDGET);
     let g = r.n.gait();
     let front = g.next_target().unwrap();
     let queued = g.queued() as u16;
@@ -195,15 +199,25 @@ fn the_cycles_command_work_stays_within_its_budget() {
             .unwrap_or_else(|| panic!("no answer for step {id}: {acks:?}"));
         a.reason
     };
-    // The budget takes the planning modification and as many others as fit.
-    let taken = 1 + (WORK_BUDGET - WORK_PLAN - WORK_STEP) / WORK_STEP;
+    // The next swing target's work is kept when it arrives (first), the later steps take
+    // what is left as far as it goes.
+    let plans = budget >= WORK_STEP + WORK_PLAN;
+    let others = (u32::from(queued) - 1).min((budget - WORK_STEP - WORK_PLAN) / WORK_STEP);
+    let taken = others + u32::from(plans);
     let reasons: Vec<Option<Reason>> = frames.iter().map(|(id, _)| answer(*id, &acks)).collect();
     let accepted = reasons.iter().filter(|a| a.is_none()).count() as u32;
     assert_eq!(accepted, taken, "{reasons:?}");
     assert!(taken < u32::from(queued), "the budget must leave some out");
+    let is_taken = |i: usize| {
+        if i == 0 {
+            plans
+        } else {
+            i as u32 <= others
+        }
+    };
     for (i, reason) in reasons.iter().enumerate() {
         let id = front.wrapping_add(i as u16);
-        if (i as u32) < taken {
+        if is_taken(i) {
             assert_eq!(*reason, None, "step {i}");
         } else {
             // Refused `Busy`: the step is where it was.
@@ -217,12 +231,14 @@ fn the_cycles_command_work_stays_within_its_budget() {
     }
     // Sent again in the next cycle: taken.
     for (i, (_, c)) in frames.iter().enumerate() {
-        if i as u32 >= taken {
+        if !is_taken(i) {
             r.bus.rx.push_back(c.encode_in(epoch));
         }
     }
     let acks = r.cycle();
-    for (id, _) in frames.iter().skip(taken as usize) {
-        assert_eq!(answer(*id, &acks), None, "step {id} sent again");
+    for (i, (id, _)) in frames.iter().enumerate() {
+        if !is_taken(i) {
+            assert_eq!(answer(*id, &acks), None, "step {id} sent again");
+        }
     }
 }

@@ -130,6 +130,11 @@ pub fn cases() -> Vec<Case> {
     for (name, adjusting) in WORST {
         let w = worst_cycle(&cfg, adjusting).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(w.replanned && !w.fallen, "{name}: {w:?}");
+        println!(
+            "{name}: burst of {} modifications, {} newer versions, {} appends, {} measured; \
+             {} refused, {} walking windows planned",
+            w.burst.0, w.burst.1, w.burst.2, w.burst.3, w.refused, w.plans
+        );
         out.push(Case {
             name: name.to_string(),
             cfg,

@@ -11,8 +11,9 @@
 //! sends, in one cycle:
 //! * a modification of **every queued step** (distinct steps, each moved [`MOVE_M`] forward,
 //!   each checked for reach against its neighbours and its two successors), the next swing
-//!   target first (it plans the re-plan it causes, eq. 17; the later ones change that re-plan's
-//!   landings, so the tick plans again, with eq. 18's adjustment);
+//!   target first (it plans the re-plan it causes, eq. 17: the node acts on it after the
+//!   others, so that it plans once on the final landings, and the tick's re-plan, with eq. 18's
+//!   adjustment, takes that plan);
 //! * appends until the queue is full or the cycle holds the node's `max_rx` command frames (the
 //!   estimator's `MEASURED` among them when adjusting);
 //! * with the queue full, a newer version of later steps (one each), [`FAR_M`] forward: out
@@ -62,7 +63,8 @@ pub struct WorstRun {
     pub replanned: bool,
     /// Whether that re-plan started from the measured state (`from_measured`).
     pub from_measured: bool,
-    /// Plans the node made in the burst cycle.
+    /// Walking windows the node planned in the burst cycle (`Gait::walk_plans`: eq. 17's
+    /// check and the re-plan, which takes the checked plan when nothing changed after it).
     pub plans: u32,
     /// Frames of the burst the node refused (the out-of-reach versions, and `Busy` what its
     /// work budget leaves out).
@@ -233,7 +235,7 @@ fn run(
         }
         bus.advance(t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
-        let plans = node.gait().plans();
+        let plans = node.gait().walk_plans();
         let report = node.poll(now_ms, &mut nport);
         if gid0.is_none() {
             gid0 = node.gait().next_target();
@@ -248,7 +250,7 @@ fn run(
         if Some(k) == burst {
             out.replanned = replans.last() == Some(&k);
             out.from_measured = node.gait().replanned_from_measured();
-            out.plans = node.gait().plans().wrapping_sub(plans);
+            out.plans = node.gait().walk_plans().wrapping_sub(plans);
             out.refused = report.refused;
             out.received = report.received;
         }

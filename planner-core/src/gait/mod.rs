@@ -146,6 +146,9 @@ pub struct Gait<T: Real, const Q: usize, G = PreviewGains<T, PREVIEW>> {
     /// The worst first-interval excursion (eq. 17) of the predicted plan, for the re-plan
     /// that takes it (valid while `predicted` is `Some`).
     predicted_worst: [T; 2],
+    /// Walking windows planned since the (re)start, wrapping: every prediction of eq. 17 and
+    /// every re-plan that does not take a predicted plan ([`Gait::walk_plans`]).
+    walk_plans: u32,
     /// The measured state the next re-plan of a capture step starts from (zero: the
     /// reference's own state); set every cycle by the node's step adjustment
     /// ([`Gait::set_measured`]).
@@ -230,6 +233,7 @@ impl<T: Real, const Q: usize, G> Gait<T, Q, G> {
                 zmp: [State::ZERO; 2],
             }),
             predicted_worst: [T::ZERO; 2],
+            walk_plans: 0,
             measured: Deviation::ZERO,
             from_measured: false,
             target: None,
@@ -330,6 +334,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.serial = 0;
         self.predicted = None;
         self.predicted_worst = [T::ZERO; 2];
+        self.walk_plans = 0;
         self.measured = Deviation::ZERO;
         self.from_measured = false;
         self.target = None;
@@ -366,6 +371,14 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// ticks means the tick in between planned one.
     pub fn plans(&self) -> u32 {
         self.serial
+    }
+
+    /// How many walking windows have been planned since the last (re)start, wrapping: every
+    /// check of eq. 17 (the re-plan a modification or a move of the next swing target will
+    /// cause, planned ahead) and every re-plan at a start of single support that does not take
+    /// the plan predicted for it. What a cycle's planning costs is counted by it.
+    pub fn walk_plans(&self) -> u32 {
+        self.walk_plans
     }
 
     /// Where the foot of the other side than `side` will be just before a step of `side` is
@@ -412,6 +425,13 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.index_of(id).is_some()
     }
 
+    /// `true` if the queued ids are consecutive (each the one before it plus one, modulo
+    /// 2¹⁶): the step `id + k` is then `k` places after the step `id`. Always `false` with
+    /// nothing queued.
+    pub fn consecutive_ids(&self) -> bool {
+        self.consecutive
+    }
+
     /// The position of the first queued step `id`. With consecutive ids (every walk the node
     /// drives) the position is `id − front` (modulo 2¹⁶), checked; otherwise a search of the
     /// queue.
@@ -429,6 +449,17 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// modification of this step plans the re-plan it will cause (eq. 17).
     pub fn next_target(&self) -> Option<u16> {
         self.queue.front().map(|q| q.id)
+    }
+
+    /// The footstep at queue position `pos` (0: the next swing target), if any.
+    pub fn queued_at(&self, pos: usize) -> Option<Footstep<T>> {
+        self.queue.get(pos).map(|q| q.step)
+    }
+
+    /// A number that changes whenever the footsteps or the stop request change (wrapping): what
+    /// is computed from the queued steps may be kept while it stays the same.
+    pub fn generation(&self) -> u32 {
+        self.gen
     }
 
     /// The footstep queued as `id` (not yet swung), if any.

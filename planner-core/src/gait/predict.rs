@@ -74,6 +74,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         // Planned in the spare buffer, which is free between re-plans.
         let spare = 1 - c;
         self.predicted = None;
+        self.walk_plans = self.walk_plans.wrapping_add(1);
         self.wins[spare].plan_into(&self.params, &inputs, cog, zmp)?;
         self.predicted = Some(self.prediction(at, inputs, cog, zmp));
         self.predicted_worst = self.wins[spare].worst_first();

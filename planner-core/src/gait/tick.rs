@@ -123,6 +123,8 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         let from_measured = measured_worst.is_some();
         let cached = cached && !tried;
         let planned = cached || from_measured;
+        let count = u32::from(tried) + u32::from(!planned);
+        self.walk_plans = self.walk_plans.wrapping_add(count);
         if !planned
             && self.wins[spare]
                 .plan_into(&self.params, &inputs, cog, zmp)

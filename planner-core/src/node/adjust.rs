@@ -43,8 +43,11 @@
 //! * eq. 17 checks the moved next swing target as it checks a modification (the ZMP stays in
 //!   the sole): a shift it refuses is put back and the next attempt in this window takes half
 //!   of it (flag *ZMP limited*);
-//! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`])
-//!   after the commands: a cycle whose budget a command spent does not adjust.
+//! * it plans (eq. 17), so it takes the cycle's planning budget ([`super::NodeConfig::max_plans`]):
+//!   it runs after the commands that do not plan and before a modification of the next swing
+//!   target (which is then refused `Busy` if the adjustment planned), and in a walk that
+//!   adjusts its work ([`super::WORK_ADJUST`]) is kept from the commands' budget, so footstep
+//!   frames never crowd it out; only a `Start` in the same cycle (which planned) defers it.
 //!
 //! # From the measured state (an option)
 //! With [`AdjustConfig::from_measured`] the re-plan that lifts a capture step's foot starts
@@ -282,6 +285,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         [x, y]
     }
 
+    /// `true` while the step adjustment works on the walk: one started with `StartAdjusting`,
+    /// in an open session, neither emergency-stopped nor with the controller lost.
+    pub(super) fn adjusts(&self) -> bool {
+        self.adj.enabled && self.open && !self.estopped && !self.lost && !self.gait.is_standing()
+    }
+
     /// The step adjustment of this cycle (see the module docs): after the commands, before the
     /// supervision and the tick. Kept out of `poll` (which it would otherwise crowd).
     #[inline(never)]
@@ -291,11 +300,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if fresh.is_some() {
             self.adj.flags |= Adjust::FRESH;
         }
-        let adjusting = self.adj.enabled
-            && self.open
-            && !self.estopped
-            && !self.lost
-            && !self.gait.is_standing();
+        let adjusting = self.adjusts();
         if adjusting {
             self.move_steps(fresh);
         }
@@ -332,9 +337,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return;
         };
         let number = front.wrapping_add(self.first);
-        if self.plans_left == 0 || self.spend(WORK_ADJUST).is_err() {
+        if self.plans_left == 0 || self.afford(WORK_ADJUST).is_err() {
             return;
         }
+        self.spend(WORK_ADJUST);
         let Some(ticks) = self.gait.ticks_to_next_landing() else {
             return;
         };
@@ -384,34 +390,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // does, to the footstep unit (bisection on k/n of the move, n its longer component in
         // 0.5 mm: at most 16 halvings; the limits are checked on the moved step and its
         // successor, the steps after them keeping their places relative to both).
-        let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
+        let (k, n) = self.reach_cut(front, old, delta);
+        if k < n {
+            flags |= Adjust::REACH_LIMITED;
+        }
         let part = |k: i64| {
             // (`n` ≥ 1: the checked division only keeps a panic out of the code)
             let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
             [at(old[0], delta[0]), at(old[1], delta[1])]
-        };
-        let keeps = |node: &Self, k: i64| {
-            let to = part(k);
-            let d = [
-                T::of_i32(to[0] - old[0]) * unit,
-                T::of_i32(to[1] - old[1]) * unit,
-            ];
-            node.reach_broken_moved(front, d).is_none()
-        };
-        let k = if keeps(self, n) {
-            n
-        } else {
-            flags |= Adjust::REACH_LIMITED;
-            let (mut lo, mut hi) = (0, n);
-            while hi - lo > 1 {
-                let mid = (lo + hi) / 2;
-                if keeps(self, mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            lo
         };
         let to = part(k);
         if k == 0 || !self.place_shift(to) {
@@ -431,6 +417,58 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.adj.count = self.adj.count.saturating_add(1);
         self.adj.flags = flags;
         self.adj.due = true;
+    }
+
+    /// The reach cut of a move of the steps from the shift `old` by `delta` \[0.5 mm\] (see
+    /// `move_steps`): `(k, n)`, the move's largest part `k/n` that keeps the limits, `n` its
+    /// longer component (the whole move if it keeps them, else a bisection to the footstep
+    /// unit: at most 16 halvings; the limits are checked on the moved step and its successor,
+    /// the steps after them keeping their places relative to both). Out of line, so that the
+    /// frames it checks on are off the stack before eq. 17 plans.
+    #[inline(never)]
+    fn reach_cut(&mut self, front: u16, old: [i32; 2], delta: [i32; 2]) -> (i64, i64) {
+        let unit = T::of(STEP_UNIT);
+        let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
+        let part = |k: i64| {
+            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
+            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
+            [at(old[0], delta[0]), at(old[1], delta[1])]
+        };
+        // (On the frames kept for the cycle's reach checks, fetched once for the bisection.
+        // They always apply to the node's queue, whose sides alternate and whose numbers are
+        // consecutive; where they would not, nothing moves.)
+        let Some(kept) = self.move_frames(front) else {
+            return (0, n);
+        };
+        let keeps = |node: &Self, k: i64| {
+            let to = part(k);
+            let d = [
+                T::of_i32(to[0] - old[0]) * unit,
+                T::of_i32(to[1] - old[1]) * unit,
+            ];
+            let broken = node.reach_broken_move(&kept, d);
+            debug_assert!(
+                broken.map(|b| (b.limit, b.value.bits()))
+                    == node
+                        .reach_broken_moved(front, d)
+                        .map(|b| (b.limit, b.value.bits())),
+                "kept frames of a move"
+            );
+            broken.is_none()
+        };
+        if keeps(self, n) {
+            return (n, n);
+        }
+        let (mut lo, mut hi) = (0, n);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if keeps(self, mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (lo, n)
     }
 
     /// The end of a walk (the gait stands): the shift ends with it, so that the next walk's

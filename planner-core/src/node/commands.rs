@@ -37,20 +37,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
     }
 
-    /// Reach and crossing check of a footstep: appended (`before` = `None`), or replacing the
-    /// queued step `before`, with its two successors then checked against it.
-    pub(super) fn check_reach(
-        &self,
-        step: &Footstep<T>,
-        before: Option<u16>,
-    ) -> Result<(), Reason> {
-        match self.reach_broken(step, before) {
-            None => Ok(()),
-            Some(b) if b.limit == Limit::Crossing => Err(Reason::Crossing),
-            Some(_) => Err(Reason::Reach),
-        }
-    }
-
     /// The limit that the node's reach check finds broken for a footstep command now
     /// (`Crossing` and `Reach` refusals): appended (`before` = `None`), or replacing the queued
     /// step `before` (then its two successors are checked against it too); `None` if the
@@ -199,14 +185,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(())
     }
 
-    /// Takes `work` from the cycle's budget ([`WORK_BUDGET`]); `Busy` (nothing taken) if it
-    /// does not fit.
-    pub(super) fn spend(&mut self, work: u32) -> Result<(), Reason> {
+    /// `Busy` if `work` does not fit what is left of the cycle's budget
+    /// ([`NodeConfig::work_budget`]). Nothing is taken: a command takes its work
+    /// ([`Node::spend`]) only once it is accepted, so a refusal spends nothing.
+    pub(super) fn afford(&self, work: u32) -> Result<(), Reason> {
         if self.work_left < work {
             return Err(Reason::Busy);
         }
-        self.work_left -= work;
         Ok(())
+    }
+
+    /// Takes `work` (afforded) from the cycle's budget.
+    pub(super) fn spend(&mut self, work: u32) {
+        self.work_left = self.work_left.saturating_sub(work);
     }
 
     pub(super) fn estop(&mut self) -> Result<(), Reason> {
@@ -245,10 +236,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     return Err(Reason::WrongState);
                 }
                 self.plan()?;
-                self.spend(WORK_PLAN)?;
+                self.afford(WORK_PLAN)?;
                 let started = self.gait.start().map_err(reason_of);
                 self.plans_left = self.plans_left.saturating_sub(1);
                 started?;
+                self.spend(WORK_PLAN);
                 self.adj.enabled = op == ControlOp::StartAdjusting;
             }
             ControlOp::Reset => {
@@ -361,10 +353,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.gait.next_side().is_some_and(|side| side != step.side) {
             return Err(Reason::SideOrder); // (before the reach check: the clearer reason)
         }
-        self.spend(WORK_APPEND)?;
-        self.check_reach(&step, None)?;
+        let gen = self.gait.generation();
+        let kept = self.check_reach_kept(&step, None)?;
+        self.afford(WORK_APPEND)?;
         let gid = self.appended as u16;
+        let pos = self.gait.queued();
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
+        self.kept_step(gen, pos, kept, step.side);
+        self.spend(WORK_APPEND);
         self.steps.push(Record {
             append: *s,
             commanded: *s,
@@ -374,6 +370,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         });
         self.appended += 1;
         Ok(())
+    }
+
+    /// `true` if a modification of the queued step `id` (gait id) plans now: the next swing
+    /// target while walking (eq. 17 checks the re-plan it will cause).
+    pub(super) fn plans_modify(&self, id: u16) -> bool {
+        !self.gait.is_standing() && self.gait.next_target() == Some(id)
+    }
+
+    /// `true` if `decoded` is a modification that plans now ([`Node::plans_modify`]): the
+    /// cycle acts on it after its other commands (see [`Node::poll`]).
+    pub(super) fn plans_later(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+        match decoded {
+            Ok(Command::Modify(m)) => self.plans_modify(self.gait_id(m.id)),
+            _ => false,
+        }
     }
 
     pub(super) fn modify(&mut self, frame: &RawFrame, m: &WireModify) -> Result<(), Reason> {
@@ -397,19 +408,28 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let walked = steps::shifted(&s, self.adj.shift).ok_or(Reason::OutOfRange)?;
         let step = Self::footstep(&walked);
         let id = self.gait_id(m.id);
-        self.spend(WORK_STEP)?;
-        self.check_reach(&step, Some(id))?;
+        let gen = self.gait.generation();
+        let kept = self.check_reach_kept(&step, Some(id))?;
         // A modification of the next swing target while walking plans (eq. 17).
-        let plans = !self.gait.is_standing() && self.gait.next_target() == Some(id);
+        let plans = self.plans_modify(id);
+        let work = if plans {
+            WORK_STEP + WORK_PLAN
+        } else {
+            WORK_STEP
+        };
         if plans {
             self.plan()?;
-            self.spend(WORK_PLAN)?;
         }
+        self.afford(work)?;
         let modified = self.gait.modify(id, step).map_err(reason_of);
         if plans {
             self.plans_left = self.plans_left.saturating_sub(1);
         }
         modified?;
+        if let Some(pos) = self.gait.position(id) {
+            self.kept_step(gen, pos, kept, step.side);
+        }
+        self.spend(work);
         if let Some(r) = self.steps.queued_at_mut(at, m.id) {
             r.version = m.version;
             r.in_force = Some(*frame);

@@ -1,6 +1,8 @@
 //! One control cycle ([`Node::poll`]): receive a bounded batch, act on it in priority order
-//! (`ESTOP`, `StopNow`, the rest; one step's modifications newest version first), supervise
-//! (the controller's silence by clock and by cycles, the clock itself), tick the gait, publish.
+//! (`ESTOP`, `StopNow`, the rest; one step's modifications newest version first; the step
+//! adjustment, then the modifications that plan, so that eq. 17 is planned once on the final
+//! steps), supervise (the controller's silence by clock and by cycles, the clock itself), tick
+//! the gait, publish.
 
 use super::*;
 
@@ -27,17 +29,77 @@ pub(super) fn keep_rank(f: &RawFrame) -> u8 {
 /// `LinkHealth::bus_state` of a link off the bus.
 const BUS_OFF: u8 = 3;
 
-/// Bit `i` of a mask over a cycle's frames (at most [`MAX_RX`] ≤ 64 of them).
-pub(super) const fn bit(i: usize) -> u64 {
-    1u64 << (i & 63)
-}
-
 /// What the acting of a cycle keeps (see [`Node::poll`]).
 pub(super) struct Acting {
     /// Commands refused.
     pub(super) refused: u8,
     /// The last `StopNow` of the batch carried out.
     pub(super) stop_at: Option<usize>,
+}
+
+/// The order in which a cycle acts on its held frames `batch` (indices into it): by [`rank`];
+/// within a rank in the order of arrival, except that the modifications of one step
+/// (`STEP_MODIFY` with the same step number's low byte) are acted on together, where the first
+/// of them arrived, newest version first (of equal versions, the first to arrive). One pass
+/// gives each frame a key (rank, place of its group, version, arrival) and an insertion sort
+/// orders the keys: the frames arrive nearly in that order, so the sort is about linear.
+///
+/// Out of line: its table is off the stack before the cycle acts.
+#[inline(never)]
+pub(super) fn act_order(batch: &[RawFrame]) -> heapless::Vec<u8, MAX_RX> {
+    let mut order = heapless::Vec::new();
+    // (A cycle without modifications, the common one, in its order of arrival by class.)
+    if !batch.iter().any(|f| f.id == ids::STEP_MODIFY) {
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate().take(MAX_RX) {
+                if rank(f) == pass {
+                    let _ = order.push(i as u8);
+                }
+            }
+        }
+        return order;
+    }
+    // The place of each step's first modification (by the low byte of its number).
+    let mut first = [u8::MAX; 256];
+    let mut keys: heapless::Vec<u32, MAX_RX> = heapless::Vec::new();
+    for (i, f) in batch.iter().enumerate().take(MAX_RX) {
+        let i = i as u8;
+        let (group, newness) = if f.id == ids::STEP_MODIFY {
+            let slot = &mut first[usize::from(f.data[0])];
+            if *slot == u8::MAX {
+                *slot = i;
+            }
+            (*slot, 0x7F - (f.data[1] & 0x7F))
+        } else {
+            (i, 0)
+        };
+        let key = u32::from(rank(f)) << 24
+            | u32::from(group) << 16
+            | u32::from(newness) << 8
+            | u32::from(i);
+        // Insertion: shift the greater keys up by one.
+        let _ = keys.push(key);
+        let mut j = keys.len();
+        while j > 1 {
+            let (Some(&a), Some(&b)) = (keys.get(j - 2), keys.get(j - 1)) else {
+                break;
+            };
+            if a <= b {
+                break;
+            }
+            if let Some(x) = keys.get_mut(j - 2) {
+                *x = b;
+            }
+            if let Some(x) = keys.get_mut(j - 1) {
+                *x = a;
+            }
+            j -= 1;
+        }
+    }
+    for k in &keys {
+        let _ = order.push(*k as u8);
+    }
+    order
 }
 
 impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
@@ -183,66 +245,84 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         // accepted is in force, the older ones are then `Stale` by the version rule; a newer
         // one refused leaves an older one its turn). The order is read from the frames' bytes
         // (class, step number's low byte, version), each frame is read when it is acted on.
-        let mut order: heapless::Vec<u8, MAX_RX> = heapless::Vec::new();
-        let mut placed: u64 = 0;
-        for pass in 0..3u8 {
-            for (i, f) in batch.iter().enumerate() {
-                if rank(f) != pass || placed & bit(i) != 0 {
-                    continue;
-                }
-                let same_step = |g: &RawFrame| g.id == ids::STEP_MODIFY && g.data[0] == f.data[0];
-                if f.id != ids::STEP_MODIFY || !batch.iter().skip(i + 1).any(same_step) {
-                    placed |= bit(i);
-                    let _ = order.push(i as u8);
-                    continue;
-                }
-                loop {
-                    let mut newest: Option<(usize, u8)> = None;
-                    for (j, g) in batch.iter().enumerate().skip(i) {
-                        let version = g.data[1] & 0x7F;
-                        if placed & bit(j) == 0
-                            && same_step(g)
-                            && newest.is_none_or(|(_, v)| version > v)
-                        {
-                            newest = Some((j, version));
-                        }
-                    }
-                    let Some((j, _)) = newest else {
-                        break;
-                    };
-                    placed |= bit(j);
-                    let _ = order.push(j as u8);
-                }
-            }
-        }
+        let order = act_order(&batch);
+        // The step adjustment's share of the budget is kept from the commands (a walk that
+        // adjusts: the commands cannot crowd out a capture step).
+        let budget = self.cfg.work_budget;
+        let reserve = if self.adjusts() {
+            WORK_ADJUST.min(budget)
+        } else {
+            0
+        };
         self.plans_left = self.cfg.max_plans;
-        self.work_left = WORK_BUDGET;
+        self.work_left = budget.saturating_sub(reserve);
+        // The frames kept for the reach checks are this phase's (the tick moved the feet).
+        self.feet.clear();
         let mut act = Acting {
             refused: 0,
             stop_at: None,
         };
+        // A modification that plans (eq. 17: the next swing target while walking) waits for
+        // the end of the command phase, with its work kept: it is then checked once on the
+        // final steps.
+        // (By a mask and the next step number each was read with: read again then, as it was.)
+        let mut later: u64 = 0;
+        let mut later_next = [0u16; MAX_RX];
+        // The first of them keeps its work from the commands after it (the next swing target
+        // is the one whose change cannot wait).
+        let mut kept_for_later = 0;
         for &i in &order {
-            let i = usize::from(i);
-            let Some(f) = batch.get(i) else {
+            let Some(f) = batch.get(usize::from(i)) else {
                 continue;
             };
             let decoded = Command::decode(f, self.expect());
             if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
                 self.estop_now = true;
             }
-            let stop_now = rank(f) == 1;
-            let accepted = self.act(i, f, decoded, &mut act, now_ms);
-            if stop_now && accepted {
-                act.stop_at = Some(i);
+            if self.plans_later(&decoded) {
+                if let Some(n) = later_next.get_mut(usize::from(i)) {
+                    *n = self.next_step();
+                    if later == 0 && self.afford(WORK_STEP + WORK_PLAN).is_ok() {
+                        kept_for_later = WORK_STEP + WORK_PLAN;
+                        self.spend(kept_for_later);
+                    }
+                    later |= 1 << (i & 63);
+                    continue;
+                }
             }
+            let stop_now = rank(f) == 1;
+            let accepted = self.act(usize::from(i), f, decoded, &mut act, now_ms);
+            if stop_now && accepted {
+                act.stop_at = Some(usize::from(i));
+            }
+        }
+        // The step adjustment, with its share and what the commands left, then the
+        // modifications that plan, if the adjustment did not plan.
+        self.work_left = self.work_left.saturating_add(reserve);
+        self.adjust_step();
+        self.work_left = self.work_left.saturating_add(kept_for_later);
+        for &i in order.iter().filter(|_| later != 0) {
+            let (Some(f), Some(&next_step)) =
+                (batch.get(usize::from(i)), later_next.get(usize::from(i)))
+            else {
+                continue;
+            };
+            if later & (1 << (i & 63)) == 0 {
+                continue;
+            }
+            let expect = Expect {
+                next_step,
+                epoch: self.epoch,
+            };
+            let decoded = Command::decode(f, expect);
+            self.act(usize::from(i), f, decoded, &mut act, now_ms);
         }
         let refused = act.refused;
         self.estop_now = false;
-        // The step adjustment, on the budget the commands left.
-        self.adjust_step();
+        self.feet.clear();
         // (`Node::handle` outside a cycle: the budget of one.)
         self.plans_left = self.cfg.max_plans;
-        self.work_left = WORK_BUDGET;
+        self.work_left = self.cfg.work_budget;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
         self.supervise(now_ms);
         let streaming = self.open;
@@ -333,6 +413,86 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             received,
             refused,
             sent,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The acting order by its definition: by class, in the order of arrival, each step's
+    /// modifications together where the first arrived, newest version first (of equal
+    /// versions the first to arrive), found by scanning the batch.
+    fn scanned(batch: &[RawFrame]) -> Vec<u8> {
+        let mut order = vec![];
+        let mut placed = vec![false; batch.len()];
+        for pass in 0..3u8 {
+            for (i, f) in batch.iter().enumerate() {
+                if rank(f) != pass || placed[i] {
+                    continue;
+                }
+                let same_step = |g: &RawFrame| g.id == ids::STEP_MODIFY && g.data[0] == f.data[0];
+                if f.id != ids::STEP_MODIFY {
+                    placed[i] = true;
+                    order.push(i as u8);
+                    continue;
+                }
+                loop {
+                    let mut newest: Option<(usize, u8)> = None;
+                    for (j, g) in batch.iter().enumerate().skip(i) {
+                        let version = g.data[1] & 0x7F;
+                        if !placed[j] && same_step(g) && newest.is_none_or(|(_, v)| version > v) {
+                            newest = Some((j, version));
+                        }
+                    }
+                    let Some((j, _)) = newest else {
+                        break;
+                    };
+                    placed[j] = true;
+                    order.push(j as u8);
+                }
+            }
+        }
+        order
+    }
+
+    /// Random batches of every class (emergency stops, stops now, other control commands,
+    /// appends, measured states, modifications of a few steps in a few versions): the sorted
+    /// order is the scanned one.
+    #[test]
+    fn the_acting_order_is_the_scanned_one() {
+        let mut seed = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        for _ in 0..2000 {
+            let len = next(MAX_RX as u64 + 1) as usize;
+            let batch: Vec<RawFrame> = (0..len)
+                .map(|_| {
+                    let mut data = [0u8; 8];
+                    let id = match next(6) {
+                        0 => ids::ESTOP,
+                        1 => {
+                            data[6] = if next(2) == 0 { 3 } else { 1 };
+                            ids::CONTROL
+                        }
+                        2 => ids::STEP_APPEND,
+                        3 => ids::MEASURED,
+                        _ => {
+                            data[0] = next(4) as u8;
+                            data[1] = next(256) as u8;
+                            ids::STEP_MODIFY
+                        }
+                    };
+                    RawFrame::new(id, &data).unwrap()
+                })
+                .collect();
+            let sorted: Vec<u8> = act_order(&batch).iter().copied().collect();
+            assert_eq!(sorted, scanned(&batch), "{batch:?}");
         }
     }
 }

@@ -27,12 +27,21 @@
 //!    are then taken whole, with room for emergency stops of other senders.
 //!    Commands that plan — a
 //!    `Start` (the start window) and a `STEP_MODIFY` of the next swing target while walking
-//!    (eq. 17 plans the re-plan it will cause) — cost up to ~60,000 instructions on the
-//!    Cortex-M7 against ~200 for the others, so at most [`NodeConfig::max_plans`] of them
-//!    are carried out a cycle; the rest are refused `Busy`. And the cycle's command work is
-//!    counted against a budget in estimated instructions ([`WORK_BUDGET`]: each footstep
-//!    command's checks, each plan, the step adjustment): a command that does not fit is
-//!    refused `Busy` with nothing changed, so the worst cycle is bounded whatever arrives. Priority keeps what arrival order
+//!    (eq. 17 plans the re-plan it will cause) — cost a window's plan against a few hundred
+//!    instructions for the others, so at most [`NodeConfig::max_plans`] of them are carried
+//!    out a cycle; the rest are refused `Busy`. A modification that plans is acted on **after
+//!    the cycle's other commands and the step adjustment**, its work kept from the commands
+//!    that arrived after it: eq. 17 is then planned once, on the final steps (the later modifications of the steps it lands with included), and the
+//!    tick's re-plan at a start of single support in the same cycle takes that plan instead
+//!    of planning again; if the step adjustment planned (a capture step comes first), it is
+//!    refused `Busy`. And the cycle's command work is counted against a budget in estimated
+//!    instructions ([`NodeConfig::work_budget`], [`WORK_BUDGET`]: each footstep command's
+//!    checks, each plan, the step adjustment): a command is taken only if its work fits what
+//!    is left, else refused `Busy` with nothing changed, and only a command carried out takes
+//!    its work (a refusal spends nothing: the checks of refused frames are bounded by
+//!    `max_rx` instead). In a walk that adjusts its steps, the step adjustment's share
+//!    ([`WORK_ADJUST`]) is kept from the commands, so no number of footstep frames defers a
+//!    capture step. So the worst cycle is bounded whatever arrives. Priority keeps what arrival order
 //!    means: a footstep frame that arrived before a `StopNow` carried out in the cycle was
 //!    dropped by it (refused `Stale`), and a `Reset` received with an `ESTOP` in one cycle is
 //!    refused `EmergencyStopped` (the stop stands, whatever the order). Modifications of one step that arrive in one cycle are
@@ -116,6 +125,7 @@
 mod adjust;
 mod commands;
 mod cycle;
+mod feet;
 mod reach;
 mod report;
 mod steps;
@@ -143,16 +153,16 @@ use crate::wire::{
 /// Frames that can wait to be sent.
 pub const TX_BACKLOG: usize = 32;
 
-/// The command work a cycle may do, in estimated Cortex-M7 instructions: every modification's
-/// checks cost [`WORK_STEP`], every append's [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of
-/// the next swing target while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment
-/// from the measured state [`WORK_ADJUST`]. A command whose work does not fit what is left of
-/// the cycle's budget is refused `Busy` with nothing changed (the controller sends it again
-/// in a later cycle); the step adjustment waits for a cycle with room. With the tick, the
-/// re-plan and the frames sent, this bounds the worst cycle whatever is received (the
-/// firmware's timing chapter states the bound and the log that reaches it). The budget takes
-/// nine modifications of distinct steps, one of them planning, in one cycle, or the 20 appends
-/// of a walk sent at once.
+/// The command work a cycle may do by default ([`NodeConfig::work_budget`]), in estimated
+/// Cortex-M7 instructions: every modification's checks cost [`WORK_STEP`], every append's
+/// [`WORK_APPEND`], a plan it causes (a `Start`, a `STEP_MODIFY` of the next swing target
+/// while walking: eq. 17) [`WORK_PLAN`] more, and the step adjustment from the measured state
+/// [`WORK_ADJUST`] (kept from the commands in a walk that adjusts). A command whose work does
+/// not fit what is left of the cycle's budget is refused `Busy` with nothing changed (the
+/// controller sends it again in a later cycle); a refused command spends nothing. With the
+/// tick, the re-plan, the frames sent and the checks of refused frames (at most
+/// [`NodeConfig::max_rx`]), this bounds the worst cycle whatever is received (the firmware's
+/// timing chapter states the bound and the log that reaches it).
 pub const WORK_BUDGET: u32 = 33_000;
 /// See [`WORK_BUDGET`]: one modification's checks (reach against the feet before it and its
 /// two successors; the step records).
@@ -171,7 +181,7 @@ pub const WORK_ADJUST: u32 = 23_000;
 /// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
 /// among them is carried out first.
 pub const MAX_RX: usize = 32;
-const _: () = assert!(MAX_RX < 64, "a cycle's frames are a 64-bit mask");
+const _: () = assert!(MAX_RX < 255, "a cycle's frames are numbered in a byte");
 
 /// Control cycles in a row that the firmware may report its link bus-off (off the bus: it
 /// neither sends nor takes part) before a moving robot stops as for a lost controller: more
@@ -219,6 +229,9 @@ pub struct NodeConfig<T = f64> {
     /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
     /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
+    /// The command work a cycle may do, in estimated Cortex-M7 instructions ([`WORK_BUDGET`]
+    /// by default; see there for what each command costs).
+    pub work_budget: u32,
     /// Reach limits.
     pub reach: Reach<T>,
     /// The step adjustment from the measured state (see `adjust`).
@@ -254,6 +267,7 @@ impl NodeConfig {
             max_rx: 20,
             max_frames: 160,
             max_plans: 1,
+            work_budget: WORK_BUDGET,
             reach,
             adjust: AdjustConfig::DEFAULT,
             entropy: 0,
@@ -294,6 +308,7 @@ impl NodeConfig {
             max_rx: self.max_rx,
             max_frames: self.max_frames,
             max_plans: self.max_plans,
+            work_budget: self.work_budget,
             reach: self.reach.cast(),
             adjust: self.adjust.cast(),
             entropy: self.entropy,
@@ -394,8 +409,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     /// Planning commands that may still plan in this cycle ([`NodeConfig::max_plans`] at
     /// the start of each cycle's acting).
     plans_left: usize,
-    /// What is left of the cycle's [`WORK_BUDGET`] (the whole budget at the start of each
-    /// cycle's acting).
+    /// What is left of the cycle's [`NodeConfig::work_budget`] (the whole budget at the start
+    /// of each cycle's acting).
     work_left: u32,
     /// An emergency stop was received in the cycle being acted on: no `Reset` leaves it (set
     /// and cleared within [`Node::poll`]).
@@ -417,6 +432,8 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     off_bus: u32,
     /// The step adjustment (see `adjust`).
     adj: Adjusting<T>,
+    /// The frames of the queued steps kept for the reach checks (see `feet`).
+    feet: feet::FeetFrames<T, Q>,
 }
 
 /// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
@@ -497,6 +514,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 max_rx: 0,
                 max_frames: 0,
                 max_plans: 0,
+                work_budget: 0,
                 reach: Reach::PARKED,
                 adjust: AdjustConfig {
                     max_age: 0,
@@ -532,6 +550,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             link: Some(LinkHealth::ZERO),
             off_bus: 0,
             adj: Adjusting::ZERO,
+            feet: feet::FeetFrames::EMPTY,
         }
     }
 }
@@ -602,13 +621,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.window = (0, 0);
         self.timeout_cycles = timeout_cycles;
         self.plans_left = cfg.max_plans;
-        self.work_left = WORK_BUDGET;
+        self.work_left = cfg.work_budget;
         self.window_ms = dt_us.saturating_mul(CLOCK_WINDOW) / 1000;
         self.counters = Counters::ZERO;
         self.cycle = 0;
         self.link = None;
         self.off_bus = 0;
         self.adj = Adjusting::ZERO;
+        self.feet = feet::FeetFrames::EMPTY;
         Ok(())
     }
 
@@ -625,6 +645,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// The counters.
     pub fn counters(&self) -> &Counters {
         &self.counters
+    }
+
+    /// What is left of the budget of the cycle being acted on ([`NodeConfig::work_budget`]),
+    /// or, between cycles, of the budget [`Node::handle`] spends from (renewed by every
+    /// [`Node::poll`]).
+    pub fn work_left(&self) -> u32 {
+        self.work_left
     }
 
     /// Cycles run.

@@ -129,6 +129,24 @@ pub(super) struct Frame<T> {
 }
 
 impl<T: Real> Frame<T> {
+    /// Every field zero (a frame not computed: see `feet`).
+    pub(super) const ZERO: Self = Self {
+        x: T::ZERO,
+        y: T::ZERO,
+        yaw: T::ZERO,
+        sin: T::ZERO,
+        cos: T::ZERO,
+    };
+
+    /// This frame moved by `d` (the heading kept): the frame of the footstep moved by `d`.
+    pub(super) fn shifted(&self, d: [T; 2]) -> Self {
+        Self {
+            x: self.x + d[0],
+            y: self.y + d[1],
+            ..*self
+        }
+    }
+
     pub(super) fn of(f: &Footstep<T>) -> Self {
         Self::like(f, &[])
     }

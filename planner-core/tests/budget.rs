@@ -1,0 +1,164 @@
+//! The cycle's work: a refusal spends none of the budget, eq. 17 is planned once per cycle
+//! from the final steps (the re-plan of that cycle takes the plan), and the step adjustment
+//! keeps its share of the budget however many footstep frames the controller sends.
+
+mod common;
+
+use common::*;
+use planner_core::gait::Side;
+use planner_core::node::{NodeConfig, NodeState, WORK_STEP};
+use planner_core::wire::{Command, ControlOp, Measured, Reason};
+
+/// `k` steps of 0.15 m queued.
+fn queue_walk(r: &mut Rig, k: u16) {
+    let first = r.n.next_step();
+    let feet = r.n.gait().feet();
+    let x0 = feet[0].x.max(feet[1].x);
+    let right_first = r.n.gait().next_side() != Some(Side::Left);
+    for i in 0..k {
+        let left = (i % 2 == 1) == right_first;
+        let x = x0 + 0.15 * f64::from(i + 1);
+        assert_eq!(r.append(first + i, left, x, y(left)), None, "step {i}");
+    }
+}
+
+/// A rig walking `k` queued steps, started with `op`.
+fn walking(op: ControlOp, k: u16) -> Rig {
+    let mut r = Rig::hrp2();
+    queue_walk(&mut r, k);
+    assert_eq!(r.control(op), None);
+    r.run(3, true);
+    assert_eq!(r.n.state(), NodeState::Walking);
+    r
+}
+
+/// The step number and the queued pose of the step at queue position `p`.
+fn queued(r: &Rig, p: u16) -> (u16, f64, f64) {
+    let g = r.n.gait();
+    let n = g.queued() as u16;
+    let s = g
+        .queued_step(g.next_target().unwrap().wrapping_add(p))
+        .unwrap();
+    (r.n.next_step().wrapping_sub(n).wrapping_add(p), s.x, s.y)
+}
+
+/// A refused footstep command leaves the budget as it was; an accepted one takes its work.
+#[test]
+fn a_refused_frame_spends_no_budget() {
+    let mut r = walking(ControlOp::Start, 12);
+    let epoch = r.session.epoch;
+    let now = r.t;
+    let full = r.n.work_left();
+    assert_eq!(full, r.n.config().work_budget);
+    // Out of reach (0.6 m forward): refused after its checks.
+    let (id, x, yy) = queued(&r, 3);
+    let far = r.book.modify(id, x + 0.6, yy, 0.0).unwrap();
+    let before = r.n.clone();
+    let a = r.n.handle(&far.encode_in(epoch), now).unwrap();
+    assert_eq!(a.reason, Some(Reason::Reach));
+    assert_eq!(r.n.work_left(), full, "a refusal spent budget");
+    assert!(r.n.same_state(&before));
+    // Taken (its work spent), then its repeat refused (`Duplicate`).
+    let near = r.book.modify(id, x + 0.01, yy, 0.0).unwrap();
+    let a = r.n.handle(&near.encode_in(epoch), now).unwrap();
+    assert_eq!(a.reason, None);
+    assert_eq!(r.n.work_left(), full - WORK_STEP);
+    let a = r.n.handle(&near.encode_in(epoch), now).unwrap();
+    assert!(a.reason.is_some());
+    assert_eq!(r.n.work_left(), full - WORK_STEP, "a refusal spent budget");
+}
+
+/// In the cycle whose tick re-plans at a start of single support, a modification of the next
+/// swing target (sent first) and of the three steps after it: eq. 17 is planned once, from
+/// the final steps, and the re-plan takes that plan (one walking window planned in all, not
+/// a check of the first modification's re-plan and another plan for the later ones).
+#[test]
+fn eq17_is_planned_once_in_a_cycle_with_many_modifications() {
+    let mut r = walking(ControlOp::Start, 12);
+    // The cycle that re-plans, found on a fork.
+    for k in 0..400 {
+        if k % 20 == 0 {
+            let hb = r.heartbeat();
+            r.bus.rx.push_back(hb.encode());
+        }
+        let mut probe = r.fork();
+        probe.bus.rx = r.bus.rx.clone();
+        let plans = probe.n.gait().plans();
+        probe.cycle();
+        if probe.n.gait().plans() != plans && !probe.n.gait().is_stopping() {
+            break;
+        }
+        r.cycle();
+    }
+    let epoch = r.session.epoch;
+    assert!(r.n.gait().queued() >= 4, "{} queued", r.n.gait().queued());
+    let frames: Vec<Command> = (0..4)
+        .map(|p| {
+            let (id, x, yy) = queued(&r, p);
+            r.book.modify(id, x + 0.02, yy, 0.0).unwrap()
+        })
+        .collect();
+    for c in &frames {
+        r.bus.rx.push_back(c.encode_in(epoch));
+    }
+    let (plans, walk_plans) = (r.n.gait().plans(), r.n.gait().walk_plans());
+    let acks = r.cycle();
+    assert_eq!(acks.len(), 4, "{acks:?}");
+    assert!(acks.iter().all(|a| a.reason.is_none()), "{acks:?}");
+    assert_ne!(r.n.gait().plans(), plans, "the cycle re-planned");
+    assert_eq!(
+        r.n.gait().walk_plans().wrapping_sub(walk_plans),
+        1,
+        "walking windows planned in the cycle"
+    );
+}
+
+/// A controller that modifies every later queued step in every cycle (more than the budget
+/// left beside the step adjustment's share) does not keep the adjustment from its capture
+/// step: the adjustment works on the measured state's move in those cycles.
+#[test]
+fn the_step_adjustment_is_taken_in_cycles_full_of_footstep_frames() {
+    let mut r = walking(ControlOp::StartAdjusting, 16);
+    let epoch = r.session.epoch;
+    let cfg = NodeConfig::hrp2();
+    let attempts = r.n.adjustment_attempts();
+    let (mut taken, mut sent) = (0, 0);
+    const CYCLES: u32 = 6;
+    for k in 0..CYCLES {
+        let m = Measured::from_si(r.n.cycles(), [0.08, 0.0]).unwrap();
+        r.bus.rx.push_back(m.encode(epoch));
+        let hb = r.heartbeat();
+        r.bus.rx.push_back(hb.encode());
+        let n = r.n.gait().queued() as u16;
+        let d = if k % 2 == 0 { 0.004 } else { -0.004 };
+        let commands: Vec<Command> = (1..n)
+            .map(|p| {
+                let (id, x, yy) = queued(&r, p);
+                let sh = r.n.shift();
+                let (cx, cy) = (x - f64::from(sh[0]) * 5e-4, yy - f64::from(sh[1]) * 5e-4);
+                r.book.modify(id, cx + d, cy, 0.0).unwrap()
+            })
+            .collect();
+        for c in &commands {
+            r.bus.rx.push_back(c.encode_in(epoch));
+        }
+        sent += commands.len();
+        let acks = r.cycle();
+        taken += acks
+            .iter()
+            .filter(|a| a.command == 0x01 && a.reason.is_none())
+            .count();
+    }
+    // The footstep frames sent in each cycle ask for more than what the budget leaves
+    // beside the adjustment, and some are taken in every cycle.
+    assert!(
+        sent as u32 * WORK_STEP / CYCLES > cfg.work_budget - planner_core::node::WORK_ADJUST,
+        "{sent} modifications sent"
+    );
+    assert!(taken as u32 >= CYCLES, "{taken} modifications taken");
+    assert_ne!(
+        r.n.adjustment_attempts(),
+        attempts,
+        "the adjustment never ran"
+    );
+}
