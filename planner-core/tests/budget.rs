@@ -162,3 +162,71 @@ fn the_step_adjustment_is_taken_in_cycles_full_of_footstep_frames() {
         "the adjustment never ran"
     );
 }
+
+/// In a walk that adjusts, an estimator whose state moves nothing (a zero deviation, every
+/// cycle) leaves the modification of the next swing target its plan: each is accepted, as
+/// without the estimator. (Only a move spends the adjustment's share.)
+#[test]
+fn a_state_that_moves_nothing_leaves_the_next_targets_change_its_plan() {
+    for estimator in [false, true] {
+        let mut r = walking(ControlOp::StartAdjusting, 16);
+        let epoch = r.session.epoch;
+        let attempts = r.n.adjustment_attempts();
+        let (mut accepted, mut sent) = (0, 0);
+        for k in 0..40u32 {
+            if r.n.gait().queued() < 3 {
+                break;
+            }
+            if estimator {
+                let m = Measured::from_si(r.n.cycles(), [0.0, 0.0]).unwrap();
+                r.bus.rx.push_back(m.encode(epoch));
+            }
+            if k % 10 == 0 {
+                let hb = r.heartbeat();
+                r.bus.rx.push_back(hb.encode());
+            }
+            let (id, x, y) = queued(&r, 0);
+            let d = if k % 2 == 0 { 0.003 } else { -0.003 };
+            let c = r.book.modify(id, x + d, y, 0.0).unwrap();
+            r.bus.rx.push_back(c.encode_in(epoch));
+            sent += 1;
+            for a in r.cycle().iter().filter(|a| a.command == 0x01) {
+                assert_eq!(a.reason, None, "estimator {estimator}, cycle {k}");
+                accepted += 1;
+            }
+        }
+        assert_eq!(r.n.adjustment_attempts(), attempts, "nothing moved");
+        assert!(sent > 10 && accepted == sent, "{accepted} of {sent}");
+    }
+}
+
+/// A budget above the default (the bound the timing figures measure), one below what a plan or
+/// the step adjustment needs, and no plan at all are refused at start-up.
+#[test]
+fn a_budget_outside_its_range_is_refused_at_start_up() {
+    use planner_core::node::{Node, WORK_ADJUST, WORK_BUDGET};
+    let ok = NodeConfig::hrp2();
+    assert!(Node::<16>::new(ok).is_ok());
+    for cfg in [
+        NodeConfig {
+            work_budget: WORK_BUDGET + 1,
+            ..ok
+        },
+        NodeConfig {
+            work_budget: WORK_ADJUST - 1,
+            ..ok
+        },
+        NodeConfig {
+            work_budget: u32::MAX,
+            ..ok
+        },
+        NodeConfig { max_plans: 0, ..ok },
+    ] {
+        assert!(
+            Node::<16>::new(cfg).is_err(),
+            "{} {}",
+            cfg.work_budget,
+            cfg.max_plans
+        );
+    }
+}

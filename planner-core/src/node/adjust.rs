@@ -340,7 +340,6 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.plans_left == 0 || self.afford(WORK_ADJUST).is_err() {
             return;
         }
-        self.spend(WORK_ADJUST);
         let Some(ticks) = self.gait.ticks_to_next_landing() else {
             return;
         };
@@ -383,6 +382,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if change < self.cfg.adjust.min_change {
             return;
         }
+        // Only a move spends the adjustment's share: a state that moves nothing leaves it to
+        // the modification that plans.
+        self.spend(WORK_ADJUST);
         self.adj.attempts = self.adj.attempts.wrapping_add(1);
         let old = self.adj.shift;
         let mut flags = self.adj.flags & Adjust::FRESH;

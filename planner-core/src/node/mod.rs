@@ -181,7 +181,10 @@ pub const WORK_ADJUST: u32 = 23_000;
 /// [`NodeConfig::max_rx`]): they are held for the cycle, so that every `ESTOP` and `StopNow`
 /// among them is carried out first.
 pub const MAX_RX: usize = 32;
-const _: () = assert!(MAX_RX < 255, "a cycle's frames are numbered in a byte");
+const _: () = assert!(
+    MAX_RX <= 64,
+    "a cycle's frames are numbered in a byte and deferred by a 64-bit mask"
+);
 
 /// Control cycles in a row that the firmware may report its link bus-off (off the bus: it
 /// neither sends nor takes part) before a moving robot stops as for a lost controller: more
@@ -230,7 +233,10 @@ pub struct NodeConfig<T = f64> {
     /// handled per cycle at most (see the module docs).
     pub max_plans: usize,
     /// The command work a cycle may do, in estimated Cortex-M7 instructions ([`WORK_BUDGET`]
-    /// by default; see there for what each command costs).
+    /// by default; see there for what each command costs). At most [`WORK_BUDGET`] (the bound
+    /// the timing figures measure) and at least [`WORK_ADJUST`] and a plan with its checks
+    /// ([`WORK_STEP`] + [`WORK_PLAN`]); `max_plans` at least 1: else the start-up refuses the
+    /// configuration.
     pub work_budget: u32,
     /// Reach limits.
     pub reach: Reach<T>,
@@ -591,6 +597,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             || cfg.max_rx > MAX_RX
             || cfg.max_rx == 0
             || cfg.max_frames < cfg.max_rx
+            // The budget bounds the cycle only up to the default (the bound measured), and
+            // below a plan with its checks, or the step adjustment's share, nothing that plans
+            // could ever be carried out.
+            || cfg.work_budget > WORK_BUDGET
+            || cfg.work_budget < WORK_ADJUST.max(WORK_STEP + WORK_PLAN)
+            || cfg.max_plans == 0
         {
             return Err(GaitError::BadParams);
         }
