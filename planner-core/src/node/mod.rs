@@ -46,7 +46,13 @@
 //!    dropped by it (refused `Stale`), and a `Reset` received with an `ESTOP` in one cycle is
 //!    refused `EmergencyStopped` (the stop stands, whatever the order). Modifications of one step that arrive in one cycle are
 //!    coalesced, newest version first: the first one accepted is in force and the older ones
-//!    are then `Stale` (a newer one that is refused leaves an older one its turn);
+//!    are then `Stale` (a newer one that is refused leaves an older one its turn, except that
+//!    a modification that planned eq. 17 and was refused `Infeasible` has spent the cycle's
+//!    plan: an older one of the next swing target is then `Busy`, and taken when sent again).
+//!    Because a modification that plans is acted on last, a command of the same cycle that
+//!    depends on it is checked against the step as it was (an append placed from the moved
+//!    next target may be refused its reach, and is sent again in the next cycle); every step
+//!    as it ends up is checked against its neighbours either way;
 //! 3. **supervision**: if the robot moves and the controller has not been heard (an accepted
 //!    command: new by construction, see below) for more than
 //!    [`NodeConfig::heartbeat_timeout_ms`], by the clock or by the count of cycles (one cycle
