@@ -294,6 +294,102 @@ pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
     (g0, g1 / lambda, x1, v1 / lambda)
 }
 
+/// Orders of the ZMP monomials whose ends [`cubic_ends`] tabulates (`s^0 … s^3`: the known
+/// part of every interval's ZMP is at most a cubic).
+pub const CUBIC: usize = 4;
+
+/// [`monomial_ends`] of `s^0 … s^3` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
+/// `λ < 1` bit for bit the same values (the series' factors `λ²/(i(i−1))` computed once for
+/// the four chains, each chain summed over its non-zero terms only); for `λ ≥ 1` the paper's
+/// polynomials with `1/λ` and `1/λ²` computed once (equal to [`monomial_ends`] to rounding).
+/// The ends of the particular solution of a cubic `c` are then `Σ_k c_k` of these: the same
+/// solution, as a particular solution is linear in the ZMP.
+pub fn cubic_ends<T: Real>(lambda: T) -> [[T; 4]; CUBIC] {
+    let mut out = [[T::ZERO; 4]; CUBIC];
+    if lambda < T::of(SHORT_LAMBDA) {
+        let l2 = lambda * lambda;
+        let mut m = [T::ZERO; PARTICULAR_LEN];
+        for (mi, &inv) in m.iter_mut().zip(INV_PAIR.iter()).skip(2) {
+            *mi = l2 * T::of(inv);
+        }
+        for (k, o) in out.iter_mut().enumerate() {
+            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k).
+            let mut i = k + 2;
+            let mut g = -m[i];
+            let (mut x1, mut v1) = (g, T::of(i as f64) * g);
+            i += 2;
+            while i < PARTICULAR_LEN {
+                g = m[i] * g;
+                x1 += g;
+                v1 += T::of(i as f64) * g;
+                i += 2;
+            }
+            *o = [T::ZERO, T::ZERO, x1, v1 / lambda];
+        }
+    } else {
+        let inv = T::ONE / lambda;
+        let inv2 = T::ONE / (lambda * lambda);
+        // m_0 = 1, m_1 = s, m_2 = s² + 2/λ², m_3 = s³ + 6s/λ².
+        let (two, six) = (T::of(2.0) * inv2, T::of(6.0) * inv2);
+        out[0] = [T::ONE, T::ZERO, T::ONE, T::ZERO];
+        out[1] = [T::ZERO, inv, T::ONE, inv];
+        out[2] = [two, T::ZERO, T::ONE + two, T::of(2.0) * inv];
+        out[3] = [T::ZERO, six * inv, T::ONE + six, (six + T::of(3.0)) * inv];
+    }
+    out
+}
+
+/// [`particular_over`] for the two planes of one interval at once (the same `λ`; `inv_l2` is
+/// `1/λ²`, used for `λ ≥ 1`): the factors of the recurrences are computed once for both, and
+/// each plane's coefficients are bit for bit those of [`particular_over`] with its own old `λ`.
+#[inline]
+pub(crate) fn particular_pair<T: Real>(
+    gx: &mut Particular<T>,
+    gy: &mut Particular<T>,
+    c: [&Poly<T>; 2],
+    lambda: T,
+    inv_l2: T,
+    old: [T; 2],
+) {
+    if lambda < T::of(SHORT_LAMBDA) {
+        let l2 = lambda * lambda;
+        gx[0] = T::ZERO;
+        gx[1] = T::ZERO;
+        gy[0] = T::ZERO;
+        gy[1] = T::ZERO;
+        for i in 2..N_COEFFS + 2 {
+            let m = l2 * T::of(INV_PAIR[i]);
+            gx[i] = m * (gx[i - 2] - c[0][i - 2]);
+            gy[i] = m * (gy[i - 2] - c[1][i - 2]);
+        }
+        // Beyond the quartic `c_i = 0`, and `g − 0 = g` exactly.
+        for i in N_COEFFS + 2..PARTICULAR_LEN {
+            let m = l2 * T::of(INV_PAIR[i]);
+            gx[i] = m * gx[i - 2];
+            gy[i] = m * gy[i - 2];
+        }
+    } else {
+        let (k12, k6, k2) = (
+            T::of(12.0) * inv_l2,
+            T::of(6.0) * inv_l2,
+            T::of(2.0) * inv_l2,
+        );
+        for (g, (c, old)) in [&mut *gx, &mut *gy].into_iter().zip(c.into_iter().zip(old)) {
+            g[4] = c[4];
+            g[3] = c[3];
+            g[2] = c[2] + k12 * g[4];
+            g[1] = c[1] + k6 * g[3];
+            g[0] = c[0] + k2 * g[2];
+            // A NaN `old` zeroes too.
+            if !(old >= T::of(SHORT_LAMBDA)) {
+                for gi in g.iter_mut().skip(N_COEFFS) {
+                    *gi = T::ZERO;
+                }
+            }
+        }
+    }
+}
+
 /// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.
 #[inline]
 pub fn particular_len<T: Real>(lambda: T) -> usize {
@@ -616,6 +712,47 @@ mod tests {
             }
         }
         assert_eq!(monomial_ends(MAX_ORDER + 1, 0.5), (0.0, 0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn cubic_ends_are_the_monomials_ends() {
+        for &lambda in &[0.005, 0.02, 0.35, 0.99, 1.0, 2.4, 3.6, 40.0] {
+            let got = cubic_ends(lambda);
+            for (k, g) in got.iter().enumerate() {
+                let w = monomial_ends(k, lambda);
+                let want = [w.0, w.1, w.2, w.3];
+                if lambda < SHORT_LAMBDA {
+                    // Bit for bit (the same operations on the same values).
+                    assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "k={k} λ={lambda}");
+                } else {
+                    for (a, b) in g.iter().zip(want.iter()) {
+                        assert!((a - b).abs() <= 4.0 * f64::EPSILON * b.abs(), "k={k} λ={lambda}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_pair_of_particulars_is_each_plane_s_own() {
+        let cx = [0.05, 0.1, -0.3, 0.2, 0.1];
+        let cy = [-0.02, 0.3, 0.1, -0.2, 0.0];
+        for &lambda in &[0.02, 0.35, 0.99, 1.0, 2.4, 3.6] {
+            for old in [[0.5, 2.0], [2.0, 0.5], [f64::NAN, 2.0]] {
+                let (mut gx, mut gy) = ([7.0; PARTICULAR_LEN], [7.0; PARTICULAR_LEN]);
+                let (mut wx, mut wy) = (gx, gy);
+                if old[1] >= SHORT_LAMBDA {
+                    // A tail zero already, as `particular_over` assumes.
+                    gy[N_COEFFS..].fill(0.0);
+                    wy[N_COEFFS..].fill(0.0);
+                }
+                particular_pair(&mut gx, &mut gy, [&cx, &cy], lambda, 1.0 / (lambda * lambda), old);
+                particular_over(&mut wx, &cx, lambda, old[0]);
+                particular_over(&mut wy, &cy, lambda, old[1]);
+                assert_eq!(gx.map(f64::to_bits), wx.map(f64::to_bits), "λ={lambda}");
+                assert_eq!(gy.map(f64::to_bits), wy.map(f64::to_bits), "λ={lambda}");
+            }
+        }
     }
 
     #[test]

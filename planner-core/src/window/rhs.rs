@@ -1,0 +1,233 @@
+//! The right-hand sides of both planes, the solve, and the segments of the solution.
+//!
+//! The right-hand side `w` of a plane holds, besides the boundary values, the start and end
+//! values of the particular COG solution of every interval's known ZMP polynomial (a cubic:
+//! Hermite between via points, or the start of a quartic). A particular solution is linear in
+//! the ZMP, so those ends are `Σ_k c_k` times the ends of the monomials `s^k`, which depend on
+//! `λ_j = ωD_j` alone: [`Intervals`] tabulates them once per timing (with `1/λ²` and `1/ω`),
+//! and a plane's ends cost a few multiply-adds per interval instead of the particular
+//! solution's series. The two planes share the timing, so they are solved together: the
+//! factors of the particular solutions' recurrences are computed once for both
+//! (`lipm::particular_pair`), and the particular solutions are only computed for the
+//! segments that are written.
+
+use super::{hcol, Basis, PlanError, PlaneBoundary, Solver, Timing, LAST_BETA, M, N};
+use crate::lipm::{cubic_ends, hermite, particular_pair, Poly, Segment, State, CUBIC, SHORT_LAMBDA};
+use crate::real::Real;
+
+/// What the right-hand sides need of the timing alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Intervals<T> {
+    /// `λ_j = ωD_j`.
+    pub(super) lambda: [T; M],
+    /// `1/λ_j²`.
+    pub(super) inv_l2: [T; M],
+    /// `1/ω`.
+    pub(super) inv_omega: T,
+    /// The ends of the particular solutions of `s^0 … s^3` per interval (`lipm::cubic_ends`).
+    pub(super) mono: [[[T; 4]; CUBIC]; M],
+}
+
+impl<T: Real> Intervals<T> {
+    /// All zero (no timing).
+    pub(super) const ZERO: Self = Self {
+        lambda: [T::ZERO; M],
+        inv_l2: [T::ZERO; M],
+        inv_omega: T::ZERO,
+        mono: [[[T::ZERO; 4]; CUBIC]; M],
+    };
+
+    /// The table of a valid timing, in place; an interval with the duration of an earlier one
+    /// takes its entries (a window alternates few durations).
+    pub(super) fn set(&mut self, timing: &Timing<T>) {
+        let w = timing.omega;
+        let d = &timing.durations;
+        self.inv_omega = T::ONE / w;
+        for j in 0..M {
+            match (0..j).find(|&i| d[i] == d[j]) {
+                Some(i) => {
+                    self.lambda[j] = self.lambda[i];
+                    self.inv_l2[j] = self.inv_l2[i];
+                    self.mono[j] = self.mono[i];
+                }
+                None => {
+                    let l = w * d[j];
+                    self.lambda[j] = l;
+                    self.inv_l2[j] = T::ONE / (l * l);
+                    self.mono[j] = cubic_ends(l);
+                }
+            }
+        }
+    }
+}
+
+/// `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` of the particular solution of the cubic `c` (`c_4` is
+/// zero; `K = 2` when `c_2 = c_3 = 0` too) from the monomials' ends `m`, skipping the entries
+/// that are zero or one by construction (`lipm::cubic_ends`).
+#[inline(always)]
+fn ends_of<T: Real, const K: usize>(c: &Poly<T>, m: &[[T; 4]; CUBIC], short: bool) -> [T; 4] {
+    if short {
+        // At rest at the start.
+        let mut x1 = c[0] * m[0][2];
+        let mut v1 = c[0] * m[0][3];
+        for k in 1..K {
+            x1 += c[k] * m[k][2];
+            v1 += c[k] * m[k][3];
+        }
+        [T::ZERO, T::ZERO, x1, v1]
+    } else if K == 2 {
+        [c[0], c[1] * m[1][1], c[0] + c[1], c[1] * m[1][3]]
+    } else {
+        [
+            c[0] + c[2] * m[2][0],
+            c[1] * m[1][1] + c[3] * m[3][1],
+            c[0] + c[1] + c[2] * m[2][2] + c[3] * m[3][2],
+            c[1] * m[1][3] + c[2] * m[2][3] + c[3] * m[3][3],
+        ]
+    }
+}
+
+/// The known part of the normalised ZMP polynomial of every interval (the quartic unknowns
+/// set to zero), relative to `origin`.
+fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [Poly<T>; M] {
+    let rel = |s: State<T>| State::new(s.pos - origin, s.vel);
+    let d = &timing.durations;
+    let z0 = rel(b.zmp_start);
+    let zl = rel(b.via[M - 2]);
+    core::array::from_fn(|j| match j {
+        0 => [z0.pos, z0.vel * d[0], T::ZERO, T::ZERO, T::ZERO],
+        j if j == M - 1 => [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO],
+        j => hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j]),
+    })
+}
+
+/// The right-hand side `w` of one plane, relative to `origin`, for the known ZMP polynomials
+/// `polys`.
+fn rhs<T: Real>(
+    timing: &Timing<T>,
+    iv: &Intervals<T>,
+    b: &PlaneBoundary<T>,
+    origin: T,
+    polys: &[Poly<T>; M],
+) -> [T; N] {
+    let d = &timing.durations;
+    let short = |j: usize| iv.lambda[j] < T::of(SHORT_LAMBDA);
+    let mut r = [T::ZERO; N];
+    let (c0, c1) = (polys[0][0], polys[0][1]);
+    r[0] = b.via[0].pos - origin - c0 - c1;
+    r[1] = b.via[0].vel * d[0] - c1;
+    let mut prev = ends_of::<T, 2>(&polys[0], &iv.mono[0], short(0));
+    r[2] = b.cog_start.pos - origin - prev[0];
+    r[3] = b.cog_start.vel * iv.inv_omega - prev[1];
+    for j in 1..M {
+        let e = if j == M - 1 {
+            ends_of::<T, 2>(&polys[j], &iv.mono[j], short(j))
+        } else {
+            ends_of::<T, CUBIC>(&polys[j], &iv.mono[j], short(j))
+        };
+        r[2 + 2 * j] = e[0] - prev[2];
+        r[3 + 2 * j] = e[1] - prev[3];
+        prev = e;
+    }
+    r[16] = b.cog_end.pos - origin - prev[2];
+    r[17] = b.cog_end.vel * iv.inv_omega - prev[3];
+    let (l0, l1) = (polys[M - 1][0], polys[M - 1][1]);
+    r[18] = b.via[M - 1].pos - origin - l0 - l1;
+    r[19] = b.via[M - 1].vel * d[M - 1] - l1;
+    r
+}
+
+/// Both planes solved: the unknowns, the known ZMP polynomials and the origins (the initial
+/// ZMP of each plane).
+pub(super) struct Pair<T> {
+    y: [[T; N]; 2],
+    polys: [[Poly<T>; M]; 2],
+    origin: [T; 2],
+}
+
+/// Solves both planes (boundary values assumed finite, the factorisation valid).
+pub(super) fn solve_pair<T: Real, S: Solver<T>>(
+    s: &S,
+    b: [&PlaneBoundary<T>; 2],
+) -> Result<Pair<T>, PlanError> {
+    let timing = s.timing();
+    let iv = s.intervals();
+    let origin = [b[0].zmp_start.pos, b[1].zmp_start.pos];
+    let polys = [
+        known_zmp(timing, b[0], origin[0]),
+        known_zmp(timing, b[1], origin[1]),
+    ];
+    let mut y = [[T::ZERO; N]; 2];
+    for p in 0..2 {
+        let r = rhs(timing, iv, b[p], origin[p], &polys[p]);
+        s.solve_rhs(&r, &mut y[p]);
+    }
+    // `v · 0` is 0 for every finite `v`, NaN otherwise (one test for all 40).
+    let mut sum = T::ZERO;
+    for v in y[0].iter().chain(y[1].iter()) {
+        sum += *v * T::ZERO;
+    }
+    if sum != T::ZERO {
+        return Err(PlanError::NonFinite);
+    }
+    Ok(Pair { y, polys, origin })
+}
+
+/// Writes interval `j` of both planes of the solution `sol` into `sx` and `sy` (their old
+/// `ω` and `D` tell whether the particular solutions' tails are zero already).
+pub(super) fn write_segments<T: Real, S: Solver<T>>(
+    s: &S,
+    sol: &Pair<T>,
+    j: usize,
+    sx: &mut Segment<T>,
+    sy: &mut Segment<T>,
+) {
+    let timing = s.timing();
+    let iv = s.intervals();
+    let w = timing.omega;
+    let d = timing.durations[j];
+    let old = [sx.omega * sx.duration, sy.omega * sy.duration];
+    let mut zmp = [sol.polys[0][j], sol.polys[1][j]];
+    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4 of the first and
+    // the last interval.
+    let quartic = match j {
+        0 => Some(0),
+        j if j == M - 1 => Some(LAST_BETA),
+        _ => None,
+    };
+    if let Some(col) = quartic {
+        for (z, y) in zmp.iter_mut().zip(sol.y.iter()) {
+            z[2..].copy_from_slice(&y[col..col + 3]);
+        }
+    }
+    particular_pair(
+        &mut sx.particular,
+        &mut sy.particular,
+        [&zmp[0], &zmp[1]],
+        iv.lambda[j],
+        iv.inv_l2[j],
+        old,
+    );
+    let e = match s.basis() {
+        Basis::Exponential => T::ONE,
+        // V = P + QE, W = −P + QE.
+        Basis::Hyperbolic => (-w * d).exp(),
+    };
+    for (p, seg) in [&mut *sx, &mut *sy].into_iter().enumerate() {
+        let (c0, c1) = (sol.y[p][hcol(j)], sol.y[p][hcol(j) + 1]);
+        let (pp, qq) = match s.basis() {
+            Basis::Exponential => (c0, c1),
+            Basis::Hyperbolic => {
+                let half = T::of(0.5);
+                (half * (c0 - c1), half * (c0 + c1) / e)
+            }
+        };
+        seg.omega = w;
+        seg.duration = d;
+        seg.p = pp;
+        seg.q = qq;
+        seg.zmp = zmp[p];
+        seg.zmp[0] += sol.origin[p];
+        seg.particular[0] += sol.origin[p];
+    }
+}
