@@ -308,23 +308,22 @@ pub fn cubic_ends<T: Real>(lambda: T) -> [[T; 4]; CUBIC] {
     let mut out = [[T::ZERO; 4]; CUBIC];
     if lambda < T::of(SHORT_LAMBDA) {
         let l2 = lambda * lambda;
-        let mut m = [T::ZERO; PARTICULAR_LEN];
-        for (mi, &inv) in m.iter_mut().zip(INV_PAIR.iter()).skip(2) {
-            *mi = l2 * T::of(inv);
-        }
-        for (k, o) in out.iter_mut().enumerate() {
-            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k).
-            let mut i = k + 2;
-            let mut g = -m[i];
-            let (mut x1, mut v1) = (g, T::of(i as f64) * g);
-            i += 2;
-            while i < PARTICULAR_LEN {
-                g = m[i] * g;
-                x1 += g;
-                v1 += T::of(i as f64) * g;
-                i += 2;
+        let (mut g, mut x1, mut v1) = ([T::ZERO; CUBIC], [T::ZERO; CUBIC], [T::ZERO; CUBIC]);
+        for (i, &inv) in INV_PAIR.iter().enumerate().skip(2) {
+            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), on the
+            // chains k ≡ i (mod 2), k + 2 ≤ i.
+            let m = l2 * T::of(inv);
+            let fi = T::of(i as f64);
+            let mut k = i % 2;
+            while k < CUBIC && k + 2 <= i {
+                g[k] = if k + 2 == i { -m } else { m * g[k] };
+                x1[k] += g[k];
+                v1[k] += fi * g[k];
+                k += 2;
             }
-            *o = [T::ZERO, T::ZERO, x1, v1 / lambda];
+        }
+        for k in 0..CUBIC {
+            out[k] = [T::ZERO, T::ZERO, x1[k], v1[k] / lambda];
         }
     } else {
         let inv = T::ONE / lambda;
@@ -723,10 +722,17 @@ mod tests {
                 let want = [w.0, w.1, w.2, w.3];
                 if lambda < SHORT_LAMBDA {
                     // Bit for bit (the same operations on the same values).
-                    assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "k={k} λ={lambda}");
+                    assert_eq!(
+                        g.map(f64::to_bits),
+                        want.map(f64::to_bits),
+                        "k={k} λ={lambda}"
+                    );
                 } else {
                     for (a, b) in g.iter().zip(want.iter()) {
-                        assert!((a - b).abs() <= 4.0 * f64::EPSILON * b.abs(), "k={k} λ={lambda}");
+                        assert!(
+                            (a - b).abs() <= 4.0 * f64::EPSILON * b.abs(),
+                            "k={k} λ={lambda}"
+                        );
                     }
                 }
             }
@@ -746,7 +752,14 @@ mod tests {
                     gy[N_COEFFS..].fill(0.0);
                     wy[N_COEFFS..].fill(0.0);
                 }
-                particular_pair(&mut gx, &mut gy, [&cx, &cy], lambda, 1.0 / (lambda * lambda), old);
+                particular_pair(
+                    &mut gx,
+                    &mut gy,
+                    [&cx, &cy],
+                    lambda,
+                    1.0 / (lambda * lambda),
+                    old,
+                );
                 particular_over(&mut wx, &cx, lambda, old[0]);
                 particular_over(&mut wy, &cy, lambda, old[1]);
                 assert_eq!(gx.map(f64::to_bits), wx.map(f64::to_bits), "λ={lambda}");

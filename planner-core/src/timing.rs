@@ -149,22 +149,28 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
         }
         let lo_negative = vlo < T::ZERO;
         // The chord between the bracket's ends crosses zero inside it (ṗ is monotone there;
-        // the midpoint if rounding says otherwise).
+        // the midpoint if rounding says otherwise), and its inverse slope, by the mean value
+        // theorem `1/p̈` somewhere on the bracket.
         let chord = |lo: T, vlo: T, hi: T, vhi: T| {
-            let c = lo - vlo * (hi - lo) / (vhi - vlo);
+            let inv = (hi - lo) / (vhi - vlo);
+            let c = lo - vlo * inv;
             if c > lo && c < hi {
-                c
+                (c, inv)
             } else {
-                T::of(0.5) * (lo + hi)
+                (T::of(0.5) * (lo + hi), inv)
             }
         };
-        // Newton's method on ṗ inside the bracket, which every step shrinks; a step that
-        // would leave it takes the chord of the bracket instead (regula falsi: a root close to
-        // an end, where Newton overshoots, is reached in a step or two; bisection took up to
-        // ~25), or, every second time, bisects. ṗ is monotone on the piece, so the root is unique and Newton converges
-        // quadratically once close (typically 2–5 steps); the count is bounded by
+        // Newton's method on ṗ inside the bracket, which every step shrinks, without a divide:
+        // `1/p̈` is tracked by one Newton–Raphson step of the reciprocal per step
+        // (`r ← r (2 − p̈ r)`, which squares its relative error; `0 < p̈ r < 2` is where it
+        // converges), seeded with the chord's inverse slope. A step that would leave the
+        // bracket, or a reciprocal out of its range, takes the chord of the bracket instead
+        // (regula falsi, which seeds the reciprocal again: a root close to an end, where Newton
+        // overshoots, is reached in a step or two; bisection took up to ~25), or, every second
+        // time, bisects. ṗ is monotone on the piece, so the root is unique and the iteration
+        // converges superlinearly once close (typically 2–5 steps); the count is bounded by
         // `MAX_STEPS` whatever the polynomial.
-        let mut x = chord(lo, vlo, hi, vhi);
+        let (mut x, mut r) = chord(lo, vlo, hi, vhi);
         let mut fallbacks = 0u32;
         for _ in 0..MAX_STEPS {
             steps += 1;
@@ -177,8 +183,12 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
             } else {
                 (hi, vhi) = (x, v);
             }
-            let newton = x - v / a;
-            let next = if newton >= lo && newton <= hi {
+            let ar = a * r;
+            let near = ar > T::ZERO && ar < T::of(2.0);
+            r *= T::of(2.0) - ar;
+            r *= T::of(2.0) - a * r;
+            let newton = x - v * r;
+            let next = if near && newton >= lo && newton <= hi {
                 newton
             } else {
                 // Fallbacks alternate chord and bisection (regula falsi alone can creep from
@@ -186,7 +196,9 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
                 // between).
                 fallbacks += 1;
                 if fallbacks % 2 == 1 {
-                    chord(lo, vlo, hi, vhi)
+                    let (c, inv) = chord(lo, vlo, hi, vhi);
+                    r = inv;
+                    c
                 } else {
                     T::of(0.5) * (lo + hi)
                 }

@@ -123,8 +123,7 @@ impl<T: Real> Solver<T> for Banded<T> {
     fn intervals(&self) -> &Intervals<T> {
         &self.intervals
     }
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]) {
-        *y = *r;
+    fn solve_in_place(&self, y: &mut [T; N]) {
         self.solve_vector(y);
     }
 }

@@ -190,32 +190,45 @@ impl<T: Real> Chain<T> {
         Ok(())
     }
 
-    /// Solves `Z y = r` (the layout of the parent module) into `y`.
-    pub(super) fn solve(&self, r: &[T; N], y: &mut [T; N]) {
+    /// Solves `Z y = r` (the layout of the parent module) in place: `r` in, `y` out (every
+    /// entry of `r` is read before the first of `y` is written over it: the constants of `P`
+    /// and `Q` go straight to their places in `y`, and the free parameters are added there).
+    pub(super) fn solve(&self, y: &mut [T; N]) {
         let e = &self.e;
         let half = T::of(0.5);
         let two = T::of(2.0);
         let three = T::of(3.0);
-        let u1 = [three * r[0] - r[1], r[1] - two * r[0], T::ZERO];
-        let u7 = [three * r[18] - r[19], r[19] - two * r[18], T::ZERO];
-        // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0.
-        let mut p = [T::ZERO; M];
-        let mut q = [T::ZERO; M];
-        p[0] = half * (r[2] - r[3] - dot3(&self.first, u1, d_start));
-        p[1] = e[0] * p[0] + half * (dot3(&self.first, u1, d_end) - (r[4] - r[5]));
+        let r = |i: usize, y: &[T; N]| y[i];
+        let u1 = [three * y[0] - y[1], y[1] - two * y[0], T::ZERO];
+        let u7 = [three * y[18] - y[19], y[19] - two * y[18], T::ZERO];
+        // The differences and sums of the COG rows, read before `y` is written.
+        let (s0, d0) = (r(2, y) + r(3, y), r(2, y) - r(3, y));
+        let (s6, d6) = (r(16, y) + r(17, y), r(16, y) - r(17, y));
+        let mut dif = [T::ZERO; M - 1];
+        let mut sum = [T::ZERO; M - 1];
+        for i in 0..M - 1 {
+            dif[i] = y[4 + 2 * i] - y[5 + 2 * i];
+            sum[i] = y[4 + 2 * i] + y[5 + 2 * i];
+        }
+        // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0, at P_i's and Q_i's places.
+        let (pc, qc) = (|i: usize| 3 + 2 * i, |i: usize| 4 + 2 * i);
+        y[pc(0)] = half * (d0 - dot3(&self.first, u1, d_start));
+        y[pc(1)] = e[0] * y[pc(0)] + half * (dot3(&self.first, u1, d_end) - dif[0]);
         for i in 1..M - 2 {
-            p[i + 1] = e[i] * p[i] - half * (r[4 + 2 * i] - r[5 + 2 * i]);
+            y[pc(i + 1)] = e[i] * y[pc(i)] - half * dif[i];
         }
-        p[M - 1] = e[M - 2] * p[M - 2] - half * (r[14] - r[15] + dot3(&self.last, u7, d_start));
-        q[M - 1] = half * (r[16] + r[17] - dot3(&self.last, u7, s_end));
-        q[M - 2] = e[M - 1] * q[M - 1] + half * (r[14] + r[15] + dot3(&self.last, u7, s_start));
+        y[pc(M - 1)] =
+            e[M - 2] * y[pc(M - 2)] - half * (dif[M - 2] + dot3(&self.last, u7, d_start));
+        y[qc(M - 1)] = half * (s6 - dot3(&self.last, u7, s_end));
+        y[qc(M - 2)] =
+            e[M - 1] * y[qc(M - 1)] + half * (sum[M - 2] + dot3(&self.last, u7, s_start));
         for i in (1..M - 2).rev() {
-            q[i] = e[i + 1] * q[i + 1] + half * (r[4 + 2 * i] + r[5 + 2 * i]);
+            y[qc(i)] = e[i + 1] * y[qc(i + 1)] + half * sum[i];
         }
-        q[0] = e[1] * q[1] + half * (r[4] + r[5] - dot3(&self.first, u1, s_end));
+        y[qc(0)] = e[1] * y[qc(1)] + half * (sum[0] - dot3(&self.first, u1, s_end));
         // The 2×2 system.
-        let ra = r[2] + r[3] - two * e[0] * q[0] - dot3(&self.first, u1, s_start);
-        let rb = r[16] - r[17] - two * e[M - 1] * p[M - 1] - dot3(&self.last, u7, d_end);
+        let ra = s0 - two * e[0] * y[qc(0)] - dot3(&self.first, u1, s_start);
+        let rb = d6 - two * e[M - 1] * y[pc(M - 1)] - dot3(&self.last, u7, d_end);
         let (b1, b2) = if self.swap { (rb, ra) } else { (ra, rb) };
         let [u11, u12, u22] = self.u;
         let t7 = (b2 - self.l * b1) / u22;
@@ -227,16 +240,10 @@ impl<T: Real> Chain<T> {
             y[LAST_BETA + k] = u7[k] + vk * t7;
         }
         for i in 0..M {
-            let mut pi = p[i] + self.p_t1[i] * t1;
-            let mut qi = q[i] + self.q_t7[i] * t7;
-            if i == M - 1 {
-                pi += self.p6_t7 * t7;
-            }
-            if i == 0 {
-                qi += self.q0_t1 * t1;
-            }
-            y[3 + 2 * i] = pi;
-            y[4 + 2 * i] = qi;
+            y[pc(i)] += self.p_t1[i] * t1;
+            y[qc(i)] += self.q_t7[i] * t7;
         }
+        y[pc(M - 1)] += self.p6_t7 * t7;
+        y[qc(0)] += self.q0_t1 * t1;
     }
 }

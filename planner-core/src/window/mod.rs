@@ -259,8 +259,8 @@ trait Solver<T: Real> {
     fn basis(&self) -> Basis;
     /// The timing-only table of the right-hand sides.
     fn intervals(&self) -> &Intervals<T>;
-    /// `y = Z⁻¹ r`.
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]);
+    /// `y = Z⁻¹ y`, in place.
+    fn solve_in_place(&self, y: &mut [T; N]);
 }
 
 /// Both planes into `out` (see [`Factorized::solve`]).
@@ -277,10 +277,11 @@ fn solve_both<T: Real, S: Solver<T>>(
         // A failed refactor.
         return Err(PlanError::Singular);
     }
-    let sol = solve_pair(s, [x, y])?;
+    let mut sol = [[T::ZERO; N]; 2];
+    solve_pair(s, [x, y], &mut sol)?;
     out.timing = *s.timing();
     for (j, (sx, sy)) in out.x.iter_mut().zip(out.y.iter_mut()).enumerate() {
-        write_segments(s, &sol, j, sx, sy);
+        write_segments(s, [x, y], &sol, j, sx, sy);
     }
     Ok(())
 }
@@ -296,11 +297,12 @@ fn solve_plane_new<T: Real, S: Solver<T>>(
     if s.timing().omega == T::ZERO {
         return Err(PlanError::Singular);
     }
-    let sol = solve_pair(s, [b, b])?;
+    let mut sol = [[T::ZERO; N]; 2];
+    solve_pair(s, [b, b], &mut sol)?;
     let mut plan = [Segment::default(); M];
     let mut other = Segment::default();
     for (j, seg) in plan.iter_mut().enumerate() {
-        write_segments(s, &sol, j, seg, &mut other);
+        write_segments(s, [b, b], &sol, j, seg, &mut other);
     }
     Ok(plan)
 }
@@ -315,8 +317,8 @@ impl<T: Real> Solver<T> for Factorized<T> {
     fn intervals(&self) -> &Intervals<T> {
         &self.intervals
     }
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]) {
-        self.chain.solve(r, y);
+    fn solve_in_place(&self, y: &mut [T; N]) {
+        self.chain.solve(y);
     }
 }
 
@@ -367,8 +369,7 @@ impl<T: Real> Factorized<T> {
     /// Solves `Z y = w` for one right-hand side (`w` in the row order of the module
     /// documentation, `y` in its column order).
     pub fn solve_vector(&self, rhs: &mut [T; N]) {
-        let r = *rhs;
-        self.chain.solve(&r, rhs);
+        self.chain.solve(rhs);
     }
 
     /// Solves both planes into `out`, in place (no copies of the plan). Non-finite boundary
@@ -405,9 +406,10 @@ impl<T: Real> Factorized<T> {
         if self.timing.omega == T::ZERO {
             return Err(PlanError::Singular);
         }
-        let sol = solve_pair(self, [x, y])?;
+        let mut sol = [[T::ZERO; N]; 2];
+        solve_pair(self, [x, y], &mut sol)?;
         let (mut sx, mut sy) = (Segment::ZERO, Segment::ZERO);
-        write_segments(self, &sol, j.min(M - 1), &mut sx, &mut sy);
+        write_segments(self, [x, y], &sol, j.min(M - 1), &mut sx, &mut sy);
         Ok(Segment::sample_pair(&sx, &sy, tau))
     }
 }

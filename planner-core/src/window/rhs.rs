@@ -12,7 +12,9 @@
 //! segments that are written.
 
 use super::{hcol, Basis, PlanError, PlaneBoundary, Solver, Timing, LAST_BETA, M, N};
-use crate::lipm::{cubic_ends, hermite, particular_pair, Poly, Segment, State, CUBIC, SHORT_LAMBDA};
+use crate::lipm::{
+    cubic_ends, hermite, particular_pair, Poly, Segment, State, CUBIC, SHORT_LAMBDA,
+};
 use crate::real::Real;
 
 /// What the right-hand sides need of the timing alone.
@@ -24,8 +26,11 @@ pub(super) struct Intervals<T> {
     pub(super) inv_l2: [T; M],
     /// `1/ω`.
     pub(super) inv_omega: T,
-    /// The ends of the particular solutions of `s^0 … s^3` per interval (`lipm::cubic_ends`).
-    pub(super) mono: [[[T; 4]; CUBIC]; M],
+    /// The entry of [`Intervals::mono`] of every interval (the first interval of its duration).
+    slot: [u8; M],
+    /// The ends of the particular solutions of `s^0 … s^3` (`lipm::cubic_ends`), at the slot
+    /// of the first interval of each distinct duration.
+    mono: [[[T; 4]; CUBIC]; M],
 }
 
 impl<T: Real> Intervals<T> {
@@ -34,11 +39,13 @@ impl<T: Real> Intervals<T> {
         lambda: [T::ZERO; M],
         inv_l2: [T::ZERO; M],
         inv_omega: T::ZERO,
+        slot: [0; M],
         mono: [[[T::ZERO; 4]; CUBIC]; M],
     };
 
     /// The table of a valid timing, in place; an interval with the duration of an earlier one
-    /// takes its entries (a window alternates few durations).
+    /// shares its entries (a window alternates few durations: nothing is computed or copied
+    /// twice).
     pub(super) fn set(&mut self, timing: &Timing<T>) {
         let w = timing.omega;
         let d = &timing.durations;
@@ -48,16 +55,25 @@ impl<T: Real> Intervals<T> {
                 Some(i) => {
                     self.lambda[j] = self.lambda[i];
                     self.inv_l2[j] = self.inv_l2[i];
-                    self.mono[j] = self.mono[i];
+                    self.slot[j] = self.slot[i];
                 }
                 None => {
                     let l = w * d[j];
                     self.lambda[j] = l;
                     self.inv_l2[j] = T::ONE / (l * l);
+                    self.slot[j] = j as u8;
                     self.mono[j] = cubic_ends(l);
                 }
             }
         }
+    }
+
+    /// The monomials' ends of interval `j`.
+    #[inline(always)]
+    fn mono(&self, j: usize) -> &[[T; 4]; CUBIC] {
+        // `slot[j] ≤ j < M` by construction; the mask keeps the index in range without a
+        // bounds check (no panic path).
+        &self.mono[usize::from(self.slot[j]) % M]
     }
 }
 
@@ -87,80 +103,63 @@ fn ends_of<T: Real, const K: usize>(c: &Poly<T>, m: &[[T; 4]; CUBIC], short: boo
     }
 }
 
-/// The known part of the normalised ZMP polynomial of every interval (the quartic unknowns
-/// set to zero), relative to `origin`.
-fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [Poly<T>; M] {
+/// The known part of the normalised ZMP polynomial of interval `j` (the quartic unknowns set
+/// to zero), relative to the plane's initial ZMP.
+#[inline(always)]
+fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, j: usize) -> Poly<T> {
+    let origin = b.zmp_start.pos;
     let rel = |s: State<T>| State::new(s.pos - origin, s.vel);
     let d = &timing.durations;
-    let z0 = rel(b.zmp_start);
-    let zl = rel(b.via[M - 2]);
-    core::array::from_fn(|j| match j {
-        0 => [z0.pos, z0.vel * d[0], T::ZERO, T::ZERO, T::ZERO],
-        j if j == M - 1 => [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO],
-        j => hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j]),
-    })
+    if j == 0 {
+        [T::ZERO, b.zmp_start.vel * d[0], T::ZERO, T::ZERO, T::ZERO]
+    } else if j == M - 1 {
+        let zl = rel(b.via[M - 2]);
+        [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO]
+    } else {
+        hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j])
+    }
 }
 
-/// The right-hand side `w` of one plane, relative to `origin`, for the known ZMP polynomials
-/// `polys`.
-fn rhs<T: Real>(
-    timing: &Timing<T>,
-    iv: &Intervals<T>,
-    b: &PlaneBoundary<T>,
-    origin: T,
-    polys: &[Poly<T>; M],
-) -> [T; N] {
+/// The right-hand side `w` of one plane, relative to its initial ZMP, into `r`.
+fn rhs<T: Real>(timing: &Timing<T>, iv: &Intervals<T>, b: &PlaneBoundary<T>, r: &mut [T; N]) {
+    let origin = b.zmp_start.pos;
     let d = &timing.durations;
     let short = |j: usize| iv.lambda[j] < T::of(SHORT_LAMBDA);
-    let mut r = [T::ZERO; N];
-    let (c0, c1) = (polys[0][0], polys[0][1]);
+    let first = known_zmp(timing, b, 0);
+    let (c0, c1) = (first[0], first[1]);
     r[0] = b.via[0].pos - origin - c0 - c1;
     r[1] = b.via[0].vel * d[0] - c1;
-    let mut prev = ends_of::<T, 2>(&polys[0], &iv.mono[0], short(0));
+    let mut prev = ends_of::<T, 2>(&first, iv.mono(0), short(0));
     r[2] = b.cog_start.pos - origin - prev[0];
     r[3] = b.cog_start.vel * iv.inv_omega - prev[1];
-    for j in 1..M {
-        let e = if j == M - 1 {
-            ends_of::<T, 2>(&polys[j], &iv.mono[j], short(j))
-        } else {
-            ends_of::<T, CUBIC>(&polys[j], &iv.mono[j], short(j))
-        };
+    for j in 1..M - 1 {
+        let e = ends_of::<T, CUBIC>(&known_zmp(timing, b, j), iv.mono(j), short(j));
         r[2 + 2 * j] = e[0] - prev[2];
         r[3 + 2 * j] = e[1] - prev[3];
         prev = e;
     }
-    r[16] = b.cog_end.pos - origin - prev[2];
-    r[17] = b.cog_end.vel * iv.inv_omega - prev[3];
-    let (l0, l1) = (polys[M - 1][0], polys[M - 1][1]);
+    let last = known_zmp(timing, b, M - 1);
+    let e = ends_of::<T, 2>(&last, iv.mono(M - 1), short(M - 1));
+    r[14] = e[0] - prev[2];
+    r[15] = e[1] - prev[3];
+    r[16] = b.cog_end.pos - origin - e[2];
+    r[17] = b.cog_end.vel * iv.inv_omega - e[3];
+    let (l0, l1) = (last[0], last[1]);
     r[18] = b.via[M - 1].pos - origin - l0 - l1;
     r[19] = b.via[M - 1].vel * d[M - 1] - l1;
-    r
 }
 
-/// Both planes solved: the unknowns, the known ZMP polynomials and the origins (the initial
-/// ZMP of each plane).
-pub(super) struct Pair<T> {
-    y: [[T; N]; 2],
-    polys: [[Poly<T>; M]; 2],
-    origin: [T; 2],
-}
-
-/// Solves both planes (boundary values assumed finite, the factorisation valid).
+/// Solves both planes into `y` (every entry written; boundary values assumed finite, the factorisation valid).
 pub(super) fn solve_pair<T: Real, S: Solver<T>>(
     s: &S,
     b: [&PlaneBoundary<T>; 2],
-) -> Result<Pair<T>, PlanError> {
+    y: &mut [[T; N]; 2],
+) -> Result<(), PlanError> {
     let timing = s.timing();
     let iv = s.intervals();
-    let origin = [b[0].zmp_start.pos, b[1].zmp_start.pos];
-    let polys = [
-        known_zmp(timing, b[0], origin[0]),
-        known_zmp(timing, b[1], origin[1]),
-    ];
-    let mut y = [[T::ZERO; N]; 2];
-    for p in 0..2 {
-        let r = rhs(timing, iv, b[p], origin[p], &polys[p]);
-        s.solve_rhs(&r, &mut y[p]);
+    for (b, y) in b.iter().zip(y.iter_mut()) {
+        rhs(timing, iv, b, y);
+        s.solve_in_place(y);
     }
     // `v · 0` is 0 for every finite `v`, NaN otherwise (one test for all 40).
     let mut sum = T::ZERO;
@@ -170,14 +169,15 @@ pub(super) fn solve_pair<T: Real, S: Solver<T>>(
     if sum != T::ZERO {
         return Err(PlanError::NonFinite);
     }
-    Ok(Pair { y, polys, origin })
+    Ok(())
 }
 
-/// Writes interval `j` of both planes of the solution `sol` into `sx` and `sy` (their old
+/// Writes interval `j` of both planes of the solution `y` for the boundary values `b` into `sx` and `sy` (their old
 /// `ω` and `D` tell whether the particular solutions' tails are zero already).
 pub(super) fn write_segments<T: Real, S: Solver<T>>(
     s: &S,
-    sol: &Pair<T>,
+    b: [&PlaneBoundary<T>; 2],
+    y: &[[T; N]; 2],
     j: usize,
     sx: &mut Segment<T>,
     sy: &mut Segment<T>,
@@ -187,7 +187,7 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
     let w = timing.omega;
     let d = timing.durations[j];
     let old = [sx.omega * sx.duration, sy.omega * sy.duration];
-    let mut zmp = [sol.polys[0][j], sol.polys[1][j]];
+    let mut zmp = [known_zmp(timing, b[0], j), known_zmp(timing, b[1], j)];
     // The quartic unknowns are the normalised coefficients c_2, c_3, c_4 of the first and
     // the last interval.
     let quartic = match j {
@@ -196,7 +196,7 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
         _ => None,
     };
     if let Some(col) = quartic {
-        for (z, y) in zmp.iter_mut().zip(sol.y.iter()) {
+        for (z, y) in zmp.iter_mut().zip(y.iter()) {
             z[2..].copy_from_slice(&y[col..col + 3]);
         }
     }
@@ -214,7 +214,7 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
         Basis::Hyperbolic => (-w * d).exp(),
     };
     for (p, seg) in [&mut *sx, &mut *sy].into_iter().enumerate() {
-        let (c0, c1) = (sol.y[p][hcol(j)], sol.y[p][hcol(j) + 1]);
+        let (c0, c1) = (y[p][hcol(j)], y[p][hcol(j) + 1]);
         let (pp, qq) = match s.basis() {
             Basis::Exponential => (c0, c1),
             Basis::Hyperbolic => {
@@ -227,7 +227,8 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
         seg.p = pp;
         seg.q = qq;
         seg.zmp = zmp[p];
-        seg.zmp[0] += sol.origin[p];
-        seg.particular[0] += sol.origin[p];
+        let origin = b[p].zmp_start.pos;
+        seg.zmp[0] += origin;
+        seg.particular[0] += origin;
     }
 }
