@@ -294,46 +294,59 @@ pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
     (g0, g1 / lambda, x1, v1 / lambda)
 }
 
-/// Orders of the ZMP monomials whose ends [`cubic_ends`] tabulates (`s^0 … s^3`: the known
-/// part of every interval's ZMP is at most a cubic).
+/// Orders of the ZMP monomials of a known part of an interval's ZMP (at most a cubic).
 pub const CUBIC: usize = 4;
 
-/// [`monomial_ends`] of `s^0 … s^3` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
+/// [`monomial_ends`] of `s^0 … s^4` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
 /// `λ < 1` bit for bit the same values (the series' factors `λ²/(i(i−1))` computed once for
-/// the four chains, each chain summed over its non-zero terms only); for `λ ≥ 1` the paper's
+/// the five chains, each chain summed over its non-zero terms only); for `λ ≥ 1` the paper's
 /// polynomials with `1/λ` and `1/λ²` computed once (equal to [`monomial_ends`] to rounding).
-/// The ends of the particular solution of a cubic `c` are then `Σ_k c_k` of these: the same
-/// solution, as a particular solution is linear in the ZMP.
-pub fn cubic_ends<T: Real>(lambda: T) -> [[T; 4]; CUBIC] {
-    let mut out = [[T::ZERO; 4]; CUBIC];
+/// The ends of the particular solution of a polynomial `c` are then `Σ_k c_k` of these: the
+/// same solution, as a particular solution is linear in the ZMP.
+pub fn monomials_ends<T: Real>(lambda: T) -> [[T; 4]; N_COEFFS] {
+    let mut out = [[T::ZERO; 4]; N_COEFFS];
     if lambda < T::of(SHORT_LAMBDA) {
         let l2 = lambda * lambda;
-        let (mut g, mut x1, mut v1) = ([T::ZERO; CUBIC], [T::ZERO; CUBIC], [T::ZERO; CUBIC]);
+        let (mut g, mut x1, mut v1) = (
+            [T::ZERO; N_COEFFS],
+            [T::ZERO; N_COEFFS],
+            [T::ZERO; N_COEFFS],
+        );
         for (i, &inv) in INV_PAIR.iter().enumerate().skip(2) {
             // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), on the
             // chains k ≡ i (mod 2), k + 2 ≤ i.
             let m = l2 * T::of(inv);
             let fi = T::of(i as f64);
             let mut k = i % 2;
-            while k < CUBIC && k + 2 <= i {
+            while k < N_COEFFS && k + 2 <= i {
                 g[k] = if k + 2 == i { -m } else { m * g[k] };
                 x1[k] += g[k];
                 v1[k] += fi * g[k];
                 k += 2;
             }
         }
-        for k in 0..CUBIC {
+        for k in 0..N_COEFFS {
             out[k] = [T::ZERO, T::ZERO, x1[k], v1[k] / lambda];
         }
     } else {
         let inv = T::ONE / lambda;
         let inv2 = T::ONE / (lambda * lambda);
-        // m_0 = 1, m_1 = s, m_2 = s² + 2/λ², m_3 = s³ + 6s/λ².
-        let (two, six) = (T::of(2.0) * inv2, T::of(6.0) * inv2);
-        out[0] = [T::ONE, T::ZERO, T::ONE, T::ZERO];
-        out[1] = [T::ZERO, inv, T::ONE, inv];
-        out[2] = [two, T::ZERO, T::ONE + two, T::of(2.0) * inv];
-        out[3] = [T::ZERO, six * inv, T::ONE + six, (six + T::of(3.0)) * inv];
+        let (k12, k6, k2) = (T::of(12.0) * inv2, T::of(6.0) * inv2, T::of(2.0) * inv2);
+        for (k, o) in out.iter_mut().enumerate() {
+            // The paper's m_k: g_k = 1, g_{k−2} = k(k−1)/λ² g_k, … (as `particular_into`).
+            let mut g = [T::ZERO; N_COEFFS];
+            g[k] = T::ONE;
+            g[2] += k12 * g[4];
+            g[1] += k6 * g[3];
+            g[0] += k2 * g[2];
+            let (mut x1, mut v1, mut i) = (T::ZERO, T::ZERO, T::ZERO);
+            for &gi in &g {
+                x1 += gi;
+                v1 += i * gi;
+                i += T::ONE;
+            }
+            *o = [g[0], g[1] * inv, x1, v1 * inv];
+        }
     }
     out
 }
@@ -714,9 +727,9 @@ mod tests {
     }
 
     #[test]
-    fn cubic_ends_are_the_monomials_ends() {
+    fn the_table_of_monomials_ends_is_monomial_ends() {
         for &lambda in &[0.005, 0.02, 0.35, 0.99, 1.0, 2.4, 3.6, 40.0] {
-            let got = cubic_ends(lambda);
+            let got = monomials_ends(lambda);
             for (k, g) in got.iter().enumerate() {
                 let w = monomial_ends(k, lambda);
                 let want = [w.0, w.1, w.2, w.3];

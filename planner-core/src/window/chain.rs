@@ -44,26 +44,24 @@
 //! 2×2, solved with partial pivoting), so `Z` is singular exactly when that 2×2 is; it is
 //! checked against the banded LU of the dense `Z` by the tests.
 
+use super::rhs::Intervals;
 use super::{PlanError, Timing, LAST_BETA, M, N};
-use crate::lipm::monomial_ends as ends_of;
+use crate::lipm::N_COEFFS;
 use crate::real::Real;
 
 /// `v`: the direction of the free quartic parameter (`β_4`) in `(β_2, β_3, β_4)`.
 const V: [f64; 3] = [1.0, -2.0, 1.0];
 
-/// Position and velocity/ω of the particular solution of the ZMP term `s^k`, `k = 2, 3, 4`, at
-/// the start and the end of an interval: `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per `k`.
-type Ends<T> = [[T; 4]; 3];
+/// Position and velocity/ω of the particular solution of the ZMP term `s^k`, `k = 0 … 4`, at
+/// the start and the end of an interval: `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per `k`
+/// ([`Intervals::mono`]; the quartic unknowns are `k = 2, 3, 4`).
+type Ends<T> = [[T; 4]; N_COEFFS];
 
 /// The timing-only part of the elimination.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Chain<T> {
     /// `e_i = e^{−ωD_i}`.
     e: [T; M],
-    /// Monomial ends of the first interval.
-    first: Ends<T>,
-    /// Monomial ends of the last interval.
-    last: Ends<T>,
     /// `∂P_i/∂t₁` (`P_6` also depends on `t₇`: [`Chain::p6_t7`]).
     p_t1: [T; M],
     /// `∂P_6/∂t₇`.
@@ -82,7 +80,7 @@ pub(super) struct Chain<T> {
 /// `Σ_k c_k x_k` over the three quartic unknowns, for one column of [`Ends`] combined by `f`.
 #[inline]
 fn dot3<T: Real>(ends: &Ends<T>, beta: [T; 3], f: impl Fn(&[T; 4]) -> T) -> T {
-    f(&ends[0]) * beta[0] + f(&ends[1]) * beta[1] + f(&ends[2]) * beta[2]
+    f(&ends[2]) * beta[0] + f(&ends[3]) * beta[1] + f(&ends[4]) * beta[2]
 }
 
 // Sums and differences of the ends (start: S, D; end: Se, De).
@@ -103,21 +101,10 @@ fn d_end<T: Real>(x: &[T; 4]) -> T {
     x[2] - x[3]
 }
 
-fn monomial_ends<T: Real>(lambda: T) -> Ends<T> {
-    let mut out = [[T::ZERO; 4]; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let (x0, v0, x1, v1) = ends_of(k + 2, lambda);
-        *o = [x0, v0, x1, v1];
-    }
-    out
-}
-
 impl<T: Real> Chain<T> {
     /// All zero (not factorised).
     pub(super) const ZERO: Self = Self {
         e: [T::ZERO; M],
-        first: [[T::ZERO; 4]; 3],
-        last: [[T::ZERO; 4]; 3],
         p_t1: [T::ZERO; M],
         p6_t7: T::ZERO,
         q_t7: [T::ZERO; M],
@@ -127,8 +114,13 @@ impl<T: Real> Chain<T> {
         u: [T::ZERO; 3],
     };
 
-    /// The timing-only part for a valid timing; `Singular` if the 2×2 system is (numerically).
-    pub(super) fn factor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
+    /// The timing-only part for a valid timing and its table `iv` (set for it); `Singular` if
+    /// the 2×2 system is (numerically).
+    pub(super) fn factor(
+        &mut self,
+        timing: &Timing<T>,
+        iv: &Intervals<T>,
+    ) -> Result<(), PlanError> {
         let w = timing.omega;
         let d = &timing.durations;
         // A window has few distinct durations (single and double supports alternate): each
@@ -141,33 +133,32 @@ impl<T: Real> Chain<T> {
                 None => (-w * dj).exp(),
             };
         }
-        self.first = monomial_ends(w * d[0]);
-        self.last = monomial_ends(w * d[M - 1]);
+        let (first, last) = (iv.mono(0), iv.mono(M - 1));
         let v = V.map(T::of);
         let half = T::of(0.5);
         let two = T::of(2.0);
         let e = self.e;
         // P forward, coefficient of t₁.
-        self.p_t1[0] = -half * dot3(&self.first, v, d_start);
-        self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(&self.first, v, d_end);
+        self.p_t1[0] = -half * dot3(first, v, d_start);
+        self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(first, v, d_end);
         let mut acc = self.p_t1[1];
         for (pt, &ei) in self.p_t1[2..].iter_mut().zip(&e[1..M - 1]) {
             acc = ei * acc;
             *pt = acc;
         }
-        self.p6_t7 = -half * dot3(&self.last, v, d_start);
+        self.p6_t7 = -half * dot3(last, v, d_start);
         // Q backward, coefficient of t₇.
-        self.q_t7[M - 1] = -half * dot3(&self.last, v, s_end);
-        self.q_t7[M - 2] = e[M - 1] * self.q_t7[M - 1] + half * dot3(&self.last, v, s_start);
+        self.q_t7[M - 1] = -half * dot3(last, v, s_end);
+        self.q_t7[M - 2] = e[M - 1] * self.q_t7[M - 1] + half * dot3(last, v, s_start);
         for i in (0..M - 2).rev() {
             self.q_t7[i] = e[i + 1] * self.q_t7[i + 1];
         }
-        self.q0_t1 = -half * dot3(&self.first, v, s_end);
+        self.q0_t1 = -half * dot3(first, v, s_end);
         // The 2×2 system [a11 a12; a21 a22] (t₁, t₇).
-        let a11 = two * e[0] * self.q0_t1 + dot3(&self.first, v, s_start);
+        let a11 = two * e[0] * self.q0_t1 + dot3(first, v, s_start);
         let a12 = two * e[0] * self.q_t7[0];
         let a21 = two * e[M - 1] * self.p_t1[M - 1];
-        let a22 = two * e[M - 1] * self.p6_t7 + dot3(&self.last, v, d_end);
+        let a22 = two * e[M - 1] * self.p6_t7 + dot3(last, v, d_end);
         let ([b11, b12], [b21, b22], swap) = if a21.abs() > a11.abs() {
             ([a21, a22], [a11, a12], true)
         } else {
@@ -193,7 +184,8 @@ impl<T: Real> Chain<T> {
     /// Solves `Z y = r` (the layout of the parent module) in place: `r` in, `y` out (every
     /// entry of `r` is read before the first of `y` is written over it: the constants of `P`
     /// and `Q` go straight to their places in `y`, and the free parameters are added there).
-    pub(super) fn solve(&self, y: &mut [T; N]) {
+    pub(super) fn solve(&self, iv: &Intervals<T>, y: &mut [T; N]) {
+        let (first, last) = (iv.mono(0), iv.mono(M - 1));
         let e = &self.e;
         let half = T::of(0.5);
         let two = T::of(2.0);
@@ -212,23 +204,21 @@ impl<T: Real> Chain<T> {
         }
         // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0, at P_i's and Q_i's places.
         let (pc, qc) = (|i: usize| 3 + 2 * i, |i: usize| 4 + 2 * i);
-        y[pc(0)] = half * (d0 - dot3(&self.first, u1, d_start));
-        y[pc(1)] = e[0] * y[pc(0)] + half * (dot3(&self.first, u1, d_end) - dif[0]);
+        y[pc(0)] = half * (d0 - dot3(first, u1, d_start));
+        y[pc(1)] = e[0] * y[pc(0)] + half * (dot3(first, u1, d_end) - dif[0]);
         for i in 1..M - 2 {
             y[pc(i + 1)] = e[i] * y[pc(i)] - half * dif[i];
         }
-        y[pc(M - 1)] =
-            e[M - 2] * y[pc(M - 2)] - half * (dif[M - 2] + dot3(&self.last, u7, d_start));
-        y[qc(M - 1)] = half * (s6 - dot3(&self.last, u7, s_end));
-        y[qc(M - 2)] =
-            e[M - 1] * y[qc(M - 1)] + half * (sum[M - 2] + dot3(&self.last, u7, s_start));
+        y[pc(M - 1)] = e[M - 2] * y[pc(M - 2)] - half * (dif[M - 2] + dot3(last, u7, d_start));
+        y[qc(M - 1)] = half * (s6 - dot3(last, u7, s_end));
+        y[qc(M - 2)] = e[M - 1] * y[qc(M - 1)] + half * (sum[M - 2] + dot3(last, u7, s_start));
         for i in (1..M - 2).rev() {
             y[qc(i)] = e[i + 1] * y[qc(i + 1)] + half * sum[i];
         }
-        y[qc(0)] = e[1] * y[qc(1)] + half * (sum[0] - dot3(&self.first, u1, s_end));
+        y[qc(0)] = e[1] * y[qc(1)] + half * (sum[0] - dot3(first, u1, s_end));
         // The 2×2 system.
-        let ra = s0 - two * e[0] * y[qc(0)] - dot3(&self.first, u1, s_start);
-        let rb = d6 - two * e[M - 1] * y[pc(M - 1)] - dot3(&self.last, u7, d_end);
+        let ra = s0 - two * e[0] * y[qc(0)] - dot3(first, u1, s_start);
+        let rb = d6 - two * e[M - 1] * y[pc(M - 1)] - dot3(last, u7, d_end);
         let (b1, b2) = if self.swap { (rb, ra) } else { (ra, rb) };
         let [u11, u12, u22] = self.u;
         let t7 = (b2 - self.l * b1) / u22;

@@ -318,7 +318,7 @@ impl<T: Real> Solver<T> for Factorized<T> {
         &self.intervals
     }
     fn solve_in_place(&self, y: &mut [T; N]) {
-        self.chain.solve(y);
+        self.chain.solve(&self.intervals, y);
     }
 }
 
@@ -355,8 +355,8 @@ impl<T: Real> Factorized<T> {
         timing.validate()?;
         // Mark unusable until the end (a failed refactor must not look like the old timing).
         self.timing.omega = T::ZERO;
-        self.chain.factor(timing)?;
         self.intervals.set(timing);
+        self.chain.factor(timing, &self.intervals)?;
         self.timing = *timing;
         Ok(())
     }
@@ -369,7 +369,7 @@ impl<T: Real> Factorized<T> {
     /// Solves `Z y = w` for one right-hand side (`w` in the row order of the module
     /// documentation, `y` in its column order).
     pub fn solve_vector(&self, rhs: &mut [T; N]) {
-        self.chain.solve(rhs);
+        self.chain.solve(&self.intervals, rhs);
     }
 
     /// Solves both planes into `out`, in place (no copies of the plan). Non-finite boundary

@@ -13,7 +13,7 @@
 
 use super::{hcol, Basis, PlanError, PlaneBoundary, Solver, Timing, LAST_BETA, M, N};
 use crate::lipm::{
-    cubic_ends, hermite, particular_pair, Poly, Segment, State, CUBIC, SHORT_LAMBDA,
+    hermite, monomials_ends, particular_pair, Poly, Segment, State, CUBIC, N_COEFFS, SHORT_LAMBDA,
 };
 use crate::real::Real;
 
@@ -28,9 +28,9 @@ pub(super) struct Intervals<T> {
     pub(super) inv_omega: T,
     /// The entry of [`Intervals::mono`] of every interval (the first interval of its duration).
     slot: [u8; M],
-    /// The ends of the particular solutions of `s^0 … s^3` (`lipm::cubic_ends`), at the slot
+    /// The ends of the particular solutions of `s^0 … s^4` (`lipm::monomials_ends`), at the slot
     /// of the first interval of each distinct duration.
-    mono: [[[T; 4]; CUBIC]; M],
+    mono: [[[T; 4]; N_COEFFS]; M],
 }
 
 impl<T: Real> Intervals<T> {
@@ -40,7 +40,7 @@ impl<T: Real> Intervals<T> {
         inv_l2: [T::ZERO; M],
         inv_omega: T::ZERO,
         slot: [0; M],
-        mono: [[[T::ZERO; 4]; CUBIC]; M],
+        mono: [[[T::ZERO; 4]; N_COEFFS]; M],
     };
 
     /// The table of a valid timing, in place; an interval with the duration of an earlier one
@@ -62,15 +62,16 @@ impl<T: Real> Intervals<T> {
                     self.lambda[j] = l;
                     self.inv_l2[j] = T::ONE / (l * l);
                     self.slot[j] = j as u8;
-                    self.mono[j] = cubic_ends(l);
+                    self.mono[j] = monomials_ends(l);
                 }
             }
         }
     }
 
-    /// The monomials' ends of interval `j`.
+    /// The monomials' ends of interval `j`, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` of the particular
+    /// solution of `s^k`, `k = 0 … 4`.
     #[inline(always)]
-    fn mono(&self, j: usize) -> &[[T; 4]; CUBIC] {
+    pub(super) fn mono(&self, j: usize) -> &[[T; 4]; N_COEFFS] {
         // `slot[j] ≤ j < M` by construction; the mask keeps the index in range without a
         // bounds check (no panic path).
         &self.mono[usize::from(self.slot[j]) % M]
@@ -79,9 +80,9 @@ impl<T: Real> Intervals<T> {
 
 /// `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` of the particular solution of the cubic `c` (`c_4` is
 /// zero; `K = 2` when `c_2 = c_3 = 0` too) from the monomials' ends `m`, skipping the entries
-/// that are zero or one by construction (`lipm::cubic_ends`).
+/// that are zero or one by construction (`lipm::monomials_ends`).
 #[inline(always)]
-fn ends_of<T: Real, const K: usize>(c: &Poly<T>, m: &[[T; 4]; CUBIC], short: bool) -> [T; 4] {
+fn ends_of<T: Real, const K: usize>(c: &Poly<T>, m: &[[T; 4]; N_COEFFS], short: bool) -> [T; 4] {
     if short {
         // At rest at the start.
         let mut x1 = c[0] * m[0][2];
