@@ -393,7 +393,8 @@ pub(crate) fn particular_pair<T: Real>(
             g[1] = c[1] + k6 * g[3];
             g[0] = c[0] + k2 * g[2];
             // A NaN `old` zeroes too.
-            if !(old >= T::of(SHORT_LAMBDA)) {
+            let tail_zero = old >= T::of(SHORT_LAMBDA);
+            if !tail_zero {
                 for gi in g.iter_mut().skip(N_COEFFS) {
                     *gi = T::ZERO;
                 }
