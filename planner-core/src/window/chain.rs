@@ -38,8 +38,9 @@
 //!
 //! (`S`, `D`: sum and difference of the particular solutions' position and velocity/ω) are a
 //! 2×2 system for `(t₁, t₇)`. Its matrix and the `t`-coefficients of every `P_i, Q_i` depend on
-//! the timing alone ([`Chain::factor`]: 7 exponentials, the monomial ends of intervals 1 and 7,
-//! ~120 flops); a right-hand side costs ~110 flops ([`Chain::solve`]). This is a factorisation
+//! the timing alone ([`Chain::factor`]: the exponentials of the distinct durations and ~80
+//! flops, with the monomial ends of intervals 1 and 7 from the timing's table, module `rhs`);
+//! a right-hand side costs ~110 flops ([`Chain::solve`], in place). This is a factorisation
 //! of `Z` (block elimination in the order `β` → `P` forward, `Q` backward → Schur complement
 //! 2×2, solved with partial pivoting), so `Z` is singular exactly when that 2×2 is; it is
 //! checked against the banded LU of the dense `Z` by the tests.

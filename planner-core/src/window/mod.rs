@@ -35,7 +35,10 @@
 //! (solved forward) from the growing ones `Q` (solved backward), and what is left is a 2×2
 //! system for one free coefficient of each quartic: ~120 flops per timing and ~110 per plane,
 //! against ~2,000 and ~400 for the banded LU of the dense matrix ([`Banded`], band width 5,
-//! which the tests use as the reference and which serves the `cosh`/`sinh` basis).
+//! which the tests use as the reference and which serves the `cosh`/`sinh` basis). The
+//! right-hand sides take the particular solutions' ends from a table of the monomials' ends
+//! per distinct duration (module `rhs`: a few multiply-adds per interval and plane), and both
+//! planes are solved together, sharing the timing's factors.
 //!
 //! # Conditioning
 //! In the paper's basis `V cosh + W sinh` the columns of an interval grow like `cosh ωD` and
