@@ -298,8 +298,8 @@ pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
 pub const CUBIC: usize = 4;
 
 /// [`monomial_ends`] of `s^0 … s^4` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
-/// `λ < 1` bit for bit the same values (the series' factors `λ²/(i(i−1))` computed once for
-/// the five chains, each chain summed over its non-zero terms only); for `λ ≥ 1` the paper's
+/// `λ < 1` bit for bit the same values (each order's chain of the series summed over its
+/// non-zero terms only); for `λ ≥ 1` the paper's
 /// polynomials with `1/λ` and `1/λ²` computed once (equal to [`monomial_ends`] to rounding).
 /// The ends of the particular solution of a polynomial `c` are then `Σ_k c_k` of these: the
 /// same solution, as a particular solution is linear in the ZMP.
@@ -307,26 +307,22 @@ pub fn monomials_ends<T: Real>(lambda: T) -> [[T; 4]; N_COEFFS] {
     let mut out = [[T::ZERO; 4]; N_COEFFS];
     if lambda < T::of(SHORT_LAMBDA) {
         let l2 = lambda * lambda;
-        let (mut g, mut x1, mut v1) = (
-            [T::ZERO; N_COEFFS],
-            [T::ZERO; N_COEFFS],
-            [T::ZERO; N_COEFFS],
-        );
-        for (i, &inv) in INV_PAIR.iter().enumerate().skip(2) {
-            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), on the
-            // chains k ≡ i (mod 2), k + 2 ≤ i.
-            let m = l2 * T::of(inv);
-            let fi = T::of(i as f64);
-            let mut k = i % 2;
-            while k < N_COEFFS && k + 2 <= i {
-                g[k] = if k + 2 == i { -m } else { m * g[k] };
-                x1[k] += g[k];
-                v1[k] += fi * g[k];
-                k += 2;
+        for (k, o) in out.iter_mut().enumerate() {
+            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), with
+            // m_i = λ²/(i(i−1)): one chain per order, its non-zero terms only.
+            let mut i = k + 2;
+            let mut g = -(l2 * T::of(INV_PAIR[i]));
+            let (mut x1, mut v1) = (T::ZERO, T::ZERO);
+            x1 += g;
+            v1 += T::of(i as f64) * g;
+            i += 2;
+            while i < PARTICULAR_LEN {
+                g = l2 * T::of(INV_PAIR[i]) * g;
+                x1 += g;
+                v1 += T::of(i as f64) * g;
+                i += 2;
             }
-        }
-        for k in 0..N_COEFFS {
-            out[k] = [T::ZERO, T::ZERO, x1[k], v1[k] / lambda];
+            *o = [T::ZERO, T::ZERO, x1, v1 / lambda];
         }
     } else {
         let inv = T::ONE / lambda;
