@@ -175,7 +175,7 @@ pub fn zmp_poly<T: Real>(big: &Poly<T>, omega: T) -> Poly<T> {
 }
 
 /// `1 / (m (m − 1))` for `m < PARTICULAR_LEN` (multiplications instead of divisions in the series).
-const INV_PAIR: [f64; PARTICULAR_LEN] = {
+pub(crate) const INV_PAIR: [f64; PARTICULAR_LEN] = {
     let mut t = [0.0; PARTICULAR_LEN];
     let mut m = 2;
     while m < PARTICULAR_LEN {
@@ -294,111 +294,6 @@ pub fn monomial_ends<T: Real>(k: usize, lambda: T) -> (T, T, T, T) {
     (g0, g1 / lambda, x1, v1 / lambda)
 }
 
-/// Orders of the ZMP monomials of a known part of an interval's ZMP (at most a cubic).
-pub const CUBIC: usize = 4;
-
-/// [`monomial_ends`] of `s^0 … s^4` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
-/// `λ < 1` bit for bit the same values (each order's chain of the series summed over its
-/// non-zero terms only); for `λ ≥ 1` the paper's
-/// polynomials with `1/λ` and `1/λ²` computed once (equal to [`monomial_ends`] to rounding).
-/// The ends of the particular solution of a polynomial `c` are then `Σ_k c_k` of these: the
-/// same solution, as a particular solution is linear in the ZMP.
-pub fn monomials_ends<T: Real>(lambda: T) -> [[T; 4]; N_COEFFS] {
-    let mut out = [[T::ZERO; 4]; N_COEFFS];
-    if lambda < T::of(SHORT_LAMBDA) {
-        let l2 = lambda * lambda;
-        for (k, o) in out.iter_mut().enumerate() {
-            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), with
-            // m_i = λ²/(i(i−1)): one chain per order, its non-zero terms only.
-            let mut i = k + 2;
-            let mut g = -(l2 * T::of(INV_PAIR[i]));
-            let (mut x1, mut v1) = (T::ZERO, T::ZERO);
-            x1 += g;
-            v1 += T::of(i as f64) * g;
-            i += 2;
-            while i < PARTICULAR_LEN {
-                g = l2 * T::of(INV_PAIR[i]) * g;
-                x1 += g;
-                v1 += T::of(i as f64) * g;
-                i += 2;
-            }
-            *o = [T::ZERO, T::ZERO, x1, v1 / lambda];
-        }
-    } else {
-        let inv = T::ONE / lambda;
-        let inv2 = T::ONE / (lambda * lambda);
-        let (k12, k6, k2) = (T::of(12.0) * inv2, T::of(6.0) * inv2, T::of(2.0) * inv2);
-        for (k, o) in out.iter_mut().enumerate() {
-            // The paper's m_k: g_k = 1, g_{k−2} = k(k−1)/λ² g_k, … (as `particular_into`).
-            let mut g = [T::ZERO; N_COEFFS];
-            g[k] = T::ONE;
-            g[2] += k12 * g[4];
-            g[1] += k6 * g[3];
-            g[0] += k2 * g[2];
-            let (mut x1, mut v1, mut i) = (T::ZERO, T::ZERO, T::ZERO);
-            for &gi in &g {
-                x1 += gi;
-                v1 += i * gi;
-                i += T::ONE;
-            }
-            *o = [g[0], g[1] * inv, x1, v1 * inv];
-        }
-    }
-    out
-}
-
-/// [`particular_over`] for the two planes of one interval at once (the same `λ`; `inv_l2` is
-/// `1/λ²`, used for `λ ≥ 1`): the factors of the recurrences are computed once for both, and
-/// each plane's coefficients are bit for bit those of [`particular_over`] with its own old `λ`.
-#[inline]
-pub(crate) fn particular_pair<T: Real>(
-    gx: &mut Particular<T>,
-    gy: &mut Particular<T>,
-    c: [&Poly<T>; 2],
-    lambda: T,
-    inv_l2: T,
-    old: [T; 2],
-) {
-    if lambda < T::of(SHORT_LAMBDA) {
-        let l2 = lambda * lambda;
-        gx[0] = T::ZERO;
-        gx[1] = T::ZERO;
-        gy[0] = T::ZERO;
-        gy[1] = T::ZERO;
-        for i in 2..N_COEFFS + 2 {
-            let m = l2 * T::of(INV_PAIR[i]);
-            gx[i] = m * (gx[i - 2] - c[0][i - 2]);
-            gy[i] = m * (gy[i - 2] - c[1][i - 2]);
-        }
-        // Beyond the quartic `c_i = 0`, and `g − 0 = g` exactly.
-        for i in N_COEFFS + 2..PARTICULAR_LEN {
-            let m = l2 * T::of(INV_PAIR[i]);
-            gx[i] = m * gx[i - 2];
-            gy[i] = m * gy[i - 2];
-        }
-    } else {
-        let (k12, k6, k2) = (
-            T::of(12.0) * inv_l2,
-            T::of(6.0) * inv_l2,
-            T::of(2.0) * inv_l2,
-        );
-        for (g, (c, old)) in [&mut *gx, &mut *gy].into_iter().zip(c.into_iter().zip(old)) {
-            g[4] = c[4];
-            g[3] = c[3];
-            g[2] = c[2] + k12 * g[4];
-            g[1] = c[1] + k6 * g[3];
-            g[0] = c[0] + k2 * g[2];
-            // A NaN `old` zeroes too.
-            let tail_zero = old >= T::of(SHORT_LAMBDA);
-            if !tail_zero {
-                for gi in g.iter_mut().skip(N_COEFFS) {
-                    *gi = T::ZERO;
-                }
-            }
-        }
-    }
-}
-
 /// Number of coefficients of the particular solution that can be non-zero for `λ = ωD`.
 #[inline]
 pub fn particular_len<T: Real>(lambda: T) -> usize {
@@ -426,7 +321,7 @@ pub fn particular_ends<T: Real>(g: &Particular<T>, lambda: T) -> (T, T, T, T) {
 
 /// The part of a sample that depends on `ω`, `D` and `τ` only ([`Segment::sample_pair`]).
 #[derive(Clone, Copy, Debug)]
-struct At<T> {
+pub(crate) struct At<T> {
     /// `τ / D`.
     s: T,
     /// `1 / D`.
@@ -574,7 +469,7 @@ impl<T: Real> Segment<T> {
 
     /// What a sample at `tau` needs of `ω`, `D` and `τ` only.
     #[inline]
-    fn at(&self, tau: T) -> At<T> {
+    pub(crate) fn at(&self, tau: T) -> At<T> {
         let tau = tau.max(T::ZERO).min(self.duration);
         let w = self.omega;
         let inv_d = T::ONE / self.duration;
@@ -587,7 +482,7 @@ impl<T: Real> Segment<T> {
     }
 
     #[inline]
-    fn sample_at(&self, a: &At<T>) -> Sample<T> {
+    pub(crate) fn sample_at(&self, a: &At<T>) -> Sample<T> {
         let w = self.omega;
         let (s, inv_d) = (a.s, a.inv_d);
         let hp = self.p * a.ep;
@@ -721,61 +616,6 @@ mod tests {
             }
         }
         assert_eq!(monomial_ends(MAX_ORDER + 1, 0.5), (0.0, 0.0, 0.0, 0.0));
-    }
-
-    #[test]
-    fn the_table_of_monomials_ends_is_monomial_ends() {
-        for &lambda in &[0.005, 0.02, 0.35, 0.99, 1.0, 2.4, 3.6, 40.0] {
-            let got = monomials_ends(lambda);
-            for (k, g) in got.iter().enumerate() {
-                let w = monomial_ends(k, lambda);
-                let want = [w.0, w.1, w.2, w.3];
-                if lambda < SHORT_LAMBDA {
-                    // Bit for bit (the same operations on the same values).
-                    assert_eq!(
-                        g.map(f64::to_bits),
-                        want.map(f64::to_bits),
-                        "k={k} λ={lambda}"
-                    );
-                } else {
-                    for (a, b) in g.iter().zip(want.iter()) {
-                        assert!(
-                            (a - b).abs() <= 4.0 * f64::EPSILON * b.abs(),
-                            "k={k} λ={lambda}"
-                        );
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn the_pair_of_particulars_is_each_plane_s_own() {
-        let cx = [0.05, 0.1, -0.3, 0.2, 0.1];
-        let cy = [-0.02, 0.3, 0.1, -0.2, 0.0];
-        for &lambda in &[0.02, 0.35, 0.99, 1.0, 2.4, 3.6] {
-            for old in [[0.5, 2.0], [2.0, 0.5], [f64::NAN, 2.0]] {
-                let (mut gx, mut gy) = ([7.0; PARTICULAR_LEN], [7.0; PARTICULAR_LEN]);
-                let (mut wx, mut wy) = (gx, gy);
-                if old[1] >= SHORT_LAMBDA {
-                    // A tail zero already, as `particular_over` assumes.
-                    gy[N_COEFFS..].fill(0.0);
-                    wy[N_COEFFS..].fill(0.0);
-                }
-                particular_pair(
-                    &mut gx,
-                    &mut gy,
-                    [&cx, &cy],
-                    lambda,
-                    1.0 / (lambda * lambda),
-                    old,
-                );
-                particular_over(&mut wx, &cx, lambda, old[0]);
-                particular_over(&mut wy, &cy, lambda, old[1]);
-                assert_eq!(gx.map(f64::to_bits), wx.map(f64::to_bits), "λ={lambda}");
-                assert_eq!(gy.map(f64::to_bits), wy.map(f64::to_bits), "λ={lambda}");
-            }
-        }
     }
 
     #[test]

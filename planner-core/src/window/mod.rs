@@ -56,7 +56,7 @@ mod rhs;
 
 pub use banded::{bandwidths, build_z, Banded, BANDWIDTH};
 use chain::Chain;
-use rhs::{solve_pair, write_segments, Intervals};
+use rhs::{solve_pair, write_segment, write_segments, Intervals};
 
 use crate::lipm::{Sample, Segment, State};
 use crate::real::Real;
@@ -411,9 +411,15 @@ impl<T: Real> Factorized<T> {
         }
         let mut sol = [[T::ZERO; N]; 2];
         solve_pair(self, [x, y], &mut sol)?;
-        let (mut sx, mut sy) = (Segment::ZERO, Segment::ZERO);
-        write_segments(self, [x, y], &sol, j.min(M - 1), &mut sx, &mut sy);
-        Ok(Segment::sample_pair(&sx, &sy, tau))
+        // One segment at a time in one buffer (a small stack), the exponentials of the sample
+        // shared by both planes as in `Segment::sample_pair`.
+        let j = j.min(M - 1);
+        let mut seg = Segment::ZERO;
+        write_segment(self, x, &sol[0], j, &mut seg);
+        let at = seg.at(tau);
+        let sx = seg.sample_at(&at);
+        write_segment(self, y, &sol[1], j, &mut seg);
+        Ok((sx, seg.sample_at(&at)))
     }
 }
 #[cfg(test)]
@@ -557,6 +563,36 @@ mod tests {
             f.solve(&bx, &by, &mut fresh).unwrap();
             f.solve(&bx, &by, &mut reused).unwrap();
             assert_eq!(reused, fresh, "case {case}: {:?}", t.durations);
+        }
+    }
+
+    /// The sample of one interval without a plan is, bit for bit, the sample of the solved
+    /// plan (eq. 18's target state), in every interval and on both sides of `λ = 1`.
+    #[test]
+    fn a_sample_without_a_plan_is_the_plan_s() {
+        let mut next = crate::test_uniform(0x1234_5678_9abc_def1_u64);
+        for case in 0..200 {
+            let mut t = timing();
+            for d in t.durations.iter_mut() {
+                *d = (libm::round(next() * 300.0)).max(1.0) * 0.005;
+            }
+            let mut bound = || {
+                let mut s = || State::new(next() - 0.5, next() - 0.5);
+                PlaneBoundary {
+                    cog_start: s(),
+                    zmp_start: s(),
+                    via: [s(), s(), s(), s(), s(), s(), s()],
+                    cog_end: s(),
+                }
+            };
+            let (bx, by) = (bound(), bound());
+            let f = Factorized::new(&t).unwrap();
+            let mut plan = Plan::zeroed(t);
+            f.solve(&bx, &by, &mut plan).unwrap();
+            let j = case % M;
+            let tau = next() * t.durations[j];
+            let want = Segment::sample_pair(&plan.x[j], &plan.y[j], tau);
+            assert_eq!(f.sample(&bx, &by, j, tau).unwrap(), want, "case {case}");
         }
     }
 

@@ -8,14 +8,121 @@
 //! and a plane's ends cost a few multiply-adds per interval instead of the particular
 //! solution's series. The two planes share the timing, so they are solved together: the
 //! factors of the particular solutions' recurrences are computed once for both
-//! (`lipm::particular_pair`), and the particular solutions are only computed for the
+//! ([`particular_pair`]), and the particular solutions are only computed for the
 //! segments that are written.
 
 use super::{hcol, Basis, PlanError, PlaneBoundary, Solver, Timing, LAST_BETA, M, N};
 use crate::lipm::{
-    hermite, monomials_ends, particular_pair, Poly, Segment, State, CUBIC, N_COEFFS, SHORT_LAMBDA,
+    hermite, particular_over, Particular, Poly, Segment, State, INV_PAIR, N_COEFFS, PARTICULAR_LEN,
+    SHORT_LAMBDA,
 };
 use crate::real::Real;
+
+/// Orders of the ZMP monomials of a known part of an interval's ZMP (at most a cubic).
+pub(super) const CUBIC: usize = 4;
+
+/// `lipm::monomial_ends` of `s^0 … s^4` at once, `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per order: for
+/// `λ < 1` bit for bit the same values (each order's chain of the series summed over its
+/// non-zero terms only); for `λ ≥ 1` the paper's
+/// polynomials with `1/λ` and `1/λ²` computed once (equal to `lipm::monomial_ends` to rounding).
+/// The ends of the particular solution of a polynomial `c` are then `Σ_k c_k` of these: the
+/// same solution, as a particular solution is linear in the ZMP.
+pub(super) fn monomials_ends<T: Real>(lambda: T) -> [[T; 4]; N_COEFFS] {
+    let mut out = [[T::ZERO; 4]; N_COEFFS];
+    if lambda < T::of(SHORT_LAMBDA) {
+        let l2 = lambda * lambda;
+        for (k, o) in out.iter_mut().enumerate() {
+            // g_{k+2} = −m_{k+2}, then g_i = m_i g_{i−2} (c = e_k is zero above k), with
+            // m_i = λ²/(i(i−1)): one chain per order, its non-zero terms only.
+            let mut i = k + 2;
+            let mut g = -(l2 * T::of(INV_PAIR[i]));
+            let (mut x1, mut v1) = (T::ZERO, T::ZERO);
+            x1 += g;
+            v1 += T::of(i as f64) * g;
+            i += 2;
+            while i < PARTICULAR_LEN {
+                g = l2 * T::of(INV_PAIR[i]) * g;
+                x1 += g;
+                v1 += T::of(i as f64) * g;
+                i += 2;
+            }
+            *o = [T::ZERO, T::ZERO, x1, v1 / lambda];
+        }
+    } else {
+        let inv = T::ONE / lambda;
+        let inv2 = T::ONE / (lambda * lambda);
+        let (k12, k6, k2) = (T::of(12.0) * inv2, T::of(6.0) * inv2, T::of(2.0) * inv2);
+        for (k, o) in out.iter_mut().enumerate() {
+            // The paper's m_k: g_k = 1, g_{k−2} = k(k−1)/λ² g_k, … (as `particular_into`).
+            let mut g = [T::ZERO; N_COEFFS];
+            g[k] = T::ONE;
+            g[2] += k12 * g[4];
+            g[1] += k6 * g[3];
+            g[0] += k2 * g[2];
+            let (mut x1, mut v1, mut i) = (T::ZERO, T::ZERO, T::ZERO);
+            for &gi in &g {
+                x1 += gi;
+                v1 += i * gi;
+                i += T::ONE;
+            }
+            *o = [g[0], g[1] * inv, x1, v1 * inv];
+        }
+    }
+    out
+}
+
+/// `lipm::particular_over` for the two planes of one interval at once (the same `λ`; `inv_l2` is
+/// `1/λ²`, used for `λ ≥ 1`): the factors of the recurrences are computed once for both, and
+/// each plane's coefficients are bit for bit those of `lipm::particular_over` with its own old
+/// `λ`.
+#[inline]
+pub(super) fn particular_pair<T: Real>(
+    gx: &mut Particular<T>,
+    gy: &mut Particular<T>,
+    c: [&Poly<T>; 2],
+    lambda: T,
+    inv_l2: T,
+    old: [T; 2],
+) {
+    if lambda < T::of(SHORT_LAMBDA) {
+        let l2 = lambda * lambda;
+        gx[0] = T::ZERO;
+        gx[1] = T::ZERO;
+        gy[0] = T::ZERO;
+        gy[1] = T::ZERO;
+        for i in 2..N_COEFFS + 2 {
+            let m = l2 * T::of(INV_PAIR[i]);
+            gx[i] = m * (gx[i - 2] - c[0][i - 2]);
+            gy[i] = m * (gy[i - 2] - c[1][i - 2]);
+        }
+        // Beyond the quartic `c_i = 0`, and `g − 0 = g` exactly.
+        for i in N_COEFFS + 2..PARTICULAR_LEN {
+            let m = l2 * T::of(INV_PAIR[i]);
+            gx[i] = m * gx[i - 2];
+            gy[i] = m * gy[i - 2];
+        }
+    } else {
+        let (k12, k6, k2) = (
+            T::of(12.0) * inv_l2,
+            T::of(6.0) * inv_l2,
+            T::of(2.0) * inv_l2,
+        );
+        for (g, (c, old)) in [&mut *gx, &mut *gy].into_iter().zip(c.into_iter().zip(old)) {
+            g[4] = c[4];
+            g[3] = c[3];
+            g[2] = c[2] + k12 * g[4];
+            g[1] = c[1] + k6 * g[3];
+            g[0] = c[0] + k2 * g[2];
+            // A NaN `old` zeroes too.
+            let tail_zero = old >= T::of(SHORT_LAMBDA);
+            if !tail_zero {
+                for gi in g.iter_mut().skip(N_COEFFS) {
+                    *gi = T::ZERO;
+                }
+            }
+        }
+    }
+}
 
 /// What the right-hand sides need of the timing alone.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,7 +135,7 @@ pub(super) struct Intervals<T> {
     pub(super) inv_omega: T,
     /// The entry of [`Intervals::mono`] of every interval (the first interval of its duration).
     slot: [u8; M],
-    /// The ends of the particular solutions of `s^0 … s^4` (`lipm::monomials_ends`), at the slot
+    /// The ends of the particular solutions of `s^0 … s^4` ([`monomials_ends`]), at the slot
     /// of the first interval of each distinct duration.
     mono: [[[T; 4]; N_COEFFS]; M],
 }
@@ -80,7 +187,7 @@ impl<T: Real> Intervals<T> {
 
 /// `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` of the particular solution of the cubic `c` (`c_4` is
 /// zero; `K = 2` when `c_2 = c_3 = 0` too) from the monomials' ends `m`, skipping the entries
-/// that are zero or one by construction (`lipm::monomials_ends`).
+/// that are zero or one by construction ([`monomials_ends`]).
 #[inline(always)]
 fn ends_of<T: Real, const K: usize>(c: &Poly<T>, m: &[[T; 4]; N_COEFFS], short: bool) -> [T; 4] {
     if short {
@@ -234,5 +341,108 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
         let origin = b[p].zmp_start.pos;
         seg.zmp[0] += origin;
         seg.particular[0] += origin;
+    }
+}
+
+/// [`write_segments`] for plane `p` alone (`0`: x, `1`: y), bit for bit the same segment, into
+/// `seg` (whose old `ω` and `D` tell whether its particular solution's tail is zero already).
+pub(super) fn write_segment<T: Real, S: Solver<T>>(
+    s: &S,
+    b: &PlaneBoundary<T>,
+    y: &[T; N],
+    j: usize,
+    seg: &mut Segment<T>,
+) {
+    let timing = s.timing();
+    let iv = s.intervals();
+    let w = timing.omega;
+    let d = timing.durations[j];
+    let old = seg.omega * seg.duration;
+    let mut zmp = known_zmp(timing, b, j);
+    let quartic = match j {
+        0 => Some(0),
+        j if j == M - 1 => Some(LAST_BETA),
+        _ => None,
+    };
+    if let Some(col) = quartic {
+        zmp[2..].copy_from_slice(&y[col..col + 3]);
+    }
+    particular_over(&mut seg.particular, &zmp, iv.lambda[j], old);
+    let (c0, c1) = (y[hcol(j)], y[hcol(j) + 1]);
+    let (pp, qq) = match s.basis() {
+        Basis::Exponential => (c0, c1),
+        Basis::Hyperbolic => {
+            let half = T::of(0.5);
+            (half * (c0 - c1), half * (c0 + c1) / (-w * d).exp())
+        }
+    };
+    seg.omega = w;
+    seg.duration = d;
+    seg.p = pp;
+    seg.q = qq;
+    seg.zmp = zmp;
+    let origin = b.zmp_start.pos;
+    seg.zmp[0] += origin;
+    seg.particular[0] += origin;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lipm::monomial_ends;
+
+    #[test]
+    fn the_table_of_monomials_ends_is_monomial_ends() {
+        for &lambda in &[0.005, 0.02, 0.35, 0.99, 1.0, 2.4, 3.6, 40.0] {
+            let got = monomials_ends(lambda);
+            for (k, g) in got.iter().enumerate() {
+                let w = monomial_ends(k, lambda);
+                let want = [w.0, w.1, w.2, w.3];
+                if lambda < SHORT_LAMBDA {
+                    // Bit for bit (the same operations on the same values).
+                    assert_eq!(
+                        g.map(f64::to_bits),
+                        want.map(f64::to_bits),
+                        "k={k} λ={lambda}"
+                    );
+                } else {
+                    for (a, b) in g.iter().zip(want.iter()) {
+                        assert!(
+                            (a - b).abs() <= 4.0 * f64::EPSILON * b.abs(),
+                            "k={k} λ={lambda}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_pair_of_particulars_is_each_plane_s_own() {
+        let cx = [0.05, 0.1, -0.3, 0.2, 0.1];
+        let cy = [-0.02, 0.3, 0.1, -0.2, 0.0];
+        for &lambda in &[0.02, 0.35, 0.99, 1.0, 2.4, 3.6] {
+            for old in [[0.5, 2.0], [2.0, 0.5], [f64::NAN, 2.0]] {
+                let (mut gx, mut gy) = ([7.0; PARTICULAR_LEN], [7.0; PARTICULAR_LEN]);
+                let (mut wx, mut wy) = (gx, gy);
+                if old[1] >= SHORT_LAMBDA {
+                    // A tail zero already, as `particular_over` assumes.
+                    gy[N_COEFFS..].fill(0.0);
+                    wy[N_COEFFS..].fill(0.0);
+                }
+                particular_pair(
+                    &mut gx,
+                    &mut gy,
+                    [&cx, &cy],
+                    lambda,
+                    1.0 / (lambda * lambda),
+                    old,
+                );
+                particular_over(&mut wx, &cx, lambda, old[0]);
+                particular_over(&mut wy, &cy, lambda, old[1]);
+                assert_eq!(gx.map(f64::to_bits), wx.map(f64::to_bits), "λ={lambda}");
+                assert_eq!(gy.map(f64::to_bits), wy.map(f64::to_bits), "λ={lambda}");
+            }
+        }
     }
 }
