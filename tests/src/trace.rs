@@ -208,7 +208,9 @@ pub fn write_log(tool: &str, scenario: &str) -> Result<PathBuf, String> {
     let fault = crate::logs::fault_runs()
         .into_iter()
         .find(|(name, _, _)| name == scenario);
-    let worst = crate::logs::WORST.iter().find(|(name, _)| *name == scenario);
+    let worst = crate::logs::WORST
+        .iter()
+        .find(|(name, _)| *name == scenario);
     let (log, cfg) = if let Some(&(_, adjusting)) = worst {
         let cfg = planner_core::node::NodeConfig::hrp2();
         let w = host_sim::sim::worst::worst_cycle(&cfg, adjusting).map_err(fail)?;
