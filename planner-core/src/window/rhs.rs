@@ -224,7 +224,9 @@ fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, j: usize) -> Pol
         let zl = rel(b.via[M - 2]);
         [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO]
     } else {
-        hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j])
+        // `1 ≤ j ≤ M − 2` here; the clamp lets the compiler see it (no panic path).
+        let i = j.clamp(1, M - 2);
+        hermite(rel(b.via[i - 1]), rel(b.via[i]), d[i])
     }
 }
 
@@ -293,6 +295,8 @@ pub(super) fn write_segments<T: Real, S: Solver<T>>(
     sx: &mut Segment<T>,
     sy: &mut Segment<T>,
 ) {
+    // `j < M` (the clamp lets the compiler see it: no panic path).
+    let j = j.min(M - 1);
     let timing = s.timing();
     let iv = s.intervals();
     let w = timing.omega;
@@ -353,6 +357,8 @@ pub(super) fn write_segment<T: Real, S: Solver<T>>(
     j: usize,
     seg: &mut Segment<T>,
 ) {
+    // `j < M` (the clamp lets the compiler see it: no panic path).
+    let j = j.min(M - 1);
     let timing = s.timing();
     let iv = s.intervals();
     let w = timing.omega;
