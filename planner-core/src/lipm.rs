@@ -175,7 +175,7 @@ pub fn zmp_poly<T: Real>(big: &Poly<T>, omega: T) -> Poly<T> {
 }
 
 /// `1 / (m (m − 1))` for `m < PARTICULAR_LEN` (multiplications instead of divisions in the series).
-const INV_PAIR: [f64; PARTICULAR_LEN] = {
+pub(crate) const INV_PAIR: [f64; PARTICULAR_LEN] = {
     let mut t = [0.0; PARTICULAR_LEN];
     let mut m = 2;
     while m < PARTICULAR_LEN {
@@ -321,7 +321,7 @@ pub fn particular_ends<T: Real>(g: &Particular<T>, lambda: T) -> (T, T, T, T) {
 
 /// The part of a sample that depends on `ω`, `D` and `τ` only ([`Segment::sample_pair`]).
 #[derive(Clone, Copy, Debug)]
-struct At<T> {
+pub(crate) struct At<T> {
     /// `τ / D`.
     s: T,
     /// `1 / D`.
@@ -469,7 +469,7 @@ impl<T: Real> Segment<T> {
 
     /// What a sample at `tau` needs of `ω`, `D` and `τ` only.
     #[inline]
-    fn at(&self, tau: T) -> At<T> {
+    pub(crate) fn at(&self, tau: T) -> At<T> {
         let tau = tau.max(T::ZERO).min(self.duration);
         let w = self.omega;
         let inv_d = T::ONE / self.duration;
@@ -482,7 +482,7 @@ impl<T: Real> Segment<T> {
     }
 
     #[inline]
-    fn sample_at(&self, a: &At<T>) -> Sample<T> {
+    pub(crate) fn sample_at(&self, a: &At<T>) -> Sample<T> {
         let w = self.omega;
         let (s, inv_d) = (a.s, a.inv_d);
         let hp = self.p * a.ep;

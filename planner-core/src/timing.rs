@@ -70,8 +70,9 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
         zmp: zmp[0],
         deviation: zmp[0] - reference,
     };
-    let mut consider = |tau: T| {
-        let (p, _, _) = eval(tau);
+    // `p` is `p(tau)`, evaluated already where `ṗ` and `p̈` were (the same value: no second
+    // evaluation).
+    let mut consider = |tau: T, p: T| {
         let dev = p - reference;
         if dev.abs() > best.deviation.abs() {
             best = Extremum {
@@ -81,7 +82,8 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
             };
         }
     };
-    consider(duration);
+    let at_end = eval(duration);
+    consider(duration, at_end.0);
     // A bound of |p| on [0, D] for the stopping test below (|Σ a_i τ^i| ≤ Σ |a_i| D^i).
     let mut scale = T::ZERO;
     let mut dpow = T::ONE;
@@ -129,19 +131,23 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
     // `ṗ(x) = v` is zero to rounding where `p(x)` is within about `ε·scale` of the value at
     // the root (near a simple root the extremum lies ≈ v²/(2|p̈|) from p(x)).
     let settled = |v: T, a: T| v == T::ZERO || v * v <= T::EPSILON * a.abs() * scale;
+    // The end of a piece is the start of the next: evaluated once.
+    let mut at_lo = eval(cuts[0]);
     for piece in 0..n {
         let (mut lo, mut hi) = (cuts[piece], cuts[piece + 1]);
-        let (_, mut vlo, alo) = eval(lo);
-        let (_, mut vhi, ahi) = eval(hi);
+        let at_hi = if piece + 1 == n { at_end } else { eval(hi) };
+        let (plo, mut vlo, alo) = at_lo;
+        let (phi, mut vhi, ahi) = at_hi;
+        at_lo = at_hi;
         // An end where ṗ vanishes to rounding (the planner's zero end velocities) is the
         // piece's critical point (ṗ is monotone on the piece): no search. Considering an end
         // is always safe (it is a point of [0, D]).
         if settled(vlo, alo) {
-            consider(lo);
+            consider(lo, plo);
             continue;
         }
         if settled(vhi, ahi) {
-            consider(hi);
+            consider(hi, phi);
             continue;
         }
         if (vlo < T::ZERO) == (vhi < T::ZERO) {
@@ -149,27 +155,36 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
         }
         let lo_negative = vlo < T::ZERO;
         // The chord between the bracket's ends crosses zero inside it (ṗ is monotone there;
-        // the midpoint if rounding says otherwise).
+        // the midpoint if rounding says otherwise), and its inverse slope, by the mean value
+        // theorem `1/p̈` somewhere on the bracket.
         let chord = |lo: T, vlo: T, hi: T, vhi: T| {
-            let c = lo - vlo * (hi - lo) / (vhi - vlo);
+            let inv = (hi - lo) / (vhi - vlo);
+            let c = lo - vlo * inv;
             if c > lo && c < hi {
-                c
+                (c, inv)
             } else {
-                T::of(0.5) * (lo + hi)
+                (T::of(0.5) * (lo + hi), inv)
             }
         };
-        // Newton's method on ṗ inside the bracket, which every step shrinks; a step that
-        // would leave it takes the chord of the bracket instead (regula falsi: a root close to
-        // an end, where Newton overshoots, is reached in a step or two; bisection took up to
-        // ~25), or, every second time, bisects. ṗ is monotone on the piece, so the root is unique and Newton converges
-        // quadratically once close (typically 2–5 steps); the count is bounded by
+        // Newton's method on ṗ inside the bracket, which every step shrinks, without a divide:
+        // `1/p̈` is tracked by one Newton–Raphson step of the reciprocal per step
+        // (`r ← r (2 − p̈ r)`, which squares its relative error; `0 < p̈ r < 2` is where it
+        // converges), seeded with the chord's inverse slope. A step that would leave the
+        // bracket, or a reciprocal out of its range, takes the chord of the bracket instead
+        // (regula falsi, which seeds the reciprocal again: a root close to an end, where Newton
+        // overshoots, is reached in a step or two; bisection took up to ~25), or, every second
+        // time, bisects. ṗ is monotone on the piece, so the root is unique and the iteration
+        // converges superlinearly once close (typically 2–5 steps); the count is bounded by
         // `MAX_STEPS` whatever the polynomial.
-        let mut x = chord(lo, vlo, hi, vhi);
+        let (mut x, mut r) = chord(lo, vlo, hi, vhi);
         let mut fallbacks = 0u32;
+        // `p(x)` once `x` is evaluated.
+        let mut px = None;
         for _ in 0..MAX_STEPS {
             steps += 1;
-            let (_, v, a) = eval(x);
+            let (p, v, a) = eval(x);
             if settled(v, a) {
+                px = Some(p);
                 break;
             }
             if (v < T::ZERO) == lo_negative {
@@ -177,8 +192,12 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
             } else {
                 (hi, vhi) = (x, v);
             }
-            let newton = x - v / a;
-            let next = if newton >= lo && newton <= hi {
+            let ar = a * r;
+            let near = ar > T::ZERO && ar < T::of(2.0);
+            r *= T::of(2.0) - ar;
+            r *= T::of(2.0) - a * r;
+            let newton = x - v * r;
+            let next = if near && newton >= lo && newton <= hi {
                 newton
             } else {
                 // Fallbacks alternate chord and bisection (regula falsi alone can creep from
@@ -186,7 +205,9 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
                 // between).
                 fallbacks += 1;
                 if fallbacks % 2 == 1 {
-                    chord(lo, vlo, hi, vhi)
+                    let (c, inv) = chord(lo, vlo, hi, vhi);
+                    r = inv;
+                    c
                 } else {
                     T::of(0.5) * (lo + hi)
                 }
@@ -197,7 +218,11 @@ fn search<T: Real>(zmp: &Poly<T>, duration: T, reference: T) -> (Extremum<T>, u3
                 break;
             }
         }
-        consider(x);
+        let p = match px {
+            Some(p) => p,
+            None => eval(x).0,
+        };
+        consider(x, p);
     }
     (best, steps)
 }

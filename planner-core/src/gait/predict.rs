@@ -184,19 +184,13 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         let f = match self.target {
             Some((g, w, a, f)) if g == self.gen && w == self.serial && a == at => f,
             _ => {
-                let bounds = self.target_bounds(&self.wins[c]);
-                // Solved with the current window's factorisation (same timing) into the spare
-                // buffer's plan, which the re-plan overwrites anyway: nothing large is copied.
-                let (w0, w1) = self.wins.split_at_mut(1);
-                let (cur, spare) = if c == 0 {
-                    (&w0[0], &mut w1[0])
-                } else {
-                    (&w1[0], &mut w0[0])
-                };
-                cur.factor.solve(&bounds[0], &bounds[1], &mut spare.plan)?;
+                let cur = &self.wins[c];
+                let bounds = self.target_bounds(cur);
+                // Solved with the current window's factorisation (same timing), and only the
+                // interval of `at` built: no plan is written.
                 let j = cur.interval(at);
                 let tau = self.params.seconds(at - cur.starts[j]);
-                let (fx, fy) = Segment::sample_pair(&spare.plan.x[j], &spare.plan.y[j], tau);
+                let (fx, fy) = cur.factor.sample(&bounds[0], &bounds[1], j, tau)?;
                 let f = [fx, fy];
                 self.target = Some((self.gen, self.serial, at, f));
                 f

@@ -11,8 +11,8 @@
 use nalgebra::SMatrix;
 
 use super::{
-    hcol, solve_both, solve_plane_new, Basis, Plan, PlanError, PlaneBoundary, PlanePlan, Solver,
-    Timing, LAST_BETA, M, N,
+    hcol, solve_both, solve_plane_new, Basis, Intervals, Plan, PlanError, PlaneBoundary, PlanePlan,
+    Solver, Timing, LAST_BETA, M, N,
 };
 use crate::lipm::monomial_ends;
 use crate::real::Real;
@@ -30,6 +30,8 @@ pub struct Banded<T: Real> {
     pivots: [u8; N],
     /// Column equilibration: the solution of the scaled system times this is `y`.
     col_scale: [T; N],
+    /// The timing-only table of the right-hand sides.
+    intervals: Intervals<T>,
 }
 
 /// Rows of the 2×2 block that maps the homogeneous pair of an interval (with `E = e^{−ωD}`)
@@ -118,8 +120,10 @@ impl<T: Real> Solver<T> for Banded<T> {
     fn basis(&self) -> Basis {
         self.basis
     }
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]) {
-        *y = *r;
+    fn intervals(&self) -> &Intervals<T> {
+        &self.intervals
+    }
+    fn solve_in_place(&self, y: &mut [T; N]) {
         self.solve_vector(y);
     }
 }
@@ -143,6 +147,7 @@ impl<T: Real> Banded<T> {
             lu: SMatrix::<T, N, N>::from_element(T::ZERO),
             pivots: [0; N],
             col_scale: [T::ONE; N],
+            intervals: Intervals::ZERO,
         }
     }
 
@@ -173,6 +178,7 @@ impl<T: Real> Banded<T> {
             }
         }
         self.pivots = factor_banded(lu, kl, ku)?;
+        self.intervals.set(timing);
         self.timing = *timing;
         Ok(())
     }

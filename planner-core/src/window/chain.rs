@@ -38,32 +38,31 @@
 //!
 //! (`S`, `D`: sum and difference of the particular solutions' position and velocity/ω) are a
 //! 2×2 system for `(t₁, t₇)`. Its matrix and the `t`-coefficients of every `P_i, Q_i` depend on
-//! the timing alone ([`Chain::factor`]: 7 exponentials, the monomial ends of intervals 1 and 7,
-//! ~120 flops); a right-hand side costs ~110 flops ([`Chain::solve`]). This is a factorisation
+//! the timing alone ([`Chain::factor`]: the exponentials of the distinct durations and ~80
+//! flops, with the monomial ends of intervals 1 and 7 from the timing's table, module `rhs`);
+//! a right-hand side costs ~110 flops ([`Chain::solve`], in place). This is a factorisation
 //! of `Z` (block elimination in the order `β` → `P` forward, `Q` backward → Schur complement
 //! 2×2, solved with partial pivoting), so `Z` is singular exactly when that 2×2 is; it is
 //! checked against the banded LU of the dense `Z` by the tests.
 
+use super::rhs::Intervals;
 use super::{PlanError, Timing, LAST_BETA, M, N};
-use crate::lipm::monomial_ends as ends_of;
+use crate::lipm::N_COEFFS;
 use crate::real::Real;
 
 /// `v`: the direction of the free quartic parameter (`β_4`) in `(β_2, β_3, β_4)`.
 const V: [f64; 3] = [1.0, -2.0, 1.0];
 
-/// Position and velocity/ω of the particular solution of the ZMP term `s^k`, `k = 2, 3, 4`, at
-/// the start and the end of an interval: `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per `k`.
-type Ends<T> = [[T; 4]; 3];
+/// Position and velocity/ω of the particular solution of the ZMP term `s^k`, `k = 0 … 4`, at
+/// the start and the end of an interval: `[x(0), ẋ(0)/ω, x(D), ẋ(D)/ω]` per `k`
+/// ([`Intervals::mono`]; the quartic unknowns are `k = 2, 3, 4`).
+type Ends<T> = [[T; 4]; N_COEFFS];
 
 /// The timing-only part of the elimination.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Chain<T> {
     /// `e_i = e^{−ωD_i}`.
     e: [T; M],
-    /// Monomial ends of the first interval.
-    first: Ends<T>,
-    /// Monomial ends of the last interval.
-    last: Ends<T>,
     /// `∂P_i/∂t₁` (`P_6` also depends on `t₇`: [`Chain::p6_t7`]).
     p_t1: [T; M],
     /// `∂P_6/∂t₇`.
@@ -82,7 +81,7 @@ pub(super) struct Chain<T> {
 /// `Σ_k c_k x_k` over the three quartic unknowns, for one column of [`Ends`] combined by `f`.
 #[inline]
 fn dot3<T: Real>(ends: &Ends<T>, beta: [T; 3], f: impl Fn(&[T; 4]) -> T) -> T {
-    f(&ends[0]) * beta[0] + f(&ends[1]) * beta[1] + f(&ends[2]) * beta[2]
+    f(&ends[2]) * beta[0] + f(&ends[3]) * beta[1] + f(&ends[4]) * beta[2]
 }
 
 // Sums and differences of the ends (start: S, D; end: Se, De).
@@ -103,21 +102,10 @@ fn d_end<T: Real>(x: &[T; 4]) -> T {
     x[2] - x[3]
 }
 
-fn monomial_ends<T: Real>(lambda: T) -> Ends<T> {
-    let mut out = [[T::ZERO; 4]; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        let (x0, v0, x1, v1) = ends_of(k + 2, lambda);
-        *o = [x0, v0, x1, v1];
-    }
-    out
-}
-
 impl<T: Real> Chain<T> {
     /// All zero (not factorised).
     pub(super) const ZERO: Self = Self {
         e: [T::ZERO; M],
-        first: [[T::ZERO; 4]; 3],
-        last: [[T::ZERO; 4]; 3],
         p_t1: [T::ZERO; M],
         p6_t7: T::ZERO,
         q_t7: [T::ZERO; M],
@@ -127,8 +115,13 @@ impl<T: Real> Chain<T> {
         u: [T::ZERO; 3],
     };
 
-    /// The timing-only part for a valid timing; `Singular` if the 2×2 system is (numerically).
-    pub(super) fn factor(&mut self, timing: &Timing<T>) -> Result<(), PlanError> {
+    /// The timing-only part for a valid timing and its table `iv` (set for it); `Singular` if
+    /// the 2×2 system is (numerically).
+    pub(super) fn factor(
+        &mut self,
+        timing: &Timing<T>,
+        iv: &Intervals<T>,
+    ) -> Result<(), PlanError> {
         let w = timing.omega;
         let d = &timing.durations;
         // A window has few distinct durations (single and double supports alternate): each
@@ -141,33 +134,32 @@ impl<T: Real> Chain<T> {
                 None => (-w * dj).exp(),
             };
         }
-        self.first = monomial_ends(w * d[0]);
-        self.last = monomial_ends(w * d[M - 1]);
+        let (first, last) = (iv.mono(0), iv.mono(M - 1));
         let v = V.map(T::of);
         let half = T::of(0.5);
         let two = T::of(2.0);
         let e = self.e;
         // P forward, coefficient of t₁.
-        self.p_t1[0] = -half * dot3(&self.first, v, d_start);
-        self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(&self.first, v, d_end);
+        self.p_t1[0] = -half * dot3(first, v, d_start);
+        self.p_t1[1] = e[0] * self.p_t1[0] + half * dot3(first, v, d_end);
         let mut acc = self.p_t1[1];
         for (pt, &ei) in self.p_t1[2..].iter_mut().zip(&e[1..M - 1]) {
             acc = ei * acc;
             *pt = acc;
         }
-        self.p6_t7 = -half * dot3(&self.last, v, d_start);
+        self.p6_t7 = -half * dot3(last, v, d_start);
         // Q backward, coefficient of t₇.
-        self.q_t7[M - 1] = -half * dot3(&self.last, v, s_end);
-        self.q_t7[M - 2] = e[M - 1] * self.q_t7[M - 1] + half * dot3(&self.last, v, s_start);
+        self.q_t7[M - 1] = -half * dot3(last, v, s_end);
+        self.q_t7[M - 2] = e[M - 1] * self.q_t7[M - 1] + half * dot3(last, v, s_start);
         for i in (0..M - 2).rev() {
             self.q_t7[i] = e[i + 1] * self.q_t7[i + 1];
         }
-        self.q0_t1 = -half * dot3(&self.first, v, s_end);
+        self.q0_t1 = -half * dot3(first, v, s_end);
         // The 2×2 system [a11 a12; a21 a22] (t₁, t₇).
-        let a11 = two * e[0] * self.q0_t1 + dot3(&self.first, v, s_start);
+        let a11 = two * e[0] * self.q0_t1 + dot3(first, v, s_start);
         let a12 = two * e[0] * self.q_t7[0];
         let a21 = two * e[M - 1] * self.p_t1[M - 1];
-        let a22 = two * e[M - 1] * self.p6_t7 + dot3(&self.last, v, d_end);
+        let a22 = two * e[M - 1] * self.p6_t7 + dot3(last, v, d_end);
         let ([b11, b12], [b21, b22], swap) = if a21.abs() > a11.abs() {
             ([a21, a22], [a11, a12], true)
         } else {
@@ -190,32 +182,44 @@ impl<T: Real> Chain<T> {
         Ok(())
     }
 
-    /// Solves `Z y = r` (the layout of the parent module) into `y`.
-    pub(super) fn solve(&self, r: &[T; N], y: &mut [T; N]) {
+    /// Solves `Z y = r` (the layout of the parent module) in place: `r` in, `y` out (every
+    /// entry of `r` is read before the first of `y` is written over it: the constants of `P`
+    /// and `Q` go straight to their places in `y`, and the free parameters are added there).
+    pub(super) fn solve(&self, iv: &Intervals<T>, y: &mut [T; N]) {
+        let (first, last) = (iv.mono(0), iv.mono(M - 1));
         let e = &self.e;
         let half = T::of(0.5);
         let two = T::of(2.0);
         let three = T::of(3.0);
-        let u1 = [three * r[0] - r[1], r[1] - two * r[0], T::ZERO];
-        let u7 = [three * r[18] - r[19], r[19] - two * r[18], T::ZERO];
-        // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0.
-        let mut p = [T::ZERO; M];
-        let mut q = [T::ZERO; M];
-        p[0] = half * (r[2] - r[3] - dot3(&self.first, u1, d_start));
-        p[1] = e[0] * p[0] + half * (dot3(&self.first, u1, d_end) - (r[4] - r[5]));
+        let r = |i: usize, y: &[T; N]| y[i];
+        let u1 = [three * y[0] - y[1], y[1] - two * y[0], T::ZERO];
+        let u7 = [three * y[18] - y[19], y[19] - two * y[18], T::ZERO];
+        // The differences and sums of the COG rows, read before `y` is written.
+        let (s0, d0) = (r(2, y) + r(3, y), r(2, y) - r(3, y));
+        let (s6, d6) = (r(16, y) + r(17, y), r(16, y) - r(17, y));
+        let mut dif = [T::ZERO; M - 1];
+        let mut sum = [T::ZERO; M - 1];
+        for i in 0..M - 1 {
+            dif[i] = y[4 + 2 * i] - y[5 + 2 * i];
+            sum[i] = y[4 + 2 * i] + y[5 + 2 * i];
+        }
+        // Constants of P (forward) and Q (backward) with t₁ = t₇ = 0, at P_i's and Q_i's places.
+        let (pc, qc) = (|i: usize| 3 + 2 * i, |i: usize| 4 + 2 * i);
+        y[pc(0)] = half * (d0 - dot3(first, u1, d_start));
+        y[pc(1)] = e[0] * y[pc(0)] + half * (dot3(first, u1, d_end) - dif[0]);
         for i in 1..M - 2 {
-            p[i + 1] = e[i] * p[i] - half * (r[4 + 2 * i] - r[5 + 2 * i]);
+            y[pc(i + 1)] = e[i] * y[pc(i)] - half * dif[i];
         }
-        p[M - 1] = e[M - 2] * p[M - 2] - half * (r[14] - r[15] + dot3(&self.last, u7, d_start));
-        q[M - 1] = half * (r[16] + r[17] - dot3(&self.last, u7, s_end));
-        q[M - 2] = e[M - 1] * q[M - 1] + half * (r[14] + r[15] + dot3(&self.last, u7, s_start));
+        y[pc(M - 1)] = e[M - 2] * y[pc(M - 2)] - half * (dif[M - 2] + dot3(last, u7, d_start));
+        y[qc(M - 1)] = half * (s6 - dot3(last, u7, s_end));
+        y[qc(M - 2)] = e[M - 1] * y[qc(M - 1)] + half * (sum[M - 2] + dot3(last, u7, s_start));
         for i in (1..M - 2).rev() {
-            q[i] = e[i + 1] * q[i + 1] + half * (r[4 + 2 * i] + r[5 + 2 * i]);
+            y[qc(i)] = e[i + 1] * y[qc(i + 1)] + half * sum[i];
         }
-        q[0] = e[1] * q[1] + half * (r[4] + r[5] - dot3(&self.first, u1, s_end));
+        y[qc(0)] = e[1] * y[qc(1)] + half * (sum[0] - dot3(first, u1, s_end));
         // The 2×2 system.
-        let ra = r[2] + r[3] - two * e[0] * q[0] - dot3(&self.first, u1, s_start);
-        let rb = r[16] - r[17] - two * e[M - 1] * p[M - 1] - dot3(&self.last, u7, d_end);
+        let ra = s0 - two * e[0] * y[qc(0)] - dot3(first, u1, s_start);
+        let rb = d6 - two * e[M - 1] * y[pc(M - 1)] - dot3(last, u7, d_end);
         let (b1, b2) = if self.swap { (rb, ra) } else { (ra, rb) };
         let [u11, u12, u22] = self.u;
         let t7 = (b2 - self.l * b1) / u22;
@@ -227,16 +231,10 @@ impl<T: Real> Chain<T> {
             y[LAST_BETA + k] = u7[k] + vk * t7;
         }
         for i in 0..M {
-            let mut pi = p[i] + self.p_t1[i] * t1;
-            let mut qi = q[i] + self.q_t7[i] * t7;
-            if i == M - 1 {
-                pi += self.p6_t7 * t7;
-            }
-            if i == 0 {
-                qi += self.q0_t1 * t1;
-            }
-            y[3 + 2 * i] = pi;
-            y[4 + 2 * i] = qi;
+            y[pc(i)] += self.p_t1[i] * t1;
+            y[qc(i)] += self.q_t7[i] * t7;
         }
+        y[pc(M - 1)] += self.p6_t7 * t7;
+        y[qc(0)] += self.q0_t1 * t1;
     }
 }

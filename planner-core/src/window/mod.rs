@@ -35,7 +35,10 @@
 //! (solved forward) from the growing ones `Q` (solved backward), and what is left is a 2×2
 //! system for one free coefficient of each quartic: ~120 flops per timing and ~110 per plane,
 //! against ~2,000 and ~400 for the banded LU of the dense matrix ([`Banded`], band width 5,
-//! which the tests use as the reference and which serves the `cosh`/`sinh` basis).
+//! which the tests use as the reference and which serves the `cosh`/`sinh` basis). The
+//! right-hand sides take the particular solutions' ends from a table of the monomials' ends
+//! per distinct duration (module `rhs`: a few multiply-adds per interval and plane), and both
+//! planes are solved together, sharing the timing's factors.
 //!
 //! # Conditioning
 //! In the paper's basis `V cosh + W sinh` the columns of an interval grow like `cosh ωD` and
@@ -49,11 +52,13 @@
 
 mod banded;
 mod chain;
+mod rhs;
 
 pub use banded::{bandwidths, build_z, Banded, BANDWIDTH};
 use chain::Chain;
+use rhs::{solve_pair, write_segment, write_segments, Intervals};
 
-use crate::lipm::{hermite, particular_ends, particular_over, Poly, Sample, Segment, State};
+use crate::lipm::{Sample, Segment, State};
 use crate::real::Real;
 
 /// Number of intervals in a window.
@@ -238,69 +243,6 @@ pub(crate) const fn hcol(j: usize) -> usize {
 /// First column of the quartic unknowns of the last interval.
 pub(crate) const LAST_BETA: usize = 3 + 2 * M;
 
-/// The known part of the normalised ZMP polynomial of every interval (the quartic unknowns
-/// set to zero), relative to `origin`.
-fn known_zmp<T: Real>(timing: &Timing<T>, b: &PlaneBoundary<T>, origin: T) -> [Poly<T>; M] {
-    let rel = |s: State<T>| State::new(s.pos - origin, s.vel);
-    let d = &timing.durations;
-    let mut polys = [[T::ZERO; 5]; M];
-    let z0 = rel(b.zmp_start);
-    polys[0] = [z0.pos, z0.vel * d[0], T::ZERO, T::ZERO, T::ZERO];
-    for j in 1..M - 1 {
-        polys[j] = hermite(rel(b.via[j - 1]), rel(b.via[j]), d[j]);
-    }
-    let zl = rel(b.via[M - 2]);
-    polys[M - 1] = [zl.pos, zl.vel * d[M - 1], T::ZERO, T::ZERO, T::ZERO];
-    polys
-}
-
-/// The right-hand side `w` of one plane, relative to `origin`, and the known ZMP polynomials;
-/// the particular solutions of the known parts are written into `segs`.
-fn build_rhs<T: Real>(
-    timing: &Timing<T>,
-    b: &PlaneBoundary<T>,
-    origin: T,
-    segs: &mut PlanePlan<T>,
-) -> ([T; N], [Poly<T>; M]) {
-    let w = timing.omega;
-    let d = &timing.durations;
-    let polys = known_zmp(timing, b, origin);
-    // Known particular COG (position, velocity/ω) at the start and end of every interval.
-    let mut starts = [State::default(); M];
-    let mut ends = [State::default(); M];
-    for j in 0..M {
-        let lambda = w * d[j];
-        // The segment written over is the one planned before into this buffer (or the
-        // default, λ = 1): a long interval's tail is zero already (see `particular_len`).
-        // The segment's λ is written with its particular solution, so that this holds even
-        // after a solve that failed half-way.
-        let old = segs[j].omega * segs[j].duration;
-        segs[j].omega = w;
-        segs[j].duration = d[j];
-        let g = &mut segs[j].particular;
-        particular_over(g, &polys[j], lambda, old);
-        let (x0, v0, x1, v1) = particular_ends(g, lambda);
-        starts[j] = State::new(x0, v0);
-        ends[j] = State::new(x1, v1);
-    }
-    let mut r = [T::ZERO; N];
-    let (c0, c1) = (polys[0][0], polys[0][1]);
-    r[0] = b.via[0].pos - origin - c0 - c1;
-    r[1] = b.via[0].vel * d[0] - c1;
-    r[2] = b.cog_start.pos - origin - starts[0].pos;
-    r[3] = b.cog_start.vel / w - starts[0].vel;
-    for j in 0..M - 1 {
-        r[4 + 2 * j] = starts[j + 1].pos - ends[j].pos;
-        r[5 + 2 * j] = starts[j + 1].vel - ends[j].vel;
-    }
-    r[16] = b.cog_end.pos - origin - ends[M - 1].pos;
-    r[17] = b.cog_end.vel / w - ends[M - 1].vel;
-    let (l0, l1) = (polys[M - 1][0], polys[M - 1][1]);
-    r[18] = b.via[M - 1].pos - origin - l0 - l1;
-    r[19] = b.via[M - 1].vel * d[M - 1] - l1;
-    (r, polys)
-}
-
 /// The planner's factorisation of `Z` ([`Basis::Exponential`]): the timing-only part of the
 /// structured elimination of [`chain`](self) (two damped scalar recursions and a 2×2 Schur
 /// complement, ~0.5 KB), kept in place and reused while the timing does not change. The
@@ -309,6 +251,7 @@ fn build_rhs<T: Real>(
 pub struct Factorized<T: Real> {
     timing: Timing<T>,
     chain: Chain<T>,
+    intervals: Intervals<T>,
 }
 
 /// What the plane solves need from a factorisation of `Z`.
@@ -317,8 +260,10 @@ trait Solver<T: Real> {
     fn timing(&self) -> &Timing<T>;
     /// The homogeneous basis of `y`.
     fn basis(&self) -> Basis;
-    /// `y = Z⁻¹ r`.
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]);
+    /// The timing-only table of the right-hand sides.
+    fn intervals(&self) -> &Intervals<T>;
+    /// `y = Z⁻¹ y`, in place.
+    fn solve_in_place(&self, y: &mut [T; N]);
 }
 
 /// Both planes into `out` (see [`Factorized::solve`]).
@@ -335,9 +280,13 @@ fn solve_both<T: Real, S: Solver<T>>(
         // A failed refactor.
         return Err(PlanError::Singular);
     }
+    let mut sol = [[T::ZERO; N]; 2];
+    solve_pair(s, [x, y], &mut sol)?;
     out.timing = *s.timing();
-    solve_plane_into(s, x, &mut out.x)?;
-    solve_plane_into(s, y, &mut out.y)
+    for (j, (sx, sy)) in out.x.iter_mut().zip(out.y.iter_mut()).enumerate() {
+        write_segments(s, [x, y], &sol, j, sx, sy);
+    }
+    Ok(())
 }
 
 /// One plane (see [`Factorized::solve_plane`]).
@@ -351,55 +300,14 @@ fn solve_plane_new<T: Real, S: Solver<T>>(
     if s.timing().omega == T::ZERO {
         return Err(PlanError::Singular);
     }
+    let mut sol = [[T::ZERO; N]; 2];
+    solve_pair(s, [b, b], &mut sol)?;
     let mut plan = [Segment::default(); M];
-    solve_plane_into(s, b, &mut plan)?;
+    let mut other = Segment::default();
+    for (j, seg) in plan.iter_mut().enumerate() {
+        write_segments(s, [b, b], &sol, j, seg, &mut other);
+    }
     Ok(plan)
-}
-
-/// Solves one plane into `out` (boundary values assumed finite).
-fn solve_plane_into<T: Real, S: Solver<T>>(
-    s: &S,
-    b: &PlaneBoundary<T>,
-    out: &mut PlanePlan<T>,
-) -> Result<(), PlanError> {
-    let timing = s.timing();
-    let origin = b.zmp_start.pos;
-    let (rhs, polys) = build_rhs(timing, b, origin, out);
-    let mut y = [T::ZERO; N];
-    s.solve_rhs(&rhs, &mut y);
-    if !y.iter().all(|v| v.is_finite()) {
-        return Err(PlanError::NonFinite);
-    }
-    let w = timing.omega;
-    let d = &timing.durations;
-    for (j, seg) in out.iter_mut().enumerate() {
-        let (c0, c1) = (y[hcol(j)], y[hcol(j) + 1]);
-        let (p, q) = match s.basis() {
-            Basis::Exponential => (c0, c1),
-            Basis::Hyperbolic => {
-                // V = P + QE, W = −P + QE.
-                let half = T::of(0.5);
-                let e = (-w * d[j]).exp();
-                (half * (c0 - c1), half * (c0 + c1) / e)
-            }
-        };
-        seg.p = p;
-        seg.q = q;
-        seg.zmp = polys[j];
-    }
-    // The quartic unknowns are the normalised coefficients c_2, c_3, c_4 of the first and the
-    // last interval: their particular solutions are those of the whole polynomials.
-    for (j, col) in [(0usize, 0usize), (M - 1, LAST_BETA)] {
-        let seg = &mut out[j];
-        seg.zmp[2..].copy_from_slice(&y[col..col + 3]);
-        // Same λ as in `build_rhs`: the tail is as it must be.
-        particular_over(&mut seg.particular, &seg.zmp, w * d[j], w * d[j]);
-    }
-    for seg in out.iter_mut() {
-        seg.zmp[0] += origin;
-        seg.particular[0] += origin;
-    }
-    Ok(())
 }
 
 impl<T: Real> Solver<T> for Factorized<T> {
@@ -409,8 +317,11 @@ impl<T: Real> Solver<T> for Factorized<T> {
     fn basis(&self) -> Basis {
         Basis::Exponential
     }
-    fn solve_rhs(&self, r: &[T; N], y: &mut [T; N]) {
-        self.chain.solve(r, y);
+    fn intervals(&self) -> &Intervals<T> {
+        &self.intervals
+    }
+    fn solve_in_place(&self, y: &mut [T; N]) {
+        self.chain.solve(&self.intervals, y);
     }
 }
 
@@ -432,6 +343,7 @@ impl<T: Real> Factorized<T> {
                 durations: [T::ZERO; M],
             },
             chain: Chain::ZERO,
+            intervals: Intervals::ZERO,
         }
     }
 
@@ -446,7 +358,8 @@ impl<T: Real> Factorized<T> {
         timing.validate()?;
         // Mark unusable until the end (a failed refactor must not look like the old timing).
         self.timing.omega = T::ZERO;
-        self.chain.factor(timing)?;
+        self.intervals.set(timing);
+        self.chain.factor(timing, &self.intervals)?;
         self.timing = *timing;
         Ok(())
     }
@@ -459,8 +372,7 @@ impl<T: Real> Factorized<T> {
     /// Solves `Z y = w` for one right-hand side (`w` in the row order of the module
     /// documentation, `y` in its column order).
     pub fn solve_vector(&self, rhs: &mut [T; N]) {
-        let r = *rhs;
-        self.chain.solve(&r, rhs);
+        self.chain.solve(&self.intervals, rhs);
     }
 
     /// Solves both planes into `out`, in place (no copies of the plan). Non-finite boundary
@@ -479,6 +391,35 @@ impl<T: Real> Factorized<T> {
     /// Solves one plane and returns it (a convenience for tests and tools).
     pub fn solve_plane(&self, b: &PlaneBoundary<T>) -> Result<PlanePlan<T>, PlanError> {
         solve_plane_new(self, b)
+    }
+
+    /// Both planes of the solution at local time `tau` of interval `j` (0-based, clamped to
+    /// the window), bit for bit the samples of the plan [`Factorized::solve`] gives, but with
+    /// only that interval's segments built: no plan is written.
+    pub fn sample(
+        &self,
+        x: &PlaneBoundary<T>,
+        y: &PlaneBoundary<T>,
+        j: usize,
+        tau: T,
+    ) -> Result<(Sample<T>, Sample<T>), PlanError> {
+        if !(x.all_finite() && y.all_finite()) {
+            return Err(PlanError::NonFinite);
+        }
+        if self.timing.omega == T::ZERO {
+            return Err(PlanError::Singular);
+        }
+        let mut sol = [[T::ZERO; N]; 2];
+        solve_pair(self, [x, y], &mut sol)?;
+        // One segment at a time in one buffer (a small stack), the exponentials of the sample
+        // shared by both planes as in `Segment::sample_pair`.
+        let j = j.min(M - 1);
+        let mut seg = Segment::ZERO;
+        write_segment(self, x, &sol[0], j, &mut seg);
+        let at = seg.at(tau);
+        let sx = seg.sample_at(&at);
+        write_segment(self, y, &sol[1], j, &mut seg);
+        Ok((sx, seg.sample_at(&at)))
     }
 }
 #[cfg(test)]
@@ -622,6 +563,36 @@ mod tests {
             f.solve(&bx, &by, &mut fresh).unwrap();
             f.solve(&bx, &by, &mut reused).unwrap();
             assert_eq!(reused, fresh, "case {case}: {:?}", t.durations);
+        }
+    }
+
+    /// The sample of one interval without a plan is, bit for bit, the sample of the solved
+    /// plan (eq. 18's target state), in every interval and on both sides of `λ = 1`.
+    #[test]
+    fn a_sample_without_a_plan_is_the_plan_s() {
+        let mut next = crate::test_uniform(0x1234_5678_9abc_def1_u64);
+        for case in 0..200 {
+            let mut t = timing();
+            for d in t.durations.iter_mut() {
+                *d = (libm::round(next() * 300.0)).max(1.0) * 0.005;
+            }
+            let mut bound = || {
+                let mut s = || State::new(next() - 0.5, next() - 0.5);
+                PlaneBoundary {
+                    cog_start: s(),
+                    zmp_start: s(),
+                    via: [s(), s(), s(), s(), s(), s(), s()],
+                    cog_end: s(),
+                }
+            };
+            let (bx, by) = (bound(), bound());
+            let f = Factorized::new(&t).unwrap();
+            let mut plan = Plan::zeroed(t);
+            f.solve(&bx, &by, &mut plan).unwrap();
+            let j = case % M;
+            let tau = next() * t.durations[j];
+            let want = Segment::sample_pair(&plan.x[j], &plan.y[j], tau);
+            assert_eq!(f.sample(&bx, &by, j, tau).unwrap(), want, "case {case}");
         }
     }
 
