@@ -7,24 +7,10 @@
 
 mod common;
 
-use common::{y, Bus, Rig, N};
+use common::{queue_walk, y, Bus, Rig, N};
 use planner_core::gait::{Footstep, Phase, Side};
 use planner_core::node::{NodeConfig, NodeState};
 use planner_core::wire::{ids, Command, ControlOp, RawFrame, Reason, Session, Status};
-
-/// `k` steps forward from standing (0.15 m each, from the foot ahead), numbered from the
-/// node's next, the first on the side the node expects (the right from parallel feet).
-fn queue_walk(r: &mut Rig, k: u16) {
-    let first = r.n.next_step();
-    let feet = r.n.gait().feet();
-    let x0 = feet[0].x.max(feet[1].x);
-    let right_first = r.n.gait().next_side() != Some(Side::Left);
-    for i in 0..k {
-        let left = (i % 2 == 1) == right_first;
-        let x = x0 + 0.15 * f64::from(i + 1);
-        assert_eq!(r.append(first + i, left, x, y(left)), None, "step {i}");
-    }
-}
 
 /// Runs `cycles` cycles with nothing from the controller but `gateway(k)` (frames a faulty
 /// gateway puts on the bus in cycle `k`).

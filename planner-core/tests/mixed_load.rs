@@ -6,21 +6,8 @@
 mod common;
 
 use common::*;
-use planner_core::gait::Side;
 use planner_core::node::{NodeConfig, NodeState, WORK_BUDGET, WORK_PLAN, WORK_STEP};
 use planner_core::wire::{Command, ControlOp, Measured, RawFrame, Reason};
-
-fn queue_walk(r: &mut Rig, k: u16) {
-    let first = r.n.next_step();
-    let feet = r.n.gait().feet();
-    let x0 = feet[0].x.max(feet[1].x);
-    let right_first = r.n.gait().next_side() != Some(Side::Left);
-    for i in 0..k {
-        let left = (i % 2 == 1) == right_first;
-        let x = x0 + 0.15 * f64::from(i + 1);
-        assert_eq!(r.append(first + i, left, x, y(left)), None, "step {i}");
-    }
-}
 
 /// A walking rig.
 fn walking() -> Rig {

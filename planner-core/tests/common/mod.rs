@@ -264,3 +264,17 @@ pub fn y(left: bool) -> f64 {
         -0.1
     }
 }
+
+/// `k` steps forward from standing (0.15 m each, from the foot ahead), numbered from the
+/// node's next, the first on the side the node expects (the right from parallel feet).
+pub fn queue_walk(r: &mut Rig, k: u16) {
+    let first = r.n.next_step();
+    let feet = r.n.gait().feet();
+    let x0 = feet[0].x.max(feet[1].x);
+    let right_first = r.n.gait().next_side() != Some(planner_core::gait::Side::Left);
+    for i in 0..k {
+        let left = (i % 2 == 1) == right_first;
+        let x = x0 + 0.15 * f64::from(i + 1);
+        assert_eq!(r.append(first + i, left, x, y(left)), None, "step {i}");
+    }
+}
