@@ -30,7 +30,6 @@ fn closed_and_numeric() -> (Model, Model) {
 #[test]
 fn numerical_ik_finds_the_closed_form() {
     let (closed, numeric) = closed_and_numeric();
-    let (waist, soles) = closed.stance_pose(0.2);
     let mut rng = Lcg(7);
     let mut worst = 0.0f64;
     for _ in 0..500 {
