@@ -154,6 +154,12 @@ SKIP=(
     # the root search's step count over 2,000 quartics against a grid (not measured under Miri):
     # run by `cargo test`
     timing::tests::the_search_takes_few_steps
+    # 2,000 random batches of frames ordered both ways (not measured under Miri; pure
+    # integer code on fixed arrays): run by `cargo test`
+    node::cycle::tests::the_acting_order_is_the_scanned_one
+    # the timing's table and the particular solutions over 6-8 interval lengths each, compared
+    # with their series (minutes under Miri together): run by `cargo test`
+    window::rhs::tests
     # 200 random windows planned whole and sampled interval by interval (not measured under
     # Miri; the rhs tests beside it run the same table and particulars): run by `cargo test`
     window::tests::a_sample_without_a_plan_is_the_plan_s
