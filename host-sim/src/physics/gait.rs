@@ -426,6 +426,16 @@ mod tests {
         assert!((q.cop_outside_max_m - 0.05).abs() < 1e-12);
         assert_eq!(q.violations(), ["CoP outside the support polygon"]);
         // The left foot swings and lands 25 mm from its reference.
+        let q = swing_and_land(w, half, pose(0.2, 0.125));
+        assert_eq!(q.landings, 1);
+        assert!((q.landing_err_max_m - 0.025).abs() < 1e-12);
+        assert_eq!(q.violations(), ["landing error"]);
+    }
+
+    /// The left foot swings (its reference lifted 5 cm at x 0.1) and lands at `landed` where
+    /// its reference lands at (0.2, 0.1), heading 0: the monitor's quality.
+    fn swing_and_land(w: f64, half: [f64; 2], landed: Pose) -> GaitQuality {
+        let still = [pose(0.0, 0.1), pose(0.0, -0.1)];
         let mut m = GaitMonitor::new(w, half);
         let up = [foot(0.1, 0.1, 0.05, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
         let down = [foot(0.2, 0.1, 0.0, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
@@ -433,13 +443,10 @@ mod tests {
         s.sole_force = [0.0, 600.0];
         s.cop = [0.0, -0.1];
         m.push(&s);
-        let mut s = sample([pose(0.2, 0.125), pose(0.0, -0.1)], down);
+        let mut s = sample([landed, pose(0.0, -0.1)], down);
         s.cop = [0.1, 0.0];
         m.push(&s);
-        let q = m.quality();
-        assert_eq!(q.landings, 1);
-        assert!((q.landing_err_max_m - 0.025).abs() < 1e-12);
-        assert_eq!(q.violations(), ["landing error"]);
+        m.quality()
     }
 
     fn turned(x: f64, y: f64, yaw: f64) -> Pose {
@@ -478,17 +485,7 @@ mod tests {
         assert!((q.slip_max_m - 0.015).abs() < 1e-12, "{q:?}");
         assert_eq!(q.violations(), ["slip"]);
         // The left foot lands where planned but turned 0.08 rad from its reference.
-        let mut m = GaitMonitor::new(w, half);
-        let up = [foot(0.1, 0.1, 0.05, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
-        let down = [foot(0.2, 0.1, 0.0, 0.0), foot(0.0, -0.1, 0.0, 0.0)];
-        let mut s = sample(still, up);
-        s.sole_force = [0.0, 600.0];
-        s.cop = [0.0, -0.1];
-        m.push(&s);
-        let mut s = sample([turned(0.2, 0.1, 0.08), pose(0.0, -0.1)], down);
-        s.cop = [0.1, 0.0];
-        m.push(&s);
-        let q = m.quality();
+        let q = swing_and_land(w, half, turned(0.2, 0.1, 0.08));
         assert!(q.landing_err_max_m < 1e-12 && (q.landing_yaw_err_max_rad - 0.08).abs() < 1e-9);
         assert_eq!(q.violations(), ["landing error"]);
     }
