@@ -99,6 +99,52 @@ fn eq17_is_planned_once_in_a_cycle_with_many_modifications() {
     );
 }
 
+/// A modification that no longer fits the cycle's budget is refused `Busy` before its reach
+/// checks: one out of reach after the budget is spent is answered `Busy` (sent again, it is
+/// then refused for its reach), not checked; the modifications within the budget are taken.
+#[test]
+fn a_frame_over_the_budget_is_refused_before_its_checks() {
+    let cfg = NodeConfig {
+        work_budget: planner_core::node::WORK_ADJUST,
+        ..NodeConfig::hrp2()
+    };
+    let mut r = Rig::new(cfg);
+    queue_walk(&mut r, 16);
+    assert_eq!(r.control(ControlOp::Start), None);
+    r.run(3, true);
+    let epoch = r.session.epoch;
+    let fit = (cfg.work_budget / WORK_STEP) as u16;
+    let mut frames: Vec<Command> = (1..=fit)
+        .map(|p| {
+            let (id, x, yy) = queued(&r, p);
+            r.book.modify(id, x + 0.01, yy, 0.0).unwrap()
+        })
+        .collect();
+    let (id, x, yy) = queued(&r, fit + 1);
+    let far = r.book.modify(id, x + 0.6, yy, 0.0).unwrap();
+    frames.push(far);
+    for c in &frames {
+        r.bus.rx.push_back(c.encode_in(epoch));
+    }
+    let acks = r.cycle();
+    let reasons: Vec<Option<Reason>> = acks
+        .iter()
+        .filter(|a| a.command == 0x01)
+        .map(|a| a.reason)
+        .collect();
+    let mut want = vec![None; usize::from(fit)];
+    want.push(Some(Reason::Busy));
+    assert_eq!(reasons, want);
+    // Sent again in the next cycle, it is checked: out of reach.
+    r.bus.rx.push_back(far.encode_in(epoch));
+    let acks = r.cycle();
+    assert!(
+        acks.iter()
+            .any(|a| a.command == 0x01 && a.reason == Some(Reason::Reach)),
+        "{acks:?}"
+    );
+}
+
 /// A controller that modifies every later queued step in every cycle (more than the budget
 /// left beside the step adjustment's share) does not keep the adjustment from its capture
 /// step: the adjustment works on the measured state's move in those cycles.

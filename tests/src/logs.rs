@@ -19,7 +19,7 @@ use host_sim::eval::faults::{run_case_logged, FaultKind, HEAVY};
 use host_sim::scenario::{self, built_in, BUILT_IN};
 use host_sim::sim::pushed::pushed_walk;
 use host_sim::sim::replay;
-use host_sim::sim::worst::worst_cycle;
+use host_sim::sim::worst::{worst_cycle, Path as WorstPath};
 use host_sim::sim::{simulate, start_config, SimConfig};
 use planner_core::gait::{Footstep, Reference, PREVIEW};
 use planner_core::node::{Node, NodeConfig};
@@ -40,8 +40,10 @@ pub const PUSHED_LENGTH_M: f64 = 0.2;
 /// See [`PUSHED_STEPS`].
 pub const PUSHED_DV: [f64; 2] = [0.35, 0.0];
 
-/// The worst-admissible-cycle logs (`host_sim::sim::worst`): name, started adjusting.
-pub const WORST: [(&str, bool); 2] = [("worst-start", false), ("worst-adjusting", true)];
+/// The worst-admissible-cycle logs (`host_sim::sim::worst`), one per path; the log of
+/// `Path::Measured` (`worst-measured`) runs the node with `AdjustConfig::from_measured`, as the
+/// images replay a log whose name ends in `-measured`.
+pub const WORST: [WorstPath; 5] = WorstPath::ALL;
 
 /// One host run to replay on the target.
 pub struct Case {
@@ -125,19 +127,30 @@ pub fn cases() -> Vec<Case> {
         adjusts: false,
     });
     // The worst admissible cycle (`sim::worst`): every queued step modified, the queue
-    // filled, the node's command frames all used, in a cycle that re-plans; started with
-    // `start` and with `start_adjusting` (the estimator's state every cycle, a push).
-    for (name, adjusting) in WORST {
-        let w = worst_cycle(&cfg, adjusting).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(w.replanned && !w.fallen, "{name}: {w:?}");
+    // filled, the node's command frames all used, in a cycle that re-plans; one log per path
+    // (started with `start`, or with `start_adjusting`: the estimator's state every cycle, a
+    // push; in a report cycle; the step adjustment's reach cut; `from_measured`).
+    for path in WORST {
+        let name = path.name();
+        let w = worst_cycle(&cfg, path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(w.replanned && !w.fallen, "{name}: {:?}", w.burst);
         println!(
             "{name}: burst of {} modifications, {} newer versions, {} appends, {} measured; \
-             {} refused, {} walking windows planned",
-            w.burst.0, w.burst.1, w.burst.2, w.burst.3, w.refused, w.plans
+             {} refused, {} walking windows planned, step adjustment flags {}, report cycle {}, \
+             from the measured state {}",
+            w.burst.0,
+            w.burst.1,
+            w.burst.2,
+            w.burst.3,
+            w.refused,
+            w.plans,
+            w.adjust_flags,
+            w.report,
+            w.from_measured
         );
         out.push(Case {
             name: name.to_string(),
-            cfg,
+            cfg: w.cfg,
             log: w.can_log,
             adjusts: false,
         });

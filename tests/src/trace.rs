@@ -191,7 +191,7 @@ pub struct Call {
 /// directory named after `tool` (returned): a fault-sweep row the QEMU test replays
 /// (`fault-drop-0.05`, `fault-mixed-0`, …: fig4, seed 1, the node as
 /// `faults::run_case_logged` runs it), a worst admissible cycle (`worst-start`,
-/// `worst-adjusting`: `crate::logs::WORST`), a TOML file (`….toml`) or a built-in scenario; `all`:
+/// `worst-adjusting`, `worst-report`, `worst-reach`, `worst-measured`: `crate::logs::WORST`), a TOML file (`….toml`) or a built-in scenario; `all`:
 /// every log the QEMU tests replay, in their order (`crate::logs::cases`).
 pub fn write_log(tool: &str, scenario: &str) -> Result<PathBuf, String> {
     let fail = |e: String| format!("scenario {scenario}: {e}");
@@ -208,13 +208,11 @@ pub fn write_log(tool: &str, scenario: &str) -> Result<PathBuf, String> {
     let fault = crate::logs::fault_runs()
         .into_iter()
         .find(|(name, _, _)| name == scenario);
-    let worst = crate::logs::WORST
-        .iter()
-        .find(|(name, _)| *name == scenario);
-    let (log, cfg) = if let Some(&(_, adjusting)) = worst {
+    let worst = host_sim::sim::worst::Path::named(scenario);
+    let (log, cfg) = if let Some(path) = worst {
         let cfg = planner_core::node::NodeConfig::hrp2();
-        let w = host_sim::sim::worst::worst_cycle(&cfg, adjusting).map_err(fail)?;
-        (w.can_log, cfg)
+        let w = host_sim::sim::worst::worst_cycle(&cfg, path).map_err(fail)?;
+        (w.can_log, w.cfg)
     } else if let Some((_, kind, rate)) = fault {
         let fig4 = host_sim::scenario::built_in("fig4").ok_or_else(|| fail("no fig4".into()))?;
         let (_, log) = host_sim::eval::faults::run_case_logged(&fig4, kind, rate, 1)

@@ -46,6 +46,18 @@ pub const NODE_CONFIG: planner_core::node::NodeConfig<Scalar> = walk_robot::NODE
 #[cfg(feature = "m4f")]
 pub const NODE_CONFIG: planner_core::node::NodeConfig<Scalar> = walk_robot::NODE_CONFIG_F32;
 
+/// The end of the name of a log that the image replays with [`NODE_CONFIG_MEASURED`].
+pub const MEASURED_SUFFIX: &str = "-measured";
+
+/// [`NODE_CONFIG`] with `AdjustConfig::from_measured` (a capture step's re-plan starts from
+/// the measured state; off on the board): the node of a log whose name ends in
+/// [`MEASURED_SUFFIX`] (`host_sim::sim::worst`'s `worst-measured`).
+pub const NODE_CONFIG_MEASURED: planner_core::node::NodeConfig<Scalar> = {
+    let mut cfg = NODE_CONFIG;
+    cfg.adjust.from_measured = true;
+    cfg
+};
+
 /// The node's preview gains in flash.
 #[cfg(not(feature = "m4f"))]
 #[inline(always)]

@@ -11,7 +11,8 @@
 //! log is played by `gait_loop::Player` (`planner_core::playback`'s rule, as `host-sim replay`
 //! plays a candump log) into a node built afresh from the robot's compiled-in configuration
 //! (`walk_robot::NODE_CONFIG`, as on the board; a log must start on that stance and be for
-//! its control period: see `restart_node`).
+//! its control period: see `restart_node`; a log whose name ends in `-measured` with
+//! `AdjustConfig::from_measured` on, `machine::NODE_CONFIG_MEASURED`).
 //! `tests/tests/qemu.rs` records host-sim runs, writes their logs into one such file and runs
 //! the image once on it.
 //!
@@ -201,17 +202,28 @@ static NODE: ConstStaticCell<ParkedNode<QUEUE>> =
 /// Nothing of the node's 14 KB is built on the stack. Not inlined: its frame is the start-up's
 /// stack, measured apart from the control loop's. (The image replays only logs that start on
 /// the robot's stance, the one the board starts on.)
+/// `measured`: with `machine::NODE_CONFIG_MEASURED` instead.
 #[inline(never)]
 fn start_node(
     parked: &'static mut ParkedNode<QUEUE>,
+    measured: bool,
 ) -> Result<&'static mut Node<QUEUE>, GaitError> {
-    parked.start(machine::NODE_CONFIG)
+    if measured {
+        parked.start(machine::NODE_CONFIG_MEASURED)
+    } else {
+        parked.start(machine::NODE_CONFIG)
+    }
 }
 
-/// The node afresh, in place (the next log starts from start-up): `Node::restart`.
+/// The node afresh, in place (the next log starts from start-up): `Node::restart`
+/// (`measured`: with `machine::NODE_CONFIG_MEASURED`).
 #[inline(never)]
-fn restart_node(node: &mut Node<QUEUE>) -> Result<(), GaitError> {
-    node.restart(machine::NODE_CONFIG)
+fn restart_node(node: &mut Node<QUEUE>, measured: bool) -> Result<(), GaitError> {
+    if measured {
+        node.restart(machine::NODE_CONFIG_MEASURED)
+    } else {
+        node.restart(machine::NODE_CONFIG)
+    }
 }
 
 /// The board's control loop over the image's hardware (`board.rs`).
@@ -505,10 +517,11 @@ fn main() -> ! {
             ok = false;
             break;
         }
+        let measured = name.ends_with(machine::MEASURED_SUFFIX);
         let t0 = timer.count();
         let configured = match (started.take(), parked.take()) {
-            (Some(node), _) => restart_node(node).map(|()| node),
-            (None, Some(p)) => start_node(p),
+            (Some(node), _) => restart_node(node, measured).map(|()| node),
+            (None, Some(p)) => start_node(p, measured),
             (None, None) => {
                 line!(out, "ERROR scenario={} no_node=1", name);
                 exit(debug::EXIT_FAILURE);

@@ -19,7 +19,20 @@
 //! * with the queue full, a newer version of later steps (one each), [`FAR_M`] forward: out
 //!   of reach, refused after its check, and the older version then acted on;
 //!
-//! and the `stop` a cycle later. The burst is sent at the start of its cycle, as every
+//! and the `stop` a cycle later. The paths ([`Path`]) load that cycle further: the burst in a
+//! cycle that also sends the periodic reports ([`Path::Report`]); in a walk that adjusts, a
+//! measured state in the burst that claims the largest plausible deviation, so that the step
+//! adjustment's reach cut bisects to the footstep unit (10 halvings for the 0.30 m shift) and
+//! eq. 17 checks the cut move ([`Path::Reach`]); and the same with
+//! [`planner_core::node::AdjustConfig::from_measured`], the next swing target a capture step
+//! (moved for a measured deviation in the cycles before), so that its lift-off plans from the
+//! measured state on top of the step adjustment's eq. 17 ([`Path::Measured`]). The worst
+//! admissible cycle is the worst over the paths. (Eq. 17 refusing the cut move, or the plan
+//! from the measured state, which would plan once more, is not reached with HRP-2's node:
+//! with claimed deviations of 0.05 to 0.9 m forward, backward, sideways and diagonally, and
+//! (without the option) bursts from 1 to 150 cycles before the lift-off, eq. 17 held.)
+//!
+//! The burst is sent at the start of its cycle, as every
 //! controller of host-sim sends (and as the replay rule, `planner_core::playback`, plays a
 //! log): it holds as many frames as the bus carries before the poll (at most `max_rx`).
 //! Appends go out before the modifications (the bus sends the lower identifier first). The start cycle is loaded too: the `start` comes with appends that
@@ -46,10 +59,89 @@ pub const FAR_M: f64 = 0.6;
 pub const BURST_SUPPORT: usize = 3;
 /// The push (x, y) \[m/s\] of the adjusting walk.
 pub const PUSH_DV: [f64; 2] = [0.2, 0.0];
+/// The deviation \[m\] the measured state of [`Path::Reach`] and [`Path::Measured`] claims in
+/// the burst: within the node's plausibility bound (`AdjustConfig::max_deviation`, 1.0 m), its
+/// capture offset far beyond the largest shift (`max_shift`) and the reach.
+pub const FAR_DEVIATION: [f64; 2] = [0.9, 0.0];
+/// The deviation \[m\] the measured state of [`Path::Measured`] claims in the
+/// [`CAPTURE_CYCLES`] cycles before the burst: the next swing target moves for it (a capture
+/// step).
+pub const CAPTURE_DEVIATION: [f64; 2] = [0.025, 0.0];
+/// See [`CAPTURE_DEVIATION`].
+pub const CAPTURE_CYCLES: u64 = 10;
+
+/// A path through the node's cycle that the generator loads (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// `worst-start`: the burst in a walk started with `start`.
+    Start,
+    /// `worst-adjusting`: started with `start_adjusting`, the estimator's state every cycle
+    /// and a push.
+    Adjusting,
+    /// `worst-report`: [`Path::Start`]'s burst in a cycle that sends the periodic reports
+    /// (`STATUS`, `DIAG`, `SESSION`, `LINK`).
+    Report,
+    /// `worst-reach`: [`Path::Adjusting`], the burst's measured state claiming
+    /// [`FAR_DEVIATION`] (the reach cut's whole bisection, then eq. 17's check), in a report
+    /// cycle.
+    Reach,
+    /// `worst-measured`: [`Path::Reach`] with `AdjustConfig::from_measured`, the next swing
+    /// target a capture step: its lift-off plans from the measured state after the step
+    /// adjustment's eq. 17. (The QEMU images replay a log whose name ends in `-measured` with the
+    /// option on.)
+    Measured,
+}
+
+impl Path {
+    /// Every path, in the order of the logs.
+    pub const ALL: [Path; 5] = [
+        Path::Start,
+        Path::Adjusting,
+        Path::Report,
+        Path::Reach,
+        Path::Measured,
+    ];
+
+    /// The log's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Start => "worst-start",
+            Path::Adjusting => "worst-adjusting",
+            Path::Report => "worst-report",
+            Path::Reach => "worst-reach",
+            Path::Measured => "worst-measured",
+        }
+    }
+
+    /// The path of the log `name`.
+    pub fn named(name: &str) -> Option<Path> {
+        Path::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The walk is started with `start_adjusting` (the estimator's state every cycle).
+    pub fn adjusting(self) -> bool {
+        !matches!(self, Path::Start | Path::Report)
+    }
+
+    /// The burst comes in a cycle that sends the periodic reports.
+    pub fn report(self) -> bool {
+        matches!(self, Path::Report | Path::Reach | Path::Measured)
+    }
+
+    /// The node's configuration for the path: `base`, with `from_measured` for
+    /// [`Path::Measured`].
+    pub fn config(self, base: &NodeConfig) -> NodeConfig {
+        let mut cfg = *base;
+        cfg.adjust.from_measured = self == Path::Measured;
+        cfg
+    }
+}
 
 /// What a worst-cycle run gave.
 #[derive(Clone, Debug)]
 pub struct WorstRun {
+    /// The path generated.
+    pub path: Path,
     /// The node's configuration.
     pub cfg: NodeConfig,
     /// The bus, as candump lines (`sim::bus::log_line`).
@@ -71,23 +163,43 @@ pub struct WorstRun {
     pub refused: u8,
     /// Frames the node received in the burst cycle.
     pub received: u8,
+    /// The burst cycle sent the periodic reports.
+    pub report: bool,
+    /// `ADJUST`'s flags after the burst cycle (reach limited, ZMP limited, fresh).
+    pub adjust_flags: u8,
+    /// Moves of the steps the step adjustment worked on in the burst cycle.
+    pub adjust_attempts: u32,
     /// The pendulum fell.
     pub fallen: bool,
 }
 
-/// The generator of the module docs: `adjusting` starts the walk with `start_adjusting` and
-/// sends the estimator's state every cycle, and the robot is pushed.
-pub fn worst_cycle(cfg: &NodeConfig, adjusting: bool) -> Result<WorstRun, String> {
-    // A first run without the burst: the cycles that re-plan at a start of single support.
-    let probe = run(cfg, adjusting, None, 0)?;
-    let at = probe
-        .1
-        .get(BURST_SUPPORT.saturating_sub(1))
-        .copied()
-        .ok_or("the walk has too few single supports")?;
+/// The generator of the module docs, for the path `path` with the node `base` (its
+/// configuration [`Path::config`]).
+pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
+    let cfg = &path.config(base);
+    // A first run without the burst: the cycles that re-plan at a start of single support
+    // (and the node's count of cycles then).
+    let replan = |lead: u64| -> Result<(u64, u32), String> {
+        let probe = run(cfg, path, None, 0, lead)?;
+        probe
+            .1
+            .get(BURST_SUPPORT.saturating_sub(1))
+            .copied()
+            .ok_or_else(|| "the walk has too few single supports".into())
+    };
+    let (mut at, cycle) = replan(0)?;
+    // A report cycle: the walk started as many cycles later as that takes.
+    let lead = if path.report() {
+        u64::from((21 - cycle % 20) % 20)
+    } else {
+        0
+    };
+    if lead > 0 {
+        at = replan(lead)?.0;
+    }
     // As many command frames as reach the poll (the node's `max_rx` at most).
     for cap in (1..=cfg.max_rx).rev() {
-        let (out, _) = run(cfg, adjusting, Some(at), cap)?;
+        let (out, _) = run(cfg, path, Some(at), cap, lead)?;
         let (m, v, a, e) = out.burst;
         if usize::from(out.received) == m + v + a + e {
             return Ok(out);
@@ -96,14 +208,17 @@ pub fn worst_cycle(cfg: &NodeConfig, adjusting: bool) -> Result<WorstRun, String
     Err("no burst reaches the poll".into())
 }
 
-/// One run; `burst`: the cycle of the burst. Returns the run and the cycles whose poll
-/// re-planned at the start of a single support.
+/// One run; `burst`: the cycle of the burst, `lead`: cycles by which the start is delayed.
+/// Returns the run and the cycles whose poll re-planned at the start of a single support
+/// (with the node's count of cycles after it).
 fn run(
     cfg: &NodeConfig,
-    adjusting: bool,
+    path: Path,
     burst: Option<u64>,
     cap: usize,
-) -> Result<(WorstRun, Vec<u64>), String> {
+    lead: u64,
+) -> Result<(WorstRun, Vec<(u64, u32)>), String> {
+    let adjusting = path.adjusting();
     let mut node: Node<16> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
     let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
     bus.record();
@@ -151,6 +266,7 @@ fn run(
     let p = cfg.params;
     let mut robot = Pendulum::at(node.gait().last());
     let mut out = WorstRun {
+        path,
         cfg: *cfg,
         can_log: Vec::new(),
         burst_tick: burst.unwrap_or(0),
@@ -160,6 +276,9 @@ fn run(
         plans: 0,
         refused: 0,
         received: 0,
+        report: false,
+        adjust_flags: 0,
+        adjust_attempts: 0,
         fallen: false,
     };
     let mut replans = Vec::new();
@@ -175,7 +294,7 @@ fn run(
         if k == 0 {
             frames.extend(first.iter().copied());
         }
-        if k == 1 {
+        if k == 1 + lead {
             // The start, with appends that fill the queue.
             frames.push(c.control(op).encode());
             let room = 16usize
@@ -191,8 +310,18 @@ fn run(
         if burst.is_some_and(|b| k == b + 1) {
             frames.push(c.control(ControlOp::Stop).encode());
         }
+        // The estimator's state: the robot's, or what the path claims.
+        let claimed = match burst {
+            Some(b) if k == b && matches!(path, Path::Reach | Path::Measured) => {
+                Some(FAR_DEVIATION)
+            }
+            Some(b) if path == Path::Measured && k < b && k + CAPTURE_CYCLES >= b => {
+                Some(CAPTURE_DEVIATION)
+            }
+            _ => None,
+        };
         let measured = if adjusting {
-            tracked.and_then(|(stamp, e)| Measured::from_si(stamp, e))
+            tracked.and_then(|(stamp, e)| Measured::from_si(stamp, claimed.unwrap_or(e)))
         } else {
             None
         };
@@ -236,6 +365,7 @@ fn run(
         bus.advance(t0 + 5 * ms / 2);
         let now_ms = (t0 / ms) as u32 + 2;
         let plans = node.gait().walk_plans();
+        let attempts = node.adjustment_attempts();
         let report = node.poll(now_ms, &mut nport);
         if gid0.is_none() {
             gid0 = node.gait().next_target();
@@ -244,11 +374,14 @@ fn run(
         if replan != last_replan {
             last_replan = replan;
             if matches!(report.reference.phase, Phase::Single(_)) {
-                replans.push(k);
+                replans.push((k, node.cycles()));
             }
         }
         if Some(k) == burst {
-            out.replanned = replans.last() == Some(&k);
+            out.replanned = replans.last().map(|r| r.0) == Some(k);
+            out.report = node.cycles() % 20 == 1;
+            out.adjust_flags = node.adjustment().flags;
+            out.adjust_attempts = node.adjustment_attempts().wrapping_sub(attempts);
             out.from_measured = node.gait().replanned_from_measured();
             out.plans = node.gait().walk_plans().wrapping_sub(plans);
             out.refused = report.refused;
@@ -289,29 +422,46 @@ fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use planner_core::wire::Adjust;
 
-    /// Both worst cycles fill the half cycle before the poll with footstep commands (every
-    /// queued step modified, out-of-reach versions), in a cycle that re-plans at a start of
-    /// single support, and the robot walks on.
+    /// Every path fills the half cycle before the poll with footstep commands (every queued
+    /// step modified, out-of-reach versions), in a cycle that re-plans at a start of single
+    /// support, and the robot walks on; each loads what its name says.
     #[test]
     fn the_burst_is_all_accepted_work_in_a_replanning_cycle() {
         let cfg = NodeConfig::hrp2();
-        for adjusting in [false, true] {
-            let w = worst_cycle(&cfg, adjusting).unwrap();
+        for path in Path::ALL {
+            let w = worst_cycle(&cfg, path).unwrap();
+            let adjusting = path.adjusting();
             let (mods, versions, appends, measured) = w.burst;
             let sent = mods + versions + appends + measured;
-            assert_eq!(usize::from(w.received), sent, "{adjusting}");
+            assert_eq!(usize::from(w.received), sent, "{path:?}");
             // At 1 Mbit/s the half cycle before the poll carries 17 or more frames.
-            assert!(
-                (17..=cfg.max_rx).contains(&sent),
-                "{adjusting}: {sent} frames"
-            );
-            assert!(mods >= 5, "{adjusting}: {mods} modifications");
+            assert!((17..=cfg.max_rx).contains(&sent), "{path:?}: {sent} frames");
+            assert!(mods >= 5, "{path:?}: {mods} modifications");
             assert_eq!(measured, usize::from(adjusting));
-            assert!(w.replanned, "{adjusting}: no re-plan in the burst cycle");
+            assert!(w.replanned, "{path:?}: no re-plan in the burst cycle");
             // The out-of-reach versions, and what the node's work budget leaves out (`Busy`).
-            assert!(usize::from(w.refused) >= versions, "{adjusting}: {w:?}");
-            assert!(!w.fallen, "{adjusting}");
+            assert!(usize::from(w.refused) >= versions, "{path:?}: {w:?}");
+            assert!(!w.fallen, "{path:?}");
+            let w = WorstRun {
+                can_log: vec![],
+                ..w
+            };
+            assert_eq!(w.report, path.report(), "{path:?}");
+            assert_eq!(w.cfg.adjust.from_measured, path == Path::Measured);
+            if matches!(path, Path::Reach | Path::Measured) {
+                // The reach cut, then eq. 17's check.
+                assert_ne!(w.adjust_flags & Adjust::REACH_LIMITED, 0, "{path:?}: {w:?}");
+                assert_eq!(w.adjust_attempts, 1, "{path:?}");
+            }
+            if path == Path::Measured {
+                // Eq. 17's check of the move, which the lift-off's re-plan takes: the step
+                // adjustment planned, so the tick does not plan from the measured state (the
+                // budget's charge of that try; without it, it plans a second time).
+                assert_eq!(w.plans, 1, "{w:?}");
+                assert!(!w.from_measured, "{w:?}");
+            }
         }
     }
 }

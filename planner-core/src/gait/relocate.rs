@@ -56,6 +56,18 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.measured = measured;
     }
 
+    /// The next tick re-plans at a start of single support (the re-plan that lifts the next
+    /// swing target's foot, and that a capture step's may start from the measured state).
+    pub fn replans_next_tick(&self) -> bool {
+        let Some(c) = self.cur_buf() else {
+            return false;
+        };
+        let w = &self.wins[c];
+        w.spec
+            .replan
+            .is_some_and(|j| w.starts.get(j) == Some(&w.tick.wrapping_add(1)))
+    }
+
     /// The window being executed was planned from the measured state (a capture step's window
     /// whose plan kept the ZMP in the sole; see the module docs); `false` after the start and
     /// the stop windows.

@@ -54,13 +54,17 @@
 //! from the measured state: every cycle the node hands the gait the fresh deviation `e`, the
 //! move this window made for it and the margin ([`crate::gait::Gait::set_measured`]), and
 //! the window starts with the divergent component moved by the part of `e` that the move
-//! captures ([`crate::capture::captured_deviation`]), if eq. 17 holds for it. The
+//! captures ([`crate::capture::captured_deviation`]), if eq. 17 holds for it. The try is a
+//! plan of its cycle: it takes the cycle's plan and a plan's work from the budget (a
+//! modification of the next swing target after it is refused `Busy`), and a lift-off cycle
+//! whose step adjustment planned (moved the step) re-plans from the reference's state, on the
+//! plan eq. 17 checked; so the tick plans at most once beyond the budget. The
 //! reference's COG velocity then steps at that tick; off by default, where the reference
 //! stays C¹ as the paper keeps it. A state measured against a reference before that step is
 //! refused as stale (and one taken already is no longer fresh): it counts a deviation that
 //! the window took as its own. Such a re-plan may plan twice in its cycle (the measured try,
-//! then the reference's state if eq. 17 refuses it); the cycle counts of the timing table are
-//! measured with the option off.
+//! then the reference's state if eq. 17 refuses it): the first is the one the budget counts.
+//! The timing table's worst admissible cycle includes a log with the option on.
 //!
 //! Every change of the shift is sent in `ADJUST` (and repeated every 100 ms while the walk
 //! adjusts or once the session has adjusted), so that
@@ -305,10 +309,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.move_steps(fresh);
         }
         // What a re-plan of a capture step starts from: the fresh measurement and the move
-        // this window made for it (nothing without a fresh state or a move).
+        // this window made for it (nothing without a fresh state or a move). The try is a plan
+        // of the cycle (its budget): in the cycle whose tick re-plans, it takes the cycle's plan
+        // and a plan's work, so that the tick plans at most once more, uncounted (the plan from
+        // the reference's state if eq. 17 refuses the try); a cycle whose step adjustment
+        // planned (eq. 17 of a move) re-plans from the reference's state, on that plan.
         let (shift, base) = (self.adj.shift, self.adj.base);
+        let tries = adjusting && self.cfg.adjust.from_measured && shift != base;
+        let charged = tries && (!self.gait.replans_next_tick() || self.charge_plan());
         let measured = match fresh {
-            Some((_, e)) if adjusting && self.cfg.adjust.from_measured && shift != base => {
+            Some((_, e)) if charged => {
                 let unit = T::of(STEP_UNIT);
                 let moved = |k: usize| T::of_i32(shift[k].saturating_sub(base[k])) * unit;
                 Deviation {
@@ -320,6 +330,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             _ => Deviation::ZERO,
         };
         self.gait.set_measured(measured);
+    }
+
+    /// Takes a plan and its work ([`WORK_PLAN`]) from the cycle's budget, if it has them.
+    fn charge_plan(&mut self) -> bool {
+        if self.plans_left == 0 || self.afford(WORK_PLAN).is_err() {
+            return false;
+        }
+        self.plans_left -= 1;
+        self.spend(WORK_PLAN);
+        true
     }
 
     /// The move of the steps for a fresh measured state (see the module docs).
@@ -383,8 +403,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return;
         }
         // Only a move spends the adjustment's share: a state that moves nothing leaves it to
-        // the modification that plans.
-        self.spend(WORK_ADJUST);
+        // the modification that plans. The reach cut's part now, eq. 17's (a plan's work) when
+        // it plans: a move the reach cuts to nothing leaves a plan's work to the cycle.
+        self.spend(WORK_ADJUST.saturating_sub(WORK_PLAN));
         self.adj.attempts = self.adj.attempts.wrapping_add(1);
         let old = self.adj.shift;
         let mut flags = self.adj.flags & Adjust::FRESH;
@@ -408,6 +429,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         // Eq. 17 (plans: the cycle's budget).
         self.plans_left = self.plans_left.saturating_sub(1);
+        self.spend(WORK_PLAN);
         if self.gait.check_next_target().is_err() {
             let _ = self.place_shift(old);
             self.adj.halvings = self.adj.halvings.saturating_add(1);

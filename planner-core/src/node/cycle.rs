@@ -188,6 +188,34 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         out
     }
 
+    /// `true` if `decoded` is a footstep command whose own work no longer fits the cycle's
+    /// budget (an append's, or the checks of a modification that does not plan): it is refused
+    /// `Busy` before its reach checks, so that a refusal for the budget costs little more than
+    /// it spends. (A repeat, a stale version or an append out of sequence is left to its own
+    /// answer, which carries out nothing either; a modification that plans, to its checks.)
+    fn over_budget(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+        match decoded {
+            Ok(Command::Append(s)) => s.id == self.next_step() && self.afford(WORK_APPEND).is_err(),
+            Ok(Command::Modify(m)) => {
+                self.afford(WORK_STEP).is_err()
+                    && !self.plans_modify(self.gait_id(m.id))
+                    && self
+                        .steps
+                        .queued_find(m.id)
+                        .is_some_and(|(_, r)| m.is_newer_than(r.version))
+            }
+            _ => false,
+        }
+    }
+
+    /// Refuses the command frame `f`, `decoded`, `Busy`, unread beyond its decoding.
+    fn busy(&mut self, f: &RawFrame, decoded: &Result<Command, (Reason, u8)>, act: &mut Acting) {
+        self.refuse(Reason::Busy);
+        let ack = self.refusal(f, decoded, Reason::Busy);
+        act.refused = act.refused.saturating_add(1);
+        self.enqueue(ack.encode());
+    }
+
     pub(super) fn enqueue(&mut self, f: RawFrame) {
         if self.tx.push_back(f).is_err() {
             self.counters.tx_dropped = self.counters.tx_dropped.saturating_add(1);
@@ -289,6 +317,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     later |= 1 << (i & 63);
                     continue;
                 }
+            }
+            let stale = act.stop_at.is_some_and(|s| usize::from(i) < s);
+            if !stale && self.over_budget(&decoded) {
+                self.busy(f, &decoded, &mut act);
+                continue;
             }
             let stop_now = rank(f) == 1;
             let accepted = self.act(usize::from(i), f, decoded, &mut act, now_ms);
