@@ -173,3 +173,53 @@ fn g1s_former_limits_are_not_reached() {
     assert!(!bad.is_empty(), "G1's former limits reached everywhere");
     println!("G1's former limits: {} not reached, {}", bad.len(), bad[0]);
 }
+
+/// The engine's waist search where G1's rear leg is at the end of its reach (a tick of a
+/// capture step after a push, taken from a run that stopped there): the leg's inverse
+/// kinematics saturates, the COG Jacobian is rough, and a whole Newton step threw the waist
+/// half a metre behind the feet, where the next tick's inverse kinematics failed. Each step is
+/// now taken only as far as it brings the COG nearer its target.
+#[test]
+fn g1s_waist_search_stays_with_a_leg_at_the_end_of_its_reach() {
+    let test = "g1s_waist_search_stays_with_a_leg_at_the_end_of_its_reach";
+    let Some(path) = urdf::robot_file(urdf::G1, test) else {
+        return;
+    };
+    let robot = import(&path, None).expect("G1 imports").robot;
+    let engine = host_sim::physics::model::Robot::of(&robot);
+    let soles = [
+        Pose::upright(0.7635, 0.0295, -2.327e-5, 0.0),
+        Pose::upright(0.428_574_218_5, -0.208_255_078_2, 0.001_383_296_9, 0.0),
+    ];
+    let target = [0.669_444_326_8, -0.013_307_712_3];
+    let start = Pose::upright(
+        0.699_370_969_7,
+        -0.000_859_783_3,
+        engine.waist_height(),
+        0.0,
+    );
+    let cog_error = |w: &Pose| {
+        let q = [
+            engine.leg_ik(Side::Left, w, &soles[0]).expect("left"),
+            engine.leg_ik(Side::Right, w, &soles[1]).expect("right"),
+        ];
+        let c = engine.fk(w, &q).2;
+        (target[0] - c[0]).hypot(target[1] - c[1])
+    };
+    let before = cog_error(&start);
+    let (w, _) = engine
+        .solve_waist(start, &soles, target)
+        .expect("the waist search ends");
+    let after = cog_error(&w);
+    assert!(after <= before, "COG error {before} → {after} m");
+    // The waist stays over the feet (between the rear sole and the front one, along x).
+    assert!(
+        (soles[1].p[0]..=soles[0].p[0]).contains(&w.p[0]),
+        "waist at {:?}",
+        w.p
+    );
+    println!(
+        "COG error {before:.4} → {after:.4} m, waist at x {:.4}",
+        w.p[0]
+    );
+}
