@@ -149,7 +149,11 @@ mod tests {
             half_width: 0.05,
         };
         let cs = corners(&r);
-        assert!(cs.len() >= 18, "{}", cs.len());
+        // No turn: forward 0.30 m at 0.15 m across, where the feet-distance circle (0.361 m)
+        // meets the box at 0.28 m across and at 0.30 m forward (two), backward at both widths,
+        // the widest step; turned either way (0.21 m forward left), the box's four and the
+        // widest step.
+        assert_eq!(cs.len(), 6 + 5 + 5, "{cs:?}");
         for c in &cs {
             let step = |k: f64| Footstep {
                 side: Side::Left,
