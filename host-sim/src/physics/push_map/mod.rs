@@ -120,7 +120,7 @@ pub struct Cell {
     pub bw_fraction: f64,
     /// Steps landed away from their commanded positions in that run.
     pub steps_adjusted: usize,
-    /// Engine runs of the bisection.
+    /// Engine runs of the bisection (and of the scan, with `--scan`).
     pub runs: usize,
     /// The gait measures of the run at the largest force walked through (of the unpushed
     /// run when none was): slip, flight, the CoP outside the support polygon and the landing
@@ -368,6 +368,11 @@ pub fn scan_cell(
         let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
         Ok(!o.fell)
     })?;
+    // Every tried push is one engine run: the bisection's and the scan's.
+    let cell = Cell {
+        runs: scan.tried.len(),
+        ..cell
+    };
     Ok((cell, scan))
 }
 
