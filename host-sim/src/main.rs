@@ -12,7 +12,7 @@
 //!                                  faults in MuJoCo
 //! host-sim physics-sequence [--out DIR] [--before M] [--afters M,M,...] [PROBE] [--robot FILE]
 //!                                  consecutive modified steps in MuJoCo, plain and proposed
-//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D [--scan]] [--push force|velocity] [PROBE] [--robot FILE]
+//! host-sim push-map [--out DIR] [--quick] [--phases P,...] [--directions D,...] [--cell C,P,D] [--scan] [--push force|velocity] [PROBE] [--robot FILE]
 //!                                  the push-recovery map in MuJoCo, with and without step adjustment
 //! host-sim node <interface> [--seconds S] [--robot FILE]   the node on SocketCAN (feature `socketcan`)
 //!
@@ -224,10 +224,11 @@ enum Cmd {
         /// How a push is given: a force for 0.1 s, or the base's velocity set at one instant.
         #[arg(long, value_name = "force|velocity", default_value = "force", value_parser = ["force", "velocity"])]
         push: String,
-        /// With `--cell`: also push around the bisected force (4 forces above, 4 below, 0.05
-        /// body weight apart) and give, under `scan`, the largest force below which every
-        /// tried push survived, the fraction survived above it and the cell's spread.
-        #[arg(long, requires = "cell")]
+        /// Also push around each cell's bisected force (4 forces above, 4 below, 0.05 body
+        /// weight apart) and give, under `scan`, the largest force below which every tried
+        /// push survived, the fraction survived above it and the cell's spread; in a map, the
+        /// table and summary carry them and compare the configurations beyond the spread.
+        #[arg(long)]
         scan: bool,
         #[command(flatten)]
         probe: ProbeArgs,

@@ -1,13 +1,15 @@
 //! Every biped of PyPI's `example-robot-data` with two six-joint legs (found here from the
-//! URDFs, not listed by hand): each is imported with soles that fit its feet and stands in
-//! MuJoCo (and walks `straight` by the engine's walked verdict, for those that walk today), or
-//! is refused with a reason
-//! naming what is missing. A biped the package adds, or one whose outcome changes, fails the
-//! test until the table below says what it does. The soles of the feet Coal reads (not COLLADA)
-//! are compared with Pinocchio's placement of the same geometry.
+//! URDFs, not listed by hand): each is imported with soles that fit its feet, stands in MuJoCo
+//! and walks every built-in scenario under ideal and realistic sensors by the engine's walked
+//! verdict (no fall; slip, flight, CoP and landings within their bounds; the exceptions, each
+//! with its measure and why, in [`NOT_WALKED`]), or is refused with a reason naming what is
+//! missing. A biped the package adds, or one whose outcome changes,
+//! fails the test until the table below says what it does. The soles of the feet Coal reads
+//! (not COLLADA) are compared with Pinocchio's placement of the same geometry.
 //!
-//! The default run imports every one and stands iCub and Romeo in the engine; `WALK_LONG=1` stands every
-//! imported one and walks `straight` with those that walk.
+//! The default run imports every one, stands iCub and Romeo in the engine and walks
+//! [`QUICK_WALKS`]; `WALK_LONG=1` stands every imported one and walks every built-in scenario
+//! under both sensor models with each ([`SENSORS`]).
 
 mod engine;
 mod urdf;
@@ -18,11 +20,13 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 
 use engine::engine_here;
+use host_sim::physics::sensors::SensorModel;
 use host_sim::physics::{run, start::stands, PhysicsConfig};
 use host_sim::robot::import::import;
 use host_sim::robot::import::sole::{CONTACT_BAND_M, SOLE_COVER};
 use host_sim::robot::model::{norm, rot_rpy, sub, Pose};
 use host_sim::robot::Robot;
+use host_sim::scenario::BUILT_IN;
 use host_sim::sim::scenario_trajectory;
 use planner_core::gait::Side;
 use urdf::{all_robot_files, pinocchio_here};
@@ -30,21 +34,43 @@ use urdf::{all_robot_files, pinocchio_here};
 /// What a biped does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Outcome {
-    /// Imported; stands and walks `straight` in MuJoCo (by the engine's walked verdict: no fall,
-    /// slip, flight, CoP and landings within their bounds).
+    /// Imported; stands and walks every built-in scenario under both sensor models by the
+    /// engine's walked verdict (no fall, slip, flight, CoP and landings within their bounds).
     Walks,
-    /// Imported; stands in MuJoCo and walks `straight` without a fall, but with the gait
-    /// measure named here beyond its bound (so not walked by the verdict).
-    Outside(&'static str),
     /// Refused, the message containing this.
     Refused(&'static str),
 }
+
+/// The sensor models every biped walks under: the engine's values, and noise, bias and 2 ms
+/// of latency with the stabilizer's gains for that delay (as `--sensors realistic`).
+const SENSORS: [(&str, SensorModel); 2] = [
+    ("ideal", SensorModel::IDEAL),
+    ("realistic", SensorModel::REALISTIC),
+];
+
+/// The walks that stay up but are not walked by the verdict: (biped, scenario, sensors, the
+/// gait measure beyond its bound). Alexander's `lateral` under ideal sensors lands 21.4 mm
+/// from its planned place (bound 20 mm) with its feet sliding 1.8 mm: the landing error is
+/// the feet's drift from the plan over 13 landings (the stabilizer commands each swing from the
+/// support foot's planned place, not its measured one), not a slide.
+const NOT_WALKED: &[(&str, &str, &str, &str)] = &[(
+    "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf",
+    "lateral",
+    "ideal",
+    "landing",
+)];
+
+/// The walks of the default run: (biped, scenario, sensors).
+const QUICK_WALKS: &[(&str, &str, &str)] = &[
+    ("icub_description/robots/icub.urdf", "straight", "realistic"),
+    ("romeo_description/urdf/romeo.urdf", "lateral", "ideal"),
+];
 
 /// The bipeds of example-robot-data 6.0.0, by the path under its `robots/` directory.
 const BIPEDS: &[(&str, Outcome)] = &[
     (
         "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf",
-        Outcome::Outside("landing"),
+        Outcome::Walks,
     ),
     ("g1_description/urdf/g1_29dof_rev_1_0.urdf", Outcome::Walks),
     (
@@ -330,31 +356,40 @@ fn every_biped_of_example_robot_data_imports_stands_and_walks_or_is_refused() {
             continue;
         }
         stands(&r).unwrap_or_else(|e| panic!("{tail}: {e}"));
-        if let (Outcome::Outside(measure), true) = (want, long()) {
-            let (_, trajectory, dt) = scenario_trajectory("straight", &r).expect("straight");
-            let out = run(&trajectory, dt, &PhysicsConfig::for_robot(&r)).expect("the engine");
-            let text = out.report.walked_text();
-            assert!(
-                !out.report.fell && !out.report.walked() && text.contains(measure),
-                "{tail}: straight: {text}: {:?}",
-                out.report
-            );
-            println!("{tail}: straight: no fall, not walked: {text}");
+        if want != Outcome::Walks {
+            continue;
         }
-        if want == Outcome::Walks && long() {
-            let (_, trajectory, dt) = scenario_trajectory("straight", &r).expect("straight");
-            let out = run(&trajectory, dt, &PhysicsConfig::for_robot(&r)).expect("the engine");
-            if out.report.walked() {
-                println!(
-                    "{tail}: straight: walked, tilt {:.2}°",
-                    out.report.max_tilt_deg
-                );
-            } else {
-                not_walked.push(format!(
-                    "{tail}: straight: {}: {:?}",
-                    out.report.walked_text(),
-                    out.report
-                ));
+        for scenario in BUILT_IN {
+            for (sensors, model) in SENSORS {
+                if !long() && !QUICK_WALKS.contains(&(tail.as_str(), scenario, sensors)) {
+                    continue;
+                }
+                let (_, trajectory, dt) = scenario_trajectory(scenario, &r).expect("built in");
+                let mut cfg = PhysicsConfig::for_robot(&r);
+                cfg.sensors = model;
+                cfg.gains = cfg.gains.for_delay(model.latency_ticks as f64 * 1e-3);
+                let out = run(&trajectory, dt, &cfg).expect("the engine");
+                let what = format!("{tail}: {scenario}, {sensors} sensors");
+                let known = NOT_WALKED
+                    .iter()
+                    .find(|k| (k.0, k.1, k.2) == (tail.as_str(), scenario, sensors));
+                let text = out.report.walked_text();
+                if let Some(k) = known {
+                    if out.report.fell || out.report.walked() || !text.contains(k.3) {
+                        not_walked.push(format!("{what}: expected no fall and {}: {text}", k.3));
+                    } else {
+                        println!("{what}: no fall, not walked: {text}");
+                    }
+                } else if out.report.walked() {
+                    println!("{what}: walked, tilt {:.2}°", out.report.max_tilt_deg);
+                } else {
+                    println!("{what}: {}", out.report.walked_text());
+                    not_walked.push(format!(
+                        "{what}: {}: {:?}",
+                        out.report.walked_text(),
+                        out.report
+                    ));
+                }
             }
         }
     }

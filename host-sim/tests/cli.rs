@@ -725,12 +725,12 @@ fn push_map_refuses_directions_out_of_range() {
     }
 }
 
-/// `push-map --scan` scans one cell: without `--cell` it is a usage error naming `--cell`
+/// `push-map --scan` pushes with forces: with `--push velocity` it is an error naming both
 /// (before any engine run).
 #[test]
-fn push_map_scan_needs_a_cell() {
-    let o = host_sim(&["push-map", "--scan"]);
+fn push_map_scan_needs_force_pushes() {
+    let o = host_sim(&["push-map", "--scan", "--push", "velocity"]);
     assert!(!o.status.success());
     let t = text(&o);
-    assert!(t.contains("--cell"), "{t}");
+    assert!(t.contains("--scan") && t.contains("--push velocity"), "{t}");
 }

@@ -335,6 +335,7 @@ fn a_failed_cell_is_reported_not_counted() {
         steppings: Stepping::ALL.to_vec(),
         threads: 1,
         convention: Convention::Force,
+        scan: false,
     };
     let ok = |s: Stepping, d: f64, bw: f64| Cell {
         stepping: s,
@@ -348,6 +349,7 @@ fn a_failed_cell_is_reported_not_counted() {
         runs: 3,
         gait: Default::default(),
         error: None,
+        scan: None,
     };
     let cause = "left ankle out of reach: 0.6980 m, reach 0.6983 m";
     let cells = vec![
@@ -374,6 +376,93 @@ fn a_failed_cell_is_reported_not_counted() {
     assert_eq!(plain[1]["error"].as_str(), Some(cause));
     assert!(plain[0].get("error").is_none());
     assert!((plain[0]["impulse_ns"].as_f64().unwrap() - 500.0 * PUSH_S).abs() < 1e-12);
+}
+
+/// A map with `--scan`: each cell's sure force and the share survived above it are in the
+/// table and the JSON, the summary counts the cells whose survival is not monotonic, and the
+/// proposed method is compared with the plain re-plan only beyond the cells' spread.
+#[test]
+fn a_scanned_map_carries_the_scan_and_compares_beyond_the_spread() {
+    use host_sim::physics::push_scan::Scan;
+    let spec = MapSpec {
+        phases: vec![PushPhase::Double],
+        directions: vec![0.0, 90.0],
+        resolution_bw: 0.02,
+        steppings: Stepping::ALL.to_vec(),
+        threads: 1,
+        convention: Convention::Force,
+        scan: true,
+    };
+    let cell = |s: Stepping, d: f64, tried: Vec<(f64, bool)>| {
+        let scan = Scan::of(tried);
+        let bw = scan
+            .tried
+            .iter()
+            .filter(|t| t.1)
+            .map(|t| t.0)
+            .fold(0.0, f64::max);
+        Cell {
+            stepping: s,
+            phase: PushPhase::Double,
+            direction_deg: d,
+            convention: Convention::Force,
+            max_force_n: bw * 1000.0,
+            dv_mps: bw,
+            bw_fraction: bw,
+            steps_adjusted: 0,
+            runs: scan.tried.len(),
+            gait: Default::default(),
+            error: None,
+            scan: Some(scan),
+        }
+    };
+    let cells = vec![
+        cell(Stepping::Fixed, 0.0, vec![(0.2, true), (0.3, false)]),
+        cell(Stepping::Fixed, 90.0, vec![(0.2, true), (0.3, false)]),
+        // Plain at 0°: falls at 0.35, survives 0.40 and 0.45 (a capture step): sure 0.30,
+        // spread 0.10; the bisection alone would say 0.45.
+        cell(
+            Stepping::Plain,
+            0.0,
+            vec![
+                (0.3, true),
+                (0.35, false),
+                (0.4, true),
+                (0.45, true),
+                (0.5, false),
+            ],
+        ),
+        cell(Stepping::Plain, 90.0, vec![(0.2, true), (0.25, false)]),
+        // Proposed at 0°: sure 0.35, 0.05 above plain's, inside plain's spread: no difference.
+        cell(Stepping::Proposed, 0.0, vec![(0.35, true), (0.4, false)]),
+        // Proposed at 90°: sure 0.40 against 0.20, beyond both spreads: larger.
+        cell(Stepping::Proposed, 90.0, vec![(0.4, true), (0.45, false)]),
+    ];
+    let md = markdown(&spec, &cells);
+    assert!(md.contains("0.450 (0.45; sure 0.30, 50 % above)"), "{md}");
+    let sums = summary_lines(&spec, &cells);
+    assert!(
+        sums.contains(
+            "plain (scan): mean sure force 0.250 BW; a push survived above a fall in 1 of 2 cells"
+        ),
+        "{sums}"
+    );
+    assert!(
+        sums.contains(
+            "proposed against plain, sure force beyond the cells' spread: larger in 1 of 2 cells, \
+             smaller in 0, within the spread in 1"
+        ),
+        "{sums}"
+    );
+    // The bisection's comparison alone counts the 0° cell as worse.
+    assert!(
+        sums.contains("proposed against plain: larger in 1 of 2 cells, smaller in 1"),
+        "{sums}"
+    );
+    let j = host_sim::physics::push_map::map_json("test", 100.0, &spec, &cells);
+    let plain = j["configs"]["plain"].as_array().unwrap();
+    assert!((plain[0]["scan"]["sure_bw"].as_f64().unwrap() - 0.3).abs() < 1e-12);
+    assert!((plain[0]["scan"]["spread_bw"].as_f64().unwrap() - 0.1).abs() < 1e-12);
 }
 
 /// A malformed `push-map --cell` is refused with the expected form (the cell itself is

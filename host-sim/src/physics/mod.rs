@@ -50,6 +50,7 @@ pub mod sequence;
 pub mod stabilizer;
 pub mod start;
 pub mod tables;
+mod waist;
 
 use crate::robot::model::{mean_yaw, Pose};
 use bridge::Engine;

@@ -67,6 +67,7 @@ pub const SERVO_KD: f64 = 600.0;
 pub const ARMATURE: f64 = 0.3;
 /// Largest hip–ankle distance the IK is asked for, as a fraction of the leg's reach.
 pub const REACH_FRACTION: f64 = 0.9995;
+
 /// Half-extents of HRP-2's sole box \[m\]: 0.24 × 0.14 × 0.08 (the robot of
 /// [`Robot::new`]; [`Robot::of`] takes the robot file's).
 pub const SOLE_HALF: Vec3 = [0.12, 0.07, 0.04];
@@ -653,52 +654,6 @@ impl Robot {
             out.push((sole.to_string(), fr.sole));
         }
         out
-    }
-
-    /// Finds the waist position (orientation `r`, at height `z`) that puts the whole-body COG
-    /// at `target` (x, y) with the soles at `soles`: Newton's method as in
-    /// [`Model::solve_waist`], but for any waist orientation. Returns the waist pose and the
-    /// joint angles.
-    pub fn solve_waist(
-        &self,
-        waist: Pose,
-        soles: &[Pose; 2],
-        target: [f64; 2],
-    ) -> Result<(Pose, [LegAngles; 2]), String> {
-        const H: f64 = 1e-6;
-        let cog = |w: &Pose| -> Result<(Vec3, [LegAngles; 2]), String> {
-            let q = [
-                self.leg_ik(Side::Left, w, &soles[0])?,
-                self.leg_ik(Side::Right, w, &soles[1])?,
-            ];
-            Ok((self.fk(w, &q).2, q))
-        };
-        let mut w = waist;
-        for _ in 0..8 {
-            let (c, q) = cog(&w)?;
-            let e = [target[0] - c[0], target[1] - c[1]];
-            if e[0].hypot(e[1]) < 1e-9 {
-                return Ok((w, q));
-            }
-            let mut wx = w;
-            wx.p[0] += H;
-            let mut wy = w;
-            wy.p[1] += H;
-            let (cx, _) = cog(&wx)?;
-            let (cy, _) = cog(&wy)?;
-            let j = [
-                [(cx[0] - c[0]) / H, (cy[0] - c[0]) / H],
-                [(cx[1] - c[1]) / H, (cy[1] - c[1]) / H],
-            ];
-            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            if det.abs() < 1e-9 || !det.is_finite() {
-                return Err("waist search: singular COG Jacobian".into());
-            }
-            w.p[0] += (j[1][1] * e[0] - j[0][1] * e[1]) / det;
-            w.p[1] += (-j[1][0] * e[0] + j[0][0] * e[1]) / det;
-        }
-        let (_, q) = cog(&w)?;
-        Ok((w, q))
     }
 }
 

@@ -58,7 +58,8 @@ pub struct MapArgs<'a> {
     pub cell: Option<&'a str>,
     /// `--push force|velocity`.
     pub push: &'a str,
-    /// `--scan`: the cell's scan around its bisected force ([`crate::physics::push_scan`]).
+    /// `--scan`: each cell's scan around its bisected force ([`crate::physics::push_scan`]),
+    /// in the cell's line or in the map's table, JSON and summary.
     pub scan: bool,
 }
 
@@ -118,6 +119,10 @@ pub fn cli(
     }
     spec.convention = Convention::parse(args.push)
         .ok_or_else(|| format!("--push {:?}: force or velocity", args.push))?;
+    if args.scan && spec.convention != Convention::Force {
+        return Err("--scan pushes with forces: not with --push velocity".into());
+    }
+    spec.scan = args.scan;
     let cell_asked = args.cell.map(parse_cell).transpose()?;
     // An engine that cannot start fails the command, not each cell.
     crate::physics::bridge::installed_version(&crate::physics::bridge::python())?;
@@ -126,9 +131,6 @@ pub fn cli(
     let mass = cfg.robot.total_mass();
     if let Some((s, p, d)) = cell_asked {
         let (c, scan) = if args.scan {
-            if spec.convention != Convention::Force {
-                return Err("--scan pushes with forces: not with --push velocity".into());
-            }
             match scan_cell(&node, &cfg, s, p, d, spec.resolution_bw) {
                 Ok((c, scan)) => (c, Some(scan)),
                 Err(e) => (Cell::failed(s, p, d, e), None),

@@ -120,7 +120,7 @@ pub struct Cell {
     pub bw_fraction: f64,
     /// Steps landed away from their commanded positions in that run.
     pub steps_adjusted: usize,
-    /// Engine runs of the bisection.
+    /// Engine runs of the bisection (and of the scan, with `--scan`).
     pub runs: usize,
     /// The gait measures of the run at the largest force walked through (of the unpushed
     /// run when none was): slip, flight, the CoP outside the support polygon and the landing
@@ -128,6 +128,8 @@ pub struct Cell {
     pub gait: super::gait::GaitQuality,
     /// Why the cell could not be measured (its force fields are then 0).
     pub error: Option<String>,
+    /// The scan around the bisected force (`--scan`; [`super::push_scan`]).
+    pub scan: Option<super::push_scan::Scan>,
 }
 
 impl Cell {
@@ -153,6 +155,9 @@ impl Cell {
         }
         if let Some(e) = &self.error {
             j["error"] = Value::String(e.clone());
+        }
+        if let Some(scan) = &self.scan {
+            j["scan"] = scan.json();
         }
         j
     }
@@ -181,6 +186,7 @@ impl Cell {
             runs: 0,
             gait: Default::default(),
             error: Some(error),
+            scan: None,
         }
     }
 }
@@ -200,6 +206,8 @@ pub struct MapSpec {
     pub threads: usize,
     /// How the pushes are given.
     pub convention: Convention,
+    /// Each cell also scanned around its bisected force (forces only; [`scan_cell`]).
+    pub scan: bool,
 }
 
 impl MapSpec {
@@ -216,6 +224,7 @@ impl MapSpec {
                 steppings: Stepping::ALL.to_vec(),
                 threads,
                 convention: Convention::Force,
+                scan: false,
             }
         } else {
             Self {
@@ -225,6 +234,7 @@ impl MapSpec {
                 steppings: Stepping::ALL.to_vec(),
                 threads,
                 convention: Convention::Force,
+                scan: false,
             }
         }
     }
@@ -321,6 +331,7 @@ pub fn bisect_tried(
         runs,
         gait,
         error: None,
+        scan: None,
     };
     Ok((cell, tried))
 }
@@ -357,6 +368,11 @@ pub fn scan_cell(
         let o = run(node, cfg, Walk::default(), stepping, Some(push))?;
         Ok(!o.fell)
     })?;
+    // Every tried push is one engine run: the bisection's and the scan's.
+    let cell = Cell {
+        runs: scan.tried.len(),
+        ..cell
+    };
     Ok((cell, scan))
 }
 
@@ -407,7 +423,17 @@ pub fn map(node: &NodeConfig, cfg: &PhysicsConfig, spec: &MapSpec) -> Vec<Cell> 
                 let Some(&(s, p, d)) = jobs.get(i) else {
                     break;
                 };
-                let r = cell(node, cfg, s, p, d, spec.resolution_bw, spec.convention);
+                let r = if spec.scan {
+                    match scan_cell(node, cfg, s, p, d, spec.resolution_bw) {
+                        Ok((c, scan)) => Cell {
+                            scan: Some(scan),
+                            ..c
+                        },
+                        Err(e) => Cell::failed(s, p, d, e),
+                    }
+                } else {
+                    cell(node, cfg, s, p, d, spec.resolution_bw, spec.convention)
+                };
                 bar.inc(format!("{}, {}, {d}°", s.name(), p.name()));
                 if let Ok(mut v) = results.lock() {
                     v[i] = Some(r);
@@ -503,7 +529,63 @@ pub fn summary_lines(spec: &MapSpec, cells: &[Cell]) -> String {
         s += &format!(
             "proposed against plain: larger in {larger} of {n} cells, smaller in {smaller}\n"
         );
+        if spec.scan {
+            s += &scan_lines(spec, cells);
+        }
     }
+    s
+}
+
+/// With `--scan`: per configuration, the cells whose survival is not monotonic in the force
+/// (a push survived above a fall) and the mean sure force; the proposed method against the
+/// plain re-plan where their `sure_bw` differ beyond the larger of the two cells' spreads
+/// ([`super::push_scan::beyond_spread`]).
+fn scan_lines(spec: &MapSpec, cells: &[Cell]) -> String {
+    let scanned = |st: Stepping| -> Vec<&Cell> {
+        cells
+            .iter()
+            .filter(|c| c.stepping == st && c.scan.is_some())
+            .collect()
+    };
+    let mut s = String::new();
+    for &st in &spec.steppings {
+        let mine = scanned(st);
+        let mixed = mine
+            .iter()
+            .filter(|c| c.scan.as_ref().is_some_and(|x| x.survived_above > 0.0))
+            .count();
+        let mean = mine
+            .iter()
+            .filter_map(|c| c.scan.as_ref().map(|x| x.sure_bw))
+            .sum::<f64>()
+            / mine.len().max(1) as f64;
+        s += &format!(
+            "{} (scan): mean sure force {mean:.3} BW; a push survived above a fall in {mixed} of {} cells\n",
+            st.name(),
+            mine.len()
+        );
+    }
+    let (mut larger, mut smaller, mut inside) = (0, 0, 0);
+    for a in scanned(Stepping::Proposed) {
+        let Some(b) = scanned(Stepping::Plain)
+            .into_iter()
+            .find(|b| b.phase == a.phase && b.direction_deg == a.direction_deg)
+        else {
+            continue;
+        };
+        if let (Some(x), Some(y)) = (&a.scan, &b.scan) {
+            match super::push_scan::beyond_spread(x, y, spec.resolution_bw) {
+                Some(std::cmp::Ordering::Greater) => larger += 1,
+                Some(std::cmp::Ordering::Less) => smaller += 1,
+                _ => inside += 1,
+            }
+        }
+    }
+    s += &format!(
+        "proposed against plain, sure force beyond the cells' spread: larger in {larger} of {} \
+         cells, smaller in {smaller}, within the spread in {inside}\n",
+        larger + smaller + inside
+    );
     s
 }
 
@@ -594,6 +676,14 @@ pub fn markdown(spec: &MapSpec, cells: &[Cell]) -> String {
                     Some(c) => {
                         if velocity {
                             s += &format!(" {:.3} |", c.dv_mps);
+                        } else if let Some(x) = &c.scan {
+                            s += &format!(
+                                " {:.3} ({:.2}; sure {:.2}, {:.0} % above) |",
+                                c.dv_mps,
+                                c.bw_fraction,
+                                x.sure_bw,
+                                100.0 * x.survived_above
+                            );
                         } else {
                             s += &format!(" {:.3} ({:.2}) |", c.dv_mps, c.bw_fraction);
                         }

@@ -35,9 +35,10 @@
 //!   whole-body COG height there.
 //! * **The reach limits**: HRP-2's limits scaled by the ratio `k` of the legs' workspace
 //!   radius at the walking height, `r = √((0.97 L)² − h²)` (`L` the leg length, `h` hip to
-//!   ankle height, a 3 % knee margin), to HRP-2's; then shrunk by 10 % steps until the
-//!   numerical inverse kinematics reaches the longest step (forward and backward) and the
-//!   widest stance in double support with the waist midway, within the joint ranges. The
+//!   ankle height, a 3 % knee margin), to HRP-2's; then shrunk by steps of 0.01 of HRP-2's
+//!   until the leg's inverse kinematics reaches every corner of the limits, with the feet
+//!   1 cm farther apart and the waist anywhere from 30 % to 70 % of the way between them, and
+//!   with the waist midway within the joint ranges ([`reach`]; refused below 0.1). The
 //!   limits that mix lengths along and across the walk allow for a stance wider than `k`
 //!   HRP-2's 0.2 m: the feet distance at least `√(max_forward² + step_width²)`, the stride HRP-2's scaled plus the
 //!   excess width.
@@ -56,6 +57,7 @@ pub mod cli;
 pub mod collada;
 mod feet;
 pub mod posture;
+pub mod reach;
 pub mod sole;
 mod text;
 pub mod xml;
@@ -68,7 +70,7 @@ use std::path::{Path, PathBuf};
 use planner_core::gait::Side;
 use urdf_rs::JointType;
 
-use super::model::{norm, rot_rpy, side_index, sub, Body, Model, Pose, Vec3, IDENTITY};
+use super::model::{norm, rot_rpy, sub, Body, Pose, Vec3, IDENTITY};
 use super::Robot;
 
 /// The waist is lowered from the straight-legged height by this fraction of the leg length.
@@ -717,35 +719,38 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
             .stance_cog_height(step_width)
             .map_err(|e| ImportError(format!("the standing posture: {e}")))?,
     );
-    // The reach: HRP-2's scaled by the workspace radii, shrunk until the legs reach it.
+    // The reach: HRP-2's scaled by the workspace radii, shrunk until the legs reach every
+    // corner of it ([`reach`]).
     let c = hrp2.model.closed_form.expect("HRP-2's leg shape");
     let r_hrp2 = workspace(c.thigh + c.shank, hrp2.model.waist_height - c.ankle_height);
     let h = (waist_height + hip[2]) - (z.ankle().p[2] - z.sole.p[2]);
     let mut scale = (workspace(leg, h) / r_hrp2 * 100.0).floor() / 100.0;
-    let reach = hrp2.planner.reach;
-    for _ in 0..30 {
-        let fwd = round_mm(reach.max_forward * scale);
-        let back = round_mm(reach.max_backward * scale);
-        let wide = round_mm(step_width + (reach.max_width - 0.2) * scale);
-        if [(fwd, step_width), (-back, step_width), (0.0, wide)]
-            .iter()
-            .all(|&(dx, w)| reaches(&model, dx, w))
-        {
-            break;
-        }
-        scale = (scale * 0.9 * 100.0).floor() / 100.0;
-    }
-    let planner = Planner {
-        cog_height: cog,
-        gravity,
-        sole: g.sole_size.map(|v| (v * 1000.0).floor() / 1000.0),
-        step_width,
-        step_height: round_mm(0.05 * scale),
-        scale,
+    let written = |scale: f64| -> Result<(String, Robot), ImportError> {
+        let planner = Planner {
+            cog_height: cog,
+            gravity,
+            sole: g.sole_size.map(|v| (v * 1000.0).floor() / 1000.0),
+            step_width,
+            step_height: round_mm(0.05 * scale),
+            scale,
+        };
+        let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
+        let robot =
+            Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
+        Ok((toml, robot))
     };
-    let toml = format!("{}{}", planner_part(name, urdf, &planner), mb);
-    let robot =
-        Robot::from_toml(&toml).map_err(|e| ImportError(format!("the written file: {e}")))?;
+    let (toml, robot) = loop {
+        let (toml, robot) = written(scale)?;
+        match reach::unreached(&robot.model, &robot.planner.reach) {
+            None => break (toml, robot),
+            Some(why) if scale <= 0.1 => {
+                return err(format!(
+                    "the reach limits: even at {scale} of HRP-2's, {why}"
+                ))
+            }
+            Some(_) => scale = ((scale - 0.01) * 100.0).round() / 100.0,
+        }
+    };
     let warnings = first
         .map(|why| {
             let here = posture::heaviest(&model, step_width).unwrap_or_default();
@@ -763,19 +768,5 @@ fn write(name: &str, urdf: &Path, g: &Parts) -> Result<Imported, ImportError> {
         toml,
         robot,
         warnings,
-    })
-}
-
-/// Both legs reach feet `dx` apart along x and `w` across, the waist midway at its height.
-fn reaches(m: &Model, dx: f64, w: f64) -> bool {
-    let waist = Pose::upright(0.0, 0.0, m.waist_height, 0.0);
-    let soles = [
-        Pose::upright(dx / 2.0, w / 2.0, 0.0, 0.0),
-        Pose::upright(-dx / 2.0, -w / 2.0, 0.0, 0.0),
-    ];
-    m.cog(&waist, &soles).is_ok_and(|(_, q)| {
-        [Side::Left, Side::Right]
-            .iter()
-            .all(|&s| posture::out_of_range(m, s, &q[side_index(s)], "").is_none())
     })
 }

@@ -122,7 +122,7 @@ pub(super) fn planner_part(name: &str, urdf: &Path, p: &Planner) -> String {
          settle = 0.7\nstand = 0.005\nrest = 0.5\n\n\
          [adjustment]\nmin = -0.2\nmax = 0.35\n\n\
          [feet]\nsole_length = {}\nsole_width = {}\nstep_width = {}\nstep_height = {}\n\n\
-         [reach]                 # HRP-2's scaled by {} (the legs' workspace at the walking height)\n\
+         [reach]                 # HRP-2's scaled by {} (the legs' workspace at the walking height, every corner reached)\n\
          max_forward = {}\nmax_backward = {}\nmin_width = {}\nmax_width = {}\nmax_yaw = {}\n\
          max_feet_distance = {}\nyaw_cost = {}\nmax_stride = {}\nmax_growth = {}\n\n\
          [preview]\nqe = 1.0\nr = 1e-6\nshaping = true\n\n",
