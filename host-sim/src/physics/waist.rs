@@ -12,10 +12,10 @@ const WAIST_HALVINGS: usize = 5;
 impl Robot {
     /// Finds the waist position (orientation `r`, at height `z`) that puts the whole-body COG
     /// at `target` (x, y) with the soles at `soles`: Newton's method as in
-    /// [`Model::solve_waist`], but for any waist orientation, each step taken only as far as
-    /// it brings the COG nearer the target (so that a saturated leg, whose COG Jacobian is
-    /// rough, never throws the waist away from the feet). Returns the waist pose and the
-    /// joint angles.
+    /// [`crate::robot::model::Model::solve_waist`], but for any waist orientation, each step
+    /// taken only as far as it brings the COG nearer the target (so that a saturated leg,
+    /// whose COG Jacobian is rough, never throws the waist away from the feet). Returns the
+    /// waist pose and the joint angles.
     pub fn solve_waist(
         &self,
         waist: Pose,
