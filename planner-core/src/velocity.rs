@@ -83,6 +83,15 @@ impl Saturation {
         self.forward || self.lateral || self.turn || self.in_place
     }
 
+    /// The cuts as the `ACK` to a `VELOCITY` or `GOAL` carries them (bit 0 forward, 1 across,
+    /// 2 turn, 3 in place; see [`crate::wire::Ack::cut`]).
+    pub fn mask(&self) -> u8 {
+        u8::from(self.forward)
+            | u8::from(self.lateral) << 1
+            | u8::from(self.turn) << 2
+            | u8::from(self.in_place) << 3
+    }
+
     /// Both cuts together.
     pub fn or(self, other: Self) -> Self {
         Self {
