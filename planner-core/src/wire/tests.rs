@@ -545,11 +545,13 @@ fn measured_states_round_trip_and_belong_to_their_session() {
             let expect = Expect {
                 next_step: 0,
                 epoch,
+                last_seq: 0,
             };
             assert_eq!(Command::decode(&f, expect), Ok(Command::Measured(m)));
             let other = Expect {
                 next_step: 0,
                 epoch: epoch.wrapping_add(1),
+                last_seq: 0,
             };
             assert_eq!(
                 Command::decode(&f, other),
