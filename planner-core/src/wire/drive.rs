@@ -13,15 +13,16 @@
 //! | 24–34 | `VELOCITY` vx i11 / `GOAL` x i11 | 1 mm/s / 1 cm |
 //! | 35–45 | `VELOCITY` vy i11 / `GOAL` y i11 | 1 mm/s / 1 cm |
 //! | 46–55 | `VELOCITY` ω i10 / `GOAL` θ i10 | 2 mrad/s / 2π/1024 rad |
-//! | 56–63 | CRC-8 over the identifier, the session's low byte, the sequence number's high byte, bytes 0–6 | |
+//! | 56–63 | CRC-8 over the identifier, the session's low byte, the Gray code of the sequence number's high byte, bytes 0–6 | |
 //!
 //! **The sequence number.** The frame carries its low 24 bits; the node reads them as the number
 //! with those bits nearest to the last one it accepted ([`seq_number`], from 2²³ below to
 //! 2²³ − 1 above): exact for every number less than 2²³ (8.4 million commands) away. The high
-//! byte is not sent but enters the CRC: a copy 2²³ or more numbers old, read as a number of
-//! another block of 2²⁴, differs from the frame its sender made in that one byte of the CRC's
-//! input only, and a CRC-8 catches every error confined to 8 consecutive bits: it is refused
-//! `BadCrc`, always. So within a start-up no old frame counts as new, by construction.
+//! byte is not sent but enters the CRC (its Gray code, so that neighbouring blocks differ in
+//! one bit, as the footsteps' [`super::step_key`]): a copy 2²³ or more numbers old, read as a
+//! number of another block of 2²⁴, differs from the frame its sender made in that one byte of
+//! the CRC's input only, and a CRC-8 catches every error confined to 8 consecutive bits: it is
+//! refused `BadCrc`, always. So within a start-up no old frame counts as new, by construction.
 //!
 //! **The session.** The low byte of the session epoch keys the CRC too (as `MEASURED`'s): a
 //! frame of an earlier start-up (another epoch drawn at random) is refused except by chance
@@ -99,7 +100,7 @@ fn pack(id: u16, seq: u32, f: [i32; 3], epoch: u32) -> RawFrame {
 fn crc(id: u16, epoch: u32, seq: u32, b: &[u8; 8]) -> u8 {
     let keyed = [
         epoch as u8,
-        (seq >> 24) as u8,
+        gray((seq >> 24) as u8),
         b[0],
         b[1],
         b[2],
@@ -109,6 +110,10 @@ fn crc(id: u16, epoch: u32, seq: u32, b: &[u8; 8]) -> u8 {
         b[6],
     ];
     crc8(id, &keyed)
+}
+
+fn gray(h: u8) -> u8 {
+    h ^ (h >> 1)
 }
 
 /// Reads a frame of `id` whose length was checked: the sequence number (read against `last`)

@@ -112,13 +112,15 @@
 //!
 //! # Frames
 //! Lower identifiers win arbitration, so commands come first, then answers, then the stream.
+//! The commands' identifiers differ pairwise in at least four bits, so that no error of up to
+//! three bits moves a frame to another command's identifier.
 //!
 //! | id | name | dir | dlc | layout |
 //! |---|---|---|---|---|
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
 //! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset, 5 start with step adjustment), crc u8 |
-//! | 0x021 | `VELOCITY` | in | 8 | seq's low 24 bits u24, vx i11, vy i11 (1 mm/s), ω i10 (2 mrad/s), crc u8 keyed with the session and the seq's high byte (see `drive.rs`) |
-//! | 0x022 | `GOAL` | in | 8 | seq's low 24 bits u24, x i11, y i11 (1 cm), θ i10 (2π/1024 rad), crc u8 keyed as `VELOCITY`'s |
+//! | 0x02F | `VELOCITY` | in | 8 | seq's low 24 bits u24, vx i11, vy i11 (1 mm/s), ω i10 (2 mrad/s), crc u8 keyed with the session and the seq's high byte (see `drive.rs`) |
+//! | 0x046 | `GOAL` | in | 8 | seq's low 24 bits u24, x i11, y i11 (1 cm), θ i10 (2π/1024 rad), crc u8 keyed as `VELOCITY`'s |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step number's low byte u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
 //! | 0x101 | `STEP_MODIFY` | in | 8 | step number's low byte u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
 //! | 0x0D8 | `MEASURED` | in | 8 | stamp u24 (the node cycle measured against), DCM deviation from that cycle's reference x i15, y i15 (0.1 mm), reserved u2 (0), crc u8 keyed with the session (see `measured.rs`) |
@@ -190,9 +192,9 @@ pub mod ids {
     /// Start, stop, heartbeat, reset (controller → node).
     pub const CONTROL: u16 = 0x020;
     /// Walk at a velocity (controller → node), a stream: see [`super::WireVelocity`].
-    pub const VELOCITY: u16 = 0x021;
+    pub const VELOCITY: u16 = 0x02F;
     /// Walk to a relative goal (controller → node): see [`super::WireGoal`].
-    pub const GOAL: u16 = 0x022;
+    pub const GOAL: u16 = 0x046;
     /// Acknowledge or reject a command (node → controller).
     pub const ACK: u16 = 0x080;
     /// Append a footstep (controller → node).
