@@ -332,7 +332,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             None,
         ),
         Some(Cmd::List) => {
-            for name in BUILT_IN {
+            for name in BUILT_IN.iter().chain(scenario::DRIVEN.iter()) {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
                 outln!("{name:<10} {}", s.about);
             }
@@ -506,8 +506,9 @@ fn load_scenario(name: &str, robot: &Robot) -> Result<ScenarioFile, Box<dyn Erro
     }
     let s: Scenario = robot.built_in(name).ok_or_else(|| {
         format!(
-            "unknown scenario {name:?}; built-in: {} (or a .toml file)",
-            BUILT_IN.join(", ")
+            "unknown scenario {name:?}; built-in: {}, {} (or a .toml file)",
+            BUILT_IN.join(", "),
+            scenario::DRIVEN.join(", ")
         )
     })?;
     let entries = (0..s.timeline.len())
@@ -609,8 +610,19 @@ fn run_scenario(
     }
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
     let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;
-    let plots =
+    let mut plots =
         plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
+    if host_sim::output::velocity::drives(run) {
+        use host_sim::output::velocity::*;
+        let p = &cfg.node.params;
+        let cycle = (p.single_ticks + p.double_ticks) as usize;
+        let samples = velocity_series(run, dt, cycle);
+        write_velocity_csv(&out.join("velocity.csv"), &samples)?;
+        let png = out.join("velocity.png");
+        write_velocity_plot(&png, name, &samples)
+            .map_err(|e| format!("plot {}: {e}", png.display()))?;
+        plots.push(png);
+    }
     if s.about.is_empty() {
         outln!("{name}");
     } else {

@@ -24,6 +24,12 @@
 //! the CRC's input only, and a CRC-8 catches every error confined to 8 consecutive bits: it is
 //! refused `BadCrc`, always. So within a start-up no old frame counts as new, by construction.
 //!
+//! **One cycle's frames.** The bus delivers the frames a controller queues at once in the
+//! order of their identifiers (`CONTROL` 0x020, then `VELOCITY` 0x02F, then `GOAL` 0x046), and
+//! the node takes them in the order they arrive: a controller numbers the frames it sends in
+//! one cycle in that order (a heartbeat numbered after a velocity of the same cycle arrives
+//! first and makes the velocity stale; the velocity proves the controller alive by itself).
+//!
 //! **The session.** The low byte of the session epoch keys the CRC too (as `MEASURED`'s): a
 //! frame of an earlier start-up (another epoch drawn at random) is refused except by chance
 //! (2⁻⁸ beyond its sequence number). Frames of an earlier session of this start-up carry
