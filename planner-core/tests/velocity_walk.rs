@@ -186,7 +186,11 @@ fn a_zero_velocity_brings_the_robot_to_a_stand_with_its_feet_together() {
     let a = velocity(&mut r, 0.0, 0.0, 0.0);
     assert_eq!(a.reason, None);
     assert!(r.n.gait().is_stopping());
-    // Another velocity waits until the robot stands.
+    // A stick held at zero keeps streaming it: taken, nothing changes (the controller is
+    // heard). Another velocity waits until the robot stands.
+    let queued = r.n.gait().queued();
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    assert!(r.n.gait().is_stopping() && r.n.gait().queued() == queued);
     let a = velocity(&mut r, 0.1, 0.0, 0.0);
     assert_eq!(a.reason, Some(Reason::WrongState));
     r.until(2000, |n| n.gait().is_standing());

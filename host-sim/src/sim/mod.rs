@@ -208,6 +208,7 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     // The velocity the controller streams (every `STREAM_TICKS`), and when it last sent it.
     let mut streaming: Option<(f64, f64, f64)> = None;
     let mut streamed_at = 0u64;
+    let mut heartbeat_due = false;
     for k in 0..s.max_ticks {
         let t0 = (k + 1) * 5 * ms;
         bus.advance(t0);
@@ -246,9 +247,11 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
             }
         }
         // (Arbitration delivers a cycle's `CONTROL` before its `VELOCITY` or `GOAL`, whatever
-        // the order of sending: a heartbeat numbered after one would make it stale. It proves
-        // the controller alive as well.)
-        if cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0 && !drove {
+        // the order of sending: a heartbeat numbered after one would make it stale, so it
+        // waits for the next cycle.)
+        heartbeat_due |= cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0;
+        if heartbeat_due && !drove {
+            heartbeat_due = false;
             // A new sequence number for every heartbeat (a repeat proves nothing).
             send(&mut ctl, ctl_state.control(ControlOp::Heartbeat).encode());
         }

@@ -21,8 +21,9 @@
 //!   cut while it lasts.
 //! * **Stopping.** A zero velocity re-plans the queued steps in place (the first one closes the
 //!   feet, parallel, at the nominal width) and requests a stop: the robot walks them out and
-//!   stands. While it stops, another velocity is refused `WrongState` (it is taken once the
-//!   robot stands). A `VELOCITY` stream that stops for longer than
+//!   stands. While it stops, a zero velocity is taken (it changes nothing: a stick held at
+//!   zero streams it) and another velocity is refused `WrongState` (it is taken once the robot
+//!   stands). A `VELOCITY` stream that stops for longer than
 //!   [`NodeConfig::velocity_timeout_ms`] (by the clock or by the cycles) while the robot walks
 //!   at a velocity stops it as a lost controller does (the state *controller lost*: the queue
 //!   dropped, a `Reset` needed once standing). Only an accepted `VELOCITY` keeps the stream
@@ -187,6 +188,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         goal: Option<[T; 3]>,
     ) -> Result<Saturation, Reason> {
         let standing = self.gait.is_standing();
+        // A zero velocity while a drive stops: the stop it asks for is under way.
+        if self.gait.is_stopping()
+            && goal.is_none()
+            && is_zero(&v)
+            && self.drive.driver != Driver::Steps
+        {
+            return Ok(Saturation::default());
+        }
         if (standing && self.gait.queued() > 0)
             || (!standing && self.drive.driver == Driver::Steps)
             || self.gait.is_stopping()
