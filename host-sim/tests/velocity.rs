@@ -156,3 +156,26 @@ fn a_goal_is_reached_within_the_nodes_tolerance() {
         );
     }
 }
+
+#[allow(dead_code)] // (the map's helper is the push map's)
+mod engine;
+
+/// In MuJoCo under the stabilizer, the built-in `velocity` scenario (forward, a step change to
+/// sideways, a turn and its reversal, zero) walks without a fall on HRP-2, by the engine's
+/// verdict (`host-sim physics velocity` prints the same run).
+#[test]
+fn the_velocity_scenario_walks_in_mujoco_without_a_fall() {
+    use host_sim::physics::{run, PhysicsConfig};
+    use host_sim::robot::Robot;
+    use host_sim::sim::scenario_trajectory;
+    if !engine::engine_here("velocity") {
+        return;
+    }
+    let (_, trajectory, dt) = scenario_trajectory("velocity", &Robot::hrp2()).expect("scenario");
+    let r = run(&trajectory, dt, &PhysicsConfig::default())
+        .expect("engine run")
+        .report;
+    assert!(!r.fell, "fell at {:?} s", r.fall_time_s);
+    assert!(r.walked(), "a gait measure beyond its bound: {:?}", r.gait);
+    assert!(r.max_tilt_deg < 2.0, "tilt {} deg", r.max_tilt_deg);
+}
