@@ -36,7 +36,7 @@ use host_sim::eval::faults::Walk;
 use host_sim::eval::multibody::{evaluate, max_zmp_error};
 use host_sim::eval::{max_fluctuation, paper};
 use host_sim::output::csv::write_trajectory;
-use host_sim::output::plot;
+use host_sim::output::{plot, velocity};
 use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
 use host_sim::scenario::file::{Entry, ScenarioFile};
@@ -506,9 +506,8 @@ fn load_scenario(name: &str, robot: &Robot) -> Result<ScenarioFile, Box<dyn Erro
     }
     let s: Scenario = robot.built_in(name).ok_or_else(|| {
         format!(
-            "unknown scenario {name:?}; built-in: {}, {} (or a .toml file)",
-            BUILT_IN.join(", "),
-            scenario::DRIVEN.join(", ")
+            "unknown scenario {name:?}; built-in: {} (or a .toml file)",
+            [BUILT_IN.as_slice(), &scenario::DRIVEN].concat().join(", ")
         )
     })?;
     let entries = (0..s.timeline.len())
@@ -612,17 +611,7 @@ fn run_scenario(
     let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;
     let mut plots =
         plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
-    if host_sim::output::velocity::drives(run) {
-        use host_sim::output::velocity::*;
-        let p = &cfg.node.params;
-        let cycle = (p.single_ticks + p.double_ticks) as usize;
-        let samples = velocity_series(run, dt, cycle);
-        write_velocity_csv(&out.join("velocity.csv"), &samples)?;
-        let png = out.join("velocity.png");
-        write_velocity_plot(&png, name, &samples)
-            .map_err(|e| format!("plot {}: {e}", png.display()))?;
-        plots.push(png);
-    }
+    let velocity_lines = velocity::outputs(out, name, run, &cfg.node.params, &mut plots)?;
     if s.about.is_empty() {
         outln!("{name}");
     } else {
@@ -647,6 +636,7 @@ fn run_scenario(
             if a.plane == 0 { "x" } else { "y" }
         );
     }
+    velocity_lines.iter().for_each(|l| outln!("{l}"));
     outln!(
         "  largest ZMP fluctuation in single support: {:.1} mm along the foot, {:.1} mm across",
         along * 1e3,

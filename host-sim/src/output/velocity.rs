@@ -17,6 +17,29 @@ use planner_core::gait::Reference;
 use super::plot::{write_time_plot, Curve};
 use crate::scenario::{Command, Run};
 
+/// How near the walked velocity must stay to a commanded one for `run` to call it followed
+/// (m/s for vx and vy, rad/s for ω).
+pub const RESPONSE_TOL: f64 = 0.01;
+
+/// `host-sim run`'s velocity outputs for a run with the gait `params`: nothing for a run
+/// whose scenario gives no velocity or goal; else [`write_velocity_outputs`] (at
+/// [`RESPONSE_TOL`]) into `out`, the figure added to `plots`, the lines to print returned.
+pub fn outputs(
+    out: &Path,
+    name: &str,
+    run: &Run,
+    params: &planner_core::gait::GaitParams<f64>,
+    plots: &mut Vec<std::path::PathBuf>,
+) -> Result<Vec<String>, String> {
+    if !drives(run) {
+        return Ok(Vec::new());
+    }
+    let cycle = (params.single_ticks + params.double_ticks) as usize;
+    let (png, lines) = write_velocity_outputs(out, name, run, params.dt, cycle, RESPONSE_TOL)?;
+    plots.push(png);
+    Ok(lines)
+}
+
 /// One sample: time, commanded (vx, vy, ω) (NaN: none in force) and walked.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VelocitySample {
@@ -148,4 +171,107 @@ pub fn write_velocity_plot(
         "vx, vy [m/s]; ω [rad/s]",
         &curves,
     )
+}
+
+/// How long the walk took to follow each change of the commanded velocity: for every change
+/// (at `t` \[s\], to `v`, from `before`), per component, the time after it from which the
+/// walked component stays within `tol` (m/s for vx and vy, rad/s for ω) of the commanded one
+/// until the next change (`None`: it never settled before the next change or the end).
+pub fn responses(samples: &[VelocitySample], tol: f64) -> Vec<Response> {
+    let mut changes: Vec<(usize, [f64; 3])> = Vec::new();
+    for (i, s) in samples.iter().enumerate() {
+        let c = s.commanded;
+        if c.iter().all(|v| v.is_finite()) && changes.last().is_none_or(|l| l.1 != c) {
+            changes.push((i, c));
+        }
+    }
+    changes
+        .iter()
+        .enumerate()
+        .map(|(n, &(i, v))| {
+            let end = changes.get(n + 1).map_or(samples.len(), |c| c.0);
+            let settled = core::array::from_fn(|j| {
+                let near = |s: &VelocitySample| {
+                    s.walked[j].is_finite() && (s.walked[j] - v[j]).abs() <= tol
+                };
+                let mut from = None;
+                for k in (i..end).rev() {
+                    if near(&samples[k]) {
+                        from = Some(k);
+                    } else {
+                        break;
+                    }
+                }
+                from.map(|k| samples[k].t - samples[i].t)
+            });
+            Response {
+                t: samples[i].t,
+                before: n.checked_sub(1).map_or([0.0; 3], |p| changes[p].1),
+                v,
+                settled,
+            }
+        })
+        .collect()
+}
+
+/// One change of the commanded velocity and how the walk followed it ([`responses`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Response {
+    /// When \[s\].
+    pub t: f64,
+    /// The velocity before (zero for the first).
+    pub before: [f64; 3],
+    /// The velocity commanded.
+    pub v: [f64; 3],
+    /// Per component, how long until the walked one stayed within the tolerance \[s\].
+    pub settled: [Option<f64>; 3],
+}
+
+/// The lines `host-sim run` prints of [`responses`]: per change, the components that changed
+/// and when each was followed, in seconds and in step cycles of `cycle_s`.
+pub fn response_lines(samples: &[VelocitySample], tol: f64, cycle_s: f64) -> Vec<String> {
+    const NAMES: [&str; 3] = ["vx", "vy", "ω"];
+    responses(samples, tol)
+        .into_iter()
+        .map(|r| {
+            let parts: Vec<String> = (0..3)
+                .filter(|&j| r.v[j] != r.before[j])
+                .map(|j| match r.settled[j] {
+                    Some(s) => format!(
+                        "{} within {tol} after {s:.2} s ({:.1} step cycles)",
+                        NAMES[j],
+                        s / cycle_s
+                    ),
+                    None => format!("{} not within {tol} before the next change", NAMES[j]),
+                })
+                .collect();
+            format!(
+                "  velocity ({:.3} m/s, {:.3} m/s, {:.3} rad/s) at {:.2} s: {}",
+                r.v[0],
+                r.v[1],
+                r.v[2],
+                r.t,
+                parts.join("; ")
+            )
+        })
+        .collect()
+}
+
+/// For a run whose scenario drives: writes `velocity.csv` and `velocity.png` into `out`;
+/// returns the figure's path and the lines of [`response_lines`] (tolerance `tol`).
+pub fn write_velocity_outputs(
+    out: &Path,
+    name: &str,
+    run: &Run,
+    dt: f64,
+    cycle_ticks: usize,
+    tol: f64,
+) -> Result<(std::path::PathBuf, Vec<String>), String> {
+    let samples = velocity_series(run, dt, cycle_ticks);
+    write_velocity_csv(&out.join("velocity.csv"), &samples)?;
+    let png = out.join("velocity.png");
+    write_velocity_plot(&png, name, &samples)
+        .map_err(|e| format!("plot {}: {e}", png.display()))?;
+    let lines = response_lines(&samples, tol, cycle_ticks as f64 * dt);
+    Ok((png, lines))
 }
