@@ -1,5 +1,5 @@
 //! Walking at a velocity and to a goal: the node chooses the footsteps itself
-//! ([`crate::velocity::Stepping`]) from a `VELOCITY` stream or a `GOAL`.
+//! ([`velocity::Stepping`](super::velocity::Stepping)) from a `VELOCITY` stream or a `GOAL`.
 //!
 //! * **Ahead.** While it drives, the node keeps [`AHEAD`] steps queued (the three future steps
 //!   the method re-plans with): at every cycle the steps that lifted off are replaced by the
@@ -41,8 +41,8 @@
 //!   controller's footsteps are taken again. A velocity or goal is refused `WrongState` while
 //!   the controller's steps are queued or walked.
 
+use super::velocity::{Saturation, Stepping, Velocity};
 use super::*;
-use crate::velocity::{Saturation, Stepping, Velocity};
 use crate::wire::{WireGoal, WireVelocity};
 
 /// Steps the node keeps queued while it drives.
@@ -50,7 +50,7 @@ pub const AHEAD: usize = 3;
 const _: () = assert!(AHEAD <= crate::gait::MODIFY_FRONT);
 
 /// See the module docs: generating one step (the cuts in closed form, at most
-/// 1 + [`crate::velocity::HALVINGS`] reach checks, the step record), estimated as seven of
+/// 1 + [`HALVINGS`](super::velocity::HALVINGS) reach checks, the step record), estimated as seven of
 /// the checks that [`WORK_STEP`] counts three of.
 pub const WORK_GENERATE: u32 = 4_900;
 

@@ -137,6 +137,7 @@ mod feet;
 mod reach;
 mod report;
 mod steps;
+pub mod velocity;
 
 use core::borrow::Borrow;
 

@@ -321,20 +321,15 @@ impl Ack {
             data: [body[0], body[1], body[2], body[3], body[4], v, c, 0],
         }
     }
-    /// For the answer to an accepted `VELOCITY` or `GOAL`: what the node cut (see
-    /// [`Ack::version`]); `None` for other answers.
-    pub fn cut(&self) -> Option<crate::velocity::Saturation> {
+    /// For the answer to an accepted `VELOCITY` or `GOAL`: what the node cut, as bits (see
+    /// [`Ack::version`]: bit 0 forward, 1 across, 2 turn, 3 stepped in place; 0 nothing cut;
+    /// `planner_core::velocity::Saturation::from_mask` reads them); `None` for other answers.
+    pub fn cut(&self) -> Option<u8> {
         let drive = [(ids::VELOCITY & 0xFF) as u8, (ids::GOAL & 0xFF) as u8];
         if !drive.contains(&self.command) || self.reason.is_some() {
             return None;
         }
-        let m = self.version?;
-        Some(crate::velocity::Saturation {
-            forward: m & 1 != 0,
-            lateral: m & 2 != 0,
-            turn: m & 4 != 0,
-            in_place: m & 8 != 0,
-        })
+        self.version
     }
 
     /// Decodes an `ACK` frame; `None` if it is not one or its CRC is wrong.

@@ -149,7 +149,7 @@ fn unpack(id: u16, b: &[u8], epoch: u32, last: u32) -> Result<(u32, [i32; 3]), R
 }
 
 /// A `VELOCITY` command: walk at (vx, vy, ω) in the support foot's frame (see
-/// [`crate::velocity`]).
+/// `planner_core::velocity`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireVelocity {

@@ -133,7 +133,7 @@ impl Gateway {
             }
             None => {
                 self.drive.last_refusal = None;
-                let cut = a.cut().map(|c| c.mask()).unwrap_or(0);
+                let cut = a.cut().unwrap_or(0);
                 if self.drive.last_cut != Some(cut) {
                     self.drive.last_cut = Some(cut);
                     if cut != 0 {

@@ -30,8 +30,8 @@
 //! A velocity with a component that is not finite is refused ([`VelocityError::NonFinite`]):
 //! nothing is planned from it.
 
+use super::{Reach, Soles};
 use crate::gait::{Footstep, GaitParams, Side};
-use crate::node::{Reach, Soles};
 use crate::real::Real;
 
 /// Most halvings of the heading change and the forward step after the closed-form cut (the
@@ -90,6 +90,16 @@ impl Saturation {
             | u8::from(self.lateral) << 1
             | u8::from(self.turn) << 2
             | u8::from(self.in_place) << 3
+    }
+
+    /// The cuts of a `mask` ([`Saturation::mask`]).
+    pub fn from_mask(mask: u8) -> Self {
+        Self {
+            forward: mask & 1 != 0,
+            lateral: mask & 2 != 0,
+            turn: mask & 4 != 0,
+            in_place: mask & 8 != 0,
+        }
     }
 
     /// Both cuts together.
