@@ -94,6 +94,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     }
 
     /// Starts walking (from standing) with the queued steps.
+    #[inline(never)] // (one copy for the node's `Start` and its velocity start)
     pub fn start(&mut self) -> Result<(), GaitError> {
         if self.mode != Mode::Standing {
             return Err(GaitError::WrongState);
@@ -210,6 +211,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// [`Gait::modify`]); if it is refused every step is put back as it was and the error
     /// returned (`Infeasible`; `WrongState` when more steps are given than queued, `SideOrder`
     /// when a side differs, `NonFinite`).
+    #[inline(never)]
     pub fn modify_front(&mut self, steps: &[Footstep<T>]) -> Result<(), GaitError> {
         if steps.len() > MODIFY_FRONT || steps.len() > self.queue.len() {
             return Err(GaitError::WrongState);

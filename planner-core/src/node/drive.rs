@@ -181,6 +181,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// Drives by `driver` at `v` (or toward `goal`): from standing, a start; walking, a
     /// re-plan of the queued steps. Nothing changes on error.
+    #[inline(never)] // (out of the command path's frame: the firmware's flash and stack)
     fn drive_to(
         &mut self,
         driver: Driver,
@@ -329,6 +330,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// The velocity that walks the stance of `support` (the other foot beside it) toward
     /// `goal` with the next step of `side`; `None` when the stance is at the goal.
+    #[inline(never)]
     fn goal_velocity(
         &self,
         support: &Footstep<T>,
@@ -361,6 +363,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         })
     }
 
+    #[inline(never)]
     fn wire_of(number: u16, s: &Footstep<T>) -> Option<WireStep> {
         WireStep::from_si(
             number,
@@ -371,6 +374,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         )
     }
 
+    #[inline(never)]
     fn record_of(w: &WireStep) -> Record {
         Record {
             append: *w,
@@ -383,6 +387,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
 
     /// Once a cycle, after the commands: the queue topped up to [`AHEAD`] steps while the node
     /// drives (as far as the budget goes); a goal reached closes the feet and stops.
+    #[inline(never)]
     pub(super) fn drive_ahead(&mut self) {
         if self.drive.driver == Driver::Steps
             || self.gait.is_standing()

@@ -149,6 +149,7 @@ impl<T: Real> Stepping<T> {
     /// The next landing of the foot that is not `support`, which lifts off from `same`;
     /// `from_rest`: the first step of a walk from standing (its growth is measured from a
     /// step of 0, as the node measures it).
+    #[inline(never)] // (one copy for its callers: the firmware's flash)
     pub fn next_step(
         &self,
         v: &Velocity<T>,
