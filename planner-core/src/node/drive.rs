@@ -105,6 +105,17 @@ impl<T: Real> Drive<T> {
     };
 }
 
+/// The steps a drive planned ([`Node::plan_drive`]).
+struct Planned<T> {
+    steps: [Footstep<T>; AHEAD],
+    /// What was cut of them.
+    cut: Saturation,
+    /// A zero velocity or the goal reached: the robot stops after them.
+    stop: bool,
+    /// The velocity of the first (for a goal, the one computed).
+    v: Velocity<T>,
+}
+
 fn is_zero<T: Real>(v: &Velocity<T>) -> bool {
     v.vx == T::ZERO && v.vy == T::ZERO && v.wz == T::ZERO
 }
@@ -151,7 +162,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(())
     }
 
-    /// A `VELOCITY` (see the module docs); the answer's cut mask when accepted.
+    /// A `VELOCITY` (see the module docs); the answer's cut mask when accepted. Out of line:
+    /// its frame is not on the stack of the other commands.
+    #[inline(never)]
     pub(super) fn velocity(&mut self, w: &WireVelocity, now_ms: u32) -> Result<u8, Reason> {
         self.drive_gate(w.seq)?;
         let (vx, vy, wz) = w.si_in::<T>();
@@ -163,7 +176,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(cut.mask())
     }
 
-    /// A `GOAL` (see the module docs); the answer's cut mask when accepted.
+    /// A `GOAL` (see the module docs); the answer's cut mask when accepted (out of line, as
+    /// the `VELOCITY`'s).
+    #[inline(never)]
     pub(super) fn goal(&mut self, w: &WireGoal) -> Result<u8, Reason> {
         self.drive_gate(w.seq)?;
         let (x, y, yaw) = w.si_in::<T>();
@@ -221,8 +236,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             None => first_side,
         };
         let from_rest = standing || self.gait.next_swing_from_rest();
-        let mut support = feet[side.other().index()];
-        let mut same = feet[side.index()];
+        let support = feet[side.other().index()];
+        let same = feet[side.index()];
         // A goal already reached, or a zero velocity, from standing: nothing moves.
         let still = match goal {
             Some(g) => self.goal_velocity(&support, side, &g).is_none(),
@@ -239,46 +254,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             + if standing { n as u32 * WORK_APPEND } else { 0 };
         self.plan()?;
         self.afford(work)?;
-        let stepping = self.stepping();
-        let mut steps = [support; AHEAD];
-        let mut cut = Saturation::default();
-        let mut stop = is_zero(&v) && goal.is_none();
-        let mut last_v = v;
-        for (i, slot) in steps.iter_mut().enumerate().take(n) {
-            let vi = match goal {
-                Some(g) => match self.goal_velocity(&support, support.side.other(), &g) {
-                    Some(vg) => vg,
-                    None => {
-                        stop = true;
-                        Velocity::ZERO
-                    }
-                },
-                None => v,
-            };
-            let (step, c) = stepping
-                .next_step(&vi, &support, &same, from_rest && i == 0)
-                .map_err(|_| Reason::OutOfRange)?;
-            if i == 0 {
-                last_v = vi;
-            }
-            cut = cut.or(c);
-            *slot = step;
-            same = support;
-            support = step;
-        }
-        // Every step in the wire's range (the walking area), before anything changes.
-        let first = self.next_step();
-        let mut wires = [None; AHEAD];
-        for (i, (s, w)) in steps.iter().zip(wires.iter_mut()).enumerate().take(n) {
-            let number = if standing {
-                first.wrapping_add(i as u16)
-            } else {
-                front
-                    .map(|id| id.wrapping_add(i as u16).wrapping_add(self.first))
-                    .unwrap_or(first)
-            };
-            *w = Some(Self::wire_of(number, s).ok_or(Reason::OutOfRange)?);
-        }
+        // The step numbers: from standing the next ones, walking the queued steps'.
+        let first = if standing {
+            self.next_step()
+        } else {
+            front.map_or(self.next_step(), |id| id.wrapping_add(self.first))
+        };
+        let p = self.plan_drive(v, goal, n, [support, same], from_rest, first)?;
+        let (steps, cut, stop, last_v) = (p.steps, p.cut, p.stop, p.v);
         if standing {
             if self.appended.saturating_add(n as u32) > STEP_NUMBERS {
                 return Err(Reason::Exhausted);
@@ -296,8 +279,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 let _ = self.gait.drop_queue();
                 return Err(e);
             }
-            for w in wires.iter().take(n).flatten() {
-                self.steps.push(Self::record_of(w));
+            for (i, s) in steps.iter().enumerate().take(n) {
+                if let Some(w) = Self::wire_of(first.wrapping_add(i as u16), s) {
+                    self.steps.push(Self::record_of(&w));
+                }
             }
             self.appended += n as u32;
             self.adj.enabled = false;
@@ -308,10 +293,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 .map_err(reason_of);
             self.plans_left = self.plans_left.saturating_sub(1);
             modified?;
-            for w in wires.iter().take(n).flatten() {
+            for (i, s) in steps.iter().enumerate().take(n) {
+                let Some(w) = Self::wire_of(first.wrapping_add(i as u16), s) else {
+                    continue;
+                };
                 if let Some((at, _)) = self.steps.queued_find(w.id) {
                     if let Some(r) = self.steps.queued_at_mut(at, w.id) {
-                        *r = Self::record_of(w);
+                        *r = Self::record_of(&w);
                     }
                 }
             }
@@ -326,6 +314,53 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.drive.goal = target;
         self.drive.arrived = stop && goal.is_some();
         Ok(cut)
+    }
+
+    /// The `n` steps a drive at `v` (or toward `goal`) plans from `support` and `same` (the
+    /// feet before the first), numbered from `first`: each generated, every one checked to be
+    /// in the wire's range (the walking area) before anything changes. Out of line, so that its
+    /// frame is off the stack when the gait plans.
+    #[inline(never)]
+    fn plan_drive(
+        &self,
+        v: Velocity<T>,
+        goal: Option<[T; 3]>,
+        n: usize,
+        [mut support, mut same]: [Footstep<T>; 2],
+        from_rest: bool,
+        first: u16,
+    ) -> Result<Planned<T>, Reason> {
+        let stepping = self.stepping();
+        let mut p = Planned {
+            steps: [support; AHEAD],
+            cut: Saturation::default(),
+            stop: is_zero(&v) && goal.is_none(),
+            v,
+        };
+        for (i, slot) in p.steps.iter_mut().enumerate().take(n) {
+            let vi = match goal {
+                Some(g) => match self.goal_velocity(&support, support.side.other(), &g) {
+                    Some(vg) => vg,
+                    None => {
+                        p.stop = true;
+                        Velocity::ZERO
+                    }
+                },
+                None => v,
+            };
+            let (step, c) = stepping
+                .next_step(&vi, &support, &same, from_rest && i == 0)
+                .map_err(|_| Reason::OutOfRange)?;
+            if i == 0 {
+                p.v = vi;
+            }
+            Self::wire_of(first.wrapping_add(i as u16), &step).ok_or(Reason::OutOfRange)?;
+            p.cut = p.cut.or(c);
+            *slot = step;
+            same = support;
+            support = step;
+        }
+        Ok(p)
     }
 
     /// The velocity that walks the stance of `support` (the other foot beside it) toward
