@@ -105,7 +105,7 @@ impl<T: Real> Drive<T> {
     };
 }
 
-/// The steps a drive planned ([`Node::plan_drive`]).
+/// The steps a drive planned (`Node::plan_drive`).
 struct Planned<T> {
     steps: [Footstep<T>; AHEAD],
     /// What was cut of them.
