@@ -94,7 +94,6 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     }
 
     /// Starts walking (from standing) with the queued steps.
-    #[inline(never)] // (one copy for the node's `Start` and its velocity start)
     pub fn start(&mut self) -> Result<(), GaitError> {
         if self.mode != Mode::Standing {
             return Err(GaitError::WrongState);

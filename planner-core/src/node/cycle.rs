@@ -319,7 +319,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.act(usize::from(i), f, decoded, &mut act, now_ms);
         }
         // The steps the node chooses itself, topped up with what the commands left.
-        self.drive_ahead();
+        let drives = self.drive.driver != drive::Driver::Steps;
+        if drives {
+            self.drive_ahead();
+        }
         let refused = act.refused;
         self.estop_now = false;
         self.feet.clear();
@@ -327,7 +330,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.plans_left = self.cfg.max_plans;
         self.work_left = self.cfg.work_budget;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
-        self.drive_supervise(now_ms);
+        if drives {
+            self.drive_supervise(now_ms);
+        }
         self.supervise(now_ms);
         let streaming = self.open;
         let reference = if streaming {
@@ -339,7 +344,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         };
         // The shift ends with its walk, and so does a velocity or a goal.
         self.end_of_walk();
-        self.drive_end();
+        if drives {
+            self.drive_end();
+        }
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)

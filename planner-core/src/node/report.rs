@@ -31,10 +31,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.clock_fault {
             flags |= Status::CLOCK_FAULT;
         }
-        if self.drive_velocity().is_some_and(|(_, cut)| cut.any()) {
+        if self.drive.driver != drive::Driver::Steps && self.drive.cut.any() {
             flags |= Status::CUT;
         }
-        if self.at_goal() {
+        if self.drive.arrived && self.at_goal() {
             flags |= Status::AT_GOAL;
         }
         Status {
