@@ -161,8 +161,9 @@ fn a_goal_is_reached_within_the_nodes_tolerance() {
 mod engine;
 
 /// In MuJoCo under the stabilizer, the built-in `velocity` scenario (forward, a step change to
-/// sideways, a turn and its reversal, zero) walks without a fall on HRP-2, by the engine's
-/// verdict (`host-sim physics velocity` prints the same run).
+/// sideways, a turn and its reversal, zero) walks without a fall, by the engine's verdict, on
+/// HRP-2 and on the test robot `host-sim/tests/robots/small.toml` (the scenario drawn in its
+/// proportions): `host-sim physics velocity [--robot FILE]` prints the same runs.
 #[test]
 fn the_velocity_scenario_walks_in_mujoco_without_a_fall() {
     use host_sim::physics::{run, PhysicsConfig};
@@ -171,11 +172,18 @@ fn the_velocity_scenario_walks_in_mujoco_without_a_fall() {
     if !engine::engine_here("velocity") {
         return;
     }
-    let (_, trajectory, dt) = scenario_trajectory("velocity", &Robot::hrp2()).expect("scenario");
-    let r = run(&trajectory, dt, &PhysicsConfig::default())
-        .expect("engine run")
-        .report;
-    assert!(!r.fell, "fell at {:?} s", r.fall_time_s);
-    assert!(r.walked(), "a gait measure beyond its bound: {:?}", r.gait);
-    assert!(r.max_tilt_deg < 2.0, "tilt {} deg", r.max_tilt_deg);
+    let small = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots/small.toml");
+    for robot in [Robot::hrp2(), Robot::load(&small).expect("the test robot")] {
+        let (_, trajectory, dt) = scenario_trajectory("velocity", &robot).expect("scenario");
+        let cfg = PhysicsConfig::for_robot(&robot);
+        let r = run(&trajectory, dt, &cfg).expect("engine run").report;
+        let name = robot.name();
+        assert!(!r.fell, "{name}: fell at {:?} s", r.fall_time_s);
+        assert!(
+            r.walked(),
+            "{name}: a gait measure beyond its bound: {:?}",
+            r.gait
+        );
+        assert!(r.max_tilt_deg < 2.0, "{name}: tilt {} deg", r.max_tilt_deg);
+    }
 }
