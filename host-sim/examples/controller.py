@@ -15,7 +15,7 @@ from one counter, above the node's SESSION last_seq, so that every one is new. c
 own encoder rounds them away from zero: a coordinate exactly between two 0.5 mm steps may go
 out one step apart (0.5 mm), which the node takes as given.
 
-Four ways to run it:
+Five ways to run it:
 
   controller.py live --channel can0 [--interface socketcan]
       waits for the node's SESSION and DIAG, then sends the plan in real time on a CAN bus
@@ -25,6 +25,12 @@ Four ways to run it:
       the plan written as a candump -l log (times from host-sim's epoch), for
       ``host-sim replay out/ctl.log`` (host-sim/tests/controller.rs does this); the defaults are
       host-sim's node (session 0, steps from 0, no control command before);
+  controller.py stick --out out/stick.log [--session E --last-seq S]
+      a scripted stick instead of footsteps: the node chooses the steps from a VELOCITY
+      stream every 50 ms (0.15 m/s forward, at 5 s 0.04 m/s sideways, at 9 s a turn of
+      0.15 rad/s, at 12 s its reversal, at 15 s zero), as a log for ``host-sim replay``;
+      ``controller.py check LOG --stick`` checks every velocity accepted and the robot
+      standing at the end (host-sim/tests/controller.rs);
   controller.py frame OP --session E --seq S
       prints one CONTROL frame for ``cansend`` (OP: reset, heartbeat, start, stop, stop_now, start_adjusting);
   controller.py check can.log
@@ -58,10 +64,12 @@ HEARTBEAT_S = 0.1
 
 
 def crc8(frame_id, data, key=None):
-    """CRC-8/AUTOSAR over the identifier (2 bytes, little-endian), `key` (a footstep frame's:
-    see `step_key`) if given, and `data`."""
+    """CRC-8/AUTOSAR over the identifier (2 bytes, little-endian), `key` (a footstep frame's
+    byte: see `step_key`; VELOCITY's two bytes: see `velocity`) if given, and `data`."""
     crc = 0xFF
-    head = bytes([frame_id & 0xFF, frame_id >> 8]) + (bytes([key]) if key is not None else b"")
+    if isinstance(key, int):
+        key = bytes([key])
+    head = bytes([frame_id & 0xFF, frame_id >> 8]) + (key or b"")
     for byte in head + bytes(data):
         crc ^= byte
         for _ in range(8):
@@ -133,6 +141,65 @@ def plan(db, steps, length, width, seconds, session=0, first_step=0, last_seq=0)
     # The reset before the footsteps of t = 0.
     out.sort(key=lambda e: (e[0], e[1].arbitration_id != 0x020 or e[1].data[6] != 4))
     return out, poses
+
+
+# The scripted stick: (from time [s], vx [m/s], vy [m/s], wz [rad/s]): forward, a step
+# change to sideways, a turn and its reversal, then zero (the robot stops and stands).
+STICK = [(0.0, 0.15, 0.0, 0.0), (5.0, 0.0, 0.04, 0.0), (9.0, 0.05, 0.0, 0.15),
+         (12.0, 0.05, 0.0, -0.15), (15.0, 0.0, 0.0, 0.0)]
+STICK_END_S = 19.0
+STICK_PERIOD_S = 0.05
+
+
+def velocity(db, epoch, seq, vx, vy, wz):
+    """A VELOCITY frame: the sequence number's low 24 bits, the CRC keyed with the session's
+    low byte and the Gray code of the sequence number's high byte (the DBC's comment)."""
+    msg = db.get_message_by_name("VELOCITY")
+    signals = {"seq_low": seq & 0xFFFFFF, "vx": vx, "vy": vy, "wz": wz}
+    data = msg.encode(dict(signals, crc=0))
+    high = (seq >> 24) & 0xFF
+    key = bytes([epoch & 0xFF, high ^ (high >> 1)])
+    signals["crc"] = crc8(msg.frame_id, data[:-1], key)
+    return can.Message(arbitration_id=msg.frame_id, data=msg.encode(signals),
+                       is_extended_id=False)
+
+
+def stick(db, session=0, last_seq=0):
+    """The scripted stick's frames as (time [s], message): the handshake in the node's session
+    `session`, then a VELOCITY every 50 ms in the next one (each proves the controller alive:
+    no heartbeat, which the bus would deliver before a VELOCITY of the same instant)."""
+    seq = last_seq + 1
+    out = [(0.0, encode(db, "CONTROL", {"session": session & 0xFFFF, "seq": seq,
+                                        "op": "reset"}))]
+    k = 2
+    while k * STICK_PERIOD_S <= STICK_END_S:
+        t = k * STICK_PERIOD_S
+        _, vx, vy, wz = [s for s in STICK if s[0] <= t][-1]
+        seq += 1
+        out.append((t, velocity(db, session + 1, seq, vx, vy, wz)))
+        k += 1
+    return out
+
+
+def check_stick(db, path, sent):
+    """Problems found in the bus log of the stick's walk: every command answered and accepted,
+    the robot standing at the end."""
+    problems = []
+    acks, state = [], None
+    for m in read_log(path):
+        if m.arbitration_id == 0x080:
+            acks.append(db.decode_message(m.arbitration_id, m.data))
+        elif m.arbitration_id == 0x300:
+            state = str(db.decode_message(m.arbitration_id, m.data)["state"])
+    velocities = [a for a in acks if str(a["command"]) == "velocity"]
+    if len(velocities) != sent:
+        problems.append(f"{len(velocities)} VELOCITY answers for {sent} sent")
+    for a in acks:
+        if str(a["reason"]) != "accepted":
+            problems.append(f"refused: {a['command']} {a['seq']}: {a['reason']}")
+    if state != "standing":
+        problems.append(f"the last STATUS says {state}, not standing")
+    return problems
 
 
 def write_log(path, frames):
@@ -239,7 +306,7 @@ def live(db, args):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("mode", choices=["plan", "check", "live", "frame"])
+    p.add_argument("mode", choices=["plan", "check", "live", "frame", "stick"])
     p.add_argument("log", nargs="?", help="check: the bus log to check; frame: the operation")
     p.add_argument("--out", help="plan: the log to write")
     p.add_argument("--channel", default="can0")
@@ -255,6 +322,8 @@ def main():
     p.add_argument("--last-seq", type=int, default=0,
                    help="plan: the node's last sequence number (SESSION last_seq)")
     p.add_argument("--seq", type=int, default=1, help="frame: its sequence number")
+    p.add_argument("--stick", action="store_true",
+                   help="check: the log of the scripted stick's walk (mode stick)")
     a = p.parse_args()
     if a.steps < 1:
         p.error("--steps must be at least 1")
@@ -275,6 +344,21 @@ def main():
         return
     if a.mode == "live":
         live(db, a)
+        return
+    if a.mode == "stick":
+        if not a.out:
+            p.error("stick needs --out")
+        frames = stick(db, a.session, a.last_seq)
+        write_log(a.out, frames)
+        print(f"{len(frames)} frames ({len(frames) - 1} VELOCITY) written to {a.out}")
+        return
+    if a.mode == "check" and a.stick:
+        problems = check_stick(db, a.log, len(stick(db, a.session, a.last_seq)) - 1)
+        for line in problems:
+            print(line)
+        if problems:
+            sys.exit(1)
+        print(f"{a.log}: every velocity accepted, standing at the end")
         return
     frames, poses = plan(db, a.steps, a.length, a.width, a.seconds, a.session, a.first_step,
                          a.last_seq)

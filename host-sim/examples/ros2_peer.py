@@ -12,7 +12,9 @@ host-sim/interfaces (not from the gateway's code).
 `check` is the test the project runs (host-sim/tests/ros2.rs): a walk with a change before
 lift-off and one after it, malformed lists, another type and a broken layout on the footstep
 topic, an abort; it exits 1 on the first expectation that fails. `types` compares the
-declarations below with the .msg files.
+declarations below with the .msg files. `stick` steers by ROS's `cmd_vel` (a
+`geometry_msgs/Twist` at 20 Hz for 5 s, then let go) and walks to a relative goal
+(`geometry_msgs/Pose2D` on `input/goal_relative`): the node chooses the footsteps.
 """
 
 import argparse
@@ -54,6 +56,19 @@ class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
     x: t.float64 = 0.0
     y: t.float64 = 0.0
     z: t.float64 = 0.0
+
+
+@dataclass
+class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
+    linear: Vector3
+    angular: Vector3
+
+
+@dataclass
+class Pose2D(IdlStruct, typename="geometry_msgs::msg::dds_::Pose2D_"):
+    x: t.float64
+    y: t.float64
+    theta: t.float64
 
 
 @dataclass
@@ -252,6 +267,8 @@ class Peer:
         self.lists = writer("footstep_data_list", FootstepDataListMessage)
         self.pause = writer("pause_walking", PauseWalkingMessage)
         self.abort = writer("abort_walking", AbortWalkingMessage)
+        self.cmd_vel = writer("cmd_vel", Twist)
+        self.goal = writer("goal_relative", Pose2D)
         self.footstep_status = reader("footstep_status", FootstepStatusMessage, tl, 64)
         self.walking_status = reader("walking_status", WalkingStatusMessage, tl, 1)
         self.refusals = reader("command_refusal", CommandRefusal, tl, 64)
@@ -371,6 +388,33 @@ def walk(peer):
         print(f"step {s.sequence_id}: {kind} ({p.x:.4f}, {p.y:.4f})")
     for r in peer.refused:
         print(f"refused: {r.command} {r.footstep_sequence_id}: {r.reason} {r.detail}")
+
+
+def stick(peer):
+    """A teleoperation stick on cmd_vel: 0.15 m/s forward at 20 Hz for 5 s, then let go (the
+    gateway sends zero after 0.5 s and the robot stands); then a relative goal 0.4 m ahead.
+    Checks that the COG went forward at about that speed, stopped, and reached the goal."""
+    peer.wait_for_gateway()
+    peer.spin(0.3)
+    x0 = peer.last_cog.point.x if peer.last_cog else 0.0
+    end = time.time() + 5.0
+    while time.time() < end:
+        peer.cmd_vel.write(Twist(Vector3(0.15, 0.0, 0.0), Vector3(0.0, 0.0, 0.0)))
+        peer.spin(0.05)
+    peer.spin(6.0)
+    x1 = peer.last_cog.point.x
+    assert 0.3 < x1 - x0 < 1.2, f"the stick walked {x1 - x0:.3f} m"
+    peer.spin(0.5)
+    assert abs(peer.last_cog.point.x - x1) < 0.005, "still moving after the stick was let go"
+    peer.goal.write(Pose2D(0.4, 0.0, 0.0))
+    peer.until(lambda: peer.last_cog.point.x > x1 + 0.3, 20, "the goal walk")
+    peer.spin(4.0)
+    x2 = peer.last_cog.point.x
+    assert abs(x2 - (x1 + 0.4)) < 0.05, f"the goal walk ended at {x2 - x1:.3f} m, not 0.4"
+    refused = [r for r in peer.refused if r.command in ("cmd_vel", "goal")]
+    assert not refused, f"refused: {[(r.command, r.reason) for r in refused]}"
+    print(f"stick: {x1 - x0:.3f} m, goal: {x2 - x1:.3f} m")
+    print("ok")
 
 
 def bench(peer, lists=40):
@@ -523,7 +567,7 @@ def check(peer):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["walk", "check", "types", "vanish", "bench"])
+    ap.add_argument("mode", choices=["walk", "check", "types", "vanish", "bench", "stick"])
     ap.add_argument("--namespace", default="/ihmc/hrp2/humanoid_control")
     ap.add_argument("--domain", type=int, default=int(os.environ.get("ROS_DOMAIN_ID", "0")))
     here = os.path.dirname(os.path.abspath(__file__))
@@ -537,6 +581,12 @@ def main():
         walk(peer)
     elif a.mode == "bench":
         bench(peer)
+    elif a.mode == "stick":
+        try:
+            stick(peer)
+        except AssertionError as e:
+            print(f"FAILED: {e}")
+            sys.exit(1)
     elif a.mode == "vanish":
         # Starts a long walk and exits at the first lift-off without a word (the test kills it).
         peer.wait_for_gateway()

@@ -36,7 +36,7 @@ use host_sim::eval::faults::Walk;
 use host_sim::eval::multibody::{evaluate, max_zmp_error};
 use host_sim::eval::{max_fluctuation, paper};
 use host_sim::output::csv::write_trajectory;
-use host_sim::output::plot;
+use host_sim::output::{plot, velocity};
 use host_sim::physics::probe::ProbeArgs;
 use host_sim::robot::Robot;
 use host_sim::scenario::file::{Entry, ScenarioFile};
@@ -333,7 +333,7 @@ fn dispatch(command: Option<Cmd>) -> Result<(), Box<dyn Error>> {
             None,
         ),
         Some(Cmd::List) => {
-            for name in BUILT_IN {
+            for name in BUILT_IN.iter().chain(scenario::DRIVEN.iter()) {
                 let s = scenario::built_in(name).ok_or("missing built-in")?;
                 outln!("{name:<10} {}", s.about);
             }
@@ -508,7 +508,7 @@ fn load_scenario(name: &str, robot: &Robot) -> Result<ScenarioFile, Box<dyn Erro
     let s: Scenario = robot.built_in(name).ok_or_else(|| {
         format!(
             "unknown scenario {name:?}; built-in: {} (or a .toml file)",
-            BUILT_IN.join(", ")
+            [BUILT_IN.as_slice(), &scenario::DRIVEN].concat().join(", ")
         )
     })?;
     let entries = (0..s.timeline.len())
@@ -610,8 +610,9 @@ fn run_scenario(
     }
     let mb_plot = (!mb.is_empty()).then_some(mb.as_slice());
     let walk = plot::Walk::from_run(name, &s, run, dt, cfg.node.params, mb_plot)?;
-    let plots =
+    let mut plots =
         plot::write_plots(out, &walk).map_err(|e| format!("plots in {}: {e}", out.display()))?;
+    let velocity_lines = velocity::outputs(out, name, run, &cfg.node.params, &mut plots)?;
     if s.about.is_empty() {
         outln!("{name}");
     } else {
@@ -636,6 +637,7 @@ fn run_scenario(
             if a.plane == 0 { "x" } else { "y" }
         );
     }
+    velocity_lines.iter().for_each(|l| outln!("{l}"));
     outln!(
         "  largest ZMP fluctuation in single support: {:.1} mm along the foot, {:.1} mm across",
         along * 1e3,

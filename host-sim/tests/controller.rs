@@ -255,3 +255,55 @@ fn plan_creates_its_output_directory() {
     assert!(o.status.success(), "{}", all_output(&o));
     assert!(log.is_file());
 }
+
+/// The scripted stick (`controller.py stick`): a `VELOCITY` stream of 19 s (forward,
+/// sideways, a turn and its reversal, zero) written from the DBC alone, replayed into the
+/// node: every velocity accepted, the robot standing at the end. A stream that stops early
+/// (the log cut after 3 s of walking) is caught by the same check: the node stops the robot
+/// as a lost controller, and the later frames are refused.
+#[test]
+fn the_scripted_stick_walks_by_velocity() {
+    if !tools_present() {
+        return;
+    }
+    let d = dir("stick");
+    let log = d.join("stick.log");
+    let out = d.join("out");
+    let o = controller(&["stick", "--out", log.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = host_sim(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let bus_log = out.join("can.log");
+    let c = controller(&["check", bus_log.to_str().unwrap(), "--stick"]);
+    let text = String::from_utf8_lossy(&c.stdout).to_string();
+    assert_eq!(c.status.code(), Some(0), "{text}");
+    // The stream falls silent for 0.5 s at 3 s: the robot is stopped, the rest refused.
+    let text_log = std::fs::read_to_string(&log).unwrap();
+    let cut: Vec<&str> = text_log
+        .lines()
+        .filter(|l| {
+            let t: f64 = l[1..l.find(')').unwrap()].parse().unwrap();
+            let t = t - 1_767_225_600.0;
+            !(3.0..3.5).contains(&t)
+        })
+        .collect();
+    let gap = d.join("gap.log");
+    std::fs::write(&gap, cut.join("\n") + "\n").unwrap();
+    let out2 = d.join("out2");
+    let r = host_sim(&[
+        "replay",
+        gap.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    let _ = r;
+    let c = controller(&["check", out2.join("can.log").to_str().unwrap(), "--stick"]);
+    let text = String::from_utf8_lossy(&c.stdout).to_string();
+    assert_eq!(c.status.code(), Some(1), "{text}");
+    assert!(text.contains("controller_lost"), "{text}");
+}

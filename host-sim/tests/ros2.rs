@@ -314,3 +314,24 @@ fn the_books_python_peer_runs_as_written() {
         .collect();
     assert_eq!(landed, printed, "the book says {printed:?}");
 }
+
+/// A cyclonedds peer steers by `cmd_vel` (`geometry_msgs/Twist` at 20 Hz for 5 s, then let
+/// go) and sends a relative goal (`geometry_msgs/Pose2D`): the COG goes forward, stops when
+/// the stick is let go (the gateway sends zero), and ends 0.4 m further at the goal; no
+/// refusal (`ros2_peer.py stick`).
+#[test]
+fn a_cyclonedds_peer_steers_by_cmd_vel_and_a_goal() {
+    if !have_cyclonedds() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("host-sim-ros2-stick");
+    let gw = gateway(63, &dir, 90, None);
+    let out = peer("stick", 63).output().unwrap();
+    let (gw_out, gw_err) = finish(gw);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.ends_with("ok\n"),
+        "peer:\n{text}{}\ngateway:\n{gw_out}{gw_err}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -37,7 +37,7 @@ pub mod robot;
 pub mod shaping;
 pub mod timing;
 mod trig;
-pub mod velocity;
+pub use node::velocity;
 pub mod window;
 pub mod wire;
 

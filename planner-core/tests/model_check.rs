@@ -40,6 +40,11 @@
 //! identifies states by that history (with the controller's and the bus's state), which is
 //! what makes the search finite.
 //!
+//! Walking at a velocity has a script of its own: `VELOCITY` frames are control commands of
+//! the session (properties 1, 2, 4 and 6 as for `CONTROL`), so a replayed, repeated or older
+//! velocity frame keeps a robot walking no more than a replayed heartbeat does: the node
+//! chooses its steps, and stops as for a lost controller when nothing new arrives (4).
+//!
 //! The estimator's measured states (`MEASURED`) have a script of their own: taken only at most
 //! 4 cycles old and newer than every one taken before (besides 1, 2 and 6), never counted as
 //! the controller heard (4).
@@ -60,7 +65,7 @@ use planner_core::gait::PREVIEW;
 use planner_core::node::{Node, NodeConfig, NodeState};
 use planner_core::shaping::{Law, PreviewGains};
 use planner_core::wire::{
-    Ack, Command, ControlOp, Measured, RawFrame, Reason, WireModify, WireStep,
+    Ack, Command, ControlOp, Measured, RawFrame, Reason, WireModify, WireStep, WireVelocity,
 };
 use stateright::{Checker, Model, Property};
 
@@ -88,6 +93,10 @@ enum Intent {
     Estop,
     /// A measured state against the last reference the node published (the estimator's).
     Measure,
+    /// A `VELOCITY` forward at `vx` (mm/s), numbered with the control commands.
+    Velocity {
+        vx_mm: i16,
+    },
 }
 
 use Intent::*;
@@ -278,8 +287,9 @@ impl Protocol {
         let mut cfg = NodeConfig::hrp2();
         cfg.entropy = ENTROPY;
         cfg.heartbeat_timeout_ms = 10; // 2 cycles: supervision within the bound
-                                       // Fewer commands held a cycle than the bus delivers: the receive's ranking (an `ESTOP`
-                                       // takes the place of another frame, which is refused `Busy`) is within the bound.
+        cfg.velocity_timeout_ms = 10; // (and the velocity stream's)
+                                      // Fewer commands held a cycle than the bus delivers: the receive's ranking (an `ESTOP`
+                                      // takes the place of another frame, which is refused `Busy`) is within the bound.
         cfg.max_rx = 2;
         let gains = gains(&cfg);
         Self {
@@ -361,6 +371,16 @@ impl Protocol {
                 epoch: None,
                 kind: Kind::Estop,
             },
+            Velocity { vx_mm } => {
+                c.seq += 1;
+                let v = WireVelocity::from_si(c.seq, f64::from(vx_mm) / 1e3, 0.0, 0.0);
+                Sent {
+                    frame: v.encode(c.epoch),
+                    epoch,
+                    // (A control command of the session: properties 1, 2 and 4 as `CONTROL`.)
+                    kind: Kind::Control { seq: c.seq },
+                }
+            }
             Measure => {
                 let m = Measured::from_si(c.cycle, [0.01, -0.02])?;
                 Sent {
@@ -568,7 +588,7 @@ impl Model for Protocol {
         let controls = self
             .script
             .iter()
-            .filter(|i| matches!(i, Control(_)))
+            .filter(|i| matches!(i, Control(_) | Velocity { .. }))
             .count() as u32;
         let slots = self
             .script
@@ -868,5 +888,46 @@ fn measured_states_only_fresh_and_of_their_session() {
             readme: |m| format!("+ {m} M states"),
             book: |m| format!(" and {m} million"),
         }),
+    );
+}
+
+/// Walking at a velocity: a stream of three `VELOCITY` frames (a start, a change, a stop) and
+/// an emergency stop; the bus replays, repeats and reorders them at will, and no replay keeps
+/// the robot walking past the supervision's 2 cycles (property 4).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: tests/run-all.sh runs it with --release"
+)]
+fn a_velocity_stream_keeps_it_walking_only_by_new_frames() {
+    check(
+        "velocity",
+        vec![
+            Control(ControlOp::Reset),
+            Velocity { vx_mm: 100 },
+            Velocity { vx_mm: 150 },
+            Velocity { vx_mm: 0 },
+            Estop,
+        ],
+        vec![
+            ("walking at a velocity", |s| {
+                s.node.state() == NodeState::Walking
+                    && s.node.driver() == planner_core::node::Driver::Velocity
+            }),
+            ("supervision stops it", |s| {
+                s.node.state() == NodeState::ControllerLost && !s.node.gait().is_standing()
+            }),
+            // (Delivered and refused: property 4 says that it keeps nothing alive.)
+            ("an old velocity frame refused while walking", |s| {
+                !s.node.gait().is_standing()
+                    && (s.node.counters().by_reason[usize::from(Reason::Stale.code())] > 0
+                        || s.node.counters().by_reason[usize::from(Reason::Duplicate.code())] > 0)
+            }),
+            ("a change taken while walking", |s| {
+                s.node.state() == NodeState::Walking
+                    && s.node.drive_velocity().is_some_and(|(v, _)| v.vx > 0.12)
+            }),
+        ],
+        None,
     );
 }

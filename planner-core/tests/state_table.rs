@@ -9,19 +9,21 @@ mod common;
 
 use common::{state_name, y, Rig};
 use planner_core::gait::Side;
-use planner_core::wire::{Command, ControlOp, Reason};
+use planner_core::wire::{Command, ControlOp, Reason, WireGoal, WireVelocity};
 
-const STATES: [&str; 8] = [
+const STATES: [&str; 10] = [
     "no session",
     "standing",
     "walking",
+    "walking (velocity)",
+    "walking (goal)",
     "stopping",
     "lost (moving)",
     "lost (standing)",
     "e-stopped (moving)",
     "e-stopped (standing)",
 ];
-const COMMANDS: [&str; 11] = [
+const COMMANDS: [&str; 13] = [
     "ESTOP",
     "HEARTBEAT",
     "START",
@@ -32,6 +34,8 @@ const COMMANDS: [&str; 11] = [
     "STEP_APPEND",
     "STEP_MODIFY",
     "MEASURED",
+    "VELOCITY",
+    "GOAL",
     "silence > 500 ms",
 ];
 
@@ -108,6 +112,18 @@ fn setup(state: &str) -> Rig {
             r
         }
         "walking" => walking(),
+        "walking (velocity)" => {
+            let mut r = Rig::hrp2();
+            let c = velocity(&mut r);
+            assert_eq!(r.ask(c), None);
+            r
+        }
+        "walking (goal)" => {
+            let mut r = Rig::hrp2();
+            let c = goal(&mut r);
+            assert_eq!(r.ask(c), None);
+            r
+        }
         "stopping" => {
             let mut r = walking();
             assert_eq!(r.control(ControlOp::Stop), None);
@@ -136,6 +152,18 @@ fn setup(state: &str) -> Rig {
     r
 }
 
+/// A valid `VELOCITY`: 0.1 m/s forward.
+fn velocity(r: &mut Rig) -> Command {
+    r.seq += 1;
+    Command::Velocity(WireVelocity::from_si(r.seq, 0.1, 0.0, 0.0))
+}
+
+/// A valid `GOAL`: 2 m ahead.
+fn goal(r: &mut Rig) -> Command {
+    r.seq += 1;
+    Command::Goal(WireGoal::from_si(r.seq, 2.0, 0.0, 0.0))
+}
+
 /// The last appended step number, and the next.
 fn ids(r: &Rig) -> (Option<u16>, u16) {
     let next = r.n.next_step();
@@ -155,6 +183,14 @@ fn apply(r: &mut Rig, command: &str) -> (Option<u8>, String) {
         "START" => code(r.control(ControlOp::Start)),
         "START_ADJUSTING" => code(r.control(ControlOp::StartAdjusting)),
         "MEASURED" => code(r.measure([0.001, -0.002])),
+        "VELOCITY" => {
+            let c = velocity(r);
+            code(r.ask(c))
+        }
+        "GOAL" => {
+            let c = goal(r);
+            code(r.ask(c))
+        }
         "STOP" => code(r.control(ControlOp::Stop)),
         "STOP_NOW" => code(r.control(ControlOp::StopNow)),
         "RESET" => code(r.control(ControlOp::Reset)),
@@ -189,6 +225,12 @@ fn apply(r: &mut Rig, command: &str) -> (Option<u8>, String) {
                     r.book.append(next, false, 0.1, -0.1, 0.0);
                     next
                 });
+            // (A step the node chose itself: the controller's book learns it from the node.)
+            if r.book.appended(id).is_none() {
+                if let Some(q) = r.n.gait().queued_step(id) {
+                    r.book.append(id, q.side == Side::Left, q.x, q.y, q.yaw);
+                }
+            }
             let f = r.book.appended(id).expect("appended").si();
             let c = r
                 .book

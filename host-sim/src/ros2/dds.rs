@@ -9,6 +9,8 @@
 //! | `input/footstep_data_list` | `controller_msgs/FootstepDataListMessage` | in | reliable, volatile, keep last 16 |
 //! | `input/pause_walking` | `controller_msgs/PauseWalkingMessage` | in | reliable, volatile, keep last 16 |
 //! | `input/abort_walking` | `controller_msgs/AbortWalkingMessage` | in | reliable, volatile, keep last 16 |
+//! | `input/cmd_vel` | `geometry_msgs/Twist` | in | reliable, volatile, keep last 16 |
+//! | `input/goal_relative` | `geometry_msgs/Pose2D` | in | reliable, volatile, keep last 16 |
 //! | `output/footstep_status` | `controller_msgs/FootstepStatusMessage` | out | reliable, transient-local, keep last 64 |
 //! | `output/walking_status` | `controller_msgs/WalkingStatusMessage` | out | reliable, transient-local, keep last 16 |
 //! | `output/command_refusal` | `walking_node_msgs/CommandRefusal` | out | reliable, transient-local, keep last 64 |
@@ -28,7 +30,8 @@
 //! the node's frames back and publishes what came of them. A message that cannot be decoded
 //! (a writer of the same type name with another layout) is refused `malformed`; a writer of
 //! another type on an input topic never reaches the gateway (DDS does not match it) and is
-//! reported once, `wrong_type`. A peer is *there* while a footstep publisher is matched; the
+//! reported once, `wrong_type`. A peer is *there* while a footstep or `cmd_vel` publisher is
+//! matched; the
 //! gateway heartbeats the node only then (see [`super::gateway`]).
 
 use std::collections::BTreeSet;
@@ -46,7 +49,8 @@ use super::gateway::{Gateway, GatewayConfig, Output};
 use super::link::NodeLink;
 use super::msg::{
     AbortWalkingMessage, CommandRefusal, FootstepDataListMessage, FootstepStatusMessage, Header,
-    PauseWalkingMessage, Point, PointStamped, Polygon, PolygonStamped, Time, WalkingStatusMessage,
+    PauseWalkingMessage, Point, PointStamped, Polygon, PolygonStamped, Pose2D, Time, Twist,
+    WalkingStatusMessage,
 };
 use crate::output::live::LiveView;
 use crate::output::mcap::{log_time_ns, LogFrame};
@@ -90,6 +94,8 @@ enum Input {
     List(Box<FootstepDataListMessage>),
     Pause(PauseWalkingMessage),
     Abort(AbortWalkingMessage),
+    CmdVel(Twist),
+    Goal(Pose2D),
 }
 
 /// The gateway's options.
@@ -131,6 +137,8 @@ struct Io {
     lists: Subscription<FootstepDataListMessage>,
     pauses: Subscription<PauseWalkingMessage>,
     aborts: Subscription<AbortWalkingMessage>,
+    cmd_vel: Subscription<Twist>,
+    goals: Subscription<Pose2D>,
     footstep_status: Publisher<FootstepStatusMessage>,
     walking_status: Publisher<WalkingStatusMessage>,
     refusals: Publisher<CommandRefusal>,
@@ -138,6 +146,7 @@ struct Io {
     zmp: Publisher<PointStamped>,
     support: Publisher<PolygonStamped>,
     lists_topic: String,
+    cmd_vel_topic: String,
 }
 
 fn err(what: &str, e: impl std::fmt::Debug) -> String {
@@ -196,6 +205,8 @@ impl Io {
             )?,
             pauses: subscription(node, &input, "pause_walking", c, "PauseWalkingMessage")?,
             aborts: subscription(node, &input, "abort_walking", c, "AbortWalkingMessage")?,
+            cmd_vel: subscription(node, &input, "cmd_vel", "geometry_msgs", "Twist")?,
+            goals: subscription(node, &input, "goal_relative", "geometry_msgs", "Pose2D")?,
             footstep_status: publisher(
                 node,
                 &output,
@@ -239,6 +250,7 @@ impl Io {
                 reference_qos(),
             )?,
             lists_topic: format!("{input}/footstep_data_list"),
+            cmd_vel_topic: format!("{input}/cmd_vel"),
         })
     }
 }
@@ -338,6 +350,12 @@ pub fn run(
         while let Ok(Some((m, info))) = io.aborts.take() {
             inputs.push((stamp(&info), inputs.len(), Input::Abort(m)));
         }
+        while let Ok(Some((m, info))) = io.cmd_vel.take() {
+            inputs.push((stamp(&info), inputs.len(), Input::CmdVel(m)));
+        }
+        while let Ok(Some((m, info))) = io.goals.take() {
+            inputs.push((stamp(&info), inputs.len(), Input::Goal(m)));
+        }
         inputs.sort_by_key(|(t, n, _)| (*t, *n));
         for (t, _, input) in inputs {
             match input {
@@ -352,6 +370,8 @@ pub fn run(
                     gw.on_pause(m.sequence_id, m.pause, m.clear_remaining_footstep_queue)
                 }
                 Input::Abort(m) => gw.on_abort(m.sequence_id),
+                Input::CmdVel(t) => gw.on_cmd_vel(t.linear.x, t.linear.y, t.angular.z),
+                Input::Goal(g) => gw.on_goal(g.x, g.y, g.theta),
             }
         }
         // Writers of another type on the footstep topic (DDS does not match them).
@@ -379,7 +399,8 @@ pub fn run(
                 }
             }
         }
-        let alive = node.publisher_count(&io.lists_topic) > 0;
+        let alive = node.publisher_count(&io.lists_topic) > 0
+            || node.publisher_count(&io.cmd_vel_topic) > 0;
         // One control cycle.
         let frames = gw.poll(alive);
         if let (Some(t), false) = (first_list_ns, frames.is_empty()) {

@@ -52,6 +52,29 @@ pub struct Vector3 {
     pub z: f64,
 }
 
+/// `geometry_msgs/Twist`: the `cmd_vel` convention (`linear.x` forward, `linear.y` to the
+/// left \[m/s\], `angular.z` counter-clockwise \[rad/s\]; the other components are not
+/// walked).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Twist {
+    /// Linear velocity.
+    pub linear: Vector3,
+    /// Angular velocity.
+    pub angular: Vector3,
+}
+
+/// `geometry_msgs/Pose2D`: the gateway's relative goal (x forward, y to the left \[m\],
+/// theta counter-clockwise \[rad\], from the midpoint of the feet and their mean heading).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pose2D {
+    /// x \[m\].
+    pub x: f64,
+    /// y \[m\].
+    pub y: f64,
+    /// theta \[rad\].
+    pub theta: f64,
+}
+
 /// `geometry_msgs/Quaternion` (`w` last, as ROS has it).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Quaternion {

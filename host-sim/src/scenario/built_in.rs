@@ -101,6 +101,11 @@ fn mm(v: f64) -> f64 {
 /// The names of the built-in scenarios.
 pub const BUILT_IN: [&str; 5] = ["straight", "turn", "stop", "fig4", "lateral"];
 
+/// The built-in scenarios in which the node chooses the footsteps (a velocity, a goal): played
+/// by `run` through the bus and the node (the gait alone, [`super::run`], has no step
+/// generator), so they are not among [`BUILT_IN`], which every footstep tool plays.
+pub const DRIVEN: [&str; 1] = ["velocity"];
+
 /// A built-in scenario by name, as written (HRP-2's proportions).
 pub fn built_in(name: &str) -> Option<Scenario> {
     built_in_for(name, &Stance::HRP2)
@@ -219,6 +224,29 @@ pub fn built_in_for(name: &str, st: &Stance) -> Option<Scenario> {
                 ),
                 timeline,
             )
+        }
+        "velocity" => {
+            // A stick: forward, then a step change to sideways, a turn to the left and its
+            // reversal to the right, then zero (the robot stops and stands).
+            let v = |vx: f64, vy: f64, wz: f64| Command::Velocity(st.l(vx), st.l(vy), wz);
+            let timeline = vec![
+                (20, v(0.15, 0.0, 0.0)),
+                (1200, v(0.0, 0.04, 0.0)),
+                (2200, v(0.05, 0.0, 0.15)),
+                (3000, v(0.05, 0.0, -0.15)),
+                (3800, v(0.0, 0.0, 0.0)),
+            ];
+            let mut s = scenario(
+                format!(
+                    "velocity walking: {} m/s forward, at 6 s {} m/s sideways, at 11 s a turn of \
+                     0.15 rad/s and at 15 s its reversal, at 19 s zero",
+                    mm(st.l(0.15)),
+                    mm(st.l(0.04))
+                ),
+                timeline,
+            );
+            s.max_ticks = 5000;
+            s
         }
         _ => return None,
     };

@@ -33,7 +33,25 @@
 //! yaw = 0.0                        # (default 0)
 //! side = "left"                    # optional: defaults to the side of [[step]] `id`; required
 //!                                  # when the file has no such step
+//!
+//! [[velocity]]                     # walk at a velocity: the node chooses the footsteps
+//! at_s = 0.5                       # when [s] (required)
+//! vx = 0.15                        # forward [m/s] (default 0), in the support foot's frame
+//! vy = 0.0                         # to the left [m/s] (default 0)
+//! wz = 0.0                         # turn, counter-clockwise [rad/s] (default 0)
+//!                                  # all 0: stop and stand
+//!
+//! [[goal]]                         # walk to a pose, then stand
+//! at_s = 0.5                       # when [s] (required)
+//! x = 1.0                          # forward [m], relative to the midpoint of the feet
+//! y = 0.2                          # to the left [m] (default 0)
+//! yaw = 0.5                        # heading change [rad] (default 0)
 //! ```
+//!
+//! A run through the bus (`host-sim run`) streams the last `[[velocity]]` every 50 ms, as a
+//! stick does, until the next `[[velocity]]` or `[[goal]]`: the node stops a robot whose
+//! velocity stream falls silent. While the node chooses the footsteps, the file's
+//! `[[step]]` and `[[modify]]` entries are refused (`wrong_state`).
 //!
 //! Times are converted to control ticks of [`TICK_S`] (5 ms), rounded to the nearest tick.
 //! The timeline is ordered by tick; commands that fall on the same tick are applied in this
@@ -103,6 +121,35 @@ struct File {
     command: Vec<Spanned<CommandEntry>>,
     #[serde(default)]
     modify: Vec<Spanned<ModifyEntry>>,
+    #[serde(default)]
+    velocity: Vec<Spanned<VelocityEntry>>,
+    #[serde(default)]
+    goal: Vec<Spanned<GoalEntry>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VelocityEntry {
+    at_s: f64,
+    #[serde(default)]
+    vx: f64,
+    #[serde(default)]
+    vy: f64,
+    #[serde(default)]
+    wz: f64,
+    expect: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GoalEntry {
+    at_s: f64,
+    x: f64,
+    #[serde(default)]
+    y: f64,
+    #[serde(default)]
+    yaw: f64,
+    expect: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -350,6 +397,53 @@ pub fn parse_file(text: &str) -> Result<ScenarioFile, String> {
             Kind::StopNow => Command::StopNow,
         };
         let expect = expectation(&what, c.expect.as_deref(), false)?;
+        let entry = Entry {
+            label: what,
+            expect,
+        };
+        timeline.push((tick, 2, command, entry));
+    }
+    let drives = file
+        .velocity
+        .iter()
+        .map(|v| {
+            let e = v.get_ref();
+            (
+                v.span().start,
+                "velocity",
+                e.at_s,
+                [e.vx, e.vy, e.wz],
+                e.expect.as_deref(),
+            )
+        })
+        .chain(file.goal.iter().map(|g| {
+            let e = g.get_ref();
+            (
+                g.span().start,
+                "goal",
+                e.at_s,
+                [e.x, e.y, e.yaw],
+                e.expect.as_deref(),
+            )
+        }));
+    let mut counts = [0usize; 2];
+    for (start, kind, at_s, v, expect) in drives {
+        let n = &mut counts[usize::from(kind == "goal")];
+        *n += 1;
+        let line = line_of(text, start);
+        let what = format!("[[{kind}]] #{n} at line {line}");
+        let tick = ticks(&format!("{what}: at_s"), at_s)?;
+        for x in v {
+            if !x.is_finite() {
+                return Err(format!("{what}: values must be finite, got {x}"));
+            }
+        }
+        let command = if kind == "goal" {
+            Command::Goal(v[0], v[1], v[2])
+        } else {
+            Command::Velocity(v[0], v[1], v[2])
+        };
+        let expect = expectation(&what, expect, false)?;
         let entry = Entry {
             label: what,
             expect,

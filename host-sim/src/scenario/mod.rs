@@ -14,7 +14,7 @@ pub mod expect;
 pub mod file;
 pub mod wire;
 
-pub use built_in::{built_in, built_in_for, Stance, BUILT_IN};
+pub use built_in::{built_in, built_in_for, Stance, BUILT_IN, DRIVEN};
 
 pub use expect::Failure;
 pub use wire::{wire_check, WireId, MAX_WIRE_ID};
@@ -37,6 +37,20 @@ pub enum Command {
     StopNow,
     /// Modify the queued step with this id.
     Modify(u16, Footstep<f64>),
+    /// Walk at (vx, vy, ω) \[m/s, m/s, rad/s\] in the support foot's frame: the node chooses
+    /// the footsteps (`VELOCITY`; a run through the bus streams it every 50 ms until the next
+    /// velocity or goal).
+    Velocity(f64, f64, f64),
+    /// Walk to (x, y, θ) \[m, m, rad\] relative to the midpoint of the feet and their mean
+    /// heading, then stand (`GOAL`).
+    Goal(f64, f64, f64),
+}
+
+impl Command {
+    /// `true` for a command with which the node chooses the footsteps (a velocity, a goal).
+    pub fn drives(&self) -> bool {
+        matches!(self, Command::Velocity(..) | Command::Goal(..))
+    }
 }
 
 /// A scenario: where the feet start, and commands at given ticks.
@@ -129,6 +143,8 @@ pub fn run(s: &Scenario, params: GaitParams<f64>) -> Run {
                     Ok(())
                 }
                 Command::Modify(id, f) => g.modify(id, f),
+                // The gait alone has no step generator: the node's (a run through the bus).
+                Command::Velocity(..) | Command::Goal(..) => Err(GaitError::WrongState),
             };
             match (command, result) {
                 (Command::Push(id, f), Ok(())) | (Command::Modify(id, f), Ok(())) => {

@@ -44,6 +44,12 @@ impl Controller {
             op,
         }
     }
+
+    /// The next `VELOCITY` (vx, vy, ω) in the session (the control sequence's next number).
+    pub(crate) fn velocity(&mut self, vx: f64, vy: f64, wz: f64) -> Command {
+        self.seq += 1;
+        Command::Velocity(wire::WireVelocity::from_si(self.seq, vx, vy, wz))
+    }
 }
 
 /// The frame of a scenario command: footsteps through the controller's step book, control
@@ -105,6 +111,11 @@ pub(crate) fn encode(
         super::Command::Start => control(ctl, ControlOp::Start),
         super::Command::Stop => control(ctl, ControlOp::Stop),
         super::Command::StopNow => control(ctl, ControlOp::StopNow),
+        super::Command::Velocity(vx, vy, wz) => Ok(ctl.velocity(vx, vy, wz)),
+        super::Command::Goal(x, y, yaw) => {
+            ctl.seq += 1;
+            Ok(Command::Goal(wire::WireGoal::from_si(ctl.seq, x, y, yaw)))
+        }
     }
 }
 
@@ -119,11 +130,13 @@ pub fn wire_check(s: &Scenario) -> Result<(), (usize, String)> {
 }
 
 /// The DBC name of the command an `ACK` answers (its `command` byte): `ESTOP`, `CONTROL`,
-/// `STEP_APPEND`, `STEP_MODIFY`, or the byte in hex for another.
+/// `VELOCITY`, `GOAL`, `STEP_APPEND`, `STEP_MODIFY`, or the byte in hex for another.
 pub fn command_name(code: u8) -> String {
     match code {
         0x10 => "ESTOP".into(),
         0x20 => "CONTROL".into(),
+        0x2F => "VELOCITY".into(),
+        0x46 => "GOAL".into(),
         0x00 => "STEP_APPEND".into(),
         0x01 => "STEP_MODIFY".into(),
         other => format!("0x{other:02x}"),

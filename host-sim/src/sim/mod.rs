@@ -127,6 +127,10 @@ pub struct SimRun {
     pub first_step: u16,
 }
 
+/// Ticks between two frames of a velocity stream (50 ms: five of them within the node's
+/// 250 ms stream timeout).
+pub const STREAM_TICKS: u64 = 10;
+
 fn send(port: &mut crate::sim::bus::Port, f: RawFrame) {
     // The mailbox holds 64 frames; a scenario never sends that many in one tick.
     let _ = port.transmit(&f);
@@ -201,23 +205,53 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
     // commands, which are in the session it opens.
     let mut ctl_state = handshake(&bus, &mut node, &mut ctl, &mut nport);
     let first_step = node.next_step();
+    // The velocity the controller streams (every `STREAM_TICKS`), and when it last sent it.
+    let mut streaming: Option<(f64, f64, f64)> = None;
+    let mut streamed_at = 0u64;
+    let mut heartbeat_due = false;
     for k in 0..s.max_ticks {
         let t0 = (k + 1) * 5 * ms;
         bus.advance(t0);
+        // A `VELOCITY` or `GOAL` sent in this tick (then no heartbeat: see below).
+        let mut drove = false;
         while next < s.timeline.len() && s.timeline[next].0 <= k {
             let (_, command) = s.timeline[next];
             let wire = encode(command, &mut ctl_state, &mut book)?;
+            drove |= command.drives();
             if let scenario::Command::Push(id, f) = command {
                 if !steps.iter().any(|(i, _, _)| *i == id) {
                     steps.push((id, f.side, Fate::Unseen));
                 }
             }
-            send(&mut ctl, wire.encode());
+            send(&mut ctl, wire.encode_in(ctl_state.epoch));
+            match command {
+                scenario::Command::Velocity(vx, vy, wz) => {
+                    streaming = Some((vx, vy, wz));
+                    streamed_at = k;
+                }
+                scenario::Command::Goal(..) => streaming = None,
+                _ => {}
+            }
             events.push((k, command, wire));
             broken.push(None);
             next += 1;
         }
-        if cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0 {
+        // A stick streams: the velocity in force again, every 50 ms, with a new number (a
+        // repeat proves nothing).
+        if let Some((vx, vy, wz)) = streaming {
+            if k >= streamed_at + STREAM_TICKS {
+                let f = ctl_state.velocity(vx, vy, wz).encode_in(ctl_state.epoch);
+                send(&mut ctl, f);
+                streamed_at = k;
+                drove = true;
+            }
+        }
+        // (Arbitration delivers a cycle's `CONTROL` before its `VELOCITY` or `GOAL`, whatever
+        // the order of sending: a heartbeat numbered after one would make it stale, so it
+        // waits for the next cycle.)
+        heartbeat_due |= cfg.heartbeat_ticks > 0 && k % cfg.heartbeat_ticks == 0;
+        if heartbeat_due && !drove {
+            heartbeat_due = false;
             // A new sequence number for every heartbeat (a repeat proves nothing).
             send(&mut ctl, ctl_state.control(ControlOp::Heartbeat).encode());
         }
@@ -272,7 +306,11 @@ pub fn simulate(s: &Scenario, cfg: &SimConfig) -> Result<SimRun, String> {
         let code = wire.code();
         let key = wire.key();
         let found = acks.iter().enumerate().find(|(i, (t, a))| {
-            !used[*i] && *t >= k && a.command == code && a.seq == key && a.echo == wire.echo()
+            !used[*i]
+                && *t >= k
+                && a.command == code
+                && a.seq == key
+                && a.echo == wire.echo_in(ctl_state.epoch)
         });
         let result = match found {
             Some((i, (_, a))) => {

@@ -113,6 +113,10 @@ pub fn describe(c: &Command) -> String {
         Command::Start => "start".into(),
         Command::Stop => "stop".into(),
         Command::StopNow => "stop_now".into(),
+        Command::Velocity(vx, vy, wz) => {
+            format!("velocity ({vx:.3} m/s, {vy:.3} m/s, {wz:.3} rad/s)")
+        }
+        Command::Goal(x, y, yaw) => format!("goal ({x:.3} m, {y:.3} m, {yaw:.3} rad)"),
     }
 }
 

@@ -25,8 +25,9 @@ use planner_core::gait::{GaitParams, Phase, Side};
 use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
     self, ids, signed_range, Ack, Adjust, Command, ControlOp, Diag, LinkHealth, Measured, RawFrame,
-    Reason, Session, Status, Stream, WireModify, WireStep, DEVIATION_BITS, DEVIATION_UNIT,
-    OFFSET_BITS, STAMPS, STEP_BITS, STEP_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
+    Reason, Session, Status, Stream, WireGoal, WireModify, WireStep, WireVelocity, DEVIATION_BITS,
+    DEVIATION_UNIT, DRIVE_BITS, DRIVE_TURN_BITS, GOAL_UNIT, GOAL_YAW_UNIT, OFFSET_BITS, SEQ_WINDOW,
+    SPEED_UNIT, STAMPS, STEP_BITS, STEP_UNIT, TURN_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
 };
 
 mod ranges;
@@ -85,6 +86,8 @@ fn every_message_of_the_codec_is_in_the_dbc_and_nothing_else() {
     let mut ours: Vec<u32> = [
         ids::ESTOP,
         ids::CONTROL,
+        ids::VELOCITY,
+        ids::GOAL,
         ids::ACK,
         ids::STEP_APPEND,
         ids::STEP_MODIFY,
@@ -221,9 +224,10 @@ fn answers_status_and_stream_decode_the_same_with_the_dbc() {
             s["tx_overflow"],
             s["next_side"],
             s["clock_fault"],
-            s["flags_reserved"]
+            s["velocity_cut"],
+            s["at_goal"]
         ),
-        (1.0, 0.0, 1.0, 1.0, 1.0, 0.0)
+        (1.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0)
     );
     close(s["last_adjust"], -0.2, 0.005, "last_adjust");
     let dg = Diag {

@@ -120,6 +120,47 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("measured_reserved", 0.0), // the encoder writes 0, the decoder refuses 1
         ],
     ));
+    // `VELOCITY` and `GOAL`: the lowest value the encoder gives is one above the field's
+    // reserved most negative one (not a number).
+    let end = |bits: u32| {
+        let (lo, hi) = signed_range(bits);
+        if high {
+            hi
+        } else {
+            lo + 1
+        }
+    };
+    let seq = if high { u32::MAX } else { 0 };
+    let v = WireVelocity {
+        seq,
+        vx: end(DRIVE_BITS),
+        vy: end(DRIVE_BITS),
+        wz: end(DRIVE_TURN_BITS),
+    };
+    out.push((
+        Command::Velocity(v).encode(),
+        vec![
+            ("seq_low", f64::from(seq & (SEQ_WINDOW - 1))),
+            ("vx", f64::from(v.vx) * SPEED_UNIT),
+            ("vy", f64::from(v.vy) * SPEED_UNIT),
+            ("wz", f64::from(v.wz) * TURN_UNIT),
+        ],
+    ));
+    let g = WireGoal {
+        seq,
+        x: end(DRIVE_BITS),
+        y: end(DRIVE_BITS),
+        yaw: end(DRIVE_TURN_BITS),
+    };
+    out.push((
+        Command::Goal(g).encode(),
+        vec![
+            ("seq_low", f64::from(seq & (SEQ_WINDOW - 1))),
+            ("x", f64::from(g.x) * GOAL_UNIT),
+            ("y", f64::from(g.y) * GOAL_UNIT),
+            ("yaw", f64::from(g.yaw) * GOAL_YAW_UNIT),
+        ],
+    ));
     let flag = u8::from(high);
     let ad = Adjust {
         from: byte,
@@ -207,7 +248,8 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             ("tx_overflow", b(st.flags >> 2 & 1)),
             ("next_side", b(st.next_side())),
             ("clock_fault", b(st.flags >> 5 & 1)),
-            ("flags_reserved", b(st.flags >> 6)),
+            ("velocity_cut", b(st.flags >> 6 & 1)),
+            ("at_goal", b(st.flags >> 7 & 1)),
         ],
     ));
     let lk = LinkHealth {
@@ -382,6 +424,8 @@ fn each_flag_of_status_is_its_own_bit() {
         "",
         "",
         "clock_fault",
+        "velocity_cut",
+        "at_goal",
     ];
     for (k, name) in names.iter().enumerate() {
         if name.is_empty() {
@@ -399,7 +443,6 @@ fn each_flag_of_status_is_its_own_bit() {
                 "flag bit {k}: {other}"
             );
         }
-        assert_eq!(s["flags_reserved"], 0.0);
         let c = d
             .signal_comment(MessageId::Standard(ids::STATUS), name)
             .expect("a comment");

@@ -187,12 +187,16 @@ impl Rig {
                         ("replan_failed", g.replan_failed()),
                         ("tx_overflow", self.node.counters().tx_dropped > 0),
                         ("clock_fault", self.node.clock_fault()),
+                        (
+                            "velocity_cut",
+                            self.node.drive_velocity().is_some_and(|(_, c)| c.any()),
+                        ),
+                        ("at_goal", self.node.at_goal()),
                     ];
                     for (flag, on) in flags {
                         assert_eq!(s[flag], f64::from(u8::from(on)), "{flag}");
                         note(flag, on.to_string());
                     }
-                    assert_eq!(s["flags_reserved"], 0.0);
                     let name = self.name(f.id, "next_side", s["next_side"]);
                     let side = self.node.gait().next_side();
                     assert_eq!(name, next_side_name(side), "cycle {}", self.cycle);

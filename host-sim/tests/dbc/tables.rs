@@ -88,7 +88,7 @@ pub(crate) fn next_side_name(s: Option<Side>) -> String {
 }
 
 /// One command of each kind, with its name in `ACK.command`.
-pub(crate) fn commands() -> [(Command, &'static str); 5] {
+pub(crate) fn commands() -> [(Command, &'static str); 7] {
     let step = WireStep::from_si(3, true, 0.2, 0.1, 0.0).unwrap();
     let change = WireModify::from_si(&step, 1, 0.25, 0.1, 0.0).unwrap();
     [
@@ -101,6 +101,8 @@ pub(crate) fn commands() -> [(Command, &'static str); 5] {
         Command::Append(step),
         Command::Modify(change),
         Command::Measured(Measured::from_si(7, [0.01, -0.02]).unwrap()),
+        Command::Velocity(WireVelocity::from_si(2, 0.1, 0.0, 0.0)),
+        Command::Goal(WireGoal::from_si(3, 1.0, 0.0, 0.0)),
     ]
     .map(|c| {
         let name = match c {
@@ -109,6 +111,8 @@ pub(crate) fn commands() -> [(Command, &'static str); 5] {
             Command::Append(_) => "append",
             Command::Modify(_) => "modify",
             Command::Measured(_) => "measured",
+            Command::Velocity(_) => "velocity",
+            Command::Goal(_) => "goal",
         };
         (c, name)
     })
@@ -242,6 +246,8 @@ fn ack_command_table_is_the_low_byte_of_the_command_ids() {
         (ids::STEP_APPEND, "append"),
         (ids::STEP_MODIFY, "modify"),
         (ids::MEASURED, "measured"),
+        (ids::VELOCITY, "velocity"),
+        (ids::GOAL, "goal"),
     ]
     .iter()
     .map(|&(id, name)| (i64::from(id & 0xFF), name.to_string()))

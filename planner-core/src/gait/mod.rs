@@ -59,6 +59,7 @@ mod active;
 mod params;
 mod predict;
 mod queue;
+pub use queue::MODIFY_FRONT;
 mod reference;
 mod relocate;
 mod shape;

@@ -4,6 +4,9 @@
 
 use super::*;
 
+/// The most steps [`Gait::modify_front`] replaces at once.
+pub const MODIFY_FRONT: usize = 4;
+
 impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G> {
     /// Moves the world frame while standing: the new origin is `(x, y)` of the old frame and
     /// the new x axis has the old heading `yaw`. Every pose the gait holds (feet, the resting
@@ -195,6 +198,55 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
                     return Err(e);
                 }
                 _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Replaces the first `steps.len()` queued steps (from the next swing target on, at most
+    /// [`MODIFY_FRONT`]) at once, each with its side kept: how the node re-plans the steps it
+    /// chose itself when the commanded velocity changes. While walking, the re-plan the new
+    /// next swing target causes is checked once, with all of them in place (eq. 17, as
+    /// [`Gait::modify`]); if it is refused every step is put back as it was and the error
+    /// returned (`Infeasible`; `WrongState` when more steps are given than queued, `SideOrder`
+    /// when a side differs, `NonFinite`).
+    #[inline(never)]
+    pub fn modify_front(&mut self, steps: &[Footstep<T>]) -> Result<(), GaitError> {
+        if steps.len() > MODIFY_FRONT || steps.len() > self.queue.len() {
+            return Err(GaitError::WrongState);
+        }
+        if steps.iter().any(|s| !s.is_finite()) {
+            return Err(GaitError::NonFinite);
+        }
+        let mut old: [Option<Queued<T>>; MODIFY_FRONT] = [None; MODIFY_FRONT];
+        for (i, s) in steps.iter().enumerate() {
+            let q = self.queue.get(i).copied();
+            if q.map(|q| q.step.side) != Some(s.side) {
+                return Err(GaitError::SideOrder);
+            }
+            if let Some(slot) = old.get_mut(i) {
+                *slot = q;
+            }
+        }
+        for (i, s) in steps.iter().enumerate() {
+            if let Some(q) = self.queue.get_mut(i) {
+                q.step = *s;
+                q.modified = true;
+                q.capture = false;
+            }
+        }
+        self.gen = self.gen.wrapping_add(1);
+        if !steps.is_empty() && self.mode == Mode::Walking {
+            let refused = match self.predict_replan() {
+                Ok(Some(worst)) if !self.inside_sole(worst) => Some(GaitError::Infeasible),
+                Err(e) => Some(e),
+                _ => None,
+            };
+            if let Some(e) = refused {
+                for (i, o) in old.iter().enumerate().take(steps.len()) {
+                    self.undo_modify(i, *o);
+                }
+                return Err(e);
             }
         }
         Ok(())

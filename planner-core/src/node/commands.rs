@@ -122,6 +122,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         now_ms: u32,
     ) -> Ack {
         let echo = crate::wire::echo_of(frame);
+        // (The cut of an accepted `VELOCITY` or `GOAL`, answered in the version byte.)
+        let mut cut = None;
         let (command, seq, result) = match decoded {
             Ok(cmd) => {
                 let result = match cmd {
@@ -130,6 +132,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     Command::Append(s) => self.append(frame, &s),
                     Command::Modify(m) => self.modify(frame, &m),
                     Command::Measured(m) => self.measured(&m),
+                    Command::Velocity(v) => self.velocity(&v, now_ms).map(|c| cut = Some(c)),
+                    Command::Goal(g) => self.goal(&g).map(|c| cut = Some(c)),
                 };
                 (cmd.code(), cmd.key(), result)
             }
@@ -165,7 +169,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let version = match decoded {
             Ok(Command::Append(s)) => self.steps.version(s.id),
             Ok(Command::Modify(m)) => self.steps.version(m.id),
-            _ => None,
+            _ => cut,
         };
         Ack {
             command,
@@ -313,8 +317,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         Ok(())
     }
 
-    /// What refuses any footstep frame first: no session, a repeat of what is in force, then
-    /// the two latched states.
+    /// What refuses any footstep frame first: no session, a repeat of what is in force, the
+    /// two latched states, then a walk whose steps the node chooses.
     pub(super) fn footstep_gate(&self, frame: &RawFrame) -> Result<(), Reason> {
         if !self.open {
             return Err(Reason::NoSession);
@@ -327,6 +331,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         if self.lost {
             return Err(Reason::ControllerLost);
+        }
+        // While the node chooses the steps (a velocity, a goal) they are its own.
+        if self.drive.driver != drive::Driver::Steps {
+            return Err(Reason::WrongState);
         }
         Ok(())
     }

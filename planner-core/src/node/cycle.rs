@@ -346,9 +346,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             let expect = Expect {
                 next_step,
                 epoch: self.epoch,
+                last_seq: self.last_seq,
             };
             let decoded = Command::decode(f, expect);
             self.act(usize::from(i), f, decoded, &mut act, now_ms);
+        }
+        // The steps the node chooses itself, topped up with what the commands left.
+        let drives = self.drive.driver != drive::Driver::Steps;
+        if drives {
+            self.drive_ahead();
         }
         let refused = act.refused;
         self.estop_now = false;
@@ -357,6 +363,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.plans_left = self.cfg.max_plans;
         self.work_left = self.cfg.work_budget;
         // 3. Supervision, 4. the gait's tick (only in a session: nothing moves before it).
+        if drives {
+            self.drive_supervise(now_ms);
+        }
         self.supervise(now_ms);
         let streaming = self.open;
         let reference = if streaming {
@@ -366,8 +375,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         } else {
             *self.gait.last()
         };
-        // The shift ends with its walk.
+        // The shift ends with its walk, and so does a velocity or a goal.
         self.end_of_walk();
+        if drives {
+            self.drive_end();
+        }
         // A stale reference in the backlog is dropped: the new one supersedes it. (One pass
         // of pop and push rather than `Deque::retain`, whose heapless implementation keeps
         // panicking branches the optimiser cannot remove: see firmware/nopanic.)

@@ -130,11 +130,14 @@
 
 mod adjust;
 mod commands;
+mod config;
 mod cycle;
+mod drive;
 mod feet;
 mod reach;
 mod report;
 mod steps;
+pub mod velocity;
 
 use core::borrow::Borrow;
 
@@ -142,7 +145,9 @@ use heapless::Deque;
 
 use adjust::Adjusting;
 pub use adjust::{AdjustConfig, MAX_AGE, MAX_SHIFT};
+pub use config::NodeConfig;
 use cycle::*;
+pub use drive::{Driver, AHEAD, GOAL_TOLERANCE, GOAL_YAW_TOLERANCE, WORK_GENERATE};
 use reach::Frame;
 pub use reach::{Broken, Limit, Reach, Soles};
 pub use steps::HISTORY;
@@ -214,119 +219,6 @@ pub const STEP_NUMBERS: u32 = 0xFFFF;
 /// a `Reset` after that still opens a session and leaves every latched state, with no step
 /// numbers (appends `Exhausted`: the robot stands until the node restarts).
 pub const SESSION_SKIP: u32 = 256;
-
-/// Node configuration, in the node's scalar `T` ([`NodeConfig::cast`] converts the `f64`
-/// configuration that a robot file gives).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NodeConfig<T = f64> {
-    /// Gait parameters.
-    pub params: GaitParams<T>,
-    /// Where the left foot stands at start-up.
-    pub left: Footstep<T>,
-    /// Where the right foot stands at start-up.
-    pub right: Footstep<T>,
-    /// Silence of the controller after which a moving robot stops \[ms\] (see the module
-    /// docs: the supervision bound).
-    pub heartbeat_timeout_ms: u32,
-    /// Command frames acted on per cycle at most, of every sender (at most [`MAX_RX`]): when
-    /// more arrive, the node keeps them by class (see the module docs) and refuses the rest
-    /// `Busy`.
-    pub max_rx: usize,
-    /// Frames of all kinds (the node's and others) taken from the device per cycle at most:
-    /// more than the bus carries in a cycle, so that nothing waits for the next one.
-    pub max_frames: usize,
-    /// Planning commands (`Start`, `STEP_MODIFY` of the next swing target while walking)
-    /// handled per cycle at most (see the module docs).
-    pub max_plans: usize,
-    /// The command work a cycle may do, in estimated Cortex-M7 instructions ([`WORK_BUDGET`]
-    /// by default; see there for what each command costs). At most [`WORK_BUDGET`] (the bound
-    /// the timing figures measure) and at least [`WORK_ADJUST`] and a plan with its checks
-    /// ([`WORK_STEP`] + [`WORK_PLAN`]); `max_plans` at least 1: else the start-up refuses the
-    /// configuration.
-    pub work_budget: u32,
-    /// Reach limits.
-    pub reach: Reach<T>,
-    /// The step adjustment from the measured state (see `adjust`).
-    pub adjust: AdjustConfig<T>,
-    /// A value that differs at every start-up (the firmware takes it from its hardware random
-    /// number generator): the start-up's session epoch, and (its high half) the number of its
-    /// first step. Frames of an earlier start-up are then refused except by chance (2⁻¹⁶ for
-    /// a control command); within a start-up, by construction.
-    pub entropy: u32,
-}
-
-impl NodeConfig {
-    /// HRP-2 defaults: [`GaitParams::hrp2`], [`Reach::default`] and
-    /// [`NodeConfig::for_robot`]'s node settings.
-    pub fn hrp2() -> Self {
-        Self::for_robot(GaitParams::hrp2(), Reach::default())
-    }
-
-    /// The node for a robot's gait parameters and reach limits (a robot file gives both: see
-    /// `planner_core::robot`, feature `robot`), with the node settings that do not depend on
-    /// the robot: the feet `step_width` apart at the origin, heading along x; 500 ms
-    /// heartbeat timeout; 20 command frames acted on per cycle (the controller's 16 and the
-    /// estimator's one, with room for emergency stops of other senders) out of at most 160
-    /// frames of all kinds taken from the device (a 1 Mbit/s bus carries at most 106 in
-    /// 5 ms); one planning command per cycle.
-    pub fn for_robot(params: GaitParams<f64>, reach: Reach) -> Self {
-        let half = params.step_width / 2.0;
-        Self {
-            params,
-            left: Footstep::new(Side::Left, 0.0, half, 0.0),
-            right: Footstep::new(Side::Right, 0.0, -half, 0.0),
-            heartbeat_timeout_ms: 500,
-            max_rx: 20,
-            max_frames: 160,
-            max_plans: 1,
-            work_budget: WORK_BUDGET,
-            reach,
-            adjust: AdjustConfig::DEFAULT,
-            entropy: 0,
-        }
-    }
-
-    /// This configuration in the scalar `T` (every real rounded to the nearest `T`; exact for
-    /// `f64`): how the `f32` node is configured from a robot file.
-    pub fn cast<T: Real>(&self) -> NodeConfig<T> {
-        let foot = |f: &Footstep<f64>| Footstep::new(f.side, T::of(f.x), T::of(f.y), T::of(f.yaw));
-        let p = &self.params;
-        NodeConfig {
-            params: GaitParams {
-                omega: T::of(p.omega),
-                dt: T::of(p.dt),
-                single_ticks: p.single_ticks,
-                double_ticks: p.double_ticks,
-                start_ticks: p.start_ticks,
-                settle_ticks: p.settle_ticks,
-                stand_ticks: p.stand_ticks,
-                rest_ticks: p.rest_ticks,
-                adjust_min_ticks: p.adjust_min_ticks,
-                adjust_max_ticks: p.adjust_max_ticks,
-                step_width: T::of(p.step_width),
-                sole_half_length: T::of(p.sole_half_length),
-                sole_half_width: T::of(p.sole_half_width),
-                step_height: T::of(p.step_height),
-                tail: p.tail,
-                shaping: p.shaping,
-                cog_height: p.cog_height,
-                gravity: p.gravity,
-                preview_qe: p.preview_qe,
-                preview_r: p.preview_r,
-            },
-            left: foot(&self.left),
-            right: foot(&self.right),
-            heartbeat_timeout_ms: self.heartbeat_timeout_ms,
-            max_rx: self.max_rx,
-            max_frames: self.max_frames,
-            max_plans: self.max_plans,
-            work_budget: self.work_budget,
-            reach: self.reach.cast(),
-            adjust: self.adjust.cast(),
-            entropy: self.entropy,
-        }
-    }
-}
 
 /// What one cycle did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -446,6 +338,9 @@ pub struct Node<const Q: usize, G = PreviewGains<f64, PREVIEW>, T: Real = f64> {
     adj: Adjusting<T>,
     /// The frames of the queued steps kept for the reach checks (see `feet`).
     feet: feet::FeetFrames<T, Q>,
+    /// Who chooses the footsteps: the controller, or the node from a velocity or a goal (see
+    /// `drive`).
+    drive: drive::Drive<T>,
 }
 
 /// A node that is not configured yet, as a `static` holds it before start-up: every byte zero
@@ -523,6 +418,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
                 left: Footstep::PARKED,
                 right: Footstep::PARKED,
                 heartbeat_timeout_ms: 0,
+                velocity_timeout_ms: 0,
                 max_rx: 0,
                 max_frames: 0,
                 max_plans: 0,
@@ -563,6 +459,7 @@ impl<const Q: usize, G, T: Real> Node<Q, G, T> {
             off_bus: 0,
             adj: Adjusting::ZERO,
             feet: feet::FeetFrames::EMPTY,
+            drive: drive::Drive::ZERO,
         }
     }
 }
@@ -647,6 +544,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.off_bus = 0;
         self.adj = Adjusting::ZERO;
         self.feet = feet::FeetFrames::EMPTY;
+        self.drive = drive::Drive::ZERO;
         Ok(())
     }
 
@@ -717,6 +615,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             && self.cycle == other.cycle
             && self.off_bus == other.off_bus
             && self.adj == other.adj
+            && self.drive == other.drive
     }
 
     /// The session as published in `SESSION`.
@@ -733,11 +632,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// What the validation of a frame depends on now ([`Command::decode`]): the next step
-    /// number and the session epoch.
+    /// number, the session epoch and the last accepted control sequence number.
     pub fn expect(&self) -> Expect {
         Expect {
             next_step: self.next_step(),
             epoch: self.epoch,
+            last_seq: self.last_seq,
         }
     }
 

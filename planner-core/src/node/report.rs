@@ -31,6 +31,12 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.clock_fault {
             flags |= Status::CLOCK_FAULT;
         }
+        if self.drive.driver != drive::Driver::Steps && self.drive.cut.any() {
+            flags |= Status::CUT;
+        }
+        if self.drive.arrived && self.at_goal() {
+            flags |= Status::AT_GOAL;
+        }
         Status {
             state: self.state() as u8,
             queue: self.gait.queued().min(255) as u8,

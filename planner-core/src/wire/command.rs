@@ -1,6 +1,7 @@
 //! The commands from the bus, validated once ([`Command::decode`]), and their answer, the
 //! `ACK` ([`Ack`]).
 
+use super::drive::{WireGoal, WireVelocity};
 use super::measured::Measured;
 use super::step::{WireModify, WireStep, VERSIONS};
 use super::{crc8, crc_ok, crc_ok_over, ids, RawFrame, Reason};
@@ -24,6 +25,9 @@ pub struct Expect {
     pub next_step: u16,
     /// The session epoch (`SESSION`).
     pub epoch: u32,
+    /// The last accepted control sequence number (`SESSION`): `VELOCITY` and `GOAL` carry the
+    /// low 24 bits of theirs, read against it ([`super::seq_number`]).
+    pub last_seq: u32,
 }
 
 impl From<u16> for Expect {
@@ -31,6 +35,7 @@ impl From<u16> for Expect {
         Self {
             next_step,
             epoch: 0,
+            last_seq: 0,
         }
     }
 }
@@ -104,6 +109,10 @@ pub enum Command {
     /// The robot's measured state (not a command of the controller: it never proves the
     /// controller alive).
     Measured(Measured),
+    /// Walk at a velocity (a control command of the session, numbered with `CONTROL`).
+    Velocity(WireVelocity),
+    /// Walk to a relative goal (a control command of the session, numbered with `CONTROL`).
+    Goal(WireGoal),
 }
 
 impl Command {
@@ -115,6 +124,7 @@ impl Command {
         let Expect {
             next_step: next,
             epoch,
+            last_seq,
         } = expect.into();
         let b = f.bytes();
         let first = b.first().copied().unwrap_or(0);
@@ -147,6 +157,18 @@ impl Command {
                     .map(Command::Measured)
                     .map_err(|r| (r, first))
             }
+            ids::VELOCITY => {
+                need(8, first)?;
+                WireVelocity::decode(b, epoch, last_seq)
+                    .map(Command::Velocity)
+                    .map_err(|r| (r, first))
+            }
+            ids::GOAL => {
+                need(8, first)?;
+                WireGoal::decode(b, epoch, last_seq)
+                    .map(Command::Goal)
+                    .map_err(|r| (r, first))
+            }
             ids::STEP_APPEND | ids::STEP_MODIFY => {
                 need(8, first)?;
                 let number = step_number(first, next);
@@ -171,11 +193,14 @@ impl Command {
         self.encode_in(0)
     }
 
-    /// The frame that carries this command in the session `epoch` (only the measured state's
-    /// CRC depends on it).
+    /// The frame that carries this command in the session `epoch` (only the CRCs of the
+    /// measured state, `VELOCITY` and `GOAL` depend on it).
     pub fn encode_in(&self, epoch: u32) -> RawFrame {
-        if let Command::Measured(m) = self {
-            return m.encode(epoch);
+        match self {
+            Command::Measured(m) => return m.encode(epoch),
+            Command::Velocity(v) => return v.encode(epoch),
+            Command::Goal(g) => return g.encode(epoch),
+            _ => {}
         }
         let (id, data, n) = match self {
             Command::EmergencyStop { seq } => (ids::ESTOP, [*seq, 0, 0, 0, 0, 0, 0, 0], 1),
@@ -189,6 +214,8 @@ impl Command {
             Command::Append(s) => (ids::STEP_APPEND, s.pack(), 8),
             Command::Modify(s) => (ids::STEP_MODIFY, s.pack(), 8),
             Command::Measured(m) => (ids::MEASURED, m.encode(0).data, 8),
+            Command::Velocity(v) => (ids::VELOCITY, v.encode(0).data, 8),
+            Command::Goal(g) => (ids::GOAL, g.encode(0).data, 8),
         };
         RawFrame {
             id,
@@ -219,6 +246,8 @@ impl Command {
             Command::Control { seq, .. } => *seq as u8,
             Command::EmergencyStop { seq } => *seq,
             Command::Measured(m) => m.stamp as u8,
+            Command::Velocity(v) => v.seq as u8,
+            Command::Goal(g) => g.seq as u8,
         }
     }
 
@@ -230,6 +259,8 @@ impl Command {
             Command::Append(_) => ids::STEP_APPEND,
             Command::Modify(_) => ids::STEP_MODIFY,
             Command::Measured(_) => ids::MEASURED,
+            Command::Velocity(_) => ids::VELOCITY,
+            Command::Goal(_) => ids::GOAL,
         };
         (id & 0xFF) as u8
     }
@@ -271,7 +302,9 @@ pub struct Ack {
     /// For a footstep command: the version of that step in force after the command (0 as
     /// appended), whatever the answer; `None` (0xFF on the wire) for other commands and for
     /// steps the node does not know. A controller whose newer modification was refused learns
-    /// from it which of its versions the node walks.
+    /// from it which of its versions the node walks. For an accepted `VELOCITY` or `GOAL`:
+    /// what the node cut of the command to what the legs can take ([`Ack::cut`]: bit 0
+    /// forward, 1 across, 2 turn, 3 stepped in place; 0 nothing cut).
     pub version: Option<u8>,
 }
 
@@ -288,6 +321,17 @@ impl Ack {
             data: [body[0], body[1], body[2], body[3], body[4], v, c, 0],
         }
     }
+    /// For the answer to an accepted `VELOCITY` or `GOAL`: what the node cut, as bits (see
+    /// [`Ack::version`]: bit 0 forward, 1 across, 2 turn, 3 stepped in place; 0 nothing cut;
+    /// `planner_core::velocity::Saturation::from_mask` reads them); `None` for other answers.
+    pub fn cut(&self) -> Option<u8> {
+        let drive = [(ids::VELOCITY & 0xFF) as u8, (ids::GOAL & 0xFF) as u8];
+        if !drive.contains(&self.command) || self.reason.is_some() {
+            return None;
+        }
+        self.version
+    }
+
     /// Decodes an `ACK` frame; `None` if it is not one or its CRC is wrong.
     pub fn decode(f: &RawFrame) -> Option<Self> {
         if f.id != ids::ACK || f.len != 7 || !crc_ok(f.id, f.bytes()) {

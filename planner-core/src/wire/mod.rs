@@ -112,11 +112,15 @@
 //!
 //! # Frames
 //! Lower identifiers win arbitration, so commands come first, then answers, then the stream.
+//! The commands' identifiers differ pairwise in at least four bits, so that no error of up to
+//! three bits moves a frame to another command's identifier.
 //!
 //! | id | name | dir | dlc | layout |
 //! |---|---|---|---|---|
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
 //! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset, 5 start with step adjustment), crc u8 |
+//! | 0x02F | `VELOCITY` | in | 8 | seq's low 24 bits u24, vx i11, vy i11 (1 mm/s), ω i10 (2 mrad/s), crc u8 keyed with the session and the seq's high byte (see `drive.rs`) |
+//! | 0x046 | `GOAL` | in | 8 | seq's low 24 bits u24, x i11, y i11 (1 cm), θ i10 (2π/1024 rad), crc u8 keyed as `VELOCITY`'s |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step number's low byte u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
 //! | 0x101 | `STEP_MODIFY` | in | 8 | step number's low byte u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
 //! | 0x0D8 | `MEASURED` | in | 8 | stamp u24 (the node cycle measured against), DCM deviation from that cycle's reference x i15, y i15 (0.1 mm), reserved u2 (0), crc u8 keyed with the session (see `measured.rs`) |
@@ -127,7 +131,7 @@
 //! | 0x202 | `COG_VEL` | out | 8 | vx i16, vy i16 (0.1 mm/s), phase u8, tick u24 (the low 24 bits of the node's cycle) |
 //! | 0x210 | `FOOT_LEFT` | out | 8 | x i20, y i20, z u8 (0.5 mm), yaw i16 (1e-4 rad) |
 //! | 0x211 | `FOOT_RIGHT` | out | 8 | as `FOOT_LEFT` |
-//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 (shaping u1, re-plan failed u1, tx overflow u1, next side u2, clock fault u1, reserved u2) |
+//! | 0x300 | `STATUS` | out | 8 | state u8, queue u8, rejected u16, overruns u16, last adjustment i8 (5 ms), flags u8 (shaping u1, re-plan failed u1, tx overflow u1, next side u2, clock fault u1, velocity cut u1, at goal u1) |
 //! | 0x301 | `DIAG` | out | 8 | foreign u16, bus errors u16, tx dropped u16, next step number u16 |
 //! | 0x302 | `LINK` | out | 8 | TEC u8, REC u7, receive passive u1, bus state u2, reset reason u4, message RAM faults u2, bus-offs u16, error-passive episodes u12, bus-off back-off u4, missed slots u8 |
 //! | 0x303 | `SESSION` | out | 8 | session epoch u32, last accepted control seq u32 (0: none) |
@@ -148,6 +152,8 @@
 //!   the CRC-8 ([`crc8`]);
 //! * `step.rs`: the footstep units and field widths, [`WireStep`] (`STEP_APPEND`),
 //!   [`WireModify`] (`STEP_MODIFY`) and the controller's [`StepBook`];
+//! * `drive.rs`: the commands with which the node chooses the footsteps itself,
+//!   [`WireVelocity`] (`VELOCITY`) and [`WireGoal`] (`GOAL`);
 //! * `command.rs`: [`ControlOp`], the validated [`Command`] (decoded once, at the edge) and
 //!   its answer, [`Ack`];
 //! * `status.rs`: the node's periodic reports [`Status`], [`Diag`], [`LinkHealth`] and
@@ -158,6 +164,7 @@
 //! * `tests.rs`: the unit tests of the message set.
 
 mod command;
+mod drive;
 mod measured;
 mod status;
 mod step;
@@ -166,6 +173,10 @@ mod stream;
 mod tests;
 
 pub use command::{echo_of, step_number, Ack, Command, ControlOp, Expect};
+pub use drive::{
+    seq_number, WireGoal, WireVelocity, DRIVE_BITS, DRIVE_TURN_BITS, GOAL_UNIT, GOAL_YAW_UNIT,
+    SEQ_WINDOW, SPEED_UNIT, TURN_UNIT,
+};
 pub use measured::{Adjust, Measured, DEVIATION_BITS, DEVIATION_UNIT, STAMPS};
 pub use status::{Diag, LinkHealth, Session, Status};
 pub use step::{
@@ -180,6 +191,10 @@ pub mod ids {
     pub const ESTOP: u16 = 0x010;
     /// Start, stop, heartbeat, reset (controller → node).
     pub const CONTROL: u16 = 0x020;
+    /// Walk at a velocity (controller → node), a stream: see [`super::WireVelocity`].
+    pub const VELOCITY: u16 = 0x02F;
+    /// Walk to a relative goal (controller → node): see [`super::WireGoal`].
+    pub const GOAL: u16 = 0x046;
     /// Acknowledge or reject a command (node → controller).
     pub const ACK: u16 = 0x080;
     /// Append a footstep (controller → node).
@@ -213,7 +228,15 @@ pub mod ids {
 
     /// The identifiers the node receives (its commands and the measured state): everything
     /// else on the bus is not its business.
-    pub const COMMANDS: [u16; 5] = [ESTOP, CONTROL, MEASURED, STEP_APPEND, STEP_MODIFY];
+    pub const COMMANDS: [u16; 7] = [
+        ESTOP,
+        CONTROL,
+        VELOCITY,
+        GOAL,
+        MEASURED,
+        STEP_APPEND,
+        STEP_MODIFY,
+    ];
 
     /// `true` for one of [`COMMANDS`].
     pub fn is_command(id: u16) -> bool {

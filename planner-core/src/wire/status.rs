@@ -20,13 +20,20 @@ pub struct Status {
     pub last_adjust: i8,
     /// Bit 0: shaping active; bit 1: last re-plan failed; bit 2: transmit backlog overflowed;
     /// bits 3–4: the side the next appended step must have (0 either, 1 left, 2 right); bit
-    /// 5: the node's clock stopped ([`Status::CLOCK_FAULT`]).
+    /// 5: the node's clock stopped ([`Status::CLOCK_FAULT`]); bit 6: the velocity the node
+    /// walks was cut to what the legs can take ([`Status::CUT`]); bit 7: a goal walk stands at
+    /// its goal ([`Status::AT_GOAL`]).
     pub flags: u8,
 }
 
 impl Status {
     /// The flag of a clock that did not advance with the cycles (latched until a `Reset`).
     pub const CLOCK_FAULT: u8 = 1 << 5;
+    /// The flag of a velocity (or a goal's) walked slower than commanded: a component was cut
+    /// to what the legs can take (while the node drives).
+    pub const CUT: u8 = 1 << 6;
+    /// The flag of a goal walk that stands at its goal (until the next command that moves).
+    pub const AT_GOAL: u8 = 1 << 7;
 
     /// The side the next appended step must have: 0 either, 1 left, 2 right.
     pub fn next_side(&self) -> u8 {

@@ -350,8 +350,10 @@ fn crc8_matches_the_autosar_check_value() {
 /// Every error of up to two bits in a protected command (identifier bits included) is
 /// refused, never accepted as another command; so is every error of three bits, except those
 /// that move a footstep frame's number into the neighbouring block of 256 (the key, read from
-/// the low byte, then changes by one bit: four bits in all), which are counted: at most 1 in
-/// 100 of them passes the CRC. The frames are taken at a block's edge, where that happens most.
+/// the low byte, then changes by one bit: four bits in all), or a velocity or goal frame's
+/// sequence number into the neighbouring block of 2²⁴ (likewise), which are counted: at most
+/// 1 in 100 of them passes the CRC. The frames are taken at a block's edge, where that happens
+/// most.
 #[test]
 fn every_one_two_and_three_bit_error_is_caught() {
     let next = 0x0102u16;
@@ -373,6 +375,8 @@ fn every_one_two_and_three_bit_error_is_caught() {
             seq: 78,
             op: ControlOp::StartAdjusting,
         },
+        Command::Velocity(WireVelocity::from_si(0xFF_FFF0, 0.25, -0.05, 0.3)),
+        Command::Goal(WireGoal::from_si(0x100_0001, 1.5, -0.4, 2.0)),
     ] {
         let f = cmd.encode();
         let n = 8 * usize::from(f.len) + 11; // data bits, then the identifier's
@@ -405,7 +409,22 @@ fn every_one_two_and_three_bit_error_is_caught() {
                         && cmd.step_id().is_some_and(|id| {
                             step_key(step_number(g.data[0], next)) != step_key(id)
                         });
-                    let decoded = Command::decode(&g, next);
+                    // Or the block of 2²⁴ sequence numbers of a velocity or goal frame (its
+                    // low 24 bits read against the last accepted number, 0x100_0000 here: a block edge).
+                    let last = 0x100_0000;
+                    let seq_of =
+                        |v: &RawFrame| u32::from_le_bytes([v.data[0], v.data[1], v.data[2], 0]);
+                    let moved = moved
+                        || (matches!(g.id, ids::VELOCITY | ids::GOAL)
+                            && matches!(f.id, ids::VELOCITY | ids::GOAL)
+                            && seq_number(seq_of(&g), last) >> 24
+                                != seq_number(seq_of(&f), last) >> 24);
+                    let expect = Expect {
+                        next_step: next,
+                        epoch: 0,
+                        last_seq: last,
+                    };
+                    let decoded = Command::decode(&g, expect);
                     if bits == 3 && moved {
                         crossing += 1;
                         passed += u32::from(decoded.is_ok());
@@ -545,11 +564,13 @@ fn measured_states_round_trip_and_belong_to_their_session() {
             let expect = Expect {
                 next_step: 0,
                 epoch,
+                last_seq: 0,
             };
             assert_eq!(Command::decode(&f, expect), Ok(Command::Measured(m)));
             let other = Expect {
                 next_step: 0,
                 epoch: epoch.wrapping_add(1),
+                last_seq: 0,
             };
             assert_eq!(
                 Command::decode(&f, other),
@@ -589,4 +610,64 @@ fn adjustments_round_trip() {
     let mut g = f;
     g.data[3] ^= 0x10;
     assert_eq!(Adjust::decode(&g), None);
+}
+
+/// `VELOCITY` and `GOAL` round-trip in their units; the values that are not numbers are
+/// refused `OutOfRange`, finite values beyond a field are sent at its end; another session's
+/// frame and a frame 2²⁴ numbers old (its low bits read as new) fail the CRC.
+#[test]
+fn velocity_and_goal_frames_round_trip_and_old_ones_fail() {
+    let last = 0x0123_4567;
+    let expect = |epoch: u32| Expect {
+        next_step: 0,
+        epoch,
+        last_seq: last,
+    };
+    let v = WireVelocity::from_si(last + 1, 0.25, -0.05, 0.3);
+    assert_eq!((v.vx, v.vy, v.wz), (250, -50, 150));
+    let f = Command::Velocity(v).encode_in(7);
+    assert_eq!(f.id, ids::VELOCITY);
+    assert_eq!(Command::decode(&f, expect(7)), Ok(Command::Velocity(v)));
+    assert_eq!(
+        Command::decode(&f, expect(8)).map_err(|e| e.0),
+        Err(Reason::BadCrc)
+    );
+    let g = WireGoal::from_si(last + 2, 1.5, -0.4, -3.0);
+    let f = Command::Goal(g).encode_in(7);
+    assert_eq!(Command::decode(&f, expect(7)), Ok(Command::Goal(g)));
+    let (x, y, yaw) = g.si_in::<f64>();
+    assert!((x - 1.5).abs() < 5e-3 && (y + 0.4).abs() < 5e-3 && (yaw + 3.0).abs() < 4e-3);
+    // Beyond the field: its end; not a number: the reserved value, refused.
+    let big = WireVelocity::from_si(last + 1, 5.0, -5.0, 5.0);
+    assert_eq!((big.vx, big.vy, big.wz), (1023, -1023, 511));
+    for bad in [
+        WireVelocity::from_si(last + 1, f64::NAN, 0.0, 0.0),
+        WireVelocity::from_si(last + 1, 0.0, f64::INFINITY, 0.0),
+        WireVelocity::from_si(last + 1, 0.0, 0.0, f64::NEG_INFINITY),
+    ] {
+        let f = Command::Velocity(bad).encode_in(7);
+        assert_eq!(
+            Command::decode(&f, expect(7)).map_err(|e| e.0),
+            Err(Reason::OutOfRange)
+        );
+    }
+    // Within 2²³ of the last: read as sent (older is older); 2²⁴ back: the CRC fails.
+    for seq in [last - 5, last, last + 0x7F_FFFF, last - 0x80_0000] {
+        let v = WireVelocity::from_si(seq, 0.1, 0.0, 0.0);
+        let f = Command::Velocity(v).encode_in(7);
+        assert_eq!(
+            Command::decode(&f, expect(7)),
+            Ok(Command::Velocity(v)),
+            "{seq:#x}"
+        );
+    }
+    for back in 1..=255u32 {
+        let old = WireVelocity::from_si((last + 1).wrapping_sub(back << 24), 0.1, 0.0, 0.0);
+        let f = Command::Velocity(old).encode_in(7);
+        assert_eq!(
+            Command::decode(&f, expect(7)).map_err(|e| e.0),
+            Err(Reason::BadCrc),
+            "{back}"
+        );
+    }
 }

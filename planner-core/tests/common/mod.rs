@@ -8,7 +8,7 @@
 
 use std::collections::VecDeque;
 
-use planner_core::node::{Node, NodeConfig, NodeState};
+use planner_core::node::{Driver, Node, NodeConfig, NodeState};
 use planner_core::wire::{
     Ack, Command, ControlOp, Diag, Measured, RawFrame, Reason, Session, Status, StepBook, Stream,
 };
@@ -241,12 +241,17 @@ impl Rig {
     }
 }
 
-/// The name of the node's state in the book's table.
+/// The name of the node's state in the book's table (walking by footsteps, at a velocity or
+/// to a goal are rows of their own).
 pub fn state_name(n: &N) -> &'static str {
     let standing = n.gait().is_standing();
     match (n.state(), standing) {
         (NodeState::Standing, _) => "standing",
-        (NodeState::Walking, _) => "walking",
+        (NodeState::Walking, _) => match n.driver() {
+            Driver::Steps => "walking",
+            Driver::Velocity => "walking (velocity)",
+            Driver::Goal => "walking (goal)",
+        },
         (NodeState::Stopping, _) => "stopping",
         (NodeState::ControllerLost, false) => "lost (moving)",
         (NodeState::ControllerLost, true) => "lost (standing)",

@@ -203,6 +203,8 @@ impl<'a> Harness<'a> {
                             Command::Modify(_) => self.stats.modifications += 1,
                             Command::EmergencyStop { .. } => {}
                             Command::Measured(_) => self.stats.measured += 1,
+                            // (The programs give the footsteps: no velocity or goal.)
+                            Command::Velocity(_) | Command::Goal(_) => {}
                         }
                         if rebased {
                             self.book.clear();

@@ -152,6 +152,7 @@ impl Model {
         Expect {
             next_step: self.next,
             epoch: self.session,
+            last_seq: self.last_seq,
         }
     }
 
@@ -284,6 +285,28 @@ impl Model {
                     Answer::OneOf(vec![None, Some(Reach), Some(Crossing)])
                 }
             }
+            // The node's freshness and latched states; what it drives then is not modelled (the
+            // programs give the footsteps: `velocity_walk.rs` and the model check cover it).
+            Command::Velocity(_) | Command::Goal(_) => {
+                let seq = match cmd {
+                    Command::Velocity(v) => v.seq,
+                    Command::Goal(g) => g.seq,
+                    _ => 0,
+                };
+                if seq == self.last_seq && seq != 0 {
+                    must(Duplicate)
+                } else if seq <= self.last_seq {
+                    must(Stale)
+                } else if !self.open {
+                    must(NoSession)
+                } else if self.estopped {
+                    must(EmergencyStopped)
+                } else if self.lost {
+                    must(ControllerLost)
+                } else {
+                    Answer::OneOf(vec![None, Some(WrongState), Some(Busy)])
+                }
+            }
             Command::Measured(m) => {
                 if !self.open {
                     return must(NoSession);
@@ -359,6 +382,8 @@ impl Model {
                 self.drop_queue(Dropped::Estop);
                 self.stopping |= !standing;
             }
+            Command::Velocity(v) => self.last_seq = v.seq,
+            Command::Goal(g) => self.last_seq = g.seq,
             Command::Control { seq, op, .. } => {
                 self.last_seq = seq;
                 match op {

@@ -294,6 +294,13 @@ pub(super) fn play(
                 scenario::Command::StopNow => {
                     issue.push((control(ControlOp::StopNow), None, false))
                 }
+                scenario::Command::Velocity(..) | scenario::Command::Goal(..) => {
+                    return Err(
+                        "the fault sweep plays footstep scenarios: a velocity or a goal is \
+                         played by `run`"
+                            .into(),
+                    );
+                }
             }
         }
         // 2. The burst of modifications, spread over the chosen single support.

@@ -287,6 +287,9 @@ impl Gateway {
     }
 
     pub(super) fn on_ack(&mut self, a: Ack) {
+        if self.on_drive_ack(&a) {
+            return;
+        }
         let Some(pos) = self
             .inflight
             .iter()

@@ -37,12 +37,16 @@
 //! its timeout (500 ms). A node that has lost its controller is opened again (`Reset`, once
 //! standing) by the next list; an emergency stop is never cleared by the gateway.
 //!
+//! **Velocity and goal.** A `Twist` (`cmd_vel`) or a relative goal is sent as the node's
+//! `VELOCITY` (streamed) or `GOAL`, and the node chooses the footsteps: see `drive.rs`.
+//!
 //! Files: `mod.rs` (this file): the state and the footstep lists; `control.rs`: pause, resume
-//! and abort; `answers.rs`: what is sent and what the node answers; `stream.rs`: lift-off,
+//! and abort; `drive.rs`: velocity and goal; `answers.rs`: what is sent and what the node answers; `stream.rs`: lift-off,
 //! touchdown and the reference, from the stream.
 
 mod answers;
 mod control;
+mod drive;
 mod stream;
 
 use std::collections::VecDeque;
@@ -246,6 +250,8 @@ pub struct Gateway {
     /// moves the node's frame while the feet stand: the frame is found again from them).
     last_feet: Option<([Pose; 2], [Pose; 2])>,
     outputs: Vec<Output>,
+    /// The velocity stream and the goal (see `drive`).
+    drive: drive::DriveLink,
 }
 
 impl Gateway {
@@ -286,6 +292,7 @@ impl Gateway {
             claim_on_demand: false,
             last_feet: None,
             outputs: Vec::new(),
+            drive: drive::DriveLink::default(),
         }
     }
 
@@ -588,7 +595,7 @@ impl Gateway {
         self.cycle += 1;
         self.peer_alive = peer_alive;
         let mut frames = Vec::new();
-        let wanted = !self.claim_on_demand || !self.deferred.is_empty();
+        let wanted = !self.claim_on_demand || !self.deferred.is_empty() || self.drive_wanted();
         if self.link == Link::WaitSession && self.have_session() && wanted {
             self.claim_on_demand = false;
             let reset = self.control(ControlOp::Reset);
@@ -657,7 +664,10 @@ impl Gateway {
             .inflight
             .iter()
             .any(|f| matches!(f.item, Item::Control(ControlOp::Reset, _)));
+        // A velocity or a goal (none while a Reset is on its way), then no heartbeat.
+        let drove = !resetting && self.drive_frames(&mut frames);
         if self.link == Link::Open
+            && !drove
             && peer_alive
             && !resetting
             && self.cycle % self.cfg.heartbeat_cycles == 0

@@ -30,8 +30,8 @@
 //! A velocity with a component that is not finite is refused ([`VelocityError::NonFinite`]):
 //! nothing is planned from it.
 
+use super::{Reach, Soles};
 use crate::gait::{Footstep, GaitParams, Side};
-use crate::node::{Reach, Soles};
 use crate::real::Real;
 
 /// Most halvings of the heading change and the forward step after the closed-form cut (the
@@ -83,6 +83,25 @@ impl Saturation {
         self.forward || self.lateral || self.turn || self.in_place
     }
 
+    /// The cuts as the `ACK` to a `VELOCITY` or `GOAL` carries them (bit 0 forward, 1 across,
+    /// 2 turn, 3 in place; see [`crate::wire::Ack::cut`]).
+    pub fn mask(&self) -> u8 {
+        u8::from(self.forward)
+            | u8::from(self.lateral) << 1
+            | u8::from(self.turn) << 2
+            | u8::from(self.in_place) << 3
+    }
+
+    /// The cuts of a `mask` ([`Saturation::mask`]).
+    pub fn from_mask(mask: u8) -> Self {
+        Self {
+            forward: mask & 1 != 0,
+            lateral: mask & 2 != 0,
+            turn: mask & 4 != 0,
+            in_place: mask & 8 != 0,
+        }
+    }
+
     /// Both cuts together.
     pub fn or(self, other: Self) -> Self {
         Self {
@@ -130,6 +149,7 @@ impl<T: Real> Stepping<T> {
     /// The next landing of the foot that is not `support`, which lifts off from `same`;
     /// `from_rest`: the first step of a walk from standing (its growth is measured from a
     /// step of 0, as the node measures it).
+    #[inline(never)] // (one copy for its callers: the firmware's flash)
     pub fn next_step(
         &self,
         v: &Velocity<T>,
