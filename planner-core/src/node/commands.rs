@@ -386,11 +386,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         !self.gait.is_standing() && self.gait.next_target() == Some(id)
     }
 
-    /// `true` if `decoded` is a modification that plans now ([`Node::plans_modify`]): the
-    /// cycle acts on it after its other commands (see [`Node::poll`]).
-    pub(super) fn plans_later(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+    /// `true` if `decoded` is a modification that plans now ([`Node::plans_modify`]) and that
+    /// the footstep gate lets through (a frame refused anyway, as every footstep command while
+    /// the node drives, keeps no work from the others): the cycle acts on it after its other
+    /// commands (see [`Node::poll`]).
+    pub(super) fn plans_later(
+        &self,
+        frame: &RawFrame,
+        decoded: &Result<Command, (Reason, u8)>,
+    ) -> bool {
         match decoded {
-            Ok(Command::Modify(m)) => self.plans_modify(self.gait_id(m.id)),
+            Ok(Command::Modify(m)) => {
+                self.footstep_gate(frame).is_ok() && self.plans_modify(self.gait_id(m.id))
+            }
             _ => false,
         }
     }

@@ -54,6 +54,12 @@ const _: () = assert!(AHEAD <= crate::gait::MODIFY_FRONT);
 /// the checks that [`WORK_STEP`] counts three of.
 pub const WORK_GENERATE: u32 = 4_900;
 
+/// The most work one `VELOCITY` or `GOAL` can need: a start from standing ([`AHEAD`]
+/// generations and appends and the start window's plan). A re-plan while walking needs less
+/// ([`AHEAD`] generations and eq. 17's plan). [`NodeConfig::work_budget`] is at least this
+/// (checked at start-up), so a drive command refused `Busy` fits a later cycle.
+pub const WORK_DRIVE: u32 = AHEAD as u32 * (WORK_GENERATE + WORK_APPEND) + WORK_PLAN;
+
 /// How near the stance must come to a goal's position \[m\] (each of x and y).
 pub const GOAL_TOLERANCE: f64 = 0.02;
 /// How near the stance must come to a goal's heading \[rad\].
