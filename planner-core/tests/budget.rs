@@ -282,3 +282,56 @@ fn a_modification_refused_while_the_node_drives_keeps_no_work_from_a_velocity() 
     assert_eq!(answer(&m), Some(Reason::WrongState));
     assert_eq!(answer(&v), None, "{acks:?}");
 }
+
+/// The work a drive command does is checked before it (the step numbers left: `Exhausted`
+/// costs nothing) or charged when it is refused after it (a step out of the wire's range is
+/// found once generated): a burst of `VELOCITY` frames in one cycle generates no more than the
+/// budget allows, the rest are refused `Busy`.
+#[test]
+fn a_burst_of_refused_velocities_stays_within_the_budget() {
+    use planner_core::node::{AHEAD, WORK_GENERATE};
+    // Standing at the edge of the walking area (the wire's range of x: 17 bits of 0.5 mm):
+    // the steps forward are out of it.
+    let mut cfg = NodeConfig::hrp2();
+    cfg.left.x = 32.70;
+    cfg.right.x = 32.70;
+    let mut r = Rig::new(cfg);
+    let epoch = r.session.epoch;
+    let frame = |seq| Command::Velocity(WireVelocity::from_si(seq, 0.1, 0.0, 0.0)).encode_in(epoch);
+    let full = r.n.work_left();
+    r.seq += 1;
+    let a = r.n.handle(&frame(r.seq), r.t).unwrap();
+    assert_eq!(a.reason, Some(Reason::OutOfRange));
+    assert_eq!(r.n.work_left(), full - AHEAD as u32 * WORK_GENERATE);
+    r.cycle();
+    for _ in 0..20 {
+        r.seq += 1;
+        r.bus.rx.push_back(frame(r.seq));
+    }
+    let acks = r.cycle();
+    let generated = acks
+        .iter()
+        .filter(|a| a.reason == Some(Reason::OutOfRange))
+        .count() as u32;
+    assert!(generated >= 1);
+    assert!(
+        generated * AHEAD as u32 * WORK_GENERATE <= r.n.config().work_budget,
+        "{generated} generated: {acks:?}"
+    );
+    assert!(acks.iter().any(|a| a.reason == Some(Reason::Busy)));
+    // With the step numbers used up (each Reset skips a session's numbers), `Exhausted` is
+    // found before any step is generated: nothing is spent.
+    let mut r = Rig::hrp2();
+    for _ in 0..256 {
+        assert_eq!(r.control(ControlOp::Reset), None);
+    }
+    let epoch = r.session.epoch;
+    let full = r.n.work_left();
+    for _ in 0..20 {
+        r.seq += 1;
+        let f = Command::Velocity(WireVelocity::from_si(r.seq, 0.1, 0.0, 0.0)).encode_in(epoch);
+        let a = r.n.handle(&f, r.t).unwrap();
+        assert_eq!(a.reason, Some(Reason::Exhausted));
+    }
+    assert_eq!(r.n.work_left(), full);
+}

@@ -210,6 +210,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         self.estopped = true;
         self.gait.clear_and_stop();
+        self.drive.own_stop = false;
         Ok(())
     }
 
@@ -259,7 +260,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
             ControlOp::Stop => {
                 if !standing {
+                    // The controller's stop: a velocity or a goal does not cancel it.
                     self.gait.stop();
+                    self.drive.own_stop = false;
                 }
             }
             ControlOp::StopNow => {
@@ -272,6 +275,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     self.gait.drop_queue().map_err(reason_of)?;
                 } else {
                     self.gait.clear_and_stop();
+                    self.drive.own_stop = false;
                 }
             }
         }
@@ -309,6 +313,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.lost = false;
         self.clock_fault = false;
         self.steps.clear();
+        self.forget_goal();
         // No shift and no measured state carry over: the new session's measured states name
         // cycles from this one on (this cycle's reference is the new session's first).
         self.adj = Adjusting::ZERO;
@@ -369,6 +374,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
         self.kept_step(gen, pos, kept, step.side);
         self.spend(WORK_APPEND);
+        self.forget_goal();
         self.steps.push(Record {
             append: *s,
             commanded: *s,

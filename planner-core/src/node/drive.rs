@@ -15,15 +15,21 @@
 //!   [`AHEAD`] generations and appends and the start window's plan. All of it is charged to
 //!   the cycle's budget like any command: a command whose work does not fit is refused `Busy`
 //!   (nothing changed: it is sent again), a step of the queue that does not fit waits for the
-//!   next cycle (the queue holds two more).
+//!   next cycle (the queue holds two more). The cheap checks come first (the step numbers
+//!   left: `Exhausted`); a command refused once its steps are generated (a step out of the
+//!   walking area, a re-plan eq. 17 refuses) is charged the generation (and the plan it
+//!   tried), so no burst of frames does more work in a cycle than the budget.
 //! * **Saturation.** A velocity the legs cannot take is walked at the nearest one they can; the
 //!   `ACK` says which components were cut ([`crate::wire::Ack::cut`]) and `STATUS` flags the
 //!   cut while it lasts.
 //! * **Stopping.** A zero velocity re-plans the queued steps in place (the first one closes the
 //!   feet, parallel, at the nominal width) and requests a stop: the robot walks them out and
 //!   stands. While it stops, a zero velocity is taken (it changes nothing: a stick held at
-//!   zero streams it) and another velocity is refused `WrongState` (it is taken once the robot
-//!   stands). A `VELOCITY` stream that stops for longer than
+//!   zero streams it). The stop is the drive's own (as is a goal's, once reached): while a
+//!   step queued after the one being swung has not lifted off, another velocity or a goal
+//!   cancels it and re-plans the queued steps as any change does; once none is left, it is
+//!   refused `WrongState` (and taken once the robot stands). A controller's `Stop` or
+//!   `StopNow` is not cancelled by a velocity. A `VELOCITY` stream that stops for longer than
 //!   [`NodeConfig::velocity_timeout_ms`] (by the clock or by the cycles) while the robot walks
 //!   at a velocity stops it as a lost controller does (the state *controller lost*: the queue
 //!   dropped, a `Reset` needed once standing). Only an accepted `VELOCITY` keeps the stream
@@ -35,7 +41,9 @@
 //!   cut to the legs as any velocity (so the walk turns, moves across and forward together,
 //!   on an arc-like path, each at most what one step can take). When the stance is within
 //!   [`GOAL_TOLERANCE`] and [`GOAL_YAW_TOLERANCE`] of the goal, the next step closes the feet
-//!   and the robot stops; standing, `STATUS` flags the arrival until the next command.
+//!   and the robot stops. `STATUS` flags the arrival while the robot stands within those
+//!   tolerances of the goal given in this session, with no other walk since (a velocity,
+//!   footsteps; a `Reset` ends it too).
 //! * **Mixing.** While the node drives, footstep commands are refused `WrongState` (the steps
 //!   are the node's); a `Stop` or `StopNow` stops as for any walk; once standing, the
 //!   controller's footsteps are taken again. A velocity or goal is refused `WrongState` while
@@ -90,8 +98,12 @@ pub(super) struct Drive<T> {
     pub(super) heard_cycle: u32,
     /// The goal in the node's frame: x, y, heading.
     pub(super) goal: [T; 3],
-    /// The goal walk has closed its feet at the goal (stopping, then standing there).
-    pub(super) arrived: bool,
+    /// A `GOAL` was accepted in this session and no other walk (a velocity, footsteps) since:
+    /// `goal` is the one whose arrival `STATUS` may report.
+    pub(super) goal_given: bool,
+    /// The stop under way is the drive's own (a zero velocity, a goal reached): a velocity or
+    /// a goal may cancel it while a step that has not lifted off is queued.
+    pub(super) own_stop: bool,
 }
 
 impl<T: Real> Drive<T> {
@@ -107,7 +119,8 @@ impl<T: Real> Drive<T> {
         heard_ms: 0,
         heard_cycle: 0,
         goal: [T::ZERO; 3],
-        arrived: false,
+        goal_given: false,
+        own_stop: false,
     };
 }
 
@@ -127,9 +140,35 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         (self.drive.driver != Driver::Steps).then_some((self.drive.v, self.drive.cut))
     }
 
-    /// `true` once a goal walk has stood still at its goal (until the next command that moves).
+    /// `true` while the robot stands within [`GOAL_TOLERANCE`] and [`GOAL_YAW_TOLERANCE`] of
+    /// the goal given in this session (the midpoint of the feet and their mean heading), with
+    /// no other walk since: a stop short of it, a `Reset`, a velocity or a footstep walk end
+    /// the arrival.
     pub fn at_goal(&self) -> bool {
-        self.drive.arrived && self.drive.driver == Driver::Steps && self.gait.is_standing()
+        if !self.drive.goal_given || self.drive.driver != Driver::Steps || !self.gait.is_standing()
+        {
+            return false;
+        }
+        let [l, r] = *self.gait.feet();
+        let half = T::of(0.5);
+        let (dx, dy) = (
+            self.drive.goal[0] - half * (l.x + r.x),
+            self.drive.goal[1] - half * (l.y + r.y),
+        );
+        let h = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
+        let (s, c) = h.sin_cos();
+        let d = self.drive.goal[2] - h;
+        // (A rounding's slack: the walk stops on the same tolerance, from the support foot.)
+        let slack = T::of(1e-6);
+        let tol = T::of(GOAL_TOLERANCE) + slack;
+        (c * dx + s * dy).abs() <= tol
+            && (-s * dx + c * dy).abs() <= tol
+            && d.sin().atan2(d.cos()).abs() <= T::of(GOAL_YAW_TOLERANCE) + slack
+    }
+
+    /// A footstep walk or a new session: no goal's arrival is reported any more.
+    pub(super) fn forget_goal(&mut self) {
+        self.drive.goal_given = false;
     }
 
     fn stepping(&self) -> Stepping<T> {
@@ -194,18 +233,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         goal: Option<[T; 3]>,
     ) -> Result<Saturation, Reason> {
         let standing = self.gait.is_standing();
-        // A zero velocity while a drive stops: the stop it asks for is under way.
-        if self.gait.is_stopping()
-            && goal.is_none()
-            && is_zero(&v)
-            && self.drive.driver != Driver::Steps
-        {
+        let stopping = self.gait.is_stopping();
+        let drives = self.drive.driver != Driver::Steps;
+        // A zero velocity while a drive stops: the stop it asks for is under way (a stick
+        // held at zero streams it). It is taken and changes nothing but who drives.
+        if stopping && drives && goal.is_none() && is_zero(&v) {
+            self.drive.driver = Driver::Velocity;
+            self.drive.v = Velocity::ZERO;
+            self.drive.cut = Saturation::default();
+            self.drive.goal_given = false;
             return Ok(Saturation::default());
         }
-        if (standing && self.gait.queued() > 0)
-            || (!standing && self.drive.driver == Driver::Steps)
-            || self.gait.is_stopping()
-        {
+        // A stop the drive asked for (a zero velocity, a goal reached) is cancelled while a
+        // step that has not lifted off is queued; any other stop stands.
+        let resume = stopping && drives && self.drive.own_stop && self.gait.resumable();
+        if (standing && self.gait.queued() > 0) || (!standing && !drives) || (stopping && !resume) {
             return Err(Reason::WrongState);
         }
         let target = goal.unwrap_or(self.drive.goal);
@@ -234,16 +276,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             None => is_zero(&v),
         };
         if standing && still {
-            self.drive.arrived = goal.is_some();
+            self.drive.goal_given = goal.is_some();
+            self.drive.goal = target;
             self.drive.v = Velocity::ZERO;
             self.drive.cut = Saturation::default();
             return Ok(Saturation::default());
         }
-        let work = n as u32 * WORK_GENERATE
-            + WORK_PLAN
-            + if standing { n as u32 * WORK_APPEND } else { 0 };
+        // The cheap checks first (the plan, the budget, the step numbers): what is refused
+        // after them has generated its steps, and that work is charged.
+        let generating = n as u32 * WORK_GENERATE;
+        let work = generating + WORK_PLAN + if standing { n as u32 * WORK_APPEND } else { 0 };
         self.plan()?;
         self.afford(work)?;
+        if standing && self.appended.saturating_add(n as u32) > STEP_NUMBERS {
+            return Err(Reason::Exhausted);
+        }
         let stepping = self.stepping();
         let mut steps = [support; AHEAD];
         let mut cut = Saturation::default();
@@ -260,9 +307,11 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 },
                 None => v,
             };
-            let (step, c) = stepping
-                .next_step(&vi, &support, &same, from_rest && i == 0)
-                .map_err(|_| Reason::OutOfRange)?;
+            let Ok((step, c)) = stepping.next_step(&vi, &support, &same, from_rest && i == 0)
+            else {
+                self.spend(generating);
+                return Err(Reason::OutOfRange);
+            };
             if i == 0 {
                 last_v = vi;
             }
@@ -282,16 +331,18 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     .map(|id| id.wrapping_add(i as u16).wrapping_add(self.first))
                     .unwrap_or(first)
             };
-            *w = Some(Self::wire_of(number, s).ok_or(Reason::OutOfRange)?);
+            *w = Self::wire_of(number, s);
+            if w.is_none() {
+                self.spend(generating);
+                return Err(Reason::OutOfRange);
+            }
         }
         if standing {
-            if self.appended.saturating_add(n as u32) > STEP_NUMBERS {
-                return Err(Reason::Exhausted);
-            }
             for (i, s) in steps.iter().enumerate().take(n) {
                 let gid = (self.appended as u16).wrapping_add(i as u16);
                 if self.gait.push(gid, *s).is_err() {
                     let _ = self.gait.drop_queue();
+                    self.spend(generating);
                     return Err(Reason::QueueFull);
                 }
             }
@@ -299,6 +350,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.plans_left = self.plans_left.saturating_sub(1);
             if let Err(e) = started {
                 let _ = self.gait.drop_queue();
+                self.spend(generating + WORK_PLAN);
                 return Err(e);
             }
             for w in wires.iter().take(n).flatten() {
@@ -307,12 +359,24 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.appended += n as u32;
             self.adj.enabled = false;
         } else {
+            // (Checked resumable above: the stop is cancelled, and requested again if the
+            // re-plan is refused.)
+            if resume && self.gait.resume().is_err() {
+                self.spend(generating);
+                return Err(Reason::WrongState);
+            }
             let modified = self
                 .gait
                 .modify_front(steps.get(..n).unwrap_or(&[]))
                 .map_err(reason_of);
             self.plans_left = self.plans_left.saturating_sub(1);
-            modified?;
+            if let Err(e) = modified {
+                if resume {
+                    self.gait.stop();
+                }
+                self.spend(generating + WORK_PLAN);
+                return Err(e);
+            }
             for w in wires.iter().take(n).flatten() {
                 if let Some((at, _)) = self.steps.queued_find(w.id) {
                     if let Some(r) = self.steps.queued_at_mut(at, w.id) {
@@ -322,6 +386,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         self.spend(work);
+        self.drive.own_stop = stop;
         if stop {
             self.gait.stop();
         }
@@ -329,7 +394,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.drive.v = last_v;
         self.drive.cut = cut;
         self.drive.goal = target;
-        self.drive.arrived = stop && goal.is_some();
+        self.drive.goal_given = goal.is_some();
         Ok(cut)
     }
 
@@ -438,8 +503,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.drive.cut = cut;
             }
             if stop {
-                self.drive.arrived = true;
                 self.gait.stop();
+                self.drive.own_stop = true;
                 return;
             }
         }
@@ -470,6 +535,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     pub(super) fn drive_end(&mut self) {
         if self.drive.driver != Driver::Steps && self.gait.is_standing() {
             self.drive.driver = Driver::Steps;
+            self.drive.own_stop = false;
             self.drive.v = Velocity::ZERO;
             self.drive.cut = Saturation::default();
         }
