@@ -551,3 +551,58 @@ fn a_goals_arrival_ends_with_a_new_session_or_a_footstep_walk() {
     assert!(!r.n.at_goal());
     assert!(!flagged(&mut r));
 }
+
+/// A `VELOCITY` of another start-up (another session epoch) is taken with odds of at most
+/// 2⁻¹⁶, those of a `CONTROL`: of the 256 epochs that share this one's low byte, at most one
+/// gets a frame through (whatever its sequence number), and none of the others' (a frame keyed
+/// with another low byte fails its CRC).
+#[test]
+fn another_sessions_velocity_is_taken_no_more_often_than_its_control() {
+    let r = Rig::hrp2();
+    let epoch = r.session.epoch;
+    let last = r.n.session().last_seq;
+    for seq in [last + 1, last + 200, last + 70_000, last + (1 << 20), 3] {
+        let taken = (0u32..256)
+            .filter(|&k| {
+                let other = epoch ^ (k << 8);
+                let f = Command::Velocity(WireVelocity::from_si(seq, 0.2, 0.0, 0.0));
+                let a = r.n.clone().handle(&f.encode_in(other), r.t).unwrap();
+                a.reason.is_none()
+            })
+            .count();
+        assert!(taken <= 1, "seq {seq}: {taken} of 256 epochs taken");
+        // Another low byte: never.
+        for k in 1u32..256 {
+            let f = Command::Velocity(WireVelocity::from_si(seq, 0.2, 0.0, 0.0));
+            let a = r.n.clone().handle(&f.encode_in(epoch ^ k), r.t).unwrap();
+            assert!(a.reason.is_some(), "seq {seq}, low byte ^ {k}");
+        }
+    }
+}
+
+/// The frame of an earlier start-up whose session differs in its second byte only is refused,
+/// and the live controller keeps its sequence numbers (its `Stop` is taken).
+#[test]
+fn an_earlier_start_ups_velocity_does_not_lock_the_controller_out() {
+    use planner_core::wire::ControlOp;
+    let mut old_cfg = NodeConfig::hrp2();
+    old_cfg.entropy = 0x1234_5600;
+    let mut cfg = NodeConfig::hrp2();
+    cfg.entropy = 0x1234_5700;
+    let mut old = Rig::new(old_cfg);
+    for _ in 0..200 {
+        old.heartbeat();
+    }
+    old.seq += 1;
+    let stale = Command::Velocity(WireVelocity::from_si(old.seq, 0.2, 0.0, 0.0))
+        .encode_in(old.session.epoch);
+    let mut r = Rig::new(cfg);
+    assert_ne!(r.session.tag(), old.session.tag());
+    r.bus.rx.push_back(stale);
+    let a = r.cycle();
+    assert!(a[0].reason.is_some(), "{a:?}");
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+    r.run(3, true);
+    assert_eq!(r.control(ControlOp::Stop), None);
+}

@@ -51,7 +51,7 @@
 
 use super::*;
 use crate::velocity::{Saturation, Stepping, Velocity};
-use crate::wire::{WireGoal, WireVelocity};
+use crate::wire::{WireGoal, WireVelocity, SEQ_ADVANCE};
 
 /// Steps the node keeps queued while it drives.
 pub const AHEAD: usize = 3;
@@ -176,7 +176,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// What refuses a `VELOCITY` or `GOAL` first: freshness (the control sequence), the
-    /// session, the latched states.
+    /// session (no session open; a number read more than [`SEQ_ADVANCE`] ahead), the latched
+    /// states.
     fn drive_gate(&self, seq: u32) -> Result<(), Reason> {
         if seq == self.last_seq && self.last_seq != 0 {
             return Err(Reason::Duplicate);
@@ -186,6 +187,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         if !self.open {
             return Err(Reason::NoSession);
+        }
+        // Read that far ahead, the frame was sent for another session (see `wire`'s `drive`).
+        if seq - self.last_seq > SEQ_ADVANCE {
+            return Err(Reason::WrongSession);
         }
         if self.estopped {
             return Err(Reason::EmergencyStopped);
