@@ -31,7 +31,7 @@
 //! nothing is planned from it.
 
 use crate::gait::{Footstep, GaitParams, Side};
-use crate::node::{Reach, Soles};
+use crate::node::{Reach, Soles, Stance};
 use crate::real::Real;
 
 /// Most halvings of the heading change and the forward step after the closed-form cut (the
@@ -204,9 +204,11 @@ impl<T: Real> Stepping<T> {
         // The check the node makes; the halvings for what the closed forms leave out.
         let mut dyaw = dyaw;
         let half = T::of(0.5);
+        // (The feet's frames once, for every try.)
+        let stance = Stance::of(support, same);
         for _ in 0..=HALVINGS {
             let step = place(support, side, forward, width, dyaw);
-            if r.broken(support, same, &step, from_rest, &self.soles)
+            if r.broken_in(&stance, &step, from_rest, &self.soles)
                 .is_none()
             {
                 return Ok((step, sat));

@@ -606,3 +606,27 @@ fn an_earlier_start_ups_velocity_does_not_lock_the_controller_out() {
     r.run(3, true);
     assert_eq!(r.control(ControlOp::Stop), None);
 }
+
+/// A zero velocity queues what the stop needs and no more: the next swing target closes the
+/// feet and the steps after it are dropped (their numbers given to the next steps), so the
+/// robot stands after landing the foot it swings and one step more.
+#[test]
+fn a_zero_velocity_keeps_only_the_closing_step() {
+    let mut r = Rig::hrp2();
+    stream(&mut r, 300, (0.1, 0.0, 0.0));
+    r.until(400, |n| n.gait().swinging().is_some());
+    r.cycle(); // (the queue topped up after the lift-off)
+    let queued = r.n.gait().queued();
+    assert_eq!(queued, planner_core::node::AHEAD);
+    let next = r.n.next_step();
+    let lifted = r.liftoffs.len();
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    assert_eq!(r.n.gait().queued(), 1);
+    assert_eq!(r.n.next_step(), next - (queued as u16 - 1));
+    r.until(2000, |n| n.gait().is_standing());
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(r.liftoffs.len() - lifted, 1, "{:?}", &r.liftoffs[lifted..]);
+    // The next walk numbers its steps from there on.
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+    assert_eq!(r.n.next_step(), next - (queued as u16 - 1) + queued as u16);
+}

@@ -158,6 +158,21 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         Ok(())
     }
 
+    /// Drops the queued steps after the first `keep` (none of them has lifted off: the step
+    /// being swung is not queued), and nothing else: how the node shortens its own steps to
+    /// what a stop needs (the stop is requested apart, [`Gait::stop`]).
+    pub fn truncate(&mut self, keep: usize) {
+        if self.queue.len() <= keep {
+            return;
+        }
+        while self.queue.len() > keep {
+            self.queue.pop_back();
+        }
+        self.consecutive &= !self.queue.is_empty();
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
     /// `true` if [`Gait::resume`] would cancel the stop under way.
     pub fn resumable(&self) -> bool {
         self.is_stopping()

@@ -22,13 +22,15 @@
 //! * **Saturation.** A velocity the legs cannot take is walked at the nearest one they can; the
 //!   `ACK` says which components were cut ([`crate::wire::Ack::cut`]) and `STATUS` flags the
 //!   cut while it lasts.
-//! * **Stopping.** A zero velocity re-plans the queued steps in place (the first one closes the
-//!   feet, parallel, at the nominal width) and requests a stop: the robot walks them out and
-//!   stands. While it stops, a zero velocity is taken (it changes nothing: a stick held at
-//!   zero streams it). The stop is the drive's own (as is a goal's, once reached): while a
-//!   step queued after the one being swung has not lifted off, another velocity or a goal
-//!   cancels it and re-plans the queued steps as any change does; once none is left, it is
-//!   refused `WrongState` (and taken once the robot stands). A controller's `Stop` or
+//! * **Stopping.** A zero velocity re-plans the next swing target as the step that closes the
+//!   feet (parallel, at the nominal width), drops the queued steps after it (their numbers are
+//!   given to the next steps generated) and requests a stop: the robot lands the foot it
+//!   swings, closes its feet and stands (a goal reached stops the same way). While it stops,
+//!   a zero velocity is taken (it changes nothing: a stick held at zero streams it). The stop
+//!   is the drive's own (as is a goal's, once reached): while a step queued after the one
+//!   being swung has not lifted off, another velocity or a goal cancels it and re-plans the
+//!   queued steps as any change does; once none is left, it is refused `WrongState` (and
+//!   taken once the robot stands). A controller's `Stop` or
 //!   `StopNow` is not cancelled by a velocity. A `VELOCITY` stream that stops for longer than
 //!   [`NodeConfig::velocity_timeout_ms`] (by the clock or by the cycles) while the robot walks
 //!   at a velocity stops it as a lost controller does (the state *controller lost*: the queue
@@ -59,7 +61,8 @@ const _: () = assert!(AHEAD <= crate::gait::MODIFY_FRONT);
 
 /// See the module docs: generating one step (the cuts in closed form, at most
 /// 1 + [`crate::velocity::HALVINGS`] reach checks, the step record), estimated as seven of
-/// the checks that [`WORK_STEP`] counts three of.
+/// the checks that [`WORK_STEP`] counts three of (each try, as those checks, computes only the
+/// step's frame: the feet's frames are computed once for all tries).
 pub const WORK_GENERATE: u32 = 4_900;
 
 /// The most work one `VELOCITY` or `GOAL` can need: a start from standing ([`AHEAD`]
@@ -301,12 +304,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let mut cut = Saturation::default();
         let mut stop = is_zero(&v) && goal.is_none();
         let mut last_v = v;
+        // A stop needs the steps up to the one that closes the feet, and no more: the ones
+        // after it are dropped (their numbers given again to the next steps).
+        let mut keep = n;
         for (i, slot) in steps.iter_mut().enumerate().take(n) {
+            if stop {
+                keep = i + 1;
+            }
             let vi = match goal {
                 Some(g) => match self.goal_velocity(&support, support.side.other(), &g) {
                     Some(vg) => vg,
                     None => {
                         stop = true;
+                        keep = i + 1;
                         Velocity::ZERO
                     }
                 },
@@ -324,11 +334,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             *slot = step;
             same = support;
             support = step;
+            if stop {
+                break;
+            }
         }
         // Every step in the wire's range (the walking area), before anything changes.
         let first = self.next_step();
         let mut wires = [None; AHEAD];
-        for (i, (s, w)) in steps.iter().zip(wires.iter_mut()).enumerate().take(n) {
+        for (i, (s, w)) in steps.iter().zip(wires.iter_mut()).enumerate().take(keep) {
             let number = if standing {
                 first.wrapping_add(i as u16)
             } else {
@@ -343,7 +356,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
         }
         if standing {
-            for (i, s) in steps.iter().enumerate().take(n) {
+            for (i, s) in steps.iter().enumerate().take(keep) {
                 let gid = (self.appended as u16).wrapping_add(i as u16);
                 if self.gait.push(gid, *s).is_err() {
                     let _ = self.gait.drop_queue();
@@ -358,10 +371,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.spend(generating + WORK_PLAN);
                 return Err(e);
             }
-            for w in wires.iter().take(n).flatten() {
+            for w in wires.iter().take(keep).flatten() {
                 self.steps.push(Self::record_of(w));
             }
-            self.appended += n as u32;
+            self.appended += keep as u32;
             self.adj.enabled = false;
         } else {
             // (Checked resumable above: the stop is cancelled, and requested again if the
@@ -372,7 +385,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
             let modified = self
                 .gait
-                .modify_front(steps.get(..n).unwrap_or(&[]))
+                .modify_front(steps.get(..keep).unwrap_or(&[]))
                 .map_err(reason_of);
             self.plans_left = self.plans_left.saturating_sub(1);
             if let Err(e) = modified {
@@ -382,12 +395,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.spend(generating + WORK_PLAN);
                 return Err(e);
             }
-            for w in wires.iter().take(n).flatten() {
+            for w in wires.iter().take(keep).flatten() {
                 if let Some((at, _)) = self.steps.queued_find(w.id) {
                     if let Some(r) = self.steps.queued_at_mut(at, w.id) {
                         *r = Self::record_of(w);
                     }
                 }
+            }
+            // The steps after the closing one: dropped, the newest numbers given back.
+            let dropped = self.gait.queued().saturating_sub(keep);
+            if dropped > 0 {
+                self.gait.truncate(keep);
+                self.steps.truncate_queued(keep);
+                self.appended = self.appended.saturating_sub(dropped as u32);
             }
         }
         self.spend(work);

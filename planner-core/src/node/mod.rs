@@ -148,6 +148,7 @@ pub use config::NodeConfig;
 use cycle::*;
 pub use drive::{Driver, AHEAD, GOAL_TOLERANCE, GOAL_YAW_TOLERANCE, WORK_DRIVE, WORK_GENERATE};
 use reach::Frame;
+pub(crate) use reach::Stance;
 pub use reach::{Broken, Limit, Reach, Soles};
 pub use steps::HISTORY;
 use steps::{Record, Steps};
