@@ -152,10 +152,12 @@ STICK_PERIOD_S = 0.05
 
 
 def velocity(db, epoch, seq, vx, vy, wz):
-    """A VELOCITY frame: the sequence number's low 24 bits, the CRC keyed with the session's
-    low byte and the Gray code of the sequence number's high byte (the DBC's comment)."""
+    """A VELOCITY frame: the sequence number's low 24 bits (bits 16-23 XOR the session's
+    second byte), the CRC keyed with the session's low byte and the Gray code of the sequence
+    number's high byte (the DBC's comment)."""
     msg = db.get_message_by_name("VELOCITY")
-    signals = {"seq_low": seq & 0xFFFFFF, "vx": vx, "vy": vy, "wz": wz}
+    signals = {"seq_low": seq & 0xFFFF, "seq_mid": ((seq >> 16) ^ (epoch >> 8)) & 0xFF,
+               "vx": vx, "vy": vy, "wz": wz}
     data = msg.encode(dict(signals, crc=0))
     high = (seq >> 24) & 0xFF
     key = bytes([epoch & 0xFF, high ^ (high >> 1)])

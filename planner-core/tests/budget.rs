@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use planner_core::node::{NodeConfig, NodeState, WORK_STEP};
-use planner_core::wire::{Command, ControlOp, Measured, Reason};
+use planner_core::wire::{Command, ControlOp, Measured, Reason, WireVelocity};
 
 /// A rig walking `k` queued steps, started with `op`.
 fn walking(op: ControlOp, k: u16) -> Rig {
@@ -232,11 +232,12 @@ fn a_state_that_moves_nothing_leaves_the_next_targets_change_its_plan() {
     }
 }
 
-/// A budget above the default (the bound the timing figures measure), one below what a plan or
-/// the step adjustment needs, and no plan at all are refused at start-up.
+/// A budget above the default (the bound the timing figures measure), one below what a plan,
+/// the step adjustment or a drive command's start needs, and no plan at all are refused at
+/// start-up.
 #[test]
 fn a_budget_outside_its_range_is_refused_at_start_up() {
-    use planner_core::node::{Node, WORK_ADJUST, WORK_BUDGET};
+    use planner_core::node::{Node, WORK_ADJUST, WORK_BUDGET, WORK_DRIVE};
     let ok = NodeConfig::hrp2();
     assert!(Node::<16>::new(ok).is_ok());
     for cfg in [
@@ -246,6 +247,10 @@ fn a_budget_outside_its_range_is_refused_at_start_up() {
         },
         NodeConfig {
             work_budget: WORK_ADJUST - 1,
+            ..ok
+        },
+        NodeConfig {
+            work_budget: WORK_DRIVE - 1,
             ..ok
         },
         NodeConfig {
@@ -261,4 +266,118 @@ fn a_budget_outside_its_range_is_refused_at_start_up() {
             cfg.max_plans
         );
     }
+}
+
+/// The next `VELOCITY` (a new sequence number) alone in a cycle; its answer.
+fn velocity(r: &mut Rig, vx: f64) -> Option<Reason> {
+    r.seq += 1;
+    r.ask(Command::Velocity(WireVelocity::from_si(
+        r.seq, vx, 0.0, 0.0,
+    )))
+}
+
+/// At the least budget the start-up takes, a drive command fits a cycle: a `VELOCITY` from
+/// standing and a change while walking are taken, not refused `Busy` forever.
+#[test]
+fn the_least_budget_accepted_takes_a_velocity_start_and_change() {
+    use planner_core::node::WORK_DRIVE;
+    let mut cfg = NodeConfig::hrp2();
+    cfg.work_budget = WORK_DRIVE;
+    let mut r = Rig::new(cfg);
+    assert_eq!(velocity(&mut r, 0.1), None);
+    for k in 0..200 {
+        if k % 10 == 0 {
+            assert_eq!(
+                velocity(&mut r, 0.1 + 0.0001 * f64::from(k)),
+                None,
+                "cycle {k}"
+            );
+        } else {
+            r.cycle();
+        }
+    }
+    assert_eq!(r.n.state(), NodeState::Walking);
+}
+
+/// A footstep frame the node refuses anyway (a `STEP_MODIFY` of the next swing target while the
+/// node chooses the steps) keeps no work: a `VELOCITY` after it in the same cycle is taken.
+#[test]
+fn a_modification_refused_while_the_node_drives_keeps_no_work_from_a_velocity() {
+    use planner_core::gait::Side;
+    use planner_core::wire::{WireModify, WireStep};
+    let mut r = Rig::hrp2();
+    for k in 0..300 {
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.1), None);
+        } else {
+            r.cycle();
+        }
+    }
+    let g = r.n.gait();
+    let s = g.queued_step(g.next_target().unwrap()).unwrap();
+    let number = r.n.next_step().wrapping_sub(g.queued() as u16);
+    let base = WireStep::from_si(number, s.side == Side::Left, s.x, s.y, s.yaw).unwrap();
+    let m = Command::Modify(WireModify::from_si(&base, 1, s.x + 0.01, s.y, s.yaw).unwrap());
+    r.seq += 1;
+    let v = Command::Velocity(WireVelocity::from_si(r.seq, 0.12, 0.0, 0.0));
+    let epoch = r.session.epoch;
+    r.bus.rx.push_back(m.encode_in(epoch));
+    r.bus.rx.push_back(v.encode_in(epoch));
+    let acks = r.cycle();
+    let answer = |c: &Command| acks.iter().find(|a| a.command == c.code()).unwrap().reason;
+    assert_eq!(answer(&m), Some(Reason::WrongState));
+    assert_eq!(answer(&v), None, "{acks:?}");
+}
+
+/// The work a drive command does is checked before it (the step numbers left: `Exhausted`
+/// costs nothing) or charged when it is refused after it (a step out of the wire's range is
+/// found once generated): a burst of `VELOCITY` frames in one cycle generates no more than the
+/// budget allows, the rest are refused `Busy`.
+#[test]
+fn a_burst_of_refused_velocities_stays_within_the_budget() {
+    use planner_core::node::{AHEAD, WORK_GENERATE};
+    // Standing at the edge of the walking area (the wire's range of x: 17 bits of 0.5 mm):
+    // the steps forward are out of it.
+    let mut cfg = NodeConfig::hrp2();
+    cfg.left.x = 32.70;
+    cfg.right.x = 32.70;
+    let mut r = Rig::new(cfg);
+    let epoch = r.session.epoch;
+    let frame = |seq| Command::Velocity(WireVelocity::from_si(seq, 0.1, 0.0, 0.0)).encode_in(epoch);
+    let full = r.n.work_left();
+    r.seq += 1;
+    let a = r.n.handle(&frame(r.seq), r.t).unwrap();
+    assert_eq!(a.reason, Some(Reason::OutOfRange));
+    assert_eq!(r.n.work_left(), full - AHEAD as u32 * WORK_GENERATE);
+    r.cycle();
+    for _ in 0..20 {
+        r.seq += 1;
+        r.bus.rx.push_back(frame(r.seq));
+    }
+    let acks = r.cycle();
+    let generated = acks
+        .iter()
+        .filter(|a| a.reason == Some(Reason::OutOfRange))
+        .count() as u32;
+    assert!(generated >= 1);
+    assert!(
+        generated * AHEAD as u32 * WORK_GENERATE <= r.n.config().work_budget,
+        "{generated} generated: {acks:?}"
+    );
+    assert!(acks.iter().any(|a| a.reason == Some(Reason::Busy)));
+    // With the step numbers used up (each Reset skips a session's numbers), `Exhausted` is
+    // found before any step is generated: nothing is spent.
+    let mut r = Rig::hrp2();
+    for _ in 0..256 {
+        assert_eq!(r.control(ControlOp::Reset), None);
+    }
+    let epoch = r.session.epoch;
+    let full = r.n.work_left();
+    for _ in 0..20 {
+        r.seq += 1;
+        let f = Command::Velocity(WireVelocity::from_si(r.seq, 0.1, 0.0, 0.0)).encode_in(epoch);
+        let a = r.n.handle(&f, r.t).unwrap();
+        assert_eq!(a.reason, Some(Reason::Exhausted));
+    }
+    assert_eq!(r.n.work_left(), full);
 }

@@ -187,12 +187,10 @@ fn a_zero_velocity_brings_the_robot_to_a_stand_with_its_feet_together() {
     assert_eq!(a.reason, None);
     assert!(r.n.gait().is_stopping());
     // A stick held at zero keeps streaming it: taken, nothing changes (the controller is
-    // heard). Another velocity waits until the robot stands.
+    // heard).
     let queued = r.n.gait().queued();
     assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
     assert!(r.n.gait().is_stopping() && r.n.gait().queued() == queued);
-    let a = velocity(&mut r, 0.1, 0.0, 0.0);
-    assert_eq!(a.reason, Some(Reason::WrongState));
     r.until(2000, |n| n.gait().is_standing());
     assert_eq!(r.n.state(), NodeState::Standing);
     assert_eq!(r.n.driver(), Driver::Steps);
@@ -209,6 +207,125 @@ fn a_zero_velocity_brings_the_robot_to_a_stand_with_its_feet_together() {
     // Standing, velocity walking starts again.
     assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
     assert_eq!(r.n.state(), NodeState::Walking);
+}
+
+/// A controller that sends nothing but a `VELOCITY` every 50 ms, and releases its stick to
+/// zero, stops the robot and is never declared lost: every frame of the stream is taken.
+#[test]
+fn a_velocity_only_stream_released_to_zero_stands_and_stays_alive() {
+    let mut r = Rig::hrp2();
+    stream(&mut r, 300, (0.1, 0.0, 0.0));
+    let mut k = 0;
+    while !r.n.gait().is_standing() {
+        assert!(k < 4000, "not standing after {k} cycles");
+        if k % 10 == 0 {
+            let a = velocity(&mut r, 0.0, 0.0, 0.0);
+            assert_eq!(a.reason, None, "cycle {k}: {a:?}");
+        } else {
+            r.cycle();
+        }
+        k += 1;
+    }
+    // The stream goes on at zero while standing, past every timeout.
+    stream(&mut r, 300, (0.0, 0.0, 0.0));
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+}
+
+/// The stop a zero velocity asks for is the drive's own: while a step queued after the one
+/// being swung has not lifted off, a new velocity cancels it and re-plans the queued steps (the
+/// next swing target is the new velocity's step from the feet before it); once no step is
+/// left to change, the velocity is refused `WrongState` and taken again once standing.
+#[test]
+fn a_velocity_cancels_the_drives_own_stop_while_its_steps_have_not_lifted_off() {
+    let mut r = Rig::hrp2();
+    stream(&mut r, 300, (0.1, 0.0, 0.0));
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    assert!(r.n.gait().is_stopping());
+    r.cycle();
+    let (before, feet) = next_landing(&r);
+    let from_rest = r.n.gait().next_swing_from_rest();
+    let v = Velocity {
+        vx: 0.12,
+        vy: 0.0,
+        wz: 0.0,
+    };
+    assert_eq!(velocity(&mut r, v.vx, v.vy, v.wz).reason, None);
+    assert!(!r.n.gait().is_stopping());
+    let (after, _) = next_landing(&r);
+    assert_ne!(before, after);
+    let side = after.side;
+    let want = stepping(&r)
+        .next_step(&v, &feet[ix(side.other())], &feet[ix(side)], from_rest)
+        .unwrap()
+        .0;
+    assert!((after.x - want.x).abs() < 2e-3 && (after.y - want.y).abs() < 2e-3);
+    // It walks on at that velocity (the queue topped up again).
+    stream(&mut r, 400, (0.12, 0.0, 0.0));
+    assert_eq!(r.n.state(), NodeState::Walking);
+    assert_eq!(r.n.gait().queued(), planner_core::node::AHEAD);
+    // Stopped again, and held at zero until nothing queued is left to change: then a velocity
+    // is refused (its steps could not be walked) and nothing changes.
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    let mut k = 0;
+    while r.n.gait().queued() > 0 {
+        assert!(k < 4000);
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+        } else {
+            r.cycle();
+        }
+        k += 1;
+    }
+    assert!(r.n.gait().is_stopping());
+    assert_eq!(
+        velocity(&mut r, 0.1, 0.0, 0.0).reason,
+        Some(Reason::WrongState)
+    );
+    r.until(2000, |n| n.gait().is_standing());
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+}
+
+/// The controller's own `Stop` during a velocity walk is not cancelled by a velocity (only a
+/// stop the drive asked for is); a zero velocity is still taken (the stick streams it).
+#[test]
+fn a_velocity_does_not_cancel_the_controllers_stop() {
+    let mut r = Rig::hrp2();
+    stream(&mut r, 300, (0.1, 0.0, 0.0));
+    assert_eq!(r.control(planner_core::wire::ControlOp::Stop), None);
+    assert!(r.n.gait().is_stopping());
+    assert_eq!(
+        velocity(&mut r, 0.1, 0.0, 0.0).reason,
+        Some(Reason::WrongState)
+    );
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    assert!(r.n.gait().is_stopping());
+}
+
+/// A goal walk that has queued its closing step (and asked for its stop) is replaced at once
+/// by a new goal or a velocity while the queued steps have not lifted off.
+#[test]
+fn a_goal_is_replaced_at_once_in_its_last_steps() {
+    for by_goal in [true, false] {
+        let mut r = Rig::hrp2();
+        assert_eq!(goal(&mut r, 1.0, 0.0, 0.0).reason, None);
+        r.until(20_000, |n| n.gait().is_stopping());
+        assert!(r.n.gait().queued() > 0);
+        let a = if by_goal {
+            goal(&mut r, -1.0, 0.0, 0.0)
+        } else {
+            velocity(&mut r, 0.0, 0.1, 0.0)
+        };
+        assert_eq!(a.reason, None, "by goal {by_goal}: {a:?}");
+        assert!(!r.n.gait().is_stopping());
+        let want = if by_goal {
+            Driver::Goal
+        } else {
+            Driver::Velocity
+        };
+        assert_eq!(r.n.driver(), want);
+        assert!(!r.n.at_goal());
+    }
 }
 
 #[test]
@@ -380,4 +497,136 @@ fn a_velocity_replaces_a_goal_at_once() {
     assert_eq!(r.n.driver(), Driver::Velocity);
     r.until(2000, |n| n.gait().is_standing());
     assert!(!r.n.at_goal());
+}
+
+/// The midpoint of the feet.
+fn midpoint(r: &Rig) -> (f64, f64) {
+    let [l, rt] = *r.n.gait().feet();
+    (0.5 * (l.x + rt.x), 0.5 * (l.y + rt.y))
+}
+
+/// `STATUS`'s `AT_GOAL` flag after a few cycles (a `STATUS` among them).
+fn flagged(r: &mut Rig) -> bool {
+    r.run(40, true);
+    r.status.unwrap().flags & planner_core::wire::Status::AT_GOAL != 0
+}
+
+/// The arrival is reported only while standing at the goal: a `StopNow` after the goal walk
+/// has queued its closing step stands short of it, and neither `at_goal()` nor `STATUS` says
+/// it arrived.
+#[test]
+fn a_goal_walk_stopped_short_of_its_goal_is_not_at_it() {
+    use planner_core::wire::ControlOp;
+    let mut r = Rig::hrp2();
+    assert_eq!(goal(&mut r, 1.0, 0.0, 0.0).reason, None);
+    r.until(20_000, |n| n.gait().is_stopping());
+    assert_eq!(r.control(ControlOp::StopNow), None);
+    r.until(2000, |n| n.gait().is_standing());
+    let (mx, my) = midpoint(&r);
+    assert!((mx - 1.0).hypot(my) > 2.0 * GOAL_TOLERANCE, "{mx} {my}");
+    assert!(!r.n.at_goal());
+    assert!(!flagged(&mut r));
+}
+
+/// The arrival belongs to the goal given in this session with no walk since: a `Reset` ends
+/// it, and so does a walk of the controller's footsteps.
+#[test]
+fn a_goals_arrival_ends_with_a_new_session_or_a_footstep_walk() {
+    use planner_core::wire::ControlOp;
+    let mut r = Rig::hrp2();
+    assert_eq!(goal(&mut r, 0.3, 0.0, 0.0).reason, None);
+    r.until(20_000, |n| n.gait().is_standing());
+    assert!(r.n.at_goal());
+    assert!(flagged(&mut r));
+    let mut s = r.fork();
+    assert_eq!(s.control(ControlOp::Reset), None);
+    assert!(!s.n.at_goal());
+    assert!(!flagged(&mut s));
+    // A footstep walk (in the same session) from the goal, ending elsewhere.
+    queue_walk(&mut r, 4);
+    assert!(!r.n.at_goal());
+    assert_eq!(r.control(ControlOp::Start), None);
+    assert_eq!(r.control(ControlOp::Stop), None);
+    r.until(4000, |n| n.gait().is_standing());
+    assert!(!r.n.at_goal());
+    assert!(!flagged(&mut r));
+}
+
+/// A `VELOCITY` of another start-up (another session epoch) is taken with odds of at most
+/// 2⁻¹⁶, those of a `CONTROL`: of the 256 epochs that share this one's low byte, at most one
+/// gets a frame through (whatever its sequence number), and none of the others' (a frame keyed
+/// with another low byte fails its CRC).
+#[test]
+fn another_sessions_velocity_is_taken_no_more_often_than_its_control() {
+    let r = Rig::hrp2();
+    let epoch = r.session.epoch;
+    let last = r.n.session().last_seq;
+    for seq in [last + 1, last + 200, last + 70_000, last + (1 << 20), 3] {
+        let taken = (0u32..256)
+            .filter(|&k| {
+                let other = epoch ^ (k << 8);
+                let f = Command::Velocity(WireVelocity::from_si(seq, 0.2, 0.0, 0.0));
+                let a = r.n.clone().handle(&f.encode_in(other), r.t).unwrap();
+                a.reason.is_none()
+            })
+            .count();
+        assert!(taken <= 1, "seq {seq}: {taken} of 256 epochs taken");
+        // Another low byte: never.
+        for k in 1u32..256 {
+            let f = Command::Velocity(WireVelocity::from_si(seq, 0.2, 0.0, 0.0));
+            let a = r.n.clone().handle(&f.encode_in(epoch ^ k), r.t).unwrap();
+            assert!(a.reason.is_some(), "seq {seq}, low byte ^ {k}");
+        }
+    }
+}
+
+/// The frame of an earlier start-up whose session differs in its second byte only is refused,
+/// and the live controller keeps its sequence numbers (its `Stop` is taken).
+#[test]
+fn an_earlier_start_ups_velocity_does_not_lock_the_controller_out() {
+    use planner_core::wire::ControlOp;
+    let mut old_cfg = NodeConfig::hrp2();
+    old_cfg.entropy = 0x1234_5600;
+    let mut cfg = NodeConfig::hrp2();
+    cfg.entropy = 0x1234_5700;
+    let mut old = Rig::new(old_cfg);
+    for _ in 0..200 {
+        old.heartbeat();
+    }
+    old.seq += 1;
+    let stale = Command::Velocity(WireVelocity::from_si(old.seq, 0.2, 0.0, 0.0))
+        .encode_in(old.session.epoch);
+    let mut r = Rig::new(cfg);
+    assert_ne!(r.session.tag(), old.session.tag());
+    r.bus.rx.push_back(stale);
+    let a = r.cycle();
+    assert!(a[0].reason.is_some(), "{a:?}");
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+    r.run(3, true);
+    assert_eq!(r.control(ControlOp::Stop), None);
+}
+
+/// A zero velocity queues what the stop needs and no more: the next swing target closes the
+/// feet and the steps after it are dropped (their numbers given to the next steps), so the
+/// robot stands after landing the foot it swings and one step more.
+#[test]
+fn a_zero_velocity_keeps_only_the_closing_step() {
+    let mut r = Rig::hrp2();
+    stream(&mut r, 300, (0.1, 0.0, 0.0));
+    r.until(400, |n| n.gait().swinging().is_some());
+    r.cycle(); // (the queue topped up after the lift-off)
+    let queued = r.n.gait().queued();
+    assert_eq!(queued, planner_core::node::AHEAD);
+    let next = r.n.next_step();
+    let lifted = r.liftoffs.len();
+    assert_eq!(velocity(&mut r, 0.0, 0.0, 0.0).reason, None);
+    assert_eq!(r.n.gait().queued(), 1);
+    assert_eq!(r.n.next_step(), next - (queued as u16 - 1));
+    r.until(2000, |n| n.gait().is_standing());
+    assert_eq!(r.n.state(), NodeState::Standing);
+    assert_eq!(r.liftoffs.len() - lifted, 1, "{:?}", &r.liftoffs[lifted..]);
+    // The next walk numbers its steps from there on.
+    assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
+    assert_eq!(r.n.next_step(), next - (queued as u16 - 1) + queued as u16);
 }

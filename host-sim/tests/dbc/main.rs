@@ -26,8 +26,8 @@ use planner_core::node::{Node, NodeConfig, NodeState, TX_BACKLOG};
 use planner_core::wire::{
     self, ids, signed_range, Ack, Adjust, Command, ControlOp, Diag, LinkHealth, Measured, RawFrame,
     Reason, Session, Status, Stream, WireGoal, WireModify, WireStep, WireVelocity, DEVIATION_BITS,
-    DEVIATION_UNIT, DRIVE_BITS, DRIVE_TURN_BITS, GOAL_UNIT, GOAL_YAW_UNIT, OFFSET_BITS, SEQ_WINDOW,
-    SPEED_UNIT, STAMPS, STEP_BITS, STEP_UNIT, TURN_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
+    DEVIATION_UNIT, DRIVE_BITS, DRIVE_TURN_BITS, GOAL_UNIT, GOAL_YAW_UNIT, OFFSET_BITS, SPEED_UNIT,
+    STAMPS, STEP_BITS, STEP_UNIT, TURN_UNIT, VERSIONS, YAW_BITS, YAW_UNIT,
 };
 
 mod ranges;

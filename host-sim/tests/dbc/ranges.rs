@@ -130,7 +130,16 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
             lo + 1
         }
     };
-    let seq = if high { u32::MAX } else { 0 };
+    // A session whose second byte is XORed into the sequence number's bits 16-23 (which
+    // give the field's end with it).
+    let epoch: u32 = if high { 0xA5_00 } else { 0x5A_00 };
+    let seq = if high {
+        u32::MAX ^ (0xA5 << 16)
+    } else {
+        0x5A << 16
+    };
+    let mid = f64::from(((seq >> 16) ^ (epoch >> 8)) & 0xFF);
+    assert_eq!(mid, if high { 255.0 } else { 0.0 });
     let v = WireVelocity {
         seq,
         vx: end(DRIVE_BITS),
@@ -138,9 +147,10 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         wz: end(DRIVE_TURN_BITS),
     };
     out.push((
-        Command::Velocity(v).encode(),
+        Command::Velocity(v).encode_in(epoch),
         vec![
-            ("seq_low", f64::from(seq & (SEQ_WINDOW - 1))),
+            ("seq_low", f64::from(seq & 0xFFFF)),
+            ("seq_mid", mid),
             ("vx", f64::from(v.vx) * SPEED_UNIT),
             ("vy", f64::from(v.vy) * SPEED_UNIT),
             ("wz", f64::from(v.wz) * TURN_UNIT),
@@ -153,9 +163,10 @@ pub(crate) fn codec_extremes(high: bool) -> Vec<(RawFrame, Values)> {
         yaw: end(DRIVE_TURN_BITS),
     };
     out.push((
-        Command::Goal(g).encode(),
+        Command::Goal(g).encode_in(epoch),
         vec![
-            ("seq_low", f64::from(seq & (SEQ_WINDOW - 1))),
+            ("seq_low", f64::from(seq & 0xFFFF)),
+            ("seq_mid", mid),
             ("x", f64::from(g.x) * GOAL_UNIT),
             ("y", f64::from(g.y) * GOAL_UNIT),
             ("yaw", f64::from(g.yaw) * GOAL_YAW_UNIT),

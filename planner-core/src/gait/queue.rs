@@ -143,6 +143,49 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         self.gen = self.gen.wrapping_add(1);
     }
 
+    /// Cancels a requested stop while it can still be undone: walking, with a step queued
+    /// after the one being swung (its foot has not lifted off) and the re-plan at the next
+    /// single support still ahead in the window being walked. The walk goes on as before the
+    /// stop (the landings padded with steps in place). The caller checks the re-plan this
+    /// causes as for a modification ([`Gait::modify_front`], eq. 17) and requests the stop
+    /// again if it is refused. `WrongState` (nothing changed) when no stop can be cancelled.
+    pub fn resume(&mut self) -> Result<(), GaitError> {
+        if !self.resumable() {
+            return Err(GaitError::WrongState);
+        }
+        self.stop_requested = false;
+        self.gen = self.gen.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Drops the queued steps after the first `keep` (none of them has lifted off: the step
+    /// being swung is not queued), and nothing else: how the node shortens its own steps to
+    /// what a stop needs (the stop is requested apart, [`Gait::stop`]).
+    pub fn truncate(&mut self, keep: usize) {
+        if self.queue.len() <= keep {
+            return;
+        }
+        while self.queue.len() > keep {
+            self.queue.pop_back();
+        }
+        self.consecutive &= !self.queue.is_empty();
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
+    }
+
+    /// `true` if [`Gait::resume`] would cancel the stop under way.
+    pub fn resumable(&self) -> bool {
+        self.is_stopping()
+            && !self.queue.is_empty()
+            && self.cur_buf().is_some_and(|c| {
+                let w = &self.wins[c];
+                w.spec
+                    .replan
+                    .and_then(|j| w.starts.get(j))
+                    .is_some_and(|&at| at > w.tick)
+            })
+    }
+
     /// Drops every queued step while standing, and nothing else (no stop is requested: a
     /// later `start` walks what is queued then exactly as if nothing had been dropped).
     pub fn drop_queue(&mut self) -> Result<(), GaitError> {

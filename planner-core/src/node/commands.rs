@@ -210,6 +210,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         self.estopped = true;
         self.gait.clear_and_stop();
+        self.drive.own_stop = false;
         Ok(())
     }
 
@@ -259,7 +260,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
             ControlOp::Stop => {
                 if !standing {
+                    // The controller's stop: a velocity or a goal does not cancel it.
                     self.gait.stop();
+                    self.drive.own_stop = false;
                 }
             }
             ControlOp::StopNow => {
@@ -272,6 +275,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     self.gait.drop_queue().map_err(reason_of)?;
                 } else {
                     self.gait.clear_and_stop();
+                    self.drive.own_stop = false;
                 }
             }
         }
@@ -309,6 +313,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.lost = false;
         self.clock_fault = false;
         self.steps.clear();
+        self.forget_goal();
         // No shift and no measured state carry over: the new session's measured states name
         // cycles from this one on (this cycle's reference is the new session's first).
         self.adj = Adjusting::ZERO;
@@ -369,6 +374,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.gait.push(gid, step).map_err(|(e, _)| reason_of(e))?;
         self.kept_step(gen, pos, kept, step.side);
         self.spend(WORK_APPEND);
+        self.forget_goal();
         self.steps.push(Record {
             append: *s,
             commanded: *s,
@@ -386,11 +392,19 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         !self.gait.is_standing() && self.gait.next_target() == Some(id)
     }
 
-    /// `true` if `decoded` is a modification that plans now ([`Node::plans_modify`]): the
-    /// cycle acts on it after its other commands (see [`Node::poll`]).
-    pub(super) fn plans_later(&self, decoded: &Result<Command, (Reason, u8)>) -> bool {
+    /// `true` if `decoded` is a modification that plans now ([`Node::plans_modify`]) and that
+    /// the footstep gate lets through (a frame refused anyway, as every footstep command while
+    /// the node drives, keeps no work from the others): the cycle acts on it after its other
+    /// commands (see [`Node::poll`]).
+    pub(super) fn plans_later(
+        &self,
+        frame: &RawFrame,
+        decoded: &Result<Command, (Reason, u8)>,
+    ) -> bool {
         match decoded {
-            Ok(Command::Modify(m)) => self.plans_modify(self.gait_id(m.id)),
+            Ok(Command::Modify(m)) => {
+                self.footstep_gate(frame).is_ok() && self.plans_modify(self.gait_id(m.id))
+            }
             _ => false,
         }
     }

@@ -307,7 +307,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             if matches!(decoded, Ok(Command::EmergencyStop { .. })) {
                 self.estop_now = true;
             }
-            if self.plans_later(&decoded) {
+            if self.plans_later(f, &decoded) {
                 if let Some(n) = later_next.get_mut(usize::from(i)) {
                     *n = self.next_step();
                     if later == 0 && self.afford(WORK_STEP + WORK_PLAN).is_ok() {

@@ -15,15 +15,23 @@
 //!   [`AHEAD`] generations and appends and the start window's plan. All of it is charged to
 //!   the cycle's budget like any command: a command whose work does not fit is refused `Busy`
 //!   (nothing changed: it is sent again), a step of the queue that does not fit waits for the
-//!   next cycle (the queue holds two more).
+//!   next cycle (the queue holds two more). The cheap checks come first (the step numbers
+//!   left: `Exhausted`); a command refused once its steps are generated (a step out of the
+//!   walking area, a re-plan eq. 17 refuses) is charged the generation (and the plan it
+//!   tried), so no burst of frames does more work in a cycle than the budget.
 //! * **Saturation.** A velocity the legs cannot take is walked at the nearest one they can; the
 //!   `ACK` says which components were cut ([`crate::wire::Ack::cut`]) and `STATUS` flags the
 //!   cut while it lasts.
-//! * **Stopping.** A zero velocity re-plans the queued steps in place (the first one closes the
-//!   feet, parallel, at the nominal width) and requests a stop: the robot walks them out and
-//!   stands. While it stops, a zero velocity is taken (it changes nothing: a stick held at
-//!   zero streams it) and another velocity is refused `WrongState` (it is taken once the robot
-//!   stands). A `VELOCITY` stream that stops for longer than
+//! * **Stopping.** A zero velocity re-plans the next swing target as the step that closes the
+//!   feet (parallel, at the nominal width), drops the queued steps after it (their numbers are
+//!   given to the next steps generated) and requests a stop: the robot lands the foot it
+//!   swings, closes its feet and stands (a goal reached stops the same way). While it stops,
+//!   a zero velocity is taken (it changes nothing: a stick held at zero streams it). The stop
+//!   is the drive's own (as is a goal's, once reached): while a step queued after the one
+//!   being swung has not lifted off, another velocity or a goal cancels it and re-plans the
+//!   queued steps as any change does; once none is left, it is refused `WrongState` (and
+//!   taken once the robot stands). A controller's `Stop` or
+//!   `StopNow` is not cancelled by a velocity. A `VELOCITY` stream that stops for longer than
 //!   [`NodeConfig::velocity_timeout_ms`] (by the clock or by the cycles) while the robot walks
 //!   at a velocity stops it as a lost controller does (the state *controller lost*: the queue
 //!   dropped, a `Reset` needed once standing). Only an accepted `VELOCITY` keeps the stream
@@ -35,7 +43,9 @@
 //!   cut to the legs as any velocity (so the walk turns, moves across and forward together,
 //!   on an arc-like path, each at most what one step can take). When the stance is within
 //!   [`GOAL_TOLERANCE`] and [`GOAL_YAW_TOLERANCE`] of the goal, the next step closes the feet
-//!   and the robot stops; standing, `STATUS` flags the arrival until the next command.
+//!   and the robot stops. `STATUS` flags the arrival while the robot stands within those
+//!   tolerances of the goal given in this session, with no other walk since (a velocity,
+//!   footsteps; a `Reset` ends it too).
 //! * **Mixing.** While the node drives, footstep commands are refused `WrongState` (the steps
 //!   are the node's); a `Stop` or `StopNow` stops as for any walk; once standing, the
 //!   controller's footsteps are taken again. A velocity or goal is refused `WrongState` while
@@ -43,7 +53,7 @@
 
 use super::velocity::{Saturation, Stepping, Velocity};
 use super::*;
-use crate::wire::{WireGoal, WireVelocity};
+use crate::wire::{WireGoal, WireVelocity, SEQ_ADVANCE};
 
 /// Steps the node keeps queued while it drives.
 pub const AHEAD: usize = 3;
@@ -51,8 +61,15 @@ const _: () = assert!(AHEAD <= crate::gait::MODIFY_FRONT);
 
 /// See the module docs: generating one step (the cuts in closed form, at most
 /// 1 + [`HALVINGS`](super::velocity::HALVINGS) reach checks, the step record), estimated as seven of
-/// the checks that [`WORK_STEP`] counts three of.
+/// the checks that [`WORK_STEP`] counts three of (each try, as those checks, computes only the
+/// step's frame: the feet's frames are computed once for all tries).
 pub const WORK_GENERATE: u32 = 4_900;
+
+/// The most work one `VELOCITY` or `GOAL` can need: a start from standing ([`AHEAD`]
+/// generations and appends and the start window's plan). A re-plan while walking needs less
+/// ([`AHEAD`] generations and eq. 17's plan). [`NodeConfig::work_budget`] is at least this
+/// (checked at start-up), so a drive command refused `Busy` fits a later cycle.
+pub const WORK_DRIVE: u32 = AHEAD as u32 * (WORK_GENERATE + WORK_APPEND) + WORK_PLAN;
 
 /// How near the stance must come to a goal's position \[m\] (each of x and y).
 pub const GOAL_TOLERANCE: f64 = 0.02;
@@ -84,8 +101,12 @@ pub(super) struct Drive<T> {
     pub(super) heard_cycle: u32,
     /// The goal in the node's frame: x, y, heading.
     pub(super) goal: [T; 3],
-    /// The goal walk has closed its feet at the goal (stopping, then standing there).
-    pub(super) arrived: bool,
+    /// A `GOAL` was accepted in this session and no other walk (a velocity, footsteps) since:
+    /// `goal` is the one whose arrival `STATUS` may report.
+    pub(super) goal_given: bool,
+    /// The stop under way is the drive's own (a zero velocity, a goal reached): a velocity or
+    /// a goal may cancel it while a step that has not lifted off is queued.
+    pub(super) own_stop: bool,
 }
 
 impl<T: Real> Drive<T> {
@@ -101,7 +122,8 @@ impl<T: Real> Drive<T> {
         heard_ms: 0,
         heard_cycle: 0,
         goal: [T::ZERO; 3],
-        arrived: false,
+        goal_given: false,
+        own_stop: false,
     };
 }
 
@@ -114,6 +136,8 @@ struct Planned<T> {
     stop: bool,
     /// The velocity of the first (for a goal, the one computed).
     v: Velocity<T>,
+    /// The steps kept: a stop keeps those up to the one that closes the feet.
+    keep: usize,
 }
 
 fn is_zero<T: Real>(v: &Velocity<T>) -> bool {
@@ -132,9 +156,35 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         (self.drive.driver != Driver::Steps).then_some((self.drive.v, self.drive.cut))
     }
 
-    /// `true` once a goal walk has stood still at its goal (until the next command that moves).
+    /// `true` while the robot stands within [`GOAL_TOLERANCE`] and [`GOAL_YAW_TOLERANCE`] of
+    /// the goal given in this session (the midpoint of the feet and their mean heading), with
+    /// no other walk since: a stop short of it, a `Reset`, a velocity or a footstep walk end
+    /// the arrival.
     pub fn at_goal(&self) -> bool {
-        self.drive.arrived && self.drive.driver == Driver::Steps && self.gait.is_standing()
+        if !self.drive.goal_given || self.drive.driver != Driver::Steps || !self.gait.is_standing()
+        {
+            return false;
+        }
+        let [l, r] = *self.gait.feet();
+        let half = T::of(0.5);
+        let (dx, dy) = (
+            self.drive.goal[0] - half * (l.x + r.x),
+            self.drive.goal[1] - half * (l.y + r.y),
+        );
+        let h = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
+        let (s, c) = h.sin_cos();
+        let d = self.drive.goal[2] - h;
+        // (A rounding's slack: the walk stops on the same tolerance, from the support foot.)
+        let slack = T::of(1e-6);
+        let tol = T::of(GOAL_TOLERANCE) + slack;
+        (c * dx + s * dy).abs() <= tol
+            && (-s * dx + c * dy).abs() <= tol
+            && d.sin().atan2(d.cos()).abs() <= T::of(GOAL_YAW_TOLERANCE) + slack
+    }
+
+    /// A footstep walk or a new session: no goal's arrival is reported any more.
+    pub(super) fn forget_goal(&mut self) {
+        self.drive.goal_given = false;
     }
 
     fn stepping(&self) -> Stepping<T> {
@@ -142,7 +192,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     }
 
     /// What refuses a `VELOCITY` or `GOAL` first: freshness (the control sequence), the
-    /// session, the latched states.
+    /// session (no session open; a number read more than [`SEQ_ADVANCE`] ahead), the latched
+    /// states.
     fn drive_gate(&self, seq: u32) -> Result<(), Reason> {
         if seq == self.last_seq && self.last_seq != 0 {
             return Err(Reason::Duplicate);
@@ -152,6 +203,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         }
         if !self.open {
             return Err(Reason::NoSession);
+        }
+        // Read that far ahead, the frame was sent for another session (see `wire`'s `drive`).
+        if seq - self.last_seq > SEQ_ADVANCE {
+            return Err(Reason::WrongSession);
         }
         if self.estopped {
             return Err(Reason::EmergencyStopped);
@@ -204,18 +259,21 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         goal: Option<[T; 3]>,
     ) -> Result<Saturation, Reason> {
         let standing = self.gait.is_standing();
-        // A zero velocity while a drive stops: the stop it asks for is under way.
-        if self.gait.is_stopping()
-            && goal.is_none()
-            && is_zero(&v)
-            && self.drive.driver != Driver::Steps
-        {
+        let stopping = self.gait.is_stopping();
+        let drives = self.drive.driver != Driver::Steps;
+        // A zero velocity while a drive stops: the stop it asks for is under way (a stick
+        // held at zero streams it). It is taken and changes nothing but who drives.
+        if stopping && drives && goal.is_none() && is_zero(&v) {
+            self.drive.driver = Driver::Velocity;
+            self.drive.v = Velocity::ZERO;
+            self.drive.cut = Saturation::default();
+            self.drive.goal_given = false;
             return Ok(Saturation::default());
         }
-        if (standing && self.gait.queued() > 0)
-            || (!standing && self.drive.driver == Driver::Steps)
-            || self.gait.is_stopping()
-        {
+        // A stop the drive asked for (a zero velocity, a goal reached) is cancelled while a
+        // step that has not lifted off is queued; any other stop stands.
+        let resume = stopping && drives && self.drive.own_stop && self.gait.resumable();
+        if (standing && self.gait.queued() > 0) || (!standing && !drives) || (stopping && !resume) {
             return Err(Reason::WrongState);
         }
         let target = goal.unwrap_or(self.drive.goal);
@@ -244,32 +302,38 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             None => is_zero(&v),
         };
         if standing && still {
-            self.drive.arrived = goal.is_some();
+            self.drive.goal_given = goal.is_some();
+            self.drive.goal = target;
             self.drive.v = Velocity::ZERO;
             self.drive.cut = Saturation::default();
             return Ok(Saturation::default());
         }
-        let work = n as u32 * WORK_GENERATE
-            + WORK_PLAN
-            + if standing { n as u32 * WORK_APPEND } else { 0 };
+        // The cheap checks first (the plan, the budget, the step numbers): what is refused
+        // after them has generated its steps, and that work is charged.
+        let generating = n as u32 * WORK_GENERATE;
+        let work = generating + WORK_PLAN + if standing { n as u32 * WORK_APPEND } else { 0 };
         self.plan()?;
         self.afford(work)?;
+        if standing && self.appended.saturating_add(n as u32) > STEP_NUMBERS {
+            return Err(Reason::Exhausted);
+        }
         // The step numbers: from standing the next ones, walking the queued steps'.
         let first = if standing {
             self.next_step()
         } else {
             front.map_or(self.next_step(), |id| id.wrapping_add(self.first))
         };
-        let p = self.plan_drive(v, goal, n, [support, same], from_rest, first)?;
-        let (steps, cut, stop, last_v) = (p.steps, p.cut, p.stop, p.v);
+        let Some(p) = self.plan_drive(v, goal, n, [support, same], from_rest, first) else {
+            self.spend(generating);
+            return Err(Reason::OutOfRange);
+        };
+        let (steps, cut, stop, last_v, keep) = (p.steps, p.cut, p.stop, p.v, p.keep);
         if standing {
-            if self.appended.saturating_add(n as u32) > STEP_NUMBERS {
-                return Err(Reason::Exhausted);
-            }
-            for (i, s) in steps.iter().enumerate().take(n) {
+            for (i, s) in steps.iter().enumerate().take(keep) {
                 let gid = (self.appended as u16).wrapping_add(i as u16);
                 if self.gait.push(gid, *s).is_err() {
                     let _ = self.gait.drop_queue();
+                    self.spend(generating);
                     return Err(Reason::QueueFull);
                 }
             }
@@ -277,23 +341,36 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.plans_left = self.plans_left.saturating_sub(1);
             if let Err(e) = started {
                 let _ = self.gait.drop_queue();
+                self.spend(generating + WORK_PLAN);
                 return Err(e);
             }
-            for (i, s) in steps.iter().enumerate().take(n) {
+            for (i, s) in steps.iter().enumerate().take(keep) {
                 if let Some(w) = Self::wire_of(first.wrapping_add(i as u16), s) {
                     self.steps.push(Self::record_of(&w));
                 }
             }
-            self.appended += n as u32;
+            self.appended += keep as u32;
             self.adj.enabled = false;
         } else {
+            // (Checked resumable above: the stop is cancelled, and requested again if the
+            // re-plan is refused.)
+            if resume && self.gait.resume().is_err() {
+                self.spend(generating);
+                return Err(Reason::WrongState);
+            }
             let modified = self
                 .gait
-                .modify_front(steps.get(..n).unwrap_or(&[]))
+                .modify_front(steps.get(..keep).unwrap_or(&[]))
                 .map_err(reason_of);
             self.plans_left = self.plans_left.saturating_sub(1);
-            modified?;
-            for (i, s) in steps.iter().enumerate().take(n) {
+            if let Err(e) = modified {
+                if resume {
+                    self.gait.stop();
+                }
+                self.spend(generating + WORK_PLAN);
+                return Err(e);
+            }
+            for (i, s) in steps.iter().enumerate().take(keep) {
                 let Some(w) = Self::wire_of(first.wrapping_add(i as u16), s) else {
                     continue;
                 };
@@ -303,8 +380,16 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                     }
                 }
             }
+            // The steps after the closing one: dropped, the newest numbers given back.
+            let dropped = self.gait.queued().saturating_sub(keep);
+            if dropped > 0 {
+                self.gait.truncate(keep);
+                self.steps.truncate_queued(keep);
+                self.appended = self.appended.saturating_sub(dropped as u32);
+            }
         }
         self.spend(work);
+        self.drive.own_stop = stop;
         if stop {
             self.gait.stop();
         }
@@ -312,14 +397,15 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         self.drive.v = last_v;
         self.drive.cut = cut;
         self.drive.goal = target;
-        self.drive.arrived = stop && goal.is_some();
+        self.drive.goal_given = goal.is_some();
         Ok(cut)
     }
 
-    /// The `n` steps a drive at `v` (or toward `goal`) plans from `support` and `same` (the
-    /// feet before the first), numbered from `first`: each generated, every one checked to be
-    /// in the wire's range (the walking area) before anything changes. Out of line, so that its
-    /// frame is off the stack when the gait plans.
+    /// The steps a drive at `v` (or toward `goal`) plans from `support` and `same` (the feet
+    /// before the first), numbered from `first`: at most `n`, each generated and checked to be
+    /// in the wire's range (the walking area) before anything changes; a stop keeps the steps
+    /// up to the one that closes the feet. `None` if a step cannot be generated or is out of
+    /// the wire's range. Out of line, so that its frame is off the stack when the gait plans.
     #[inline(never)]
     fn plan_drive(
         &self,
@@ -329,20 +415,25 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         [mut support, mut same]: [Footstep<T>; 2],
         from_rest: bool,
         first: u16,
-    ) -> Result<Planned<T>, Reason> {
+    ) -> Option<Planned<T>> {
         let stepping = self.stepping();
         let mut p = Planned {
             steps: [support; AHEAD],
             cut: Saturation::default(),
             stop: is_zero(&v) && goal.is_none(),
             v,
+            keep: n,
         };
         for (i, slot) in p.steps.iter_mut().enumerate().take(n) {
+            if p.stop {
+                p.keep = i + 1;
+            }
             let vi = match goal {
                 Some(g) => match self.goal_velocity(&support, support.side.other(), &g) {
                     Some(vg) => vg,
                     None => {
                         p.stop = true;
+                        p.keep = i + 1;
                         Velocity::ZERO
                     }
                 },
@@ -350,17 +441,20 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             };
             let (step, c) = stepping
                 .next_step(&vi, &support, &same, from_rest && i == 0)
-                .map_err(|_| Reason::OutOfRange)?;
+                .ok()?;
             if i == 0 {
                 p.v = vi;
             }
-            Self::wire_of(first.wrapping_add(i as u16), &step).ok_or(Reason::OutOfRange)?;
+            Self::wire_of(first.wrapping_add(i as u16), &step)?;
             p.cut = p.cut.or(c);
             *slot = step;
             same = support;
             support = step;
+            if p.stop {
+                break;
+            }
         }
-        Ok(p)
+        Some(p)
     }
 
     /// The velocity that walks the stance of `support` (the other foot beside it) toward
@@ -472,8 +566,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 self.drive.cut = cut;
             }
             if stop {
-                self.drive.arrived = true;
                 self.gait.stop();
+                self.drive.own_stop = true;
                 return;
             }
         }
@@ -504,6 +598,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     pub(super) fn drive_end(&mut self) {
         if self.drive.driver != Driver::Steps && self.gait.is_standing() {
             self.drive.driver = Driver::Steps;
+            self.drive.own_stop = false;
             self.drive.v = Velocity::ZERO;
             self.drive.cut = Saturation::default();
         }

@@ -147,8 +147,9 @@ use adjust::Adjusting;
 pub use adjust::{AdjustConfig, MAX_AGE, MAX_SHIFT};
 pub use config::NodeConfig;
 use cycle::*;
-pub use drive::{Driver, AHEAD, GOAL_TOLERANCE, GOAL_YAW_TOLERANCE, WORK_GENERATE};
+pub use drive::{Driver, AHEAD, GOAL_TOLERANCE, GOAL_YAW_TOLERANCE, WORK_DRIVE, WORK_GENERATE};
 use reach::Frame;
+pub(crate) use reach::Stance;
 pub use reach::{Broken, Limit, Reach, Soles};
 pub use steps::HISTORY;
 use steps::{Record, Steps};
@@ -501,10 +502,10 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             || cfg.max_rx == 0
             || cfg.max_frames < cfg.max_rx
             // The budget bounds the cycle only up to the default (the bound measured), and
-            // below a plan with its checks, or the step adjustment's share, nothing that plans
-            // could ever be carried out.
+            // below a plan with its checks, the step adjustment's share or a drive command's
+            // start, something that plans could never be carried out.
             || cfg.work_budget > WORK_BUDGET
-            || cfg.work_budget < WORK_ADJUST.max(WORK_STEP + WORK_PLAN)
+            || cfg.work_budget < WORK_ADJUST.max(WORK_STEP + WORK_PLAN).max(WORK_DRIVE)
             || cfg.max_plans == 0
         {
             return Err(GaitError::BadParams);

@@ -117,6 +117,24 @@ impl Reach<f64> {
     }
 }
 
+/// The two feet a step is checked against, as frames ([`Reach::broken_in`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Stance<T> {
+    other: Frame<T>,
+    same: Frame<T>,
+}
+
+impl<T: Real> Stance<T> {
+    /// The frames of `other` (the support foot) and `same` (where the swinging foot stands).
+    pub(crate) fn of(other: &Footstep<T>, same: &Footstep<T>) -> Self {
+        let o = Frame::of(other);
+        Self {
+            other: o,
+            same: Frame::like(same, &[&o]),
+        }
+    }
+}
+
 /// A foot as a frame: its pose with the sine and cosine of its yaw (computed once per foot:
 /// the reach check runs on the Cortex-M for every footstep frame).
 #[derive(Clone, Copy, Debug)]
@@ -286,6 +304,28 @@ impl<T: Real> Reach<T> {
             &Frame::of(other),
             &Frame::of(same),
             &Frame::of(step),
+            step.side,
+            from_rest,
+            soles,
+        )
+    }
+
+    /// [`Reach::broken`] of `step` against two feet whose frames were computed once
+    /// ([`Stance::of`]): the velocity stepping tries up to 1 + `HALVINGS` steps against the
+    /// same feet, each try computing only the step's frame (none when it keeps a foot's
+    /// heading), as a footstep command's checks with the node's kept frames do.
+    pub(crate) fn broken_in(
+        &self,
+        stance: &Stance<T>,
+        step: &Footstep<T>,
+        from_rest: bool,
+        soles: &Soles<T>,
+    ) -> Option<Broken<T>> {
+        let frame = Frame::like(step, &[&stance.other, &stance.same]);
+        self.broken_frames(
+            &stance.other,
+            &stance.same,
+            &frame,
             step.side,
             from_rest,
             soles,

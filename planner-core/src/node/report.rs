@@ -34,7 +34,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.drive.driver != drive::Driver::Steps && self.drive.cut.any() {
             flags |= Status::CUT;
         }
-        if self.drive.arrived && self.at_goal() {
+        if self.at_goal() {
             flags |= Status::AT_GOAL;
         }
         Status {

@@ -171,6 +171,14 @@ impl<const Q: usize> Steps<Q> {
             .then_some(i)
     }
 
+    /// Forgets the records of the queued steps after the first `keep` (the gait dropped them:
+    /// [`Gait::truncate`]).
+    pub fn truncate_queued(&mut self, keep: usize) {
+        while self.queued.len() > keep {
+            self.queued.pop_back();
+        }
+    }
+
     /// Records an accepted append (the gait queued it: there is room).
     pub fn push(&mut self, r: Record) {
         let _ = self.queued.push_back(r);

@@ -30,7 +30,7 @@
 //! A velocity with a component that is not finite is refused ([`VelocityError::NonFinite`]):
 //! nothing is planned from it.
 
-use super::{Reach, Soles};
+use super::{Reach, Soles, Stance};
 use crate::gait::{Footstep, GaitParams, Side};
 use crate::real::Real;
 
@@ -215,9 +215,11 @@ impl<T: Real> Stepping<T> {
         // The check the node makes; the halvings for what the closed forms leave out.
         let mut dyaw = dyaw;
         let half = T::of(0.5);
+        // (The feet's frames once, for every try.)
+        let stance = Stance::of(support, same);
         for _ in 0..=HALVINGS {
             let step = place(support, side, forward, width, dyaw);
-            if r.broken(support, same, &step, from_rest, &self.soles)
+            if r.broken_in(&stance, &step, from_rest, &self.soles)
                 .is_none()
             {
                 return Ok((step, sat));

@@ -9,7 +9,8 @@
 //!
 //! | bits | field | unit |
 //! |---|---|---|
-//! | 0–23 | the sequence number's low 24 bits | |
+//! | 0–15 | the sequence number's bits 0–15 | |
+//! | 16–23 | the sequence number's bits 16–23 XOR the session epoch's bits 8–15 | |
 //! | 24–34 | `VELOCITY` vx i11 / `GOAL` x i11 | 1 mm/s / 1 cm |
 //! | 35–45 | `VELOCITY` vy i11 / `GOAL` y i11 | 1 mm/s / 1 cm |
 //! | 46–55 | `VELOCITY` ω i10 / `GOAL` θ i10 | 2 mrad/s / 2π/1024 rad |
@@ -30,10 +31,17 @@
 //! one cycle in that order (a heartbeat numbered after a velocity of the same cycle arrives
 //! first and makes the velocity stale; the velocity proves the controller alive by itself).
 //!
-//! **The session.** The low byte of the session epoch keys the CRC too (as `MEASURED`'s): a
-//! frame of an earlier start-up (another epoch drawn at random) is refused except by chance
-//! (2⁻⁸ beyond its sequence number). Frames of an earlier session of this start-up carry
-//! older sequence numbers: refused by the rule above.
+//! **The session.** The frame carries 16 bits of the session as `CONTROL` does, without a
+//! field of their own: the low byte of the session epoch keys the CRC (as `MEASURED`'s), and
+//! its second byte is XORed into the sequence number's bits 16–23. A frame whose sender knew
+//! another session is read with those bits wrong, 2¹⁶ or more away from the number it was
+//! sent as, and the node takes no `VELOCITY` or `GOAL` more than [`SEQ_ADVANCE`] above the
+//! last accepted number (refused `WrongSession`; a controller that falls that far behind is
+//! taken again after any `CONTROL`, which carries its whole number): of the 256 second bytes,
+//! at most one puts a frame in that window, and a CRC-8 keyed with another low byte (an error
+//! confined to one byte) always fails. A frame of an earlier start-up (another epoch drawn at
+//! random) is thus taken with odds of at most 2⁻¹⁶, those of `CONTROL`. Frames of an earlier
+//! session of this start-up carry older sequence numbers: refused by the rule above.
 //!
 //! **Not a number.** The most negative value of each field is reserved: a gateway that receives
 //! a value that is not a finite number (a ROS `Twist` with a `NaN`) sends it so
@@ -58,6 +66,14 @@ pub const DRIVE_BITS: u32 = 11;
 pub const DRIVE_TURN_BITS: u32 = 10;
 /// Sequence numbers a frame tells apart (it carries the low 24 bits).
 pub const SEQ_WINDOW: u32 = 1 << 24;
+/// The most one `VELOCITY` or `GOAL` may advance the control sequence number (see the module
+/// docs: below 2¹⁶, the step by which a wrong session byte moves it).
+pub const SEQ_ADVANCE: u32 = 1 << 15;
+
+/// The session epoch's second byte, where it is XORed into the carried sequence number.
+fn session_bits(epoch: u32) -> u32 {
+    ((epoch >> 8) & 0xFF) << 16
+}
 
 /// The control sequence number whose low 24 bits are `low` nearest to `last` (the last
 /// accepted one): from 2²³ below `last` to 2²³ − 1 above it, wrapping.
@@ -90,7 +106,7 @@ fn field(v: i32, n: u32) -> u64 {
 
 /// The three fields and the sequence number of both frames.
 fn pack(id: u16, seq: u32, f: [i32; 3], epoch: u32) -> RawFrame {
-    let bits = u64::from(seq & (SEQ_WINDOW - 1))
+    let bits = u64::from((seq & (SEQ_WINDOW - 1)) ^ session_bits(epoch))
         | field(f[0], DRIVE_BITS) << 24
         | field(f[1], DRIVE_BITS) << 35
         | field(f[2], DRIVE_TURN_BITS) << 46;
@@ -128,7 +144,7 @@ fn unpack(id: u16, b: &[u8], epoch: u32, last: u32) -> Result<(u32, [i32; 3]), R
     let mut d = [0u8; 8];
     d.copy_from_slice(b);
     let bits = u64::from_le_bytes(d);
-    let seq = seq_number(bits as u32, last);
+    let seq = seq_number((bits as u32 ^ session_bits(epoch)) & (SEQ_WINDOW - 1), last);
     if crc(id, epoch, seq, &d) != d[7] {
         return Err(Reason::BadCrc);
     }

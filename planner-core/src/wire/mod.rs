@@ -119,8 +119,8 @@
 //! |---|---|---|---|---|
 //! | 0x010 | `ESTOP` | in | 1 | seq u8 |
 //! | 0x020 | `CONTROL` | in | 8 | session u16, seq u32, op u8 (0 heartbeat, 1 start, 2 stop, 3 stop now, 4 reset, 5 start with step adjustment), crc u8 |
-//! | 0x02F | `VELOCITY` | in | 8 | seq's low 24 bits u24, vx i11, vy i11 (1 mm/s), ω i10 (2 mrad/s), crc u8 keyed with the session and the seq's high byte (see `drive.rs`) |
-//! | 0x046 | `GOAL` | in | 8 | seq's low 24 bits u24, x i11, y i11 (1 cm), θ i10 (2π/1024 rad), crc u8 keyed as `VELOCITY`'s |
+//! | 0x02F | `VELOCITY` | in | 8 | seq's low 16 bits u16, seq's bits 16–23 XOR the session's second byte u8, vx i11, vy i11 (1 mm/s), ω i10 (2 mrad/s), crc u8 keyed with the session's low byte and the seq's high byte (see `drive.rs`) |
+//! | 0x046 | `GOAL` | in | 8 | seq's low 24 bits as `VELOCITY`'s, x i11, y i11 (1 cm), θ i10 (2π/1024 rad), crc u8 keyed as `VELOCITY`'s |
 //! | 0x100 | `STEP_APPEND` | in | 8 | step number's low byte u8, left u1, reserved u1 (0), x i17, y i17, yaw i12, crc u8 |
 //! | 0x101 | `STEP_MODIFY` | in | 8 | step number's low byte u8, version u7, left u1, dx i14, dy i14, yaw i12, crc u8 |
 //! | 0x0D8 | `MEASURED` | in | 8 | stamp u24 (the node cycle measured against), DCM deviation from that cycle's reference x i15, y i15 (0.1 mm), reserved u2 (0), crc u8 keyed with the session (see `measured.rs`) |
@@ -175,7 +175,7 @@ mod tests;
 pub use command::{echo_of, step_number, Ack, Command, ControlOp, Expect};
 pub use drive::{
     seq_number, WireGoal, WireVelocity, DRIVE_BITS, DRIVE_TURN_BITS, GOAL_UNIT, GOAL_YAW_UNIT,
-    SEQ_WINDOW, SPEED_UNIT, TURN_UNIT,
+    SEQ_ADVANCE, SEQ_WINDOW, SPEED_UNIT, TURN_UNIT,
 };
 pub use measured::{Adjust, Measured, DEVIATION_BITS, DEVIATION_UNIT, STAMPS};
 pub use status::{Diag, LinkHealth, Session, Status};
@@ -380,7 +380,9 @@ pub enum Reason {
     /// motion commands are refused until a `Reset` once standing.
     ControllerLost = 18,
     /// The `CONTROL` frame belongs to another session (before the last `Reset`, or another
-    /// start-up of the node); a measured state stamped before the session opened.
+    /// start-up of the node); a `VELOCITY` or `GOAL` read more than [`SEQ_ADVANCE`] above the
+    /// last accepted sequence number (sent for another session); a measured state stamped
+    /// before the session opened.
     WrongSession = 19,
     /// No session is open (after start-up): only a `Reset` (the handshake) and `ESTOP` are
     /// taken.
