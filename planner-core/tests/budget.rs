@@ -104,22 +104,18 @@ fn eq17_is_planned_once_in_a_cycle_with_many_modifications() {
 /// then refused for its reach), not checked; the modifications within the budget are taken.
 #[test]
 fn a_frame_over_the_budget_is_refused_before_its_checks() {
-    let cfg = NodeConfig {
-        work_budget: planner_core::node::WORK_ADJUST,
-        ..NodeConfig::hrp2()
-    };
-    let mut r = Rig::new(cfg);
-    queue_walk(&mut r, 16);
-    assert_eq!(r.control(ControlOp::Start), None);
-    r.run(3, true);
+    // A walk that adjusts: the commands have the budget less the adjustment's share.
+    let mut r = walking(ControlOp::StartAdjusting, 16);
+    let commands = NodeConfig::hrp2().work_budget - planner_core::node::WORK_ADJUST;
     let epoch = r.session.epoch;
-    let fit = (cfg.work_budget / WORK_STEP) as u16;
+    let fit = (commands / WORK_STEP) as u16;
     let mut frames: Vec<Command> = (1..=fit)
         .map(|p| {
             let (id, x, yy) = queued(&r, p);
             r.book.modify(id, x + 0.01, yy, 0.0).unwrap()
         })
         .collect();
+    assert!(fit < 15, "the queue holds a step beyond those that fit");
     let (id, x, yy) = queued(&r, fit + 1);
     let far = r.book.modify(id, x + 0.6, yy, 0.0).unwrap();
     frames.push(far);
