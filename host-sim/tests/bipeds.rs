@@ -51,8 +51,18 @@ const SENSORS: [(&str, SensorModel); 2] = [
 /// The walks that stay up but are not walked by the verdict: (biped, scenario, sensors, the
 /// gait measure beyond its bound). Alexander's `lateral` under ideal sensors lands 21.4 mm
 /// from its planned place (bound 20 mm) with its feet sliding 1.8 mm: the landing error is
-/// the feet's drift from the plan over 13 landings (the stabilizer commands each swing from the
-/// support foot's planned place, not its measured one), not a slide.
+/// the feet's drift from the plan over 13 landings, not a slide. Its cause is the joint servos'
+/// tracking: the stabilizer's targets place each swing sole at its planned offset from the
+/// support sole (within 0.3 mm at touchdown, by forward kinematics of the targets), but each
+/// joint lags its target (a position servo against the joint's viscous damping, `kd / kp` =
+/// 30 ms), and the forward kinematics of the encoders puts the sole 2.0 to 2.9 mm behind that
+/// offset at each touchdown of the walk: the support hip pitch's lag (about 32 mrad, 24 mm at
+/// the sole) is not cancelled by the knees' (20 mm) and the other joints' (1 mm), where HRP-2's
+/// are 17, 15 and 1 mm. Each step ends about 1.3 mm short; nothing brings the feet back to the
+/// plan (the stabilizer has no foot-placement feedback), so 12 steps add up. The sideways part
+/// (the stance about 4 mm narrower) does not add up. With half the servos' damping
+/// (`host-sim physics lateral --robot FILE --servo-damping 306.75`) it lands 16.9 mm from the
+/// plan and walks.
 const NOT_WALKED: &[(&str, &str, &str, &str)] = &[(
     "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf",
     "lateral",
