@@ -45,7 +45,10 @@ use host_sim::sim::replay;
 use host_sim::sim::report::{report, Report};
 use host_sim::sim::{outcomes, simulate, SimConfig};
 use host_sim::{errln, outln};
+use parse::{positive_seconds, walk};
 use serde_json::json;
+
+mod parse;
 
 /// The HRP-2 walking simulation around the planner-core node: a virtual CAN bus, the
 /// multi-body model, CSV/JSON/PNG results. Without a subcommand: the demo (the `straight`
@@ -273,21 +276,6 @@ enum RobotCmd {
         #[arg(long, value_name = "FILE.toml")]
         out: PathBuf,
     },
-}
-
-fn walk(s: &str) -> Result<Walk, String> {
-    match s {
-        "plain" => Ok(Walk::Plain),
-        "adjusting" => Ok(Walk::Adjusting),
-        _ => Err(format!("{s:?} is not a walk: plain or adjusting")),
-    }
-}
-
-fn positive_seconds(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("{s:?} is not a positive number of seconds")),
-    }
 }
 
 /// Something the run should not have had: commands that failed against the scenario's
