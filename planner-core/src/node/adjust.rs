@@ -186,6 +186,18 @@ impl<T: Real> Adjusting<T> {
     };
 }
 
+/// `d·k/n` rounded toward zero, for `n ≥ 1`, `0 ≤ k ≤ n` and `|d| ≤ n` (the part `k/n` of a
+/// move's component `d`): in 32 bits when `n²` fits them (a move of up to 23 m, in 0.5 mm; a
+/// 64-bit division is a library call on the target), else in 64; the same value either way.
+fn fraction(d: i32, k: i64, n: i64) -> i32 {
+    // (`n` ≥ 1: the checked divisions only keep a panic out of the code)
+    if (1..=46_340).contains(&n) {
+        // |d·k| ≤ n² < 2³¹
+        return d.wrapping_mul(k as i32).checked_div(n as i32).unwrap_or(0);
+    }
+    (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32
+}
+
 impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T> {
     /// Takes (or refuses) a measured state (see the module docs of [`crate::wire`] for its
     /// freshness rules).
@@ -418,8 +430,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             flags |= Adjust::REACH_LIMITED;
         }
         let part = |k: i64| {
-            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
-            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
+            let at = |o: i32, d: i32| o + fraction(d, k, n);
             [at(old[0], delta[0]), at(old[1], delta[1])]
         };
         let to = part(k);
@@ -454,8 +465,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let unit = T::of(STEP_UNIT);
         let n = i64::from(delta[0].unsigned_abs().max(delta[1].unsigned_abs()).max(1));
         let part = |k: i64| {
-            // (`n` ≥ 1: the checked division only keeps a panic out of the code)
-            let at = |o: i32, d: i32| o + (i64::from(d) * k).checked_div(n).unwrap_or(0) as i32;
+            let at = |o: i32, d: i32| o + fraction(d, k, n);
             [at(old[0], delta[0]), at(old[1], delta[1])]
         };
         // (On the frames kept for the cycle's reach checks, fetched once for the bisection.
@@ -536,5 +546,24 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     /// position plus it.
     pub fn shift(&self) -> [i32; 2] {
         self.adj.shift
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fraction;
+
+    /// The 32-bit part of a move is the 64-bit one, at the ends of its range and across it.
+    #[test]
+    fn the_part_of_a_move_is_the_64_bit_quotient() {
+        let wide = |d: i32, k: i64, n: i64| (i64::from(d) * k / n) as i32;
+        for n in [1i64, 2, 3, 599, 600, 601, 46_339, 46_340, 46_341, 65_534] {
+            for d in [-n, -n + 1, -(n / 2) - 1, -1, 0, 1, n / 3, n - 1, n] {
+                let d = d as i32;
+                for k in [0, 1, n / 2, n / 2 + 1, n - 1, n] {
+                    assert_eq!(fraction(d, k, n), wide(d, k, n), "{d}·{k}/{n}");
+                }
+            }
+        }
     }
 }
