@@ -36,6 +36,11 @@
 //! [`crate::sim::pushed`], tracking the node's references, pushed once by 0.15 … 0.25 m/s in a
 //! direction drawn from the seed). Every fault of a row applies to every frame on the bus, so
 //! to `MEASURED` and `ADJUST` too, at the same rates; `silence` is the controller's.
+//! A third walk, [`Walk::Velocity`], plays a velocity scenario ([`VELOCITY_SCENARIO`]): a
+//! stick streams the velocity it holds every 50 ms (`stick.rs`), and [`VelocityRun`] counts
+//! what the node did with its frames (none taken after a newer one, none once the controller
+//! is lost, the velocity in force the one taken last carries; under `silence`, how soon the
+//! node declared the controller lost and the robot stood). It has no `burst` rows.
 //!
 //! What is counted per run ([`CaseResult`]):
 //! * **fall**: the multi-body ZMP ([`crate::eval::multibody::evaluate`] of the node's references)
@@ -82,6 +87,7 @@
 //!   to `MEASURED`, and the node's and the controller's books of the shift;
 //! * `polygon.rs`: the support polygon (the soles' convex hull) and the distance of a ZMP
 //!   outside it, and the landings of a trajectory;
+//! * `stick.rs`: the velocity walk's stick and its count of the node's uptake;
 //! * `sweep.rs`: the sweep over the rows, scenarios and seeds ([`sweep()`], [`SweepRow`]) and its
 //!   Markdown table.
 
