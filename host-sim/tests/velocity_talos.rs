@@ -7,7 +7,6 @@
 
 #[allow(dead_code)]
 mod engine;
-#[allow(dead_code)]
 mod urdf;
 
 #[test]
