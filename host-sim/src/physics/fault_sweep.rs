@@ -199,6 +199,7 @@ pub fn markdown(runs: &[FaultRun]) -> String {
     for r in runs {
         let scenario = match r.walk {
             Walk::Plain => r.scenario.clone(),
+            Walk::Velocity => format!("{} (stick)", r.scenario),
             Walk::Adjusting => format!("{} (adjusting, {} adjustments)", r.scenario, r.adjustments),
         };
         md += &format!(

@@ -36,6 +36,11 @@
 //! [`crate::sim::pushed`], tracking the node's references, pushed once by 0.15 … 0.25 m/s in a
 //! direction drawn from the seed). Every fault of a row applies to every frame on the bus, so
 //! to `MEASURED` and `ADJUST` too, at the same rates; `silence` is the controller's.
+//! A third walk, [`Walk::Velocity`], plays a velocity scenario ([`VELOCITY_SCENARIO`]): a
+//! stick streams the velocity it holds every 50 ms (`stick.rs`), and [`VelocityRun`] counts
+//! what the node did with its frames (none taken after a newer one, none once the controller
+//! is lost, the velocity in force the one taken last carries; under `silence`, how soon the
+//! node declared the controller lost and the robot stood). It has no `burst` rows.
 //!
 //! What is counted per run ([`CaseResult`]):
 //! * **fall**: the multi-body ZMP ([`crate::eval::multibody::evaluate`] of the node's references)
@@ -82,6 +87,7 @@
 //!   to `MEASURED`, and the node's and the controller's books of the shift;
 //! * `polygon.rs`: the support polygon (the soles' convex hull) and the distance of a ZMP
 //!   outside it, and the landings of a trajectory;
+//! * `stick.rs`: the velocity walk's stick and its count of the node's uptake;
 //! * `sweep.rs`: the sweep over the rows, scenarios and seeds ([`sweep()`], [`SweepRow`]) and its
 //!   Markdown table.
 
@@ -89,6 +95,7 @@ mod adjusting;
 mod play;
 mod polygon;
 mod ports;
+mod stick;
 mod sweep;
 
 use planner_core::gait::Reference;
@@ -99,7 +106,9 @@ use crate::scenario::Scenario;
 
 pub use adjusting::{BLIND_AFTER, PUSH_DV};
 pub use polygon::{landings, support_polygon};
-pub use sweep::{markdown, markdown_adjusting, sweep, sweep_markdown, sweep_walk, SweepRow};
+pub use sweep::{
+    markdown, markdown_adjusting, markdown_velocity, sweep, sweep_markdown, sweep_walk, SweepRow,
+};
 
 /// How far the multi-body ZMP may leave the support polygon before the run counts as a fall
 /// \[m\]. The fault-free runs of the built-in scenarios stay inside (see the test); 20 mm is
@@ -237,6 +246,39 @@ pub const ADJUSTING_ONLY: [(FaultKind, &[f64]); 1] = [(FaultKind::Blind, &[0.0])
 /// The scenarios of the sweep.
 pub const SCENARIOS: [&str; 2] = ["straight", "fig4"];
 
+/// The scenario of the velocity walk ([`Walk::Velocity`]).
+pub const VELOCITY_SCENARIO: &str = "velocity";
+
+/// The `ACK`'s command code of a `VELOCITY`.
+pub const VELOCITY_CODE: u8 = (planner_core::wire::ids::VELOCITY & 0xFF) as u8;
+
+/// What a velocity walk's node did with the stick's `VELOCITY` frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VelocityRun {
+    /// Frames the stick sent.
+    pub sent: usize,
+    /// Answered accepted.
+    pub taken: usize,
+    /// Refused stale or duplicate (a late or repeated copy).
+    pub refused_old: usize,
+    /// Refused for a bad CRC.
+    pub refused_crc: usize,
+    /// Refused otherwise (controller lost, emergency stop, wrong state).
+    pub refused_other: usize,
+    /// Frames taken although a newer one had been taken before (must be 0).
+    pub old_taken: usize,
+    /// Frames taken after the node had declared the controller lost (must be 0).
+    pub taken_after_lost: usize,
+    /// Frames taken whose velocity the node then did not hold (uncut; must be 0).
+    pub wrong_velocity: usize,
+    /// The oldest frame taken: ticks between its sending and the cycle that took it.
+    pub max_age_taken: u64,
+    /// `silence`: ticks from the controller's silence to the node's *controller lost*.
+    pub lost_after: Option<u64>,
+    /// `silence`: ticks from the controller's silence to the robot standing.
+    pub standing_after: Option<u64>,
+}
+
 /// How a scenario of the sweep is walked (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Walk {
@@ -244,6 +286,8 @@ pub enum Walk {
     Plain,
     /// `start_adjusting`, a pushed robot and its estimator's `MEASURED` every cycle.
     Adjusting,
+    /// A stick: the scenario's velocities streamed every 50 ms (see `stick.rs`).
+    Velocity,
 }
 
 impl Walk {
@@ -252,6 +296,7 @@ impl Walk {
         match self {
             Walk::Plain => "plain",
             Walk::Adjusting => "adjusting",
+            Walk::Velocity => "velocity",
         }
     }
 }
@@ -260,15 +305,22 @@ impl Walk {
 /// [`ADJUSTING_ONLY`], then the [`HEAVY`] mixes.
 pub fn rows(walk: Walk) -> Vec<(FaultKind, f64)> {
     let extra: &[(FaultKind, &[f64])] = match walk {
-        Walk::Plain => &[],
+        Walk::Plain | Walk::Velocity => &[],
         Walk::Adjusting => &ADJUSTING_ONLY,
     };
+    // A velocity walk has no footsteps of the controller's to modify: no burst.
+    let velocity = walk == Walk::Velocity;
     let mut v: Vec<(FaultKind, f64)> = SWEEP
         .iter()
         .chain(extra)
+        .filter(|(k, _)| !(velocity && *k == FaultKind::Burst))
         .flat_map(|(k, rates)| rates.iter().map(move |r| (*k, *r)))
         .collect();
-    v.extend((0..HEAVY.len()).map(|i| (FaultKind::Mixed(i), 0.0)));
+    v.extend(
+        (0..HEAVY.len())
+            .filter(|&i| !(velocity && HEAVY[i].burst > 0))
+            .map(|i| (FaultKind::Mixed(i), 0.0)),
+    );
     v
 }
 
@@ -350,8 +402,27 @@ pub struct CaseResult {
     pub shifted_landings: usize,
     /// `estimator silent`: the node cycle of the first state the estimator did not send.
     pub estimator_silent_from: Option<u32>,
+    /// The velocity walk's stick and the node's uptake of its frames.
+    pub velocity: Option<VelocityRun>,
     /// The references the node published, one per tick (for the physics engine run).
     pub trajectory: Vec<Reference<f64>>,
+}
+
+impl std::ops::AddAssign for VelocityRun {
+    /// Sums the counts; the ages and delays: the largest.
+    fn add_assign(&mut self, o: Self) {
+        self.sent += o.sent;
+        self.taken += o.taken;
+        self.refused_old += o.refused_old;
+        self.refused_crc += o.refused_crc;
+        self.refused_other += o.refused_other;
+        self.old_taken += o.old_taken;
+        self.taken_after_lost += o.taken_after_lost;
+        self.wrong_velocity += o.wrong_velocity;
+        self.max_age_taken = self.max_age_taken.max(o.max_age_taken);
+        self.lost_after = self.lost_after.max(o.lost_after);
+        self.standing_after = self.standing_after.max(o.standing_after);
+    }
 }
 
 /// Plays `scenario` with one fault kind at one rate and one seed, and evaluates the outcome.

@@ -11,6 +11,7 @@ use planner_core::wire::{ids, Ack, Adjust, Command, ControlOp, Reason, StepBook,
 use super::adjusting::{count_measured, shifted, Estimator, Shifts};
 use super::polygon::{landings, outside, support_polygon};
 use super::ports::{Flood, Rng};
+use super::stick::Stick;
 use super::{
     CaseResult, FaultKind, MeasuredCount, Walk, DELAY_NS, FALL_MARGIN, HEAVY, MAX_RETRIES,
     RETRY_TICKS,
@@ -104,6 +105,8 @@ pub(super) fn play(
         seed,
     } = case;
     let adjusting = walk == Walk::Adjusting;
+    let driven = walk == Walk::Velocity;
+    let mut silent_at_ns = None;
     let mut node: Node<64> = Node::new(cfg).map_err(|e| format!("node start-up: {e:?}"))?;
     let mut rng = Rng::new(seed ^ 0xFA17);
     let ms = 1_000_000u64;
@@ -119,6 +122,7 @@ pub(super) fn play(
         FaultKind::Silence => {
             faults.from_port = Some(0);
             let at = (rng.range(0.1, 8.0) * 1e9) as u64;
+            silent_at_ns = Some(at);
             faults.silence_ns = Some((at, u64::MAX));
         }
         FaultKind::Mixed(i) => {
@@ -246,6 +250,7 @@ pub(super) fn play(
         )
     });
     let mut shifts = Shifts::default();
+    let mut stick = Stick::new(silent_at_ns.map(|at| (at / (5 * ms)).saturating_sub(pre)));
     let mut measured = MeasuredCount::default();
     let mut measured_too_old = 0;
     let max_age = cfg.adjust.max_age;
@@ -266,6 +271,9 @@ pub(super) fn play(
         bus.advance(t0);
         // 1. The scenario's commands due now.
         let mut issue: Vec<Outgoing> = Vec::new();
+        // (A `VELOCITY` is sent at once, outside the retransmitted commands: the stream
+        // replaces a lost frame with the next one.)
+        let mut drove = false;
         while next < s.timeline.len() && s.timeline[next].0 <= k {
             let (_, command) = s.timeline[next];
             next += 1;
@@ -294,13 +302,24 @@ pub(super) fn play(
                 scenario::Command::StopNow => {
                     issue.push((control(ControlOp::StopNow), None, false))
                 }
+                scenario::Command::Velocity(vx, vy, wz) if driven => {
+                    let c = stick.hold((vx, vy, wz), k, &mut ctl_state);
+                    let _ = ctl.transmit(&c.encode_in(ctl_state.epoch));
+                    drove = true;
+                }
                 scenario::Command::Velocity(..) | scenario::Command::Goal(..) => {
                     return Err(
-                        "the fault sweep plays footstep scenarios: a velocity or a goal is \
-                         played by `run`"
+                        "the fault sweep plays footstep scenarios and (walked as `velocity`) \
+                         velocity scenarios: a goal is played by `run`"
                             .into(),
                     );
                 }
+            }
+        }
+        if !drove {
+            if let Some(c) = stick.due(k, &mut ctl_state) {
+                let _ = ctl.transmit(&c.encode_in(ctl_state.epoch));
+                drove = true;
             }
         }
         // 2. The burst of modifications, spread over the chosen single support.
@@ -399,7 +418,9 @@ pub(super) fn play(
                 let _ = ctl.transmit(&p.cmd.encode());
             }
         }
-        if k % 20 == 0 {
+        // (Not in a cycle with a `VELOCITY`: arbitration delivers the `CONTROL` first, and a
+        // heartbeat numbered after the velocity would make it stale.)
+        if k % 20 == 0 && !drove {
             let hb = ctl_state.control(ControlOp::Heartbeat);
             let _ = ctl.transmit(&hb.encode());
         }
@@ -425,6 +446,9 @@ pub(super) fn play(
             if count_measured(&mut measured, &a, node.cycles(), max_age) {
                 measured_too_old += 1;
             }
+        }
+        if driven {
+            stick.observe(k, &node, tap.frames().filter_map(Ack::decode));
         }
         let a = node.adjustment();
         let from = step_of(&plan, a.from);
@@ -604,7 +628,12 @@ pub(super) fn play(
         }
     }
     // Landings nobody asked for: a safety stop's closing step is expected (one).
-    let stray = used.iter().filter(|u| !**u).count();
+    // (A velocity walk's landings are the node's own steps: none is asked for.)
+    let stray = if driven {
+        0
+    } else {
+        used.iter().filter(|u| !**u).count()
+    };
     let stray = if safety_stop {
         cancelled += stray.min(1);
         stray.saturating_sub(1)
@@ -665,6 +694,7 @@ pub(super) fn play(
         shift_unheard,
         shifted_landings,
         estimator_silent_from: estimator.as_ref().and_then(|e| e.silent_from),
+        velocity: driven.then(|| stick.finish()),
         trajectory,
     };
     Ok((result, bus.log()))

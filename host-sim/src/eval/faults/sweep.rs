@@ -4,7 +4,9 @@
 
 use std::fmt::Write as _;
 
-use super::{rows, run_walk, FaultKind, MeasuredCount, Walk, SCENARIOS};
+use super::{
+    rows, run_walk, FaultKind, MeasuredCount, VelocityRun, Walk, SCENARIOS, VELOCITY_SCENARIO,
+};
 use crate::scenario::{self, Scenario};
 
 /// One row of the table: one fault kind at one rate over scenarios and seeds.
@@ -61,6 +63,8 @@ pub struct SweepRow {
     pub shifted_landings: usize,
     /// Walked steps whose shift the controller's book got wrong, summed.
     pub shift_unheard: usize,
+    /// The velocity walk's counts, summed (the ages and delays: the largest).
+    pub velocity: VelocityRun,
 }
 
 /// Runs the sweep over [`super::SWEEP`] × [`SCENARIOS`] × `seeds` seeds (1 … seeds), then the
@@ -71,7 +75,11 @@ pub fn sweep(seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepRow>, String> {
 
 /// [`sweep`] of `walk`'s rows ([`super::rows`]).
 pub fn sweep_walk(walk: Walk, seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepRow>, String> {
-    let scenarios: Vec<Scenario> = SCENARIOS
+    let names: &[&str] = match walk {
+        Walk::Velocity => &[VELOCITY_SCENARIO],
+        _ => &SCENARIOS,
+    };
+    let scenarios: Vec<Scenario> = names
         .iter()
         .map(|n| scenario::built_in(n).ok_or_else(|| format!("no scenario {n}")))
         .collect::<Result<_, _>>()?;
@@ -103,6 +111,7 @@ pub fn sweep_walk(walk: Walk, seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepR
             adjusted_runs: 0,
             shifted_landings: 0,
             shift_unheard: 0,
+            velocity: VelocityRun::default(),
         };
         let seeds_here = match kind {
             FaultKind::None => 1,
@@ -134,6 +143,9 @@ pub fn sweep_walk(walk: Walk, seeds: u64, heavy_seeds: u64) -> Result<Vec<SweepR
                 row.adjusted_runs += usize::from(r.adjustments > 0);
                 row.shifted_landings += r.shifted_landings;
                 row.shift_unheard += r.shift_unheard;
+                if let Some(v) = r.velocity {
+                    row.velocity += v;
+                }
                 if let Some(e) = r.model_error {
                     row.model_errors
                         .push(format!("{} seed {seed}: {e}", s.name));
@@ -227,4 +239,49 @@ pub fn sweep_markdown() -> String {
         Ok(rows) => markdown(&rows),
         Err(e) => format!("sweep failed: {e}\n"),
     }
+}
+
+/// The table of a velocity walk's [`sweep_walk`] rows as Markdown: the falls, the references,
+/// what the node did with the stick's `VELOCITY` frames, and (`silence`) how soon it stopped.
+pub fn markdown_velocity(rows: &[SweepRow]) -> String {
+    let mut out = String::from(
+        "| fault | rate | runs | falls | max ZMP outside polygon (mm) | leg out of reach (runs) | \
+         cycles without reference | VELOCITY sent | taken | refused stale or duplicate | \
+         refused bad CRC | refused otherwise | old frame taken | taken after controller lost | \
+         velocity not held | oldest taken (ms) | safety stops | silence: lost after / standing \
+         after (s, worst) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let s = |t: Option<u64>| t.map_or("—".into(), |t| format!("{:.2}", t as f64 * 0.005));
+    for r in rows {
+        let v = r.velocity;
+        let silence = if r.kind == FaultKind::Silence {
+            format!("{} / {}", s(v.lost_after), s(v.standing_after))
+        } else {
+            "—".into()
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.kind.name(),
+            r.kind.rate_label(r.rate),
+            r.runs,
+            r.falls,
+            r.max_outside * 1e3,
+            r.out_of_reach,
+            r.ticks_without_reference,
+            v.sent,
+            v.taken,
+            v.refused_old,
+            v.refused_crc,
+            v.refused_other,
+            v.old_taken,
+            v.taken_after_lost,
+            v.wrong_velocity,
+            v.max_age_taken * 5,
+            r.safety_stops,
+            silence,
+        );
+    }
+    out
 }
