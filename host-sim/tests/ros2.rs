@@ -196,14 +196,11 @@ fn finish(mut gw: Child) -> (String, String) {
     )
 }
 
-#[test]
-fn a_cyclonedds_peer_walks_changes_refuses_and_aborts_through_the_gateway() {
-    if !have_cyclonedds() {
-        return;
-    }
-    let dir = std::env::temp_dir().join("host-sim-ros2-peer");
-    let gw = gateway(61, &dir, 120, None);
-    let out = peer("check", 61).output().unwrap();
+/// Runs the peer in `mode` against a gateway on `domain` (writing to `dir`, for at most
+/// `seconds`) and asserts that it passed (exit 0, its last line `ok`); the gateway's output.
+fn peer_passes(mode: &str, domain: u16, dir: &Path, seconds: u32) -> (String, String) {
+    let gw = gateway(domain, dir, seconds, None);
+    let out = peer(mode, domain).output().unwrap();
     let (gw_out, gw_err) = finish(gw);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -211,6 +208,16 @@ fn a_cyclonedds_peer_walks_changes_refuses_and_aborts_through_the_gateway() {
         "peer:\n{text}{}\ngateway:\n{gw_out}{gw_err}",
         String::from_utf8_lossy(&out.stderr)
     );
+    (gw_out, gw_err)
+}
+
+#[test]
+fn a_cyclonedds_peer_walks_changes_refuses_and_aborts_through_the_gateway() {
+    if !have_cyclonedds() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("host-sim-ros2-peer");
+    let (gw_out, gw_err) = peer_passes("check", 61, &dir, 120);
     // The gateway logged each refusal too.
     for reason in ["lifted_off", "not_finite", "queue_full", "too_many_steps"] {
         assert!(
@@ -325,13 +332,5 @@ fn a_cyclonedds_peer_steers_by_cmd_vel_and_a_goal() {
         return;
     }
     let dir = std::env::temp_dir().join("host-sim-ros2-stick");
-    let gw = gateway(63, &dir, 90, None);
-    let out = peer("stick", 63).output().unwrap();
-    let (gw_out, gw_err) = finish(gw);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.ends_with("ok\n"),
-        "peer:\n{text}{}\ngateway:\n{gw_out}{gw_err}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    peer_passes("stick", 63, &dir, 90);
 }
