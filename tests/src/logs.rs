@@ -43,7 +43,7 @@ pub const PUSHED_DV: [f64; 2] = [0.35, 0.0];
 /// The worst-admissible-cycle logs (`host_sim::sim::worst`), one per path; the log of
 /// `Path::Measured` (`worst-measured`) runs the node with `AdjustConfig::from_measured`, as the
 /// images replay a log whose name ends in `-measured`.
-pub const WORST: [WorstPath; 5] = WorstPath::ALL;
+pub const WORST: [WorstPath; 10] = WorstPath::ALL;
 
 /// One host run to replay on the target.
 pub struct Case {

@@ -38,6 +38,10 @@
 //! Appends go out before the modifications (the bus sends the lower identifier first). The start cycle is loaded too: the `start` comes with appends that
 //! fill the queue.
 
+mod drive;
+
+pub use drive::{largest_change, GOAL_AHEAD, GOAL_REAIM, STREAM_CYCLES, WALK_V};
+
 use planner_core::gait::Phase;
 use planner_core::node::{Node, NodeConfig};
 use planner_core::wire::{ControlOp, Measured, RawFrame, Session, StepBook};
@@ -90,16 +94,34 @@ pub enum Path {
     /// adjustment's eq. 17. (The QEMU images replay a log whose name ends in `-measured` with the
     /// option on.)
     Measured,
+    /// `worst-velocity`: a walk the node drives at a velocity; in a report cycle that re-plans
+    /// at a start of single support, the velocity the legs cut the most re-plans every queued
+    /// step, in a burst of the other drive commands and footstep frames (`drive` module).
+    Velocity,
+    /// `worst-velocity-start`: the start from standing by that velocity, with the burst.
+    VelocityStart,
+    /// `worst-goal-start`: the start from standing by a `GOAL`, with the burst.
+    GoalStart,
+    /// `worst-goal`: a walk toward a goal, re-aimed behind the robot in the burst.
+    Goal,
+    /// `worst-resume`: the drive's own stop (a zero velocity) cancelled by the burst's
+    /// velocity, the queue topped up in the same cycle.
+    Resume,
 }
 
 impl Path {
     /// Every path, in the order of the logs.
-    pub const ALL: [Path; 5] = [
+    pub const ALL: [Path; 10] = [
         Path::Start,
         Path::Adjusting,
         Path::Report,
         Path::Reach,
         Path::Measured,
+        Path::Velocity,
+        Path::VelocityStart,
+        Path::GoalStart,
+        Path::Goal,
+        Path::Resume,
     ];
 
     /// The log's name.
@@ -110,6 +132,11 @@ impl Path {
             Path::Report => "worst-report",
             Path::Reach => "worst-reach",
             Path::Measured => "worst-measured",
+            Path::Velocity => "worst-velocity",
+            Path::VelocityStart => "worst-velocity-start",
+            Path::GoalStart => "worst-goal-start",
+            Path::Goal => "worst-goal",
+            Path::Resume => "worst-resume",
         }
     }
 
@@ -120,12 +147,20 @@ impl Path {
 
     /// The walk is started with `start_adjusting` (the estimator's state every cycle).
     pub fn adjusting(self) -> bool {
-        !matches!(self, Path::Start | Path::Report)
+        matches!(self, Path::Adjusting | Path::Reach | Path::Measured)
     }
 
     /// The burst comes in a cycle that sends the periodic reports.
     pub fn report(self) -> bool {
-        matches!(self, Path::Report | Path::Reach | Path::Measured)
+        !matches!(self, Path::Start | Path::Adjusting)
+    }
+
+    /// The node drives the walk (`VELOCITY`, `GOAL`): the footstep frames are refused.
+    pub fn drives(self) -> bool {
+        matches!(
+            self,
+            Path::Velocity | Path::VelocityStart | Path::GoalStart | Path::Goal | Path::Resume
+        )
     }
 
     /// The node's configuration for the path: `base`, with `from_measured` for
@@ -149,7 +184,8 @@ pub struct WorstRun {
     /// The cycle of the burst (counted from the scenario's tick 0).
     pub burst_tick: u64,
     /// Command frames sent for that cycle: modifications of distinct steps, newer
-    /// out-of-reach versions, appends, the measured state.
+    /// out-of-reach versions, appends, the measured state (a drive path: the drive command
+    /// accepted, the drive commands refused, the footstep frames, the others).
     pub burst: (usize, usize, usize, usize),
     /// Whether the node re-planned in the burst cycle.
     pub replanned: bool,
@@ -165,7 +201,8 @@ pub struct WorstRun {
     pub received: u8,
     /// The burst cycle sent the periodic reports.
     pub report: bool,
-    /// `ADJUST`'s flags after the burst cycle (reach limited, ZMP limited, fresh).
+    /// `ADJUST`'s flags after the burst cycle (reach limited, ZMP limited, fresh); a drive
+    /// path: the cut mask of the velocity in force (`Saturation::mask`).
     pub adjust_flags: u8,
     /// Moves of the steps the step adjustment worked on in the burst cycle.
     pub adjust_attempts: u32,
@@ -177,6 +214,9 @@ pub struct WorstRun {
 /// configuration [`Path::config`]).
 pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
     let cfg = &path.config(base);
+    if path.drives() {
+        return drive::worst_drive(cfg, path);
+    }
     // A first run without the burst: the cycles that re-plan at a start of single support
     // (and the node's count of cycles then).
     let replan = |lead: u64| -> Result<(u64, u32), String> {
@@ -430,7 +470,7 @@ mod tests {
     #[test]
     fn the_burst_is_all_accepted_work_in_a_replanning_cycle() {
         let cfg = NodeConfig::hrp2();
-        for path in Path::ALL {
+        for path in Path::ALL.into_iter().filter(|p| !p.drives()) {
             let w = worst_cycle(&cfg, path).unwrap();
             let adjusting = path.adjusting();
             let (mods, versions, appends, measured) = w.burst;
