@@ -5,7 +5,7 @@
 #
 # Builds the QEMU image (release, as tests/tests/qemu.rs runs it) and the `qemu-attribute`
 # tool (tests/src/bin/qemu-attribute.rs), records host-sim's run of a scenario as the image's
-# replay log (`--scenario NAME|FILE.toml|fault-KIND-RATE|worst-PATH` (worst-start, worst-adjusting, worst-report, worst-reach, worst-measured), fig4 by default; the fault
+# replay log (`--scenario NAME|FILE.toml|fault-KIND-RATE|worst-PATH` (worst-start, worst-adjusting, worst-report, worst-reach, worst-measured, worst-velocity, worst-velocity-start, worst-goal-start, worst-goal, worst-resume), fig4 by default; the fault
 # rows and the worst admissible cycles are the QEMU test's), runs the image on it under QEMU's
 # instruction trace and prints, for the `Node::poll` that ran the most instructions (or `--call N`, 0-based; poll N
 # is the cycle of tick N+1), its instructions per function: inclusive on the call stack and

@@ -191,7 +191,7 @@ pub struct Call {
 /// directory named after `tool` (returned): a fault-sweep row the QEMU test replays
 /// (`fault-drop-0.05`, `fault-mixed-0`, …: fig4, seed 1, the node as
 /// `faults::run_case_logged` runs it), a worst admissible cycle (`worst-start`,
-/// `worst-adjusting`, `worst-report`, `worst-reach`, `worst-measured`: `crate::logs::WORST`), a TOML file (`….toml`) or a built-in scenario; `all`:
+/// `worst-adjusting`, `worst-report`, `worst-reach`, `worst-measured`, `worst-velocity`, `worst-velocity-start`, `worst-goal-start`, `worst-goal`, `worst-resume`: `crate::logs::WORST`), a TOML file (`….toml`) or a built-in scenario; `all`:
 /// every log the QEMU tests replay, in their order (`crate::logs::cases`).
 pub fn write_log(tool: &str, scenario: &str) -> Result<PathBuf, String> {
     let fail = |e: String| format!("scenario {scenario}: {e}");

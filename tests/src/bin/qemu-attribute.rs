@@ -26,7 +26,7 @@
 //! The image replays recorded CAN logs (`replay.wlog` in its working directory, see
 //! `gait_loop::binlog`): the tool records them, host-sim's run of `--scenario` (a built-in
 //! scenario, a TOML file, a fault row of the QEMU test such as `fault-mixed-0` or a worst
-//! admissible cycle, `worst-start`, `worst-adjusting`, `worst-report`, `worst-reach` or `worst-measured`; `fig4` by
+//! admissible cycle, `worst-start`, `worst-adjusting`, `worst-report`, `worst-reach`, `worst-measured`, `worst-velocity`, `worst-velocity-start`, `worst-goal-start`, `worst-goal` or `worst-resume`; `fig4` by
 //! default; `all`: every log the QEMU test replays, in its order), in a directory of its own
 //! and runs QEMU there. `--stop-after N` kills QEMU after N calls (for a quick look at the
 //! first cycles, and for the smoke test in `tests/tests/attribute.rs`).

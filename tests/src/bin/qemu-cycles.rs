@@ -43,14 +43,18 @@
 //!
 //! It also counts the 32-byte lines of code a poll runs: beyond the 512 lines of the H743's
 //! 16 KiB I-cache, each is at least one line fill from flash per poll (at least 10 core
-//! cycles), which the estimate leaves out.
+//! cycles), which the estimate leaves out; the estimate **including the fills** adds them
+//! (a stated bound: the fewest fills, each at its least). For the M4F the lines are the
+//! 16-byte lines of an STM32F407-class part's ART accelerator (1 KiB, 64 lines), each beyond
+//! them a fetch with the flash's 5 wait states at 168 MHz (assumed not hidden by the prefetch).
 //!
 //! Output: `METHOD` and `ASSUME …` lines, a table, and one line per estimated poll:
 //! `ESTIMATE kind=… label=… log=… poll=… instructions=… image=… low=… high=… cpi_low=…
 //! cpi_high=… budget=… share_low=… share_high=… lines=… fills_min=… fill_cycles_min=…
-//! blocks=… nops=… mcpu=… mhz=…` (`low`, `high`: estimated cycles, rounded; `poll`: its index
-//! in its log; `image`: the image's own count; `lines`: the 32-byte code lines the poll ran;
-//! `fills_min`: those beyond the I-cache's 512, M7 only; `nops`: executions costed as a
+//! low_fills=… high_fills=… blocks=… nops=… mcpu=… mhz=…` (`low`, `high`: estimated cycles,
+//! rounded; `poll`: its index in its log; `image`: the image's own count; `lines`: the code
+//! lines the poll ran (32 bytes on the M7, 16 on the M4F); `fills_min`: those beyond the
+//! cache's lines; `low_fills`, `high_fills`: the estimate with their cycles; `nops`: executions costed as a
 //! `nop`). The estimate is deterministic: the same image, log and llvm-mca give the same
 //! numbers.
 //!
@@ -91,6 +95,12 @@ const ICACHE_LINES: u64 = 16 * 1024 / LINE as u64;
 /// The least an I-cache line fill from the H743's flash takes \[core cycles\]: 4 wait states
 /// and the access, 5 cycles of the 240 MHz AXI clock.
 const FILL_CYCLES: u64 = 10;
+/// A line of the STM32F407-class part's ART accelerator (its instruction cache) \[bytes\].
+const M4F_LINE: u32 = 16;
+/// The lines of that cache (1 KiB).
+const M4F_CACHE_LINES: u64 = 1024 / M4F_LINE as u64;
+/// The core cycles a fetch from that part's flash waits at 168 MHz: 5 wait states.
+const M4F_FILL_CYCLES: u64 = 5;
 
 /// Command-line options.
 #[derive(Debug)]
@@ -830,7 +840,7 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
     let m7 = o.mcpu == "cortex-m7";
     let _ = writeln!(
         out,
-        "\n{:<18} {:<20} {:>5} {:>12} {:>15} {:>12} {:>13} {:>5} {:>8}",
+        "\n{:<18} {:<20} {:>5} {:>12} {:>15} {:>12} {:>13} {:>5} {:>8} {:>17}",
         "kind",
         "log",
         "poll",
@@ -839,8 +849,15 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
         "cycles/instr",
         "of budget",
         "lines",
-        "fills >="
+        "fills >=",
+        "incl. fills"
     );
+    // The cache the code runs behind: its line, its lines, a fill's least cycles.
+    let (line, cache_lines, fill_cycles) = if m7 {
+        (LINE, ICACHE_LINES, FILL_CYCLES)
+    } else {
+        (M4F_LINE, M4F_CACHE_LINES, M4F_FILL_CYCLES)
+    };
     let mut estimates = vec![];
     // In the order of the kinds asked for, then the poll asked for.
     let mut order: Vec<&Poll> = polls.values().collect();
@@ -865,9 +882,9 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
             let addrs = &code[key];
             instructions += n * addrs.len() as u64;
             for &a in addrs {
-                touched.insert(a / LINE);
+                touched.insert(a / line);
             }
-            touched.insert((key.1 - 1) / LINE);
+            touched.insert((key.1 - 1) / line);
         }
         if instructions != p.instructions {
             return Err(format!(
@@ -880,15 +897,12 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
         let cpi = |c: f64| c / instructions.max(1) as f64;
         let share = |c: f64| c / budget as f64;
         let names = p.kinds.iter().map(|k| label(k)).collect::<Vec<_>>();
-        // The lines a poll runs that a 512-line I-cache cannot have held since the last one.
-        let fills = if m7 {
-            (touched.len() as u64).saturating_sub(ICACHE_LINES)
-        } else {
-            0
-        };
+        // The lines a poll runs that the cache cannot have held since the last one.
+        let fills = (touched.len() as u64).saturating_sub(cache_lines);
+        let (low_f, high_f) = (low + fills * fill_cycles, high + fills * fill_cycles);
         let _ = writeln!(
             out,
-            "{:<18} {:<20} {:>5} {:>12} {:>15} {:>12} {:>13} {:>5} {:>8}",
+            "{:<18} {:<20} {:>5} {:>12} {:>15} {:>12} {:>13} {:>5} {:>8} {:>17}",
             names.join(", "),
             p.log,
             p.index,
@@ -897,18 +911,16 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
             format!("{:.2}-{:.2}", cpi(low_exact), cpi(high as f64)),
             format!("{:.3}-{:.3}", share(low_exact), share(high as f64)),
             touched.len(),
-            if m7 {
-                thousands(fills)
-            } else {
-                "-".to_string()
-            }
+            thousands(fills),
+            format!("{}-{}", thousands(low_f), thousands(high_f)),
         );
         for k in &p.kinds {
             estimates.push(format!(
                 "ESTIMATE kind={k} label={} log={} poll={} instructions={instructions} image={} \
                  low={low} high={high} cpi_low={:.3} cpi_high={:.3} budget={budget} \
                  share_low={:.4} share_high={:.4} lines={} fills_min={} fill_cycles_min={} \
-                 blocks={} nops={nop_executions} mcpu={} mhz={}",
+                 low_fills={low_f} high_fills={high_f} blocks={} nops={nop_executions} mcpu={} \
+                 mhz={}",
                 label(k).replace(' ', "_"),
                 p.log,
                 p.index,
@@ -918,12 +930,8 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
                 share(low_exact),
                 share(high as f64),
                 touched.len(),
-                if m7 { fills.to_string() } else { "-".into() },
-                if m7 {
-                    (fills * FILL_CYCLES).to_string()
-                } else {
-                    "-".into()
-                },
+                fills,
+                fills * fill_cycles,
                 p.counts.len(),
                 o.mcpu,
                 o.mhz
@@ -954,16 +962,21 @@ fn estimate(o: &Options, syms: &mut Symbols, dir: &Path) -> Result<(), String> {
     let _ = writeln!(
         out,
         "\nest. cycles: low (steady state) - high (cold pass); of budget: of {} cycles; lines: \
-         the {LINE}-byte lines of code the poll executed{}",
+         the lines of code the poll executed{}",
         thousands(budget),
         if m7 {
             format!(
                 "; fills >=: the fewest I-cache line fills the poll needs (its lines beyond \
                  the {ICACHE_LINES} of the 16 KiB I-cache), at least {FILL_CYCLES} core cycles \
-                 each from flash: not in the estimate"
+                 each from flash; incl. fills: the estimate with them"
             )
         } else {
-            String::new()
+            format!(
+                "; lines and fills >=: the {M4F_LINE}-byte lines of the ART accelerator's \
+                 1 KiB cache, those beyond its {M4F_CACHE_LINES} each a fetch from flash \
+                 with its {M4F_FILL_CYCLES} wait states (not hidden by the prefetch, assumed); \
+                 incl. fills: the estimate with them"
+            )
         }
     );
     for l in estimates {
