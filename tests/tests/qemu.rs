@@ -59,7 +59,7 @@ const BUDGET: u64 = 120_000;
 /// The bound of the worst admissible control cycle on the M7 (instructions): the node's work
 /// budget (`planner_core::node::WORK_BUDGET`) spent, with the tick, the re-plan with eq. 18 and
 /// the frames sent; asserted for the generated worst cycles (`walk_tests::logs::WORST`).
-const WORST_CEILING: u64 = 50_000;
+const WORST_CEILING: u64 = 52_000;
 /// The QEMU machine of the M7 image.
 const MACHINE: &str = "mps2-an500";
 /// `firmware/qemu`'s report: instructions per CMSDK timer tick under `-icount shift=0`.
@@ -450,7 +450,8 @@ fn a_stack_overflow_reaches_the_fault_handler() {
 /// with whether it is met): `Node::new` (the node configured in place) ≤ 100,000
 /// instructions, the worst control cycle ≤ the worst admissible cycle's bound (the target
 /// 20,000 is not met), the re-plan at the start of single support ≤ 20,000 (plain and adjusted), the
-/// control loop's stack ≤ 12 KiB, the steady cycle's mean and maximum ≤ 3,000 (steady: at
+/// control loop's stack ≤ 12 KiB (not met: its ceiling 13 KiB), a drive command's cycle within
+/// the worst admissible cycle's bound, the steady cycle's mean and maximum ≤ 3,000 (steady: at
 /// least 90 % of the walking cycles, 95 % in every fault-free log; the other walking cycles
 /// without command bounded as well), the start-up stack
 /// ≤ 16 KiB; the start-up stack also ≤ 4 KiB ("a few KB"; the node is configured
@@ -500,13 +501,15 @@ fn timing_targets() {
     }
     let stack = q.one("STACK");
     let (startup, control): (u64, u64) = (stack.num("startup"), stack.num("control"));
-    let checks: [(&str, f64, f64, f64); 12] = [
+    let checks: [(&str, f64, f64, f64); 13] = [
         ("Node::new", max("new") as f64, 100_000.0, 100_000.0),
         // (The worst re-plan cycle is a fault-sweep burst of modifications: the node acts on
         // 20 commands a cycle, the controller's 16 and the estimator's with room for
         // emergency stops of other senders.)
         ("re-plan (max)", max("replan") as f64, 21_000.0, 21_000.0),
-        ("control-loop stack [B]", control as f64, 12_288.0, 12_288.0),
+        // (The drive commands' frames, `drive_to` and the steps it plans, took the control
+        // loop's high-water mark from 12,288 to 13,104 B: the ceiling is 13 KiB.)
+        ("control-loop stack [B]", control as f64, 12_288.0, 13_312.0),
         ("steady (mean)", steady_mean, 3_000.0, 3_000.0),
         // (Every 20th cycle sends the four reports: STATUS, DIAG, SESSION and LINK, ~700
         // instructions; the steady maximum is such a cycle, in the adjusting walk, which also
@@ -536,6 +539,14 @@ fn timing_targets() {
             30_000.0,
         ),
         ("start-up stack [B]", startup as f64, 16_384.0, 4_096.0),
+        // A drive command's cycle (or one whose queue the node tops up): within the worst
+        // admissible cycle's bound (its drive paths are generated), the target 20,000.
+        (
+            "drive (max)",
+            max("drive") as f64,
+            20_000.0,
+            WORST_CEILING as f64,
+        ),
         // The walking cycles without command that are not steady, bounded too (regression
         // ceilings, not targets): more than one heartbeat, or a reset, an invalid or a
         // foreign frame (duplicates, floods); the stop window planned; a supervision stop.
@@ -603,6 +614,7 @@ fn the_documents_quote_the_measured_figures() {
     let adjust = "re-plan with a single-support adjustment";
     let step_adjust = "the node's step adjustment from the measured state";
     let start = "`Start` (plans the start window)";
+    let drive = "a drive command (`VELOCITY`, `GOAL`";
     let cycle = "**worst control cycle**";
     let board = "the board's whole cycle around it";
     let new = "start-up: `ParkedNode::start`";
@@ -634,6 +646,8 @@ fn the_documents_quote_the_measured_figures() {
         .cell(T, step_adjust, "mean", &mean("step-adjust"))
         .cell(T, start, "worst", &max("start"))
         .cell(T, start, "mean", &mean("start"))
+        .cell(T, drive, "worst", &max("drive"))
+        .cell(T, drive, "mean", &mean("drive"))
         .cell(T, cycle, "worst", &format!("**{}**", thousands(worst)))
         .cell(T, cycle, "mean", &mean("cycle"))
         .cell(T, board, "worst", &thousands(whole.num("max")))

@@ -82,10 +82,13 @@ const RX_HEARTBEAT: u8 = 16;
 const RX_OTHER: u8 = 32;
 /// The estimator's measured state (`MEASURED`: up to one every cycle, part of a steady one).
 const RX_MEASURED: u8 = 64;
+/// A drive command (`VELOCITY`, `GOAL`).
+const RX_DRIVE: u8 = 128;
 
 fn class(f: &RawFrame, expect: Expect) -> u8 {
     match Command::decode(f, expect) {
         Ok(Command::Measured(_)) => RX_MEASURED,
+        Ok(Command::Velocity(_) | Command::Goal(_)) => RX_DRIVE,
         Ok(Command::Append(_)) => RX_PUSH,
         Ok(Command::Modify(_)) => RX_MODIFY,
         Ok(Command::Control {
@@ -125,6 +128,8 @@ pub struct Pending {
     state: NodeState,
     /// The node's count of step adjustments worked on.
     adjustments: u32,
+    /// The node's next step number (it moves when a step is appended).
+    next_step: u16,
 }
 
 impl Pending {
@@ -152,6 +157,7 @@ impl Pending {
             plans: node.gait().plans(),
             state: node.state(),
             adjustments: node.adjustment_attempts(),
+            next_step: node.next_step(),
         }
     }
 
@@ -175,33 +181,36 @@ impl Pending {
             .last_replan()
             .filter(|i| i.tick == tick)
             .copied();
-        let kind = if rx & RX_MODIFY != 0 {
-            Kind::Modify
-        } else if rx & RX_START != 0 {
-            Kind::Start
-        } else if let Some(info) = replan {
-            if info.adjust_ticks != 0 {
-                Kind::Adjust
+        let kind =
+            if rx & RX_DRIVE != 0 || (rx & RX_PUSH == 0 && node.next_step() != self.next_step) {
+                Kind::Drive
+            } else if rx & RX_MODIFY != 0 {
+                Kind::Modify
+            } else if rx & RX_START != 0 {
+                Kind::Start
+            } else if let Some(info) = replan {
+                if info.adjust_ticks != 0 {
+                    Kind::Adjust
+                } else {
+                    Kind::Replan
+                }
+            } else if node.adjustment_attempts() != self.adjustments {
+                Kind::StepAdjust
+            } else if rx & RX_STOP != 0 {
+                Kind::StopCommand
+            } else if rx & RX_PUSH != 0 {
+                Kind::Push
+            } else if self.was_standing && node.gait().is_standing() {
+                Kind::Standing
+            } else if node.gait().plans() != self.plans {
+                Kind::Settle
+            } else if node.state() != self.state {
+                Kind::Transition
+            } else if taken > 1 + usize::from(rx & RX_MEASURED != 0) || rx & RX_OTHER != 0 {
+                Kind::Traffic
             } else {
-                Kind::Replan
-            }
-        } else if node.adjustment_attempts() != self.adjustments {
-            Kind::StepAdjust
-        } else if rx & RX_STOP != 0 {
-            Kind::StopCommand
-        } else if rx & RX_PUSH != 0 {
-            Kind::Push
-        } else if self.was_standing && node.gait().is_standing() {
-            Kind::Standing
-        } else if node.gait().plans() != self.plans {
-            Kind::Settle
-        } else if node.state() != self.state {
-            Kind::Transition
-        } else if taken > 1 + usize::from(rx & RX_MEASURED != 0) || rx & RX_OTHER != 0 {
-            Kind::Traffic
-        } else {
-            Kind::Steady
-        };
+                Kind::Steady
+            };
         CycleRecord {
             tick,
             kind,

@@ -5,8 +5,9 @@
 
 /// A kind of timed work: `New` is the node's start-up, every other kind is a whole
 /// `Node::poll` (one control cycle), classified by what it did, first match wins:
-/// a cycle that received a `STEP_MODIFY` is `Modify`, one that received a `Start` is `Start`,
-/// then by its tick (`Adjust`, `Replan`), then `StopCommand`, `Push`, `Standing`, then by
+/// a cycle that received a `VELOCITY` or `GOAL` or in which the node chose steps itself is
+/// `Drive`, one that received a `STEP_MODIFY` is `Modify`, one that received a `Start` is
+/// `Start`, then by its tick (`Adjust`, `Replan`), then `StopCommand`, `Push`, `Standing`, then by
 /// whether its tick planned a window (`Settle`), the node's state changed (`Transition`) or it
 /// took more than a heartbeat (`Traffic`), else `Steady`. One heartbeat does not count as a command. Every cycle is also recorded as
 /// `Cycle`.
@@ -22,6 +23,11 @@ pub enum Kind {
     /// A cycle that received `STEP_MODIFY` frames: a modification of the next swing target
     /// plans the re-plan it will cause (eq. 17); the cycle's tick may re-plan too.
     Modify,
+    /// A cycle that received a `VELOCITY` or a `GOAL` (a start from standing or a re-plan of
+    /// the queued steps), or in which the node chose steps itself (a walk it drives: the queue
+    /// topped up after a lift-off, no footstep append received); footstep frames in the same
+    /// cycle are refused (`WrongState`).
+    Drive,
     /// A cycle that received a `Stop`, `StopNow` or emergency stop (and did not re-plan).
     StopCommand,
     /// A cycle standing, no command.
@@ -55,11 +61,12 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 14] = [
+    pub const ALL: [Kind; 15] = [
         Kind::New,
         Kind::Push,
         Kind::Start,
         Kind::Modify,
+        Kind::Drive,
         Kind::StopCommand,
         Kind::Standing,
         Kind::Steady,
@@ -79,6 +86,7 @@ impl Kind {
             Kind::Push => "push",
             Kind::Start => "start",
             Kind::Modify => "modify",
+            Kind::Drive => "drive",
             Kind::StopCommand => "stop-command",
             Kind::Standing => "standing",
             Kind::Steady => "steady",
