@@ -129,7 +129,8 @@ pub fn cases() -> Vec<Case> {
     // The worst admissible cycle (`sim::worst`): every queued step modified, the queue
     // filled, the node's command frames all used, in a cycle that re-plans; one log per path
     // (started with `start`, or with `start_adjusting`: the estimator's state every cycle, a
-    // push; in a report cycle; the step adjustment's reach cut; `from_measured`).
+    // push; in a report cycle; the step adjustment's reach cut; `from_measured`; the drive
+    // commands).
     for path in WORST {
         let name = path.name();
         let w = worst_cycle(&cfg, path).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -13,7 +13,9 @@
 //! of `host-sim/scenarios/` through `sim::simulate`, a pushed walk with the node's step
 //! adjustment (`sim::pushed`), the worst admissible cycle with `start` and with
 //! `start_adjusting` (`sim::worst`: every queued step modified in a cycle that re-plans, the
-//! node's work budget spent), and one fault-sweep run
+//! node's work budget spent) and with the drive commands (`VELOCITY`, `GOAL`: a re-plan of
+//! the queued steps, starts, a goal re-aimed, the drive's own stop cancelled), and one
+//! fault-sweep run
 //! (`faults::run_case_logged`, fig4, seed 1) per fault kind that the in-memory device can
 //! replay as host-sim's bus does: none, drop, duplicate, corrupt, delay, silence, flood at
 //! 20 % load, burst and the heavier mixed rows. **Not the flood at 100 % load**: it puts more
