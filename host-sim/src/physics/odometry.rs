@@ -22,30 +22,40 @@
 //! # The estimate
 //!
 //! * At the start `ŝ_k = s_k` (the robot stands on its plan).
-//! * A foot on the ground (by the stabilizer's contact phase) does not move: `ŝ_k` is kept.
-//! * At touchdown of foot `k` (the contact phase's change that puts it on the ground) while
-//!   foot `j` stands: `δ = ψ̂_j − φ_j`, `(x̂_k, ŷ_k) = (x̂_j, ŷ_j) + R(δ) (f_k − f_j)_xy`,
-//!   `ψ̂_k = φ_k + δ` (`R(δ)` the rotation by `δ` about the vertical): the stance sole's
-//!   estimated pose composed with the two soles' relative pose by the encoders. A constant
-//!   encoder bias enters one landing with one sign and the next with the other, so it does not
-//!   add up; random encoder noise adds up as a random walk (1e-4 rad on 0.6 m legs: about
-//!   0.1 mm a step).
+//! * A sole measured from the other sole `j`: `δ = ψ̂_j − φ_j`,
+//!   `(x̂_k, ŷ_k) = (x̂_j, ŷ_j) + R(δ) (f_k − f_j)_xy`, `ψ̂_k = φ_k + δ` (`R(δ)` the rotation by
+//!   `δ` about the vertical): the other sole's estimated pose composed with the two soles'
+//!   relative pose by the encoders. This is done at each touchdown (the contact phase's change
+//!   that puts foot `k` on the ground while `j` stands), and in double support, while the less
+//!   loaded sole carries at least [`FIRM_SHARE`] of the two soles' vertical force, for the
+//!   less loaded sole from the more loaded one (a landed sole settling, measured again until
+//!   it takes the weight; a sole rolling onto its edge at lift-off is not measured).
+//! * Otherwise a sole keeps its estimate: a foot on the ground is taken not to move.
+//!
+//! A constant encoder bias enters one step with one sign and the next with the other, so it
+//! does not add up; random encoder noise adds up as a random walk (1e-4 rad on 0.6 m legs:
+//! about 0.1 mm a step). What the encoders cannot see is a standing sole sliding on the floor:
+//! that adds up, as it does for any leg odometry (Alexander's stance sole creeps back about
+//! 0.5 mm in each single support of its `lateral` walk).
 //!
 //! # The sole targets
 //!
-//! * A foot on the ground: `ŝ_k` at the reference's height `z_k` (the floor is where the plan
-//!   says: only the horizontal placement and the heading are estimated).
-//! * A swinging foot: `s_k(t) + w(t) e_k`, `e_k = ŝ_k − s_k` at lift-off (so the target does not
-//!   jump there), `w` the blend from the lift-off pose to the reference's landing: 1 until the
-//!   reference lifts the foot and while it rises, `z_k / z_peak` while it comes down (a smooth
-//!   blend over the second half of the swing, 0 at the reference's touchdown), 0 once the
-//!   reference has it back on the ground. The blend needs only the reference stream, not the
-//!   landing ahead or the swing's duration, so it also holds when the node adjusts a step in
-//!   the middle of a swing. A swing the reference never lifts (a step height of 0) keeps
-//!   `w = 1` until the reference's touchdown, where the target moves by `e_k`.
+//! * A foot on the ground: its last target low-passed toward `ŝ_k` with the time constant
+//!   [`TARGET_FOLLOW_S`] (from where the swing aimed it to where the encoders say it landed,
+//!   without a jump at touchdown), at the reference's height `z_k` (the floor is where the
+//!   plan says: only the horizontal placement and the heading are estimated).
+//! * A swinging foot: `s_k(t) + w(t) e_k`, `e_k` its last target less `s_k` at lift-off (so
+//!   the target does not jump there), `w` the blend from the lift-off pose to the reference's
+//!   landing: 1 until the reference lifts the foot and while it rises, `z_k / z_peak` while it
+//!   comes down (a smooth blend over the second half of the swing, 0 at the reference's
+//!   touchdown), 0 once the reference has it back on the ground. The blend needs only the
+//!   reference stream, not the landing ahead or the swing's duration, so it also holds when
+//!   the node adjusts a step in the middle of a swing. A swing the reference never lifts (a
+//!   step height of 0) keeps `w = 1` until the reference's touchdown, where the target moves
+//!   by `e_k`.
 //!
 //! The swing sole so lands at its reference pose in the world less only that step's own
-//! servo lag, and no landing error adds to the next.
+//! servo lag, and the landing errors do not add up from step to step.
 
 use crate::robot::model::{wrap, Pose};
 use planner_core::gait::{FootPose, Phase, Side};
@@ -55,6 +65,8 @@ use planner_core::gait::{FootPose, Phase, Side};
 pub struct Odometry {
     /// Estimated sole poses (x, y, yaw), left then right; `None` before the first tick.
     est: Option<[[f64; 3]; 2]>,
+    /// The sole targets of the last tick (x, y, yaw).
+    target: [[f64; 3]; 2],
     /// The feet on the ground at the last tick.
     contact: [bool; 2],
     /// Per foot: the swing's offset `e_k` from its reference at lift-off.
@@ -65,7 +77,18 @@ pub struct Odometry {
     started: [bool; 2],
     /// Per foot: the reference's swing has passed its peak.
     falling: [bool; 2],
+    /// The target's low-pass per tick, `dt / T_r`.
+    fade: f64,
 }
+
+/// The time constant `T_r` with which the target of a foot on the ground follows its
+/// estimate (from where the swing aimed it to where the encoders say it is) \[s\].
+pub const TARGET_FOLLOW_S: f64 = 0.05;
+
+/// In double support the less loaded sole is measured again from the more loaded one while it
+/// carries at least this share of the two soles' vertical force (both then stand firmly: a
+/// sole that rolls onto an edge at lift-off or skims the floor is not measured).
+pub const FIRM_SHARE: f64 = 0.25;
 
 /// The feet the phase has on the ground (left, right).
 pub fn on_ground(phase: Phase) -> [bool; 2] {
@@ -81,24 +104,33 @@ fn heading(p: &Pose) -> f64 {
     p.r[1][0].atan2(p.r[0][0])
 }
 
+/// `(x, y, yaw)` of a foot pose.
+fn xyyaw(f: &FootPose<f64>) -> [f64; 3] {
+    [f.x, f.y, f.yaw]
+}
+
 impl Odometry {
-    /// The odometry before its first tick.
-    pub fn new() -> Self {
-        Self::default()
+    /// The odometry before its first tick, at the control period `dt` \[s\].
+    pub fn new(dt: f64) -> Self {
+        Self {
+            fade: (dt / TARGET_FOLLOW_S).min(1.0),
+            ..Self::default()
+        }
     }
 
-    /// The estimated sole poses (x, y, yaw), left then right (the references' before the
-    /// first tick).
+    /// The estimated sole poses (x, y, yaw), left then right (`None` before the first tick).
     pub fn estimate(&self) -> Option<[[f64; 3]; 2]> {
         self.est
     }
 
-    /// One tick: the contact `phase`, the reference `r_phase` and `feet`, and the soles by
-    /// forward kinematics of the encoders `fk` (waist at the origin, IMU attitude). Returns
-    /// the sole targets for the IK (left, right; see the module docs).
+    /// One tick: the contact `phase`, the vertical forces on the feet `fz` \[N\], the
+    /// reference `r_phase` and `feet`, and the soles by forward kinematics of the encoders
+    /// `fk` (waist at the origin, IMU attitude). Returns the sole targets for the IK (left,
+    /// right; see the module docs).
     pub fn update(
         &mut self,
         phase: Phase,
+        fz: [f64; 2],
         r_phase: Phase,
         feet: &[FootPose<f64>; 2],
         fk: &[Pose; 2],
@@ -106,30 +138,40 @@ impl Odometry {
         let on = on_ground(phase);
         let mut est = self.est.unwrap_or_else(|| {
             self.contact = on;
-            [
-                [feet[0].x, feet[0].y, feet[0].yaw],
-                [feet[1].x, feet[1].y, feet[1].yaw],
-            ]
+            self.target = [xyyaw(&feet[0]), xyyaw(&feet[1])];
+            self.target
         });
-        for k in 0..2 {
+        // The sole measured from the other: at a touchdown the landed one from the stance
+        // one, and in double support with both soles firmly loaded the less loaded one from
+        // the more loaded one.
+        let landed = |k: usize| on[k] && !self.contact[k] && self.contact[1 - k];
+        let light = usize::from(fz[0] >= fz[1]);
+        let firm = fz[light] >= FIRM_SHARE * (fz[0] + fz[1]).max(f64::MIN_POSITIVE);
+        let measured = if landed(0) {
+            Some(0)
+        } else if landed(1) {
+            Some(1)
+        } else if on == [true, true] && firm {
+            Some(light)
+        } else {
+            None
+        };
+        if let Some(k) = measured {
             let j = 1 - k;
-            if on[k] && !self.contact[k] && self.contact[j] {
-                // Touchdown of k on stance j.
-                let d = wrap(est[j][2] - heading(&fk[j]));
-                let (s, c) = d.sin_cos();
-                let (dx, dy) = (fk[k].p[0] - fk[j].p[0], fk[k].p[1] - fk[j].p[1]);
-                est[k] = [
-                    est[j][0] + c * dx - s * dy,
-                    est[j][1] + s * dx + c * dy,
-                    wrap(heading(&fk[k]) + d),
-                ];
-            } else if !on[k] && self.contact[k] {
-                // Lift-off.
-                self.offset[k] = [
-                    est[k][0] - feet[k].x,
-                    est[k][1] - feet[k].y,
-                    wrap(est[k][2] - feet[k].yaw),
-                ];
+            let d = wrap(est[j][2] - heading(&fk[j]));
+            let (s, c) = d.sin_cos();
+            let (dx, dy) = (fk[k].p[0] - fk[j].p[0], fk[k].p[1] - fk[j].p[1]);
+            est[k] = [
+                est[j][0] + c * dx - s * dy,
+                est[j][1] + s * dx + c * dy,
+                wrap(heading(&fk[k]) + d),
+            ];
+        }
+        for k in 0..2 {
+            if !on[k] && self.contact[k] {
+                // Lift-off: the swing starts from the last target.
+                let t = self.target[k];
+                self.offset[k] = [t[0] - feet[k].x, t[1] - feet[k].y, wrap(t[2] - feet[k].yaw)];
                 self.peak[k] = 0.0;
                 self.started[k] = false;
                 self.falling[k] = false;
@@ -141,11 +183,20 @@ impl Odometry {
         for k in 0..2 {
             let f = &feet[k];
             if on[k] {
+                let t = &mut self.target[k];
+                for i in 0..3 {
+                    let e = if i == 2 {
+                        wrap(est[k][i] - t[i])
+                    } else {
+                        est[k][i] - t[i]
+                    };
+                    t[i] += self.fade * e;
+                }
                 out[k] = FootPose {
-                    x: est[k][0],
-                    y: est[k][1],
+                    x: t[0],
+                    y: t[1],
                     z: f.z,
-                    yaw: est[k][2],
+                    yaw: wrap(t[2]),
                 };
                 continue;
             }
@@ -178,6 +229,11 @@ impl Odometry {
                 yaw: wrap(f.yaw + w * e[2]),
             };
         }
+        for k in 0..2 {
+            if !on[k] {
+                self.target[k] = xyyaw(&out[k]);
+            }
+        }
         out
     }
 }
@@ -199,29 +255,32 @@ mod tests {
         ]
     }
 
+    /// A swing of the reference from `from` to `to` over `n` ticks (quintic in x, lifted 5 cm).
+    fn swing_at(from: f64, to: f64, y: f64, i: usize, n: usize) -> FootPose<f64> {
+        let s = i as f64 / n as f64;
+        let q = s * (1.0 - s);
+        let b = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+        pose(from + (to - from) * b, y, 0.05 * 64.0 * q * q * q, 0.0)
+    }
+
+    const N: usize = 400;
+    /// Double support ticks: ten times the target's time constant.
+    const DOUBLE: usize = 500;
+
     #[test]
     fn a_short_landing_is_estimated_and_the_next_step_aims_at_the_plan() {
-        let mut o = Odometry::new();
+        let mut o = Odometry::new(0.001);
         let (short, len) = (0.0013, 0.2);
+        let (left, right) = ([500.0, 100.0], [100.0, 500.0]);
         // Standing on the plan, then the right foot swings from x = 0 to x = len.
         let start = [pose(0.0, 0.1, 0.0, 0.0), pose(0.0, -0.1, 0.0, 0.0)];
-        let out = o.update(
-            Phase::Double,
-            Phase::Double,
-            &start,
-            &fk([0.0; 2], [0.0, 0.1], [0.0, -0.1]),
-        );
+        let at = fk([0.0; 2], [0.0, 0.1], [0.0, -0.1]);
+        let out = o.update(Phase::Double, left, Phase::Double, &start, &at);
         assert_eq!(out, start);
         let swing = Phase::Single(Side::Left);
-        let n = 100;
-        for i in 0..=n {
-            let s = i as f64 / n as f64;
-            let q = s * (1.0 - s);
-            let feet = [
-                start[0],
-                pose(len * s, -0.1, 0.05 * 64.0 * q * q * q, 0.0),
-            ];
-            let out = o.update(swing, swing, &feet, &fk([0.0; 2], [0.0, 0.1], [0.0, -0.1]));
+        for i in 0..=N {
+            let feet = [start[0], swing_at(0.0, len, -0.1, i, N)];
+            let out = o.update(swing, [600.0, 0.0], swing, &feet, &at);
             // The stance sole stays; the swing target is the reference (no offset yet).
             assert_eq!(out[0], start[0]);
             assert!((out[1].x - feet[1].x).abs() < 1e-12);
@@ -229,65 +288,62 @@ mod tests {
         // Touchdown 1.3 mm short by the encoders, the waist somewhere else.
         let planned = [pose(0.0, 0.1, 0.0, 0.0), pose(len, -0.1, 0.0, 0.0)];
         let w = [0.37, 0.05];
-        let out = o.update(
-            Phase::Double,
-            Phase::Double,
-            &planned,
-            &fk(w, [0.0, 0.1], [len - short, -0.1]),
-        );
+        let at = fk(w, [0.0, 0.1], [len - short, -0.1]);
+        let mut out = [planned[0]; 2];
+        let mut last = planned[1];
+        for i in 0..DOUBLE {
+            out = o.update(Phase::Double, left, Phase::Double, &planned, &at);
+            // The landed sole's target moves smoothly from the planned landing to the
+            // measured one.
+            assert!((out[1].x - last.x).abs() < short * 0.03, "{i}: {out:?}");
+            last = out[1];
+        }
         let est = o.estimate().expect("estimated");
         assert!((est[1][0] - (len - short)).abs() < 1e-12, "{est:?}");
         assert!((est[1][1] + 0.1).abs() < 1e-12 && est[1][2].abs() < 1e-12);
-        // The IK keeps the landed sole where it is.
-        assert!((out[1].x - (len - short)).abs() < 1e-12);
-        // The left foot swings from x = 0 to 2 len: its target starts at its estimate (no
-        // jump) and ends at its planned landing in the world, a step of len + short from the
-        // real stance foot.
+        assert!((out[1].x - (len - short)).abs() < 1e-6, "{out:?}");
+        // The weight onto the right foot, then the left foot swings from x = 0 to 2 len: its
+        // target starts where it stood (no jump) and ends at its planned landing in the world,
+        // a step of len + short from the real stance foot.
+        o.update(Phase::Double, right, Phase::Double, &planned, &at);
         let swing = Phase::Single(Side::Right);
-        let mut last = out[0];
-        for i in 0..=n {
-            let s = i as f64 / n as f64;
-            let q = s * (1.0 - s);
-            let feet = [
-                pose(2.0 * len * s, 0.1, 0.05 * 64.0 * q * q * q, 0.0),
-                planned[1],
-            ];
-            let out = o.update(swing, swing, &feet, &fk(w, [0.0, 0.1], [len - short, -0.1]));
-            assert!((out[1].x - (len - short)).abs() < 1e-12, "stance target");
+        let mut last = planned[0];
+        for i in 0..=N {
+            let feet = [swing_at(0.0, 2.0 * len, 0.1, i, N), planned[1]];
+            let out = o.update(swing, [0.0, 600.0], swing, &feet, &at);
+            assert!((out[1].x - (len - short)).abs() < 1e-6, "stance target");
             assert!(
-                (out[0].x - last.x).abs() < 2.0 * len / n as f64 * 2.0,
+                (out[0].x - last.x).abs() < 2e-3,
                 "a jump of the swing target: {last:?} → {:?}",
                 out[0]
             );
             last = out[0];
         }
         assert!((last.x - 2.0 * len).abs() < 1e-12, "{last:?}");
-        assert!((last.x - (len - short) - (len + short)).abs() < 1e-12);
         // The left foot lands on its plan; the right one swings from its short estimate to
         // 3 len: its target starts where the foot is and blends to the planned landing.
         let planned = [pose(2.0 * len, 0.1, 0.0, 0.0), pose(len, -0.1, 0.0, 0.0)];
         let at = fk(w, [2.0 * len, 0.1], [len - short, -0.1]);
-        o.update(Phase::Double, Phase::Double, &planned, &at);
+        for _ in 0..DOUBLE {
+            o.update(Phase::Double, right, Phase::Double, &planned, &at);
+        }
+        let est = o.estimate().expect("estimated");
+        assert!((est[0][0] - 2.0 * len).abs() < 1e-12, "{est:?}");
+        o.update(Phase::Double, left, Phase::Double, &planned, &at);
         let swing = Phase::Single(Side::Left);
         let mut first = None;
-        for i in 0..=n {
-            let s = i as f64 / n as f64;
-            let q = s * (1.0 - s);
-            let b = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
-            let feet = [
-                planned[0],
-                pose(len + 2.0 * len * b, -0.1, 0.05 * 64.0 * q * q * q, 0.0),
-            ];
-            let out = o.update(swing, swing, &feet, &at);
+        for i in 0..=N {
+            let feet = [planned[0], swing_at(len, 3.0 * len, -0.1, i, N)];
+            let out = o.update(swing, [600.0, 0.0], swing, &feet, &at);
             first.get_or_insert(out[1]);
-            if i <= n / 2 {
+            if i <= N / 2 {
                 // Rising: the whole offset.
-                assert!((out[1].x - (feet[1].x - short)).abs() < 1e-12, "{out:?}");
+                assert!((out[1].x - (feet[1].x - short)).abs() < 1e-6, "{out:?}");
             }
             last = out[1];
         }
         let first = first.expect("a tick");
-        assert!((first.x - (len - short)).abs() < 1e-12, "{first:?}");
+        assert!((first.x - (len - short)).abs() < 1e-6, "{first:?}");
         assert!((last.x - 3.0 * len).abs() < 1e-12, "{last:?}");
     }
 
@@ -295,19 +351,23 @@ mod tests {
     fn a_turned_stance_turns_the_measured_step() {
         // The stance sole estimated at heading 0.1 rad while the encoders' frame has it at 0:
         // the measured step is turned by 0.1 rad into the world.
-        let mut o = Odometry::new();
-        let start = [pose(1.0, 2.0, 0.0, 0.1), pose(1.0, 1.8, 0.0, 0.1)];
+        let mut o = Odometry::new(0.001);
+        let (s, c) = 0.1f64.sin_cos();
+        let start = [
+            pose(1.0, 2.0, 0.0, 0.1),
+            pose(1.0 + 0.2 * s, 2.0 - 0.2 * c, 0.0, 0.1),
+        ];
         let level = [
             Pose::upright(0.0, 0.1, -0.6, 0.0),
             Pose::upright(0.0, -0.1, -0.6, 0.0),
         ];
-        o.update(Phase::Double, Phase::Double, &start, &level);
+        let left = [500.0, 100.0];
+        o.update(Phase::Double, left, Phase::Double, &start, &level);
         let swing = Phase::Single(Side::Left);
-        o.update(swing, swing, &start, &level);
+        o.update(swing, [600.0, 0.0], swing, &start, &level);
         let landed = [level[0], Pose::upright(0.2, -0.1, -0.6, 0.05)];
-        o.update(Phase::Double, Phase::Double, &start, &landed);
+        o.update(Phase::Double, left, Phase::Double, &start, &landed);
         let est = o.estimate().expect("estimated");
-        let (s, c) = 0.1f64.sin_cos();
         let want = [1.0 + c * 0.2 + s * 0.2, 2.0 + s * 0.2 - c * 0.2, 0.15];
         for i in 0..3 {
             assert!((est[1][i] - want[i]).abs() < 1e-12, "{est:?} {want:?}");

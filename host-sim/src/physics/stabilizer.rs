@@ -97,7 +97,10 @@ pub struct Gains {
     /// Foot placement from leg odometry ([`super::odometry`]; the default): the soles where
     /// the encoders say they landed, the swing aimed at its planned landing in the world.
     /// Off: the soles at their references (a landing that falls short is never known, and
-    /// the shortfalls add up over a walk).
+    /// the shortfalls add up over a walk). A switch rather than always on because it is
+    /// feedback from the encoders: the open-loop playback ([`Gains::enabled`] off) and the
+    /// stabilizer scaled to 0 ([`Gains::scaled`]) act without it, and a test measures what
+    /// it changes against the walk without it.
     pub foot_odometry: bool,
 }
 
@@ -318,7 +321,7 @@ impl Stabilizer {
             dc: [0.0; 2],
             waist_guess: None,
             contact: [true; 2],
-            odometry: Odometry::new(),
+            odometry: Odometry::new(dt),
             internals: Internals::default(),
         }
     }
@@ -372,7 +375,8 @@ impl Stabilizer {
         let (soles_rel, _, cog_rel) = self.robot.fk(&origin, &q_meas);
         // The soles' targets: from the leg odometry, or the references.
         let feet = if g.enabled && g.foot_odometry {
-            self.odometry.update(phase, r.phase, &r.feet, &soles_rel)
+            self.odometry
+                .update(phase, fz, r.phase, &r.feet, &soles_rel)
         } else {
             r.feet
         };
