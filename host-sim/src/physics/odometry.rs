@@ -26,10 +26,12 @@
 //!   `(x̂_k, ŷ_k) = (x̂_j, ŷ_j) + R(δ) (f_k − f_j)_xy`, `ψ̂_k = φ_k + δ` (`R(δ)` the rotation by
 //!   `δ` about the vertical): the other sole's estimated pose composed with the two soles'
 //!   relative pose by the encoders. This is done at each touchdown (the contact phase's change
-//!   that puts foot `k` on the ground while `j` stands), and in double support, while the less
-//!   loaded sole carries at least [`FIRM_SHARE`] of the two soles' vertical force, for the
-//!   less loaded sole from the more loaded one (a landed sole settling, measured again until
-//!   it takes the weight; a sole rolling onto its edge at lift-off is not measured).
+//!   that puts foot `k` on the ground while `j` stands), and again for the landed sole in the
+//!   double support that follows, while the less loaded sole carries at least [`FIRM_SHARE`]
+//!   of the two soles' vertical force (a landed sole settling, measured until both stand
+//!   firmly; a sole rolling onto its edge at lift-off is not measured). Always the landed sole
+//!   from the other, never back: each measurement of it is a fresh one, so the encoders' noise
+//!   enters once a step.
 //! * Otherwise a sole keeps its estimate: a foot on the ground is taken not to move.
 //!
 //! A constant encoder bias enters one step with one sign and the next with the other, so it
@@ -79,6 +81,8 @@ pub struct Odometry {
     falling: [bool; 2],
     /// The target's low-pass per tick, `dt / T_r`.
     fade: f64,
+    /// The sole that landed last, measured again in double support (none standing).
+    newest: Option<usize>,
 }
 
 /// The time constant `T_r` with which the target of a foot on the ground follows its
@@ -142,20 +146,28 @@ impl Odometry {
             self.target
         });
         // The sole measured from the other: at a touchdown the landed one from the stance
-        // one, and in double support with both soles firmly loaded the less loaded one from
-        // the more loaded one.
+        // one, and in double support, while both soles are firmly loaded, the one that landed
+        // last again from the other (never the other way round: each measurement of it is
+        // then a fresh one, and the encoders' noise does not add up in a double support).
         let landed = |k: usize| on[k] && !self.contact[k] && self.contact[1 - k];
-        let light = usize::from(fz[0] >= fz[1]);
-        let firm = fz[light] >= FIRM_SHARE * (fz[0] + fz[1]).max(f64::MIN_POSITIVE);
+        let light = fz[0].min(fz[1]);
+        let firm = light >= FIRM_SHARE * (fz[0] + fz[1]).max(f64::MIN_POSITIVE);
         let measured = if landed(0) {
             Some(0)
         } else if landed(1) {
             Some(1)
         } else if on == [true, true] && firm {
-            Some(light)
+            self.newest
         } else {
             None
         };
+        if let Some(k) = measured {
+            self.newest = Some(k);
+        }
+        if on != [true, true] {
+            // In single support the stance sole is the newest on the ground.
+            self.newest = None;
+        }
         if let Some(k) = measured {
             let j = 1 - k;
             let d = wrap(est[j][2] - heading(&fk[j]));
