@@ -14,7 +14,7 @@
 //!
 //! Why these values: HRP-2's built-in walks with ideal sensors slip at most 2.0 mm, leave the
 //! floor for at most one physics tick, keep the CoP in the planned polygon but for a tick and
-//! land within 2.1 mm (the book's physics page gives the measurements); a
+//! land within 2.2 mm (the book's physics page gives the measurements); a
 //! sole sliding a centimetre, a hop of more than a few physics ticks, or a landing two
 //! centimetres off are what a roboticist reads as a slip, a flight and a misplaced step. The
 //! engine's CoP cannot leave the soles it touches, so the polygon is the *planned* one: the
