@@ -189,9 +189,9 @@ impl Gains {
     /// here (the foot damping control, whose rate is the ankle's stiffness over `D`, and the
     /// COG modification) are tuned for no delay. τ₀ comes from a delay sweep of the stated
     /// gains on HRP-2's `straight` walk (the book's physics page): every gait measure within
-    /// half its bound at 1 ms, the landing error at 90 % of its bound and the longest flight
-    /// at its bound at 2 ms, the feet sliding beyond it from 3 ms. The filters, return times
-    /// and limits are unchanged.
+    /// half its bound at 1 ms; at 2 ms the longest flight at 80 % of its bound and the CoP
+    /// error three times that with no delay, at 3 ms five times, the feet sliding beyond the
+    /// bound at 5 ms. The filters, return times and limits are unchanged.
     pub fn for_delay(self, delay_s: f64) -> Self {
         let s = if delay_s > FULL_GAIN_DELAY_S {
             FULL_GAIN_DELAY_S / delay_s
