@@ -165,7 +165,7 @@ impl Odometry {
             self.newest = Some(k);
         }
         if on != [true, true] {
-            // In single support the stance sole is the newest on the ground.
+            // Single support: nothing is measured again until the next touchdown.
             self.newest = None;
         }
         if let Some(k) = measured {
