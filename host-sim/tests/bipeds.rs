@@ -2,9 +2,9 @@
 //! URDFs, not listed by hand): each is imported with soles that fit its feet, stands in MuJoCo
 //! and walks every built-in scenario under ideal and realistic sensors by the engine's walked
 //! verdict (no fall; slip, flight, CoP and landings within their bounds; an exception, with
-//! its measure and why, would be listed in [`NOT_WALKED`]), or is refused with a reason naming what is
-//! missing. A biped the package adds, or one whose outcome changes,
-//! fails the test until the table below says what it does. The soles of the feet Coal reads
+//! its measure and why, would be listed in [`NOT_WALKED`]), or is refused with a reason
+//! naming what is missing. A biped the package adds, or one whose outcome changes, fails the
+//! test until the table below says what it does. The soles of the feet Coal reads
 //! (not COLLADA) are compared with Pinocchio's placement of the same geometry.
 //!
 //! The default run imports every one, stands Alexander, iCub and Romeo in the engine and walks
