@@ -290,7 +290,11 @@ fn the_full_map_is_the_books() {
     let quoted = format!("mean Δv {} m/s", means.join(" / "));
     assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
     let (larger, smaller, _) = compare(&cells, Stepping::Proposed, Stepping::Plain);
-    let quoted = format!("better than the plain re-plan in {larger} cells, worse in {smaller}");
+    let noun = |n: usize| if n == 1 { "cell" } else { "cells" };
+    let quoted = format!(
+        "better than the plain re-plan in {larger} {}, worse in {smaller}",
+        noun(larger)
+    );
     assert!(readme.contains(&quoted), "README.md lacks: {quoted}");
     let raised: Vec<String> = host_sim::physics::push_map::summary(&spec, &cells)
         .iter()

@@ -12,9 +12,9 @@
 //! | **CoP outside the support polygon** | the engine's CoP (1 ms, all floor contacts) more than [`COP_MARGIN_M`] = 5 mm outside the planned support polygon (the convex hull of the sole rectangles the reference has on the floor) | longest interval [`COP_OUTSIDE_MAX_S`] = 50 ms |
 //! | **landing error** | at each landing (the first tick at which the reference has the foot on the floor and its sole carries load, after a swing), the horizontal distance of the sole centre from the reference's, and the sole's heading from the reference's | [`LANDING_MAX_M`] = 20 mm, [`LANDING_YAW_MAX_RAD`] = 0.05 rad |
 //!
-//! Why these values: HRP-2's built-in walks with ideal sensors slip at most 2.2 mm, leave the
+//! Why these values: HRP-2's built-in walks with ideal sensors slip at most 2.0 mm, leave the
 //! floor for at most one physics tick, keep the CoP in the planned polygon but for a tick and
-//! land within 5.2 mm (the book's physics page gives the measurements); a
+//! land within 2.2 mm (the book's physics page gives the measurements); a
 //! sole sliding a centimetre, a hop of more than a few physics ticks, or a landing two
 //! centimetres off are what a roboticist reads as a slip, a flight and a misplaced step. The
 //! engine's CoP cannot leave the soles it touches, so the polygon is the *planned* one: the

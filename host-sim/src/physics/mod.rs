@@ -41,6 +41,7 @@ pub mod fault_sweep;
 pub mod gait;
 pub mod metrics;
 pub mod model;
+pub mod odometry;
 pub mod output;
 pub mod probe;
 pub mod push_map;

@@ -21,9 +21,14 @@
 //! The contact phase (which foot supports) is the ankle force sensors' ([`contact_phase`]),
 //! or with [`Gains::contact_from_sensors`] off the reference's.
 //!
+//! The soles' poses `S_k` used below are the leg odometry's ([`super::odometry`], with
+//! [`Gains::foot_odometry`], the default): a sole on the ground where the encoders say it
+//! landed, a swinging sole blended from where it lifted off to its planned landing; without
+//! it the references'.
+//!
 //! 1. **State estimate** (IMU + encoders): the waist attitude `R` from the IMU, the joint
 //!    angles from the encoders; forward kinematics with the waist at the origin in attitude
-//!    `R` gives the COG relative to each sole; anchored at the reference pose of the support
+//!    `R` gives the COG relative to each sole; anchored at `S_k` of the support
 //!    sole(s) (weighted by the measured vertical forces) that is the measured COG `c_m`;
 //!    `ċ_m` its difference quotient through a first-order low-pass of time constant
 //!    [`Gains::vel_filter_s`].
@@ -46,10 +51,11 @@
 //!    [`Gains::cog_limit_m`]; the commanded COG is `c_ref + Δc`.
 //! 8. **Inverse kinematics**: the waist upright, heading the mean yaw, at the waist height,
 //!    placed (Newton on the whole-body COG, as the kinematic model does) so that the COG is
-//!    the commanded one; the soles at their references (plus `Δz`); the analytic leg IK gives
+//!    the commanded one; the soles at `S_k` (plus `Δz`); the analytic leg IK gives
 //!    the twelve joint targets, the ankle corrections are added.
 
 use super::model::{sensor, Robot};
+use super::odometry::Odometry;
 use crate::robot::model::{mean_yaw, rot_z, LegAngles, Mat3, Pose, Vec3};
 use planner_core::gait::{Phase, Reference, Side};
 
@@ -88,6 +94,14 @@ pub struct Gains {
     pub contact_from_sensors: bool,
     /// The loop delay the gains were designed for ([`Gains::for_delay`]) \[s\].
     pub design_delay_s: f64,
+    /// Foot placement from leg odometry ([`super::odometry`]; the default): the soles where
+    /// the encoders say they landed, the swing aimed at its planned landing in the world.
+    /// Off: the soles at their references (a landing that falls short is never known, and
+    /// the shortfalls add up over a walk). A switch rather than always on because it is
+    /// feedback from the encoders: the open-loop playback ([`Gains::enabled`] off) and the
+    /// stabilizer scaled to 0 ([`Gains::scaled`]) act without it, and a test measures what
+    /// it changes against the walk without it.
+    pub foot_odometry: bool,
 }
 
 impl Default for Gains {
@@ -107,6 +121,7 @@ impl Default for Gains {
             cog_limit_m: 0.04,
             contact_from_sensors: true,
             design_delay_s: 0.0,
+            foot_odometry: true,
         }
     }
 }
@@ -149,13 +164,15 @@ impl Gains {
     /// modification `K_c` and the force difference `K_f` times `s`, the foot damping `D`
     /// divided by it (its compliance `1 / D` times `s`); the filters, return times and limits
     /// unchanged. `s` = 1 is the stabilizer as stated, `s` = 0 leaves no feedback acting (the
-    /// pattern through the same IK: the open-loop playback).
+    /// pattern through the same IK: the open-loop playback; the foot placement from the
+    /// encoders, [`Gains::foot_odometry`], is feedback too and off at `s` = 0).
     pub fn scaled(self, s: f64) -> Self {
         Self {
             k_dcm: self.k_dcm * s,
             damping: self.damping / s,
             k_force: self.k_force * s,
             k_cog: self.k_cog * s,
+            foot_odometry: self.foot_odometry && s > 0.0,
             ..self
         }
     }
@@ -172,9 +189,9 @@ impl Gains {
     /// here (the foot damping control, whose rate is the ankle's stiffness over `D`, and the
     /// COG modification) are tuned for no delay. τ₀ comes from a delay sweep of the stated
     /// gains on HRP-2's `straight` walk (the book's physics page): every gait measure within
-    /// half its bound at 1 ms, the landing error at 90 % of its bound and the longest flight
-    /// at its bound at 2 ms, the feet sliding beyond it from 3 ms. The filters, return times
-    /// and limits are unchanged.
+    /// half its bound at 1 ms; at 2 ms the longest flight at 80 % of its bound and the CoP
+    /// error three times that with no delay, at 3 ms five times, the feet sliding beyond the
+    /// bound at 5 ms. The filters, return times and limits are unchanged.
     pub fn for_delay(self, delay_s: f64) -> Self {
         let s = if delay_s > FULL_GAIN_DELAY_S {
             FULL_GAIN_DELAY_S / delay_s
@@ -220,6 +237,8 @@ pub struct Stabilizer {
     waist_guess: Option<Pose>,
     /// The feet in contact by the force sensors (with `contact_from_sensors`).
     contact: [bool; 2],
+    /// The soles' estimate from the encoders (with `foot_odometry`).
+    odometry: Odometry,
     /// The last tick's internals.
     pub internals: Internals,
 }
@@ -302,6 +321,7 @@ impl Stabilizer {
             dc: [0.0; 2],
             waist_guess: None,
             contact: [true; 2],
+            odometry: Odometry::new(dt),
             internals: Internals::default(),
         }
     }
@@ -309,7 +329,6 @@ impl Stabilizer {
     /// The joint targets (left leg then right leg) for the reference `r` and the sensors.
     pub fn step(&mut self, r: &Reference<f64>, sensors: &[f64]) -> Result<[f64; 12], String> {
         let g = self.gains;
-        let soles_ref = [Pose::sole(&r.feet[0]), Pose::sole(&r.feet[1])];
         let mut q_meas: [LegAngles; 2] = [[0.0; 6]; 2];
         for k in 0..2 {
             q_meas[k].copy_from_slice(&sensors[sensor::QPOS + 6 * k..sensor::QPOS + 6 * k + 6]);
@@ -354,6 +373,14 @@ impl Stabilizer {
             r: att,
         };
         let (soles_rel, _, cog_rel) = self.robot.fk(&origin, &q_meas);
+        // The soles' targets: from the leg odometry, or the references.
+        let feet = if g.enabled && g.foot_odometry {
+            self.odometry
+                .update(phase, fz, r.phase, &r.feet, &soles_rel)
+        } else {
+            r.feet
+        };
+        let sole_targets = [Pose::sole(&feet[0]), Pose::sole(&feet[1])];
         let weights = match phase {
             Phase::Single(s) => {
                 let i = s as usize;
@@ -369,7 +396,7 @@ impl Stabilizer {
         let mut cog = [0.0; 2];
         for k in 0..2 {
             for i in 0..2 {
-                cog[i] += weights[k] * (soles_ref[k].p[i] + cog_rel[i] - soles_rel[k].p[i]);
+                cog[i] += weights[k] * (sole_targets[k].p[i] + cog_rel[i] - soles_rel[k].p[i]);
             }
         }
         if let Some(prev) = self.cog_prev {
@@ -396,11 +423,11 @@ impl Stabilizer {
             p_d[i] = p_ref[i] + (1.0 + g.k_dcm / w) * dcm_error[i];
         }
         // 4. Distribution.
-        let (a, b) = (soles_ref[0].p, soles_ref[1].p);
+        let (a, b) = (sole_targets[0].p, sole_targets[1].p);
         let (alpha, rest) = match phase {
             Phase::Single(s) => {
                 let i = s as usize;
-                let sp = soles_ref[i].p;
+                let sp = sole_targets[i].p;
                 (
                     if i == 0 { 1.0 } else { 0.0 },
                     [p_d[0] - sp[0], p_d[1] - sp[1]],
@@ -425,24 +452,24 @@ impl Stabilizer {
         let mut r_d = [[0.0; 2]; 2];
         let mut clamped_pd = [0.0; 2];
         for k in 0..2 {
-            let yaw = r.feet[k].yaw;
+            let yaw = feet[k].yaw;
             let (s, c) = yaw.sin_cos();
             let lx = (c * rest[0] + s * rest[1]).clamp(-clamp[0], clamp[0]);
             let ly = (-s * rest[0] + c * rest[1]).clamp(-clamp[1], clamp[1]);
             r_d[k] = [lx, ly];
             let share = if k == 0 { alpha } else { 1.0 - alpha };
-            clamped_pd[0] += share * (soles_ref[k].p[0] + c * lx - s * ly);
-            clamped_pd[1] += share * (soles_ref[k].p[1] + s * lx + c * ly);
+            clamped_pd[0] += share * (sole_targets[k].p[0] + c * lx - s * ly);
+            clamped_pd[1] += share * (sole_targets[k].p[1] + s * lx + c * ly);
         }
         // Measured ZMP (world) from the loaded feet.
         let mut zm = [0.0; 2];
         let mut fsum = 0.0;
         for k in 0..2 {
             if local[k][0].is_finite() {
-                let (s, c) = r.feet[k].yaw.sin_cos();
+                let (s, c) = feet[k].yaw.sin_cos();
                 let [lx, ly] = local[k];
-                zm[0] += fz[k] * (soles_ref[k].p[0] + c * lx - s * ly);
-                zm[1] += fz[k] * (soles_ref[k].p[1] + s * lx + c * ly);
+                zm[0] += fz[k] * (sole_targets[k].p[0] + c * lx - s * ly);
+                zm[1] += fz[k] * (sole_targets[k].p[1] + s * lx + c * ly);
                 fsum += fz[k];
             }
         }
@@ -505,8 +532,8 @@ impl Stabilizer {
             dcm_error,
         };
         // 8. Inverse kinematics.
-        let yaw = mean_yaw(&r.feet);
-        let mut soles = soles_ref;
+        let yaw = mean_yaw(&feet);
+        let mut soles = sole_targets;
         soles[0].p[2] -= 0.5 * self.dz;
         soles[1].p[2] += 0.5 * self.dz;
         let target = [c_ref[0] + self.dc[0], c_ref[1] + self.dc[1]];
