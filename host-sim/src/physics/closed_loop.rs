@@ -9,7 +9,7 @@
 //! ticks of the next 5 ms track the linear interpolation from `r_{k−1}` to `r_k` (one cycle of
 //! delay, as on a robot whose controller acts on the newest reference). After those ticks the
 //! estimator sends the stabilizer's sensor-only DCM deviation `ξ − ξ_ref` (COG from the
-//! encoders and the reference soles, velocity filtered; see [`super::stabilizer`]) against
+//! encoders, anchored at the soles' targets of the leg odometry, velocity filtered; see [`super::stabilizer`]) against
 //! `r_k`, stamped with the node cycle that produced `r_k`: one cycle old when the node reads
 //! it, within its `max_age`.
 //!

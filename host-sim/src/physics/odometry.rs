@@ -34,8 +34,10 @@
 //!   enters once a step.
 //! * Otherwise a sole keeps its estimate: a foot on the ground is taken not to move.
 //!
-//! A constant encoder bias enters one step with one sign and the next with the other, so it
-//! does not add up; random encoder noise adds up as a random walk (1e-4 rad on 0.6 m legs:
+//! A constant bias of a pitch joint's encoder enters one step with one sign and the next with
+//! the other, so it does not add up; a bias whose effect on the sole does not flip with the
+//! leg in front or behind (a hip yaw's, moving the sole sideways) adds up step by step, as in
+//! any leg odometry (the realistic sensor model has no bias); random encoder noise adds up as a random walk (1e-4 rad on 0.6 m legs:
 //! about 0.1 mm a step). What the encoders cannot see is a standing sole sliding on the floor:
 //! that adds up, as it does for any leg odometry (Alexander's stance sole creeps back about
 //! 0.5 mm in each single support of its `lateral` walk).
@@ -57,7 +59,16 @@
 //!   by `e_k`.
 //!
 //! The swing sole so lands at its reference pose in the world less only that step's own
-//! servo lag, and the landing errors do not add up from step to step.
+//! servo lag: the legs' shortfalls no longer add up from step to step; a standing sole's
+//! creep, which the encoders cannot see, still does (above).
+//!
+//! # What the stabilizer takes from it
+//!
+//! The sole targets (not the raw estimate): the stance sole's target in the IK, and the anchor
+//! of the COG estimate (each sole's target plus the COG's offset from that sole by the
+//! encoders). Just after a touchdown the landed sole's target is still on its way from the
+//! planned landing to the estimate (the low-pass above, a few millimetres in 50 ms), and the
+//! COG estimate follows it; that was chosen over a jump of the IK's target at touchdown.
 
 use crate::robot::model::{wrap, Pose};
 use planner_core::gait::{FootPose, Phase, Side};
