@@ -258,6 +258,25 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         [cx + c * x - s * y, cy + s * x + c * y, h + yaw]
     }
 
+    /// From standing: `Some` (with the goal in the node's frame, if one is given) when
+    /// nothing moves (a zero velocity, a goal reached). Out of line: its frame is off the
+    /// stack when the drive plans.
+    #[inline(never)]
+    fn still_from_standing(
+        &self,
+        v: &Velocity<T>,
+        goal: Option<&WireGoal>,
+    ) -> Option<Option<[T; 3]>> {
+        let (_, [support, _], side, _) = self.drive_stance(v);
+        match goal.map(|w| self.goal_frame(w)) {
+            Some(g) => self
+                .goal_velocity(&support, side, &g)
+                .is_none()
+                .then_some(Some(g)),
+            None => is_zero(v).then_some(None),
+        }
+    }
+
     /// Where the next step a drive plans leaves from: the step that starts the steps planned
     /// (`None` from standing or with nothing queued), the feet before it (support, same
     /// side), its side and whether it swings from rest.
@@ -322,24 +341,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let appends = n.saturating_sub(queued);
         // A goal already reached, or a zero velocity, from standing: nothing moves (taken
         // without work, so decided before the budget; a goal reads the stance for it).
-        let mut at = None;
-        let mut goal_at = None;
         if standing {
-            let stance = self.drive_stance(&v);
-            let (_, [support, _], side, _) = stance;
-            let g = goal.map(|w| self.goal_frame(w));
-            let still = match g {
-                Some(g) => self.goal_velocity(&support, side, &g).is_none(),
-                None => is_zero(&v),
-            };
-            if still {
+            if let Some(g) = self.still_from_standing(&v, goal) {
                 self.drive.goal_given = g.is_some();
                 self.drive.goal = g.unwrap_or(self.drive.goal);
                 self.drive.v = Velocity::ZERO;
                 self.drive.cut = Saturation::default();
                 return Ok(Saturation::default());
             }
-            (at, goal_at) = (Some(stance), g);
         }
         // The cheap checks first (the plan, the budget, the step numbers), before any geometry
         // while walking: what is refused after them has generated its steps, and that work is
@@ -351,15 +360,8 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if self.appended.saturating_add(appends as u32) > STEP_NUMBERS {
             return Err(Reason::Exhausted);
         }
-        let (front, [support, same], _, from_rest) = match at {
-            Some(stance) => stance,
-            None => self.drive_stance(&v),
-        };
-        let goal = match (goal_at, goal) {
-            (Some(g), _) => Some(g),
-            (None, Some(w)) => Some(self.goal_frame(w)),
-            (None, None) => None,
-        };
+        let (front, [support, same], _, from_rest) = self.drive_stance(&v);
+        let goal = goal.map(|w| self.goal_frame(w));
         let target = goal.unwrap_or(self.drive.goal);
         // The step numbers: from standing the next ones, walking the queued steps'.
         let first = if standing {
