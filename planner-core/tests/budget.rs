@@ -377,3 +377,97 @@ fn a_burst_of_refused_velocities_stays_within_the_budget() {
     }
     assert_eq!(r.n.work_left(), full);
 }
+
+/// From `r` (a walk the node drives at `walk` m/s, or its stop), cycle by cycle until the
+/// cycle whose tick re-plans at a start of single support (found on a fork): in that cycle a
+/// `VELOCITY` of `vx` (accepted). Returns the walking windows planned in that cycle.
+fn plans_with_a_velocity_in_the_replan_cycle(r: &mut Rig, walk: f64, vx: f64) -> u32 {
+    for k in 0..600 {
+        let mut probe = r.fork();
+        probe.seq += 1;
+        let v = Command::Velocity(WireVelocity::from_si(probe.seq, vx, 0.0, 0.0));
+        probe.bus.rx.push_back(v.encode_in(probe.session.epoch));
+        let g = probe.n.gait();
+        let (replan, plans) = (g.last_replan().map(|i| i.tick), g.walk_plans());
+        let acks = probe.cycle();
+        if probe.n.gait().last_replan().map(|i| i.tick) != replan {
+            let a = acks.iter().find(|a| a.command == v.code()).unwrap();
+            assert_eq!(a.reason, None, "{acks:?}");
+            return probe.n.gait().walk_plans().wrapping_sub(plans);
+        }
+        if k % 10 == 0 {
+            let hb = r.heartbeat();
+            r.bus.rx.push_back(hb.encode());
+            if !r.n.gait().is_stopping() {
+                r.seq += 1;
+                let v = Command::Velocity(WireVelocity::from_si(r.seq, walk, 0.0, 0.0));
+                r.bus.rx.push_back(v.encode_in(r.session.epoch));
+            }
+        }
+        let acks = r.cycle();
+        assert!(acks.iter().all(|a| a.reason.is_none()), "{acks:?}");
+    }
+    panic!("no re-plan in 600 cycles");
+}
+
+/// A walk the node drives at 0.2 m/s, some steps into it, just after a re-plan at a start
+/// of single support.
+fn driven_after_a_replan() -> Rig {
+    let mut r = Rig::hrp2();
+    assert_eq!(velocity(&mut r, 0.2), None);
+    for k in 0..200 {
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.2), None);
+        } else {
+            r.cycle();
+        }
+    }
+    let replan = r.n.gait().last_replan().map(|i| i.tick);
+    for k in 0..600 {
+        if r.n.gait().last_replan().map(|i| i.tick) != replan {
+            break;
+        }
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.2), None);
+        } else {
+            r.cycle();
+        }
+    }
+    assert_ne!(r.n.gait().last_replan().map(|i| i.tick), replan);
+    assert_eq!(r.n.state(), NodeState::Walking);
+    r
+}
+
+/// A drive command in the cycle whose tick re-plans at a start of single support: a change
+/// of velocity, a zero velocity (the drive's own stop) and a velocity that cancels that stop
+/// (its queue shortened to the closing step, made up again to `AHEAD` steps). Eq. 17 is
+/// planned once in each, on the final queue and stop: nothing the node appends or drops after
+/// the command's plan changes what the re-plan plans, and the re-plan takes that plan.
+#[test]
+fn a_drive_command_plans_once_in_the_cycle_that_replans() {
+    use planner_core::node::AHEAD;
+    let mut r = driven_after_a_replan();
+    r.cycle();
+    assert_eq!(r.n.gait().queued(), AHEAD, "topped up after the re-plan");
+    assert_eq!(
+        plans_with_a_velocity_in_the_replan_cycle(&mut r.fork(), 0.2, 0.1),
+        1,
+        "a change"
+    );
+    assert_eq!(
+        plans_with_a_velocity_in_the_replan_cycle(&mut r.fork(), 0.2, 0.0),
+        1,
+        "a stop"
+    );
+    // The drive's own stop a few cycles into the single support: the next swing target is
+    // then the step that closes the feet, the only one queued.
+    r.run(5, true);
+    assert_eq!(velocity(&mut r, 0.0), None);
+    assert!(r.n.gait().is_stopping());
+    assert_eq!(r.n.gait().queued(), 1);
+    assert_eq!(
+        plans_with_a_velocity_in_the_replan_cycle(&mut r, 0.2, 0.2),
+        1,
+        "a resume"
+    );
+}

@@ -105,7 +105,7 @@ pub enum Path {
     /// `worst-goal`: a walk toward a goal, re-aimed behind the robot in the burst.
     Goal,
     /// `worst-resume`: the drive's own stop (a zero velocity) cancelled by the burst's
-    /// velocity, the queue topped up in the same cycle.
+    /// velocity, the queue made up again by that command in the same cycle.
     Resume,
 }
 

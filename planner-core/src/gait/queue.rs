@@ -4,7 +4,7 @@
 
 use super::*;
 
-/// The most steps [`Gait::modify_front`] replaces at once.
+/// The most steps [`Gait::replace_front`] makes the queue at once.
 pub const MODIFY_FRONT: usize = 4;
 
 impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G> {
@@ -147,7 +147,7 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
     /// after the one being swung (its foot has not lifted off) and the re-plan at the next
     /// single support still ahead in the window being walked. The walk goes on as before the
     /// stop (the landings padded with steps in place). The caller checks the re-plan this
-    /// causes as for a modification ([`Gait::modify_front`], eq. 17) and requests the stop
+    /// causes as for a modification ([`Gait::modify`], eq. 17) and requests the stop
     /// again if it is refused. `WrongState` (nothing changed) when no stop can be cancelled.
     pub fn resume(&mut self) -> Result<(), GaitError> {
         if !self.resumable() {
@@ -246,53 +246,106 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
         Ok(())
     }
 
-    /// Replaces the first `steps.len()` queued steps (from the next swing target on, at most
-    /// [`MODIFY_FRONT`]) at once, each with its side kept: how the node re-plans the steps it
-    /// chose itself when the commanded velocity changes. While walking, the re-plan the new
-    /// next swing target causes is checked once, with all of them in place (eq. 17, as
-    /// [`Gait::modify`]); if it is refused every step is put back as it was and the error
-    /// returned (`Infeasible`; `WrongState` when more steps are given than queued, `SideOrder`
-    /// when a side differs, `NonFinite`).
+    /// Makes the queue `steps` (at most [`MODIFY_FRONT`], from the next swing target on) at
+    /// once, and requests a stop after them if `stop` (else cancels one that was requested):
+    /// how the node re-plans the steps it chooses itself when the commanded velocity changes.
+    /// The queued steps are replaced in place (each with its side and number kept), those
+    /// beyond `steps` dropped, and the steps beyond the queue appended, numbered from `id`.
+    /// While walking, the re-plan the new queue causes at the next start of single support is
+    /// checked once, with every step and the stop in place (eq. 17, as [`Gait::modify`]): it
+    /// is the plan that re-plan takes. If it is refused, the queue and the stop request are
+    /// put back as they were and the error returned (`Infeasible`; `WrongState` when more
+    /// than [`MODIFY_FRONT`] steps are given or queued, `SideOrder` when a side differs from
+    /// the queued step's or the steps do not alternate, `NonFinite`).
     #[inline(never)]
-    pub fn modify_front(&mut self, steps: &[Footstep<T>]) -> Result<(), GaitError> {
-        if steps.len() > MODIFY_FRONT || steps.len() > self.queue.len() {
+    pub fn replace_front(
+        &mut self,
+        steps: &[Footstep<T>],
+        id: u16,
+        stop: bool,
+    ) -> Result<(), GaitError> {
+        let queued = self.queue.len();
+        if steps.len() > MODIFY_FRONT || queued > MODIFY_FRONT {
             return Err(GaitError::WrongState);
         }
         if steps.iter().any(|s| !s.is_finite()) {
             return Err(GaitError::NonFinite);
         }
-        let mut old: [Option<Queued<T>>; MODIFY_FRONT] = [None; MODIFY_FRONT];
+        let mut side = self.queue.front().map(|q| q.step.side);
+        if queued == 0 {
+            side = self.next_side();
+        }
         for (i, s) in steps.iter().enumerate() {
-            let q = self.queue.get(i).copied();
-            if q.map(|q| q.step.side) != Some(s.side) {
+            let want = match self.queue.get(i) {
+                Some(q) => Some(q.step.side),
+                None => side,
+            };
+            if want.is_some_and(|w| w != s.side) {
                 return Err(GaitError::SideOrder);
             }
-            if let Some(slot) = old.get_mut(i) {
-                *slot = q;
-            }
+            side = Some(s.side.other());
+        }
+        let mut old: [Option<Queued<T>>; MODIFY_FRONT] = [None; MODIFY_FRONT];
+        for (slot, q) in old.iter_mut().zip(self.queue.iter()) {
+            *slot = Some(*q);
+        }
+        let (old_stop, old_consecutive) = (self.stop_requested, self.consecutive);
+        while self.queue.len() > steps.len() {
+            self.queue.pop_back();
         }
         for (i, s) in steps.iter().enumerate() {
             if let Some(q) = self.queue.get_mut(i) {
                 q.step = *s;
                 q.modified = true;
                 q.capture = false;
+                continue;
             }
+            let n = id.wrapping_add((i - queued) as u16);
+            let consecutive = match self.queue.back() {
+                None => true,
+                Some(b) => self.consecutive && n == b.id.wrapping_add(1),
+            };
+            let q = Queued {
+                id: n,
+                step: *s,
+                modified: false,
+                capture: false,
+            };
+            if self.queue.push_back(q).is_err() {
+                self.put_back(&old, old_stop, old_consecutive);
+                return Err(GaitError::QueueFull);
+            }
+            self.consecutive = consecutive;
         }
+        self.consecutive &= !self.queue.is_empty();
+        self.stop_requested = stop;
+        self.predicted = None;
         self.gen = self.gen.wrapping_add(1);
-        if !steps.is_empty() && self.mode == Mode::Walking {
+        if self.mode == Mode::Walking {
             let refused = match self.predict_replan() {
                 Ok(Some(worst)) if !self.inside_sole(worst) => Some(GaitError::Infeasible),
                 Err(e) => Some(e),
                 _ => None,
             };
             if let Some(e) = refused {
-                for (i, o) in old.iter().enumerate().take(steps.len()) {
-                    self.undo_modify(i, *o);
-                }
+                self.put_back(&old, old_stop, old_consecutive);
                 return Err(e);
             }
         }
         Ok(())
+    }
+
+    /// Puts back the queue and the stop request a refused [`Gait::replace_front`] replaced
+    /// (the prediction dropped, `gen` moved on: see [`Gait::undo_modify`]).
+    fn put_back(&mut self, old: &[Option<Queued<T>>; MODIFY_FRONT], stop: bool, consecutive: bool) {
+        self.queue.clear();
+        for q in old.iter().flatten() {
+            let _ = self.queue.push_back(*q);
+        }
+        self.stop_requested = stop;
+        self.consecutive = consecutive;
+        self.predicted = None;
+        self.gen = self.gen.wrapping_add(1);
     }
 
     /// Puts back the step a refused modification replaced. The spare buffer now holds the

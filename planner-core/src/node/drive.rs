@@ -6,17 +6,22 @@
 //!   next ones at the end of the queue, each from the one before it.
 //! * **A change.** A new velocity (or goal) re-plans every queued step whose foot has not lifted
 //!   off, the next swing target first, in the cycle the command is accepted: the change shows
-//!   in the very next landing that may still move. The re-plan is checked as a modification of
-//!   the next swing target is (eq. 17, all steps in place); if refused, nothing changes and the
-//!   command is refused with the reason (`Infeasible`).
+//!   in the very next landing that may still move. The queue is made up to [`AHEAD`] steps
+//!   with it (or shortened to the step that closes the feet, for a stop), and the re-plan is
+//!   checked once on that final queue and stop, as a modification of the next swing target is
+//!   (eq. 17, all steps in place); if refused, nothing changes and the command is refused with
+//!   the reason (`Infeasible`). So nothing is appended or dropped after that check in its
+//!   cycle (the queue is full, or the walk stops): the re-plan at a start of single support in
+//!   the same cycle takes its plan and plans no second time, and it sees the [`AHEAD`] steps
+//!   it lands with.
 //! * **Work.** Generating a step costs [`WORK_GENERATE`] (its cuts and up to 1 + `HALVINGS`
-//!   reach checks), appending it [`WORK_APPEND`] more; a change that re-plans N queued steps
-//!   costs N generations and a plan ([`WORK_PLAN`]: eq. 17), a start from standing
-//!   [`AHEAD`] generations and appends and the start window's plan. All of it is charged to
+//!   reach checks), appending it [`WORK_APPEND`] more; a change costs [`AHEAD`] generations,
+//!   the appends that make the queue up and a plan ([`WORK_PLAN`]: eq. 17), a start from
+//!   standing [`AHEAD`] generations and appends and the start window's plan. All of it is charged to
 //!   the cycle's budget like any command: a command whose work does not fit is refused `Busy`
 //!   (nothing changed: it is sent again), a step of the queue that does not fit waits for the
 //!   next cycle (the queue holds two more). The cheap checks come first (the step numbers
-//!   left: `Exhausted`); a command refused once its steps are generated (a step out of the
+//!   left for the steps it appends: `Exhausted`); a command refused once its steps are generated (a step out of the
 //!   walking area, a re-plan eq. 17 refuses) is charged the generation (and the plan it
 //!   tried), so no burst of frames does more work in a cycle than the budget.
 //! * **Saturation.** A velocity the legs cannot take is walked at the nearest one they can; the
@@ -66,8 +71,8 @@ const _: () = assert!(AHEAD <= crate::gait::MODIFY_FRONT);
 pub const WORK_GENERATE: u32 = 4_900;
 
 /// The most work one `VELOCITY` or `GOAL` can need: a start from standing ([`AHEAD`]
-/// generations and appends and the start window's plan). A re-plan while walking needs less
-/// ([`AHEAD`] generations and eq. 17's plan). [`NodeConfig::work_budget`] is at least this
+/// generations and appends and the start window's plan). A re-plan while walking needs no
+/// more ([`AHEAD`] generations, the appends that make the queue up and eq. 17's plan). [`NodeConfig::work_budget`] is at least this
 /// (checked at start-up), so a drive command refused `Busy` fits a later cycle.
 pub const WORK_DRIVE: u32 = AHEAD as u32 * (WORK_GENERATE + WORK_APPEND) + WORK_PLAN;
 
@@ -236,17 +241,69 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
     #[inline(never)]
     pub(super) fn goal(&mut self, w: &WireGoal) -> Result<u8, Reason> {
         self.drive_gate(w.seq)?;
+        let cut = self.drive_to(Driver::Goal, Velocity::ZERO, Some(w))?;
+        self.last_seq = w.seq;
+        Ok(cut.mask())
+    }
+
+    /// The goal `w` in the node's frame: relative to the midpoint of the feet and their mean
+    /// heading now.
+    fn goal_frame(&self, w: &WireGoal) -> [T; 3] {
         let (x, y, yaw) = w.si_in::<T>();
-        // Relative to the midpoint of the feet and their mean heading.
         let [l, r] = *self.gait.feet();
         let half = T::of(0.5);
         let (cx, cy) = (half * (l.x + r.x), half * (l.y + r.y));
         let h = (l.yaw.sin() + r.yaw.sin()).atan2(l.yaw.cos() + r.yaw.cos());
         let (s, c) = h.sin_cos();
-        let goal = [cx + c * x - s * y, cy + s * x + c * y, h + yaw];
-        let cut = self.drive_to(Driver::Goal, Velocity::ZERO, Some(goal))?;
-        self.last_seq = w.seq;
-        Ok(cut.mask())
+        [cx + c * x - s * y, cy + s * x + c * y, h + yaw]
+    }
+
+    /// From standing: `Some` (with the goal in the node's frame, if one is given) when
+    /// nothing moves (a zero velocity, a goal reached). Out of line: its frame is off the
+    /// stack when the drive plans.
+    #[inline(never)]
+    fn still_from_standing(
+        &self,
+        v: &Velocity<T>,
+        goal: Option<&WireGoal>,
+    ) -> Option<Option<[T; 3]>> {
+        let (_, [support, _], side, _) = self.drive_stance(v);
+        match goal.map(|w| self.goal_frame(w)) {
+            Some(g) => self
+                .goal_velocity(&support, side, &g)
+                .is_none()
+                .then_some(Some(g)),
+            None => is_zero(v).then_some(None),
+        }
+    }
+
+    /// Where the next step a drive plans leaves from: the step that starts the steps planned
+    /// (`None` from standing or with nothing queued), the feet before it (support, same
+    /// side), its side and whether it swings from rest.
+    fn drive_stance(&self, v: &Velocity<T>) -> (Option<u16>, [Footstep<T>; 2], Side, bool) {
+        let standing = self.gait.is_standing();
+        let front = if standing {
+            None
+        } else {
+            self.gait.next_target()
+        };
+        let first_side = match self.gait.next_side() {
+            Some(s) => s,
+            None if v.vy > T::ZERO || (v.vy == T::ZERO && v.wz > T::ZERO) => Side::Left,
+            None => Side::Right,
+        };
+        let feet = self.gait.previous_feet(front);
+        let side = match front.and_then(|id| self.gait.queued_step(id)) {
+            Some(s) => s.side,
+            None => first_side,
+        };
+        let from_rest = standing || self.gait.next_swing_from_rest();
+        (
+            front,
+            [feet[side.other().index()], feet[side.index()]],
+            side,
+            from_rest,
+        )
     }
 
     /// Drives by `driver` at `v` (or toward `goal`): from standing, a start; walking, a
@@ -256,7 +313,7 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         &mut self,
         driver: Driver,
         v: Velocity<T>,
-        goal: Option<[T; 3]>,
+        goal: Option<&WireGoal>,
     ) -> Result<Saturation, Reason> {
         let standing = self.gait.is_standing();
         let stopping = self.gait.is_stopping();
@@ -276,47 +333,36 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         if (standing && self.gait.queued() > 0) || (!standing && !drives) || (stopping && !resume) {
             return Err(Reason::WrongState);
         }
-        let target = goal.unwrap_or(self.drive.goal);
-        // The steps: from standing a new queue, walking the queued ones re-planned.
-        let (n, front) = if standing {
-            (AHEAD, None)
-        } else {
-            (self.gait.queued().min(AHEAD), self.gait.next_target())
-        };
-        let first_side = match self.gait.next_side() {
-            Some(s) => s,
-            None if v.vy > T::ZERO || (v.vy == T::ZERO && v.wz > T::ZERO) => Side::Left,
-            None => Side::Right,
-        };
-        let feet = self.gait.previous_feet(front);
-        let side = match front.and_then(|id| self.gait.queued_step(id)) {
-            Some(s) => s.side,
-            None => first_side,
-        };
-        let from_rest = standing || self.gait.next_swing_from_rest();
-        let support = feet[side.other().index()];
-        let same = feet[side.index()];
-        // A goal already reached, or a zero velocity, from standing: nothing moves.
-        let still = match goal {
-            Some(g) => self.goal_velocity(&support, side, &g).is_none(),
-            None => is_zero(&v),
-        };
-        if standing && still {
-            self.drive.goal_given = goal.is_some();
-            self.drive.goal = target;
-            self.drive.v = Velocity::ZERO;
-            self.drive.cut = Saturation::default();
-            return Ok(Saturation::default());
+        // The steps: from standing a new queue; walking, the queued ones re-planned and the
+        // queue made up to `AHEAD` with new ones, all before the one plan (eq. 17) that the
+        // re-plan at the next start of single support takes (nothing is appended after it).
+        let n = AHEAD;
+        let queued = if standing { 0 } else { self.gait.queued() };
+        let appends = n.saturating_sub(queued);
+        // A goal already reached, or a zero velocity, from standing: nothing moves (taken
+        // without work, so decided before the budget; a goal reads the stance for it).
+        if standing {
+            if let Some(g) = self.still_from_standing(&v, goal) {
+                self.drive.goal_given = g.is_some();
+                self.drive.goal = g.unwrap_or(self.drive.goal);
+                self.drive.v = Velocity::ZERO;
+                self.drive.cut = Saturation::default();
+                return Ok(Saturation::default());
+            }
         }
-        // The cheap checks first (the plan, the budget, the step numbers): what is refused
-        // after them has generated its steps, and that work is charged.
+        // The cheap checks first (the plan, the budget, the step numbers), before any geometry
+        // while walking: what is refused after them has generated its steps, and that work is
+        // charged.
         let generating = n as u32 * WORK_GENERATE;
-        let work = generating + WORK_PLAN + if standing { n as u32 * WORK_APPEND } else { 0 };
+        let work = generating + WORK_PLAN + appends as u32 * WORK_APPEND;
         self.plan()?;
         self.afford(work)?;
-        if standing && self.appended.saturating_add(n as u32) > STEP_NUMBERS {
+        if self.appended.saturating_add(appends as u32) > STEP_NUMBERS {
             return Err(Reason::Exhausted);
         }
+        let (front, [support, same], _, from_rest) = self.drive_stance(&v);
+        let goal = goal.map(|w| self.goal_frame(w));
+        let target = goal.unwrap_or(self.drive.goal);
         // The step numbers: from standing the next ones, walking the queued steps'.
         let first = if standing {
             self.next_step()
@@ -352,25 +398,20 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             self.appended += keep as u32;
             self.adj.enabled = false;
         } else {
-            // (Checked resumable above: the stop is cancelled, and requested again if the
-            // re-plan is refused.)
-            if resume && self.gait.resume().is_err() {
-                self.spend(generating);
-                return Err(Reason::WrongState);
-            }
-            let modified = self
+            // One call: the queue re-planned and made up, the stop requested (a zero velocity,
+            // a goal reached: the steps after the closing one dropped) or cancelled (checked
+            // resumable above), then eq. 17 checked once; refused, all is put back.
+            let next = self.next_step();
+            let replaced = self
                 .gait
-                .modify_front(steps.get(..keep).unwrap_or(&[]))
+                .replace_front(steps.get(..keep).unwrap_or(&[]), self.appended as u16, stop)
                 .map_err(reason_of);
             self.plans_left = self.plans_left.saturating_sub(1);
-            if let Err(e) = modified {
-                if resume {
-                    self.gait.stop();
-                }
+            if let Err(e) = replaced {
                 self.spend(generating + WORK_PLAN);
                 return Err(e);
             }
-            for (i, s) in steps.iter().enumerate().take(keep) {
+            for (i, s) in steps.iter().enumerate().take(keep.min(queued)) {
                 let Some(w) = Self::wire_of(first.wrapping_add(i as u16), s) else {
                     continue;
                 };
@@ -381,16 +422,22 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
                 }
             }
             // The steps after the closing one: dropped, the newest numbers given back.
-            let dropped = self.gait.queued().saturating_sub(keep);
+            let dropped = queued.saturating_sub(keep);
             if dropped > 0 {
-                self.gait.truncate(keep);
                 self.steps.truncate_queued(keep);
                 self.appended = self.appended.saturating_sub(dropped as u32);
             }
+            // The steps appended: numbered on from the queued ones.
+            for (k, s) in steps.iter().take(keep).skip(queued).enumerate() {
+                if let Some(w) = Self::wire_of(next.wrapping_add(k as u16), s) {
+                    self.steps.push(Self::record_of(&w));
+                }
+            }
+            self.appended += keep.saturating_sub(queued) as u32;
         }
         self.spend(work);
         self.drive.own_stop = stop;
-        if stop {
+        if stop && standing {
             self.gait.stop();
         }
         self.drive.driver = driver;

@@ -20,9 +20,9 @@
 //!
 //! [`Path::Resume`] sends a zero velocity during the single support before: the next swing
 //! target becomes the step that closes the feet and the walk stops after it (the drive's own
-//! stop); the burst's velocity cancels that stop, re-plans the closing step and the node tops
-//! the queue up with [`AHEAD`] − 1 steps (`drive_ahead`) in the same cycle, before the tick's
-//! re-plan. A walk the node drives does not adjust its steps (a drive from standing turns the
+//! stop); the burst's velocity cancels that stop, re-plans the closing step and makes the
+//! queue up with [`AHEAD`] − 1 new steps before its one eq. 17 plan, which the tick's re-plan
+//! in the same cycle takes. A walk the node drives does not adjust its steps (a drive from standing turns the
 //! step adjustment off; a velocity is refused while the controller's steps are walked), so no
 //! drive path combines with the step adjustment.
 
@@ -431,6 +431,13 @@ mod tests {
             }
             // The velocity in force was cut.
             assert_ne!(w.adjust_flags, 0, "{path:?}");
+            // At most one walking window planned (the drive command's eq. 17, which the
+            // re-plan takes: nothing is appended after it).
+            assert!(
+                w.plans <= 1,
+                "{path:?}: {} walking windows planned",
+                w.plans
+            );
         }
     }
 
