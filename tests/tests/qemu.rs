@@ -683,6 +683,25 @@ fn the_documents_quote_the_measured_figures() {
             "(QEMU high-water marks)",
             &format!("control loop {} B", thousands(control)),
         )
+        .line(
+            "firmware/README.md",
+            "bytes at start-up**",
+            &format!("**{} of 65,536 bytes at start-up**", thousands(startup)),
+        )
+        .line(
+            "firmware/README.md",
+            "bytes in the control loop**",
+            &format!("**{} bytes in the control loop**", thousands(control)),
+        )
+        .line(
+            "firmware/README.md",
+            "bytes for the start-up and",
+            &format!(
+                "are {} bytes for the start-up and {} for its",
+                thousands(startup),
+                thousands(control)
+            ),
+        )
         .cell(
             "README.md",
             "worst control cycle on the Cortex-M7",
