@@ -44,11 +44,10 @@ pub use drive::{largest_change, GOAL_AHEAD, GOAL_REAIM, STREAM_CYCLES, WALK_V};
 
 use planner_core::gait::Phase;
 use planner_core::node::{Node, NodeConfig};
-use planner_core::wire::{ControlOp, Measured, RawFrame, Session, StepBook};
+use planner_core::wire::{ControlOp, Measured, RawFrame, StepBook};
 
 use super::bus::{Bus, Faults};
 use super::pushed::{Pendulum, PUSH_DELAY_TICKS};
-use crate::scenario::wire::Controller;
 use embedded_can::nb::Can;
 
 /// The walk's steps appended before the start.
@@ -264,21 +263,7 @@ fn run(
     bus.record();
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let ms = 1_000_000u64;
-    bus.advance(0);
-    bus.advance(5 * ms / 2);
-    node.poll(2, &mut nport);
-    bus.advance(5 * ms);
-    let mut c = Controller::default();
-    while let Ok(f) = ctl.receive() {
-        if let Some(s) = Session::decode(&f) {
-            c = Controller {
-                epoch: s.epoch,
-                seq: s.last_seq,
-            };
-        }
-    }
-    let _ = ctl.transmit(&c.control(ControlOp::Reset).encode());
-    c.epoch = c.epoch.wrapping_add(1);
+    let mut c = crate::sim::handshake(&bus, &mut node, &mut ctl, &mut nport);
     let mut book = StepBook::new();
     // The controller's steps: (wire id, left, x, y), in order.
     let mut steps: Vec<(u16, bool, f64, f64)> = Vec::new();

@@ -31,7 +31,7 @@ use planner_core::node::velocity::{Stepping, Velocity, HALVINGS};
 use planner_core::node::Limit;
 use planner_core::node::{Node, NodeConfig, AHEAD};
 use planner_core::wire::{
-    Command, ControlOp, Measured, RawFrame, Session, StepBook, WireGoal, WireVelocity,
+    Command, ControlOp, Measured, RawFrame, StepBook, WireGoal, WireVelocity,
 };
 
 use super::super::bus::{Bus, Faults};
@@ -198,21 +198,7 @@ fn run(
     bus.record();
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let ms = 1_000_000u64;
-    bus.advance(0);
-    bus.advance(5 * ms / 2);
-    node.poll(2, &mut nport);
-    bus.advance(5 * ms);
-    let mut c = Controller::default();
-    while let Ok(f) = ctl.receive() {
-        if let Some(s) = Session::decode(&f) {
-            c = Controller {
-                epoch: s.epoch,
-                seq: s.last_seq,
-            };
-        }
-    }
-    let _ = ctl.transmit(&c.control(ControlOp::Reset).encode());
-    c.epoch = c.epoch.wrapping_add(1);
+    let mut c = crate::sim::handshake(&bus, &mut node, &mut ctl, &mut nport);
     let mut book = StepBook::new();
     let mut out = WorstRun {
         path,
