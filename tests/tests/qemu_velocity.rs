@@ -7,6 +7,7 @@
 //! walk's work is charged to it). `cargo test -p walk-tests --test qemu_velocity --
 //! --nocapture` prints the cycle figures.
 
+use walk_tests::figures::{thousands, Quotes};
 use walk_tests::logs::{self, compare, expected, Case};
 use walk_tests::report;
 use walk_tests::{build_firmware, qemu_available};
@@ -59,4 +60,43 @@ fn a_velocity_walk_replays_on_the_m7_image_within_the_cycle_bound() {
         worst <= WORST_CEILING,
         "the velocity walk's worst cycle: {worst} instructions (bound {WORST_CEILING})"
     );
+    // The velocity chapter quotes these figures (exactly, as the image counts them).
+    const DOC: &str = "docs/src/velocity.md";
+    let kind = |k: &str| q.timing("velocity", k).map(|r| r.num::<u64>("max"));
+    let mean = |k: &str| {
+        q.timing("velocity", k)
+            .map(|r| r.num::<f64>("mean").round() as u64)
+    };
+    let mut quotes = Quotes::new("cargo test -p walk-tests --test qemu_velocity -- --nocapture")
+        .line(
+            DOC,
+            "its worst control cycle is",
+            &format!("over {} cycles", thousands(want.cycles)),
+        )
+        .line(
+            DOC,
+            "its worst control cycle is",
+            &format!("**{} instructions**", thousands(worst)),
+        )
+        .line(
+            DOC,
+            "within the worst admissible cycle's bound of",
+            &format!("bound of {}.", thousands(WORST_CEILING)),
+        );
+    if let (Some(replan), Some(steady), Some(steady_mean)) =
+        (kind("replan"), kind("steady"), mean("steady"))
+    {
+        quotes = quotes
+            .line(
+                DOC,
+                "the re-plans' cycles: at most",
+                &format!("at most {}", thousands(replan)),
+            )
+            .line(
+                DOC,
+                "within the worst admissible cycle's bound of",
+                &format!("{}, mean {}", thousands(steady), thousands(steady_mean)),
+            );
+    }
+    quotes.assert();
 }
