@@ -399,10 +399,6 @@ mod tests {
             let w = worst_cycle(&cfg, path).unwrap();
             let (accepted, drive_refused, footsteps, other) = w.burst;
             let sent = accepted + drive_refused + footsteps + other;
-            eprintln!(
-                "{path:?}: sent {sent} received {} refused {} plans {} cut {:#x} replanned {} report {}",
-                w.received, w.refused, w.plans, w.adjust_flags, w.replanned, w.report
-            );
             assert_eq!(usize::from(w.received), sent, "{path:?}");
             assert!((17..=cfg.max_rx).contains(&sent), "{path:?}: {sent} frames");
             assert!(w.report, "{path:?}");
