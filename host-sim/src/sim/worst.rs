@@ -236,7 +236,24 @@ pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
     if lead > 0 {
         at = replan(lead)?.0;
     }
-    // As many command frames as reach the poll (the node's `max_rx` at most).
+    largest_burst(cfg, path, at, lead, run)
+}
+
+/// One run of a path: `burst` the cycle of the burst, `cap` its frames, `lead` the cycles by
+/// which the start is delayed; the run and the cycles whose poll re-planned at a start of
+/// single support.
+type Run =
+    fn(&NodeConfig, Path, Option<u64>, usize, u64) -> Result<(WorstRun, Vec<(u64, u32)>), String>;
+
+/// The run with as many command frames in the burst at cycle `at` as reach the poll (the
+/// node's `max_rx` at most).
+fn largest_burst(
+    cfg: &NodeConfig,
+    path: Path,
+    at: u64,
+    lead: u64,
+    run: Run,
+) -> Result<WorstRun, String> {
     for cap in (1..=cfg.max_rx).rev() {
         let (out, _) = run(cfg, path, Some(at), cap, lead)?;
         let (m, v, a, e) = out.burst;
@@ -245,6 +262,14 @@ pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
         }
     }
     Err("no burst reaches the poll".into())
+}
+
+/// The node of a run (HRP-2's 16-step queue) on a recorded 1 Mbit/s bus of two ports.
+fn open(cfg: &NodeConfig) -> Result<(Node<16>, Bus), String> {
+    let node = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
+    let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
+    bus.record();
+    Ok((node, bus))
 }
 
 /// One run; `burst`: the cycle of the burst, `lead`: cycles by which the start is delayed.
@@ -258,9 +283,7 @@ fn run(
     lead: u64,
 ) -> Result<(WorstRun, Vec<(u64, u32)>), String> {
     let adjusting = path.adjusting();
-    let mut node: Node<16> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
-    let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
-    bus.record();
+    let (mut node, bus) = open(cfg)?;
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let ms = 1_000_000u64;
     let mut c = crate::sim::handshake(&bus, &mut node, &mut ctl, &mut nport);

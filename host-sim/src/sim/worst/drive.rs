@@ -34,7 +34,6 @@ use planner_core::wire::{
     Command, ControlOp, Measured, RawFrame, StepBook, WireGoal, WireVelocity,
 };
 
-use super::super::bus::{Bus, Faults};
 use super::{Path, WorstRun, BURST_SUPPORT};
 use crate::scenario::wire::Controller;
 use embedded_can::nb::Can;
@@ -173,14 +172,7 @@ pub(super) fn worst_drive(cfg: &NodeConfig, path: Path) -> Result<WorstRun, Stri
         }
         (at, lead)
     };
-    for cap in (1..=cfg.max_rx).rev() {
-        let (out, _) = run(cfg, path, Some(at), cap, lead)?;
-        let (m, v, a, e) = out.burst;
-        if usize::from(out.received) == m + v + a + e {
-            return Ok(out);
-        }
-    }
-    Err("no burst reaches the poll".into())
+    super::largest_burst(cfg, path, at, lead, run)
 }
 
 /// One run (as `worst`'s): `burst` the cycle of the burst, `cap` its frames, `lead` the cycles
@@ -193,9 +185,7 @@ fn run(
     lead: u64,
 ) -> Result<(WorstRun, Vec<(u64, u32)>), String> {
     let goal_walk = matches!(path, Path::Goal | Path::GoalStart);
-    let mut node: Node<16> = Node::new(*cfg).map_err(|e| format!("node start-up failed: {e:?}"))?;
-    let bus = Bus::new(1_000_000, 2, Faults::default(), 1);
-    bus.record();
+    let (mut node, bus) = super::open(cfg)?;
     let (mut ctl, mut nport) = (bus.port(0), bus.port(1));
     let ms = 1_000_000u64;
     let mut c = crate::sim::handshake(&bus, &mut node, &mut ctl, &mut nport);
