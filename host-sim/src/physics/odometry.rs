@@ -396,4 +396,201 @@ mod tests {
             assert!((est[1][i] - want[i]).abs() < 1e-12, "{est:?} {want:?}");
         }
     }
+
+    /// Standing, a right step of `len` from x = 0 to its touchdown, `fk_right` the encoders'
+    /// right sole there (the left one at its plan): the odometry and the planned feet after it.
+    fn step_right(len: f64, fk_right: [f64; 2]) -> (Odometry, [FootPose<f64>; 2]) {
+        let mut o = Odometry::new(0.001);
+        let start = [pose(0.0, 0.1, 0.0, 0.0), pose(0.0, -0.1, 0.0, 0.0)];
+        let at = fk([0.0; 2], [0.0, 0.1], [0.0, -0.1]);
+        o.update(Phase::Double, [500.0, 100.0], Phase::Double, &start, &at);
+        let swing = Phase::Single(Side::Left);
+        for i in 0..=N {
+            let feet = [start[0], swing_at(0.0, len, -0.1, i, N)];
+            o.update(swing, [600.0, 0.0], swing, &feet, &at);
+        }
+        let planned = [start[0], pose(len, -0.1, 0.0, 0.0)];
+        let at = fk([0.2, 0.0], [0.0, 0.1], fk_right);
+        // The touchdown itself, the landed sole lightly loaded.
+        o.update(Phase::Double, [550.0, 50.0], Phase::Double, &planned, &at);
+        (o, planned)
+    }
+
+    #[test]
+    fn a_landed_sole_is_measured_again_only_while_both_stand_firmly() {
+        let len = 0.2;
+        let (mut o, planned) = step_right(len, [len - 0.002, -0.1]);
+        let est = |o: &Odometry| o.estimate().expect("estimated");
+        assert!(
+            (est(&o)[1][0] - (len - 0.002)).abs() < 1e-12,
+            "{:?}",
+            est(&o)
+        );
+        // The sole settles 1 mm further back while it carries less than FIRM_SHARE of the
+        // load: not measured again.
+        let settled = fk([0.2, 0.0], [0.0, 0.1], [len - 0.003, -0.1]);
+        let light = 0.9 * FIRM_SHARE * 600.0;
+        for _ in 0..10 {
+            o.update(
+                Phase::Double,
+                [600.0 - light, light],
+                Phase::Double,
+                &planned,
+                &settled,
+            );
+            assert!(
+                (est(&o)[1][0] - (len - 0.002)).abs() < 1e-12,
+                "{:?}",
+                est(&o)
+            );
+        }
+        // Both firmly loaded: measured again, from the stance sole, whose estimate stays.
+        let firm = 1.1 * FIRM_SHARE * 600.0;
+        o.update(
+            Phase::Double,
+            [600.0 - firm, firm],
+            Phase::Double,
+            &planned,
+            &settled,
+        );
+        let e = est(&o);
+        assert!((e[1][0] - (len - 0.003)).abs() < 1e-12, "{e:?}");
+        assert_eq!(
+            e[0],
+            [0.0, 0.1, 0.0],
+            "the stance sole is never measured back"
+        );
+        // The encoders now put the left sole 1 mm forward (the relative pose changed): still
+        // the landed sole is measured from the left one, never the left one from it.
+        let moved = fk([0.2, 0.0], [0.001, 0.1], [len - 0.003, -0.1]);
+        o.update(
+            Phase::Double,
+            [firm, 600.0 - firm],
+            Phase::Double,
+            &planned,
+            &moved,
+        );
+        let e = est(&o);
+        assert_eq!(e[0], [0.0, 0.1, 0.0]);
+        assert!((e[1][0] - (len - 0.004)).abs() < 1e-12, "{e:?}");
+        // Single support on the right sole: nothing is measured, whatever the encoders say.
+        let swing = Phase::Single(Side::Right);
+        let wild = fk([0.0; 2], [0.3, 0.2], [0.5, -0.4]);
+        let before = est(&o);
+        for i in 0..N / 4 {
+            let feet = [swing_at(0.0, 2.0 * len, 0.1, i, N), planned[1]];
+            o.update(swing, [0.0, 600.0], swing, &feet, &wild);
+            assert_eq!(est(&o), before);
+        }
+        // A firm double support that follows no touchdown (standing from the start) measures
+        // nothing either.
+        let mut o = Odometry::new(0.001);
+        let start = [pose(0.0, 0.1, 0.0, 0.0), pose(0.0, -0.1, 0.0, 0.0)];
+        let off = fk([0.0; 2], [0.0, 0.1], [0.01, -0.1]);
+        for _ in 0..10 {
+            o.update(Phase::Double, [300.0, 300.0], Phase::Double, &start, &off);
+        }
+        assert_eq!(est(&o), [[0.0, 0.1, 0.0], [0.0, -0.1, 0.0]]);
+    }
+
+    #[test]
+    fn a_yaw_offset_blends_out_through_a_turning_swing_across_pi() {
+        // Both soles at heading 3.1 rad, the encoders' frame aligned with the world. The right
+        // sole lands turned 0.01 rad from its plan; its next swing turns 0.0832 rad, across ±π.
+        let h = 3.1;
+        let stand = [pose(0.0, 0.1, 0.0, h), pose(0.0, -0.1, 0.0, h)];
+        let level = [
+            Pose::upright(0.0, 0.1, -0.6, h),
+            Pose::upright(0.0, -0.1, -0.6, h),
+        ];
+        let turned = [level[0], Pose::upright(0.0, -0.1, -0.6, h + 0.01)];
+        let mut o = Odometry::new(0.001);
+        let left = [500.0, 100.0];
+        o.update(Phase::Double, left, Phase::Double, &stand, &level);
+        let swing = Phase::Single(Side::Left);
+        o.update(swing, [600.0, 0.0], swing, &stand, &level);
+        for _ in 0..DOUBLE {
+            o.update(Phase::Double, left, Phase::Double, &stand, &turned);
+        }
+        let e = o.estimate().expect("estimated");
+        assert!((e[1][2] - (h + 0.01)).abs() < 1e-12, "{e:?}");
+        // The turning swing: its target starts at the landed heading and ends at the
+        // reference's, without a jump, every heading in (−π, π].
+        let turn = 0.0832;
+        let mut last: Option<FootPose<f64>> = None;
+        for i in 0..=N {
+            let mut f = swing_at(0.0, 0.0, -0.1, i, N);
+            let s = i as f64 / N as f64;
+            f.yaw = wrap(h + turn * s * s * s * (10.0 + s * (-15.0 + 6.0 * s)));
+            let feet = [stand[0], f];
+            let out = o.update(swing, [600.0, 0.0], swing, &feet, &turned);
+            let y = out[1].yaw;
+            assert!(
+                y > -core::f64::consts::PI && y <= core::f64::consts::PI,
+                "{y}"
+            );
+            match last {
+                None => assert!(wrap(y - (h + 0.01)).abs() < 1e-6, "a jump at lift-off: {y}"),
+                Some(l) => assert!(wrap(y - l.yaw).abs() < 2e-3, "a jump: {} → {y}", l.yaw),
+            }
+            last = Some(out[1]);
+        }
+        let end = last.expect("a tick");
+        assert!(wrap(end.yaw - wrap(h + turn)).abs() < 1e-12, "{end:?}");
+        assert!(end.yaw < 0.0, "across π: {end:?}");
+    }
+
+    #[test]
+    fn a_contact_flickering_mid_swing_is_overwritten_by_the_landing() {
+        let (len, short) = (0.2, 0.0013);
+        let mut o = Odometry::new(0.001);
+        let start = [pose(0.0, 0.1, 0.0, 0.0), pose(0.0, -0.1, 0.0, 0.0)];
+        let at = fk([0.0; 2], [0.0, 0.1], [0.0, -0.1]);
+        o.update(Phase::Double, [500.0, 100.0], Phase::Double, &start, &at);
+        let swing = Phase::Single(Side::Left);
+        let flicker = 3 * N / 4;
+        let mut last: Option<FootPose<f64>> = None;
+        for i in 0..=N {
+            let feet = [start[0], swing_at(0.0, len, -0.1, i, N)];
+            // One tick of contact while the reference descends; the encoders put the sole
+            // 30 mm behind its reference there (a servo lagging mid-swing).
+            let (phase, fz, enc) = if i == flicker {
+                let x = feet[1].x - 0.03;
+                (
+                    Phase::Double,
+                    [590.0, 10.0],
+                    fk([0.0; 2], [0.0, 0.1], [x, -0.1]),
+                )
+            } else {
+                (swing, [600.0, 0.0], at)
+            };
+            let out = o.update(phase, fz, swing, &feet, &enc);
+            assert_eq!(out[0], start[0], "the stance sole's target stays");
+            if let Some(l) = last {
+                assert!(
+                    (out[1].x - l.x).abs() < 2e-3,
+                    "a jump: {l:?} → {:?}",
+                    out[1]
+                );
+            }
+            last = Some(out[1]);
+            let e = o.estimate().expect("estimated");
+            assert_eq!(e[0], [0.0, 0.1, 0.0], "the stance sole's estimate stays");
+        }
+        // The swing still ends on its reference, and the landing replaces the flicker's
+        // measurement.
+        let end = last.expect("a tick");
+        assert!((end.x - len).abs() < 1e-12, "{end:?}");
+        let planned = [start[0], pose(len, -0.1, 0.0, 0.0)];
+        let landed = fk([0.1, 0.0], [0.0, 0.1], [len - short, -0.1]);
+        o.update(
+            Phase::Double,
+            [550.0, 50.0],
+            Phase::Double,
+            &planned,
+            &landed,
+        );
+        let e = o.estimate().expect("estimated");
+        assert!((e[1][0] - (len - short)).abs() < 1e-12, "{e:?}");
+    }
 }
