@@ -41,8 +41,10 @@ cd "$ROOT"
 
 TARGET=thumbv7em-none-eabihf
 
+# Each section's header says when it starts, counted from the outermost script's start.
+export WALK_RUN_START="${WALK_RUN_START:-$(date +%s)}"
 section() {
-    printf '\n==== %s ====\n' "$*"
+    printf '\n==== %s ==== (at %d s)\n' "$*" "$(($(date +%s) - WALK_RUN_START))"
 }
 
 section "toolchain"
