@@ -382,18 +382,36 @@ fn a_burst_of_refused_velocities_stays_within_the_budget() {
 /// cycle whose tick re-plans at a start of single support (found on a fork): in that cycle a
 /// `VELOCITY` of `vx` (accepted). Returns the walking windows planned in that cycle.
 fn plans_with_a_velocity_in_the_replan_cycle(r: &mut Rig, walk: f64, vx: f64) -> u32 {
+    let (_, acks, plans, code) = replan_cycle_with(r, walk, vx, None);
+    let a = acks.iter().find(|a| a.command == code).unwrap();
+    assert_eq!(a.reason, None, "{acks:?}");
+    plans
+}
+
+/// As [`plans_with_a_velocity_in_the_replan_cycle`], with the controller's `then` after the
+/// `VELOCITY` in that cycle: the node after it, the cycle's answers, the walking windows it
+/// planned and the `VELOCITY`'s command code.
+fn replan_cycle_with(
+    r: &mut Rig,
+    walk: f64,
+    vx: f64,
+    then: Option<ControlOp>,
+) -> (Rig, Vec<planner_core::wire::Ack>, u32, u8) {
     for k in 0..600 {
         let mut probe = r.fork();
         probe.seq += 1;
         let v = Command::Velocity(WireVelocity::from_si(probe.seq, vx, 0.0, 0.0));
         probe.bus.rx.push_back(v.encode_in(probe.session.epoch));
+        if let Some(op) = then {
+            let c = probe.command(op);
+            probe.bus.rx.push_back(c.encode_in(probe.session.epoch));
+        }
         let g = probe.n.gait();
         let (replan, plans) = (g.last_replan().map(|i| i.tick), g.walk_plans());
         let acks = probe.cycle();
         if probe.n.gait().last_replan().map(|i| i.tick) != replan {
-            let a = acks.iter().find(|a| a.command == v.code()).unwrap();
-            assert_eq!(a.reason, None, "{acks:?}");
-            return probe.n.gait().walk_plans().wrapping_sub(plans);
+            let planned = probe.n.gait().walk_plans().wrapping_sub(plans);
+            return (probe, acks, planned, v.code());
         }
         if k % 10 == 0 {
             let hb = r.heartbeat();
@@ -470,4 +488,86 @@ fn a_drive_command_plans_once_in_the_cycle_that_replans() {
         1,
         "a resume"
     );
+}
+
+/// The controller's `Stop` after an accepted `VELOCITY` in the cycle whose tick re-plans: the
+/// stop would change the plan the re-plan takes, so it waits (`Busy`, nothing changed) and the
+/// cycle plans one window; sent again in the next cycle, it is taken. A `Stop` alone in that
+/// cycle is taken, and a second `Stop` once stopping changes nothing.
+#[test]
+fn a_stop_after_a_drive_command_in_the_replan_cycle_waits_a_cycle() {
+    let mut r = driven_after_a_replan();
+    r.cycle();
+    let (mut p, acks, plans, code) =
+        replan_cycle_with(&mut r.fork(), 0.2, 0.1, Some(ControlOp::Stop));
+    assert_eq!(plans, 1, "{acks:?}");
+    let v = acks.iter().find(|a| a.command == code).unwrap();
+    assert_eq!(v.reason, None, "{acks:?}");
+    let stop = acks.iter().find(|a| a.command != code).unwrap();
+    assert_eq!(stop.reason, Some(Reason::Busy), "{acks:?}");
+    assert!(!p.n.gait().is_stopping());
+    assert_eq!(p.control(ControlOp::Stop), None);
+    assert!(p.n.gait().is_stopping());
+    assert_eq!(p.control(ControlOp::Stop), None, "a second stop");
+    // Without the velocity the stop is taken in the re-plan cycle itself (the re-plan plans
+    // it), and plans that one window.
+    let mut q = r.fork();
+    for _ in 0..600 {
+        let mut probe = q.fork();
+        let g = probe.n.gait();
+        let (replan, before) = (g.last_replan().map(|i| i.tick), g.walk_plans());
+        let answer = probe.control(ControlOp::Stop);
+        if probe.n.gait().last_replan().map(|i| i.tick) != replan {
+            assert_eq!(answer, None);
+            assert!(probe.n.gait().is_stopping());
+            assert_eq!(probe.n.gait().walk_plans().wrapping_sub(before), 1);
+            return;
+        }
+        assert_eq!(velocity(&mut q, 0.2), None);
+    }
+    panic!("no re-plan in 600 cycles");
+}
+
+/// A modification of the next swing target that eq. 17 refused in the cycle whose tick
+/// re-plans would leave that tick to plan afresh: two walking windows in the cycle. With
+/// HRP-2's node no move within reach is refused by eq. 17 there: over a grid of moves of the
+/// next swing target (−0.12 to 0.24 m forward, ±0.10 m sideways, headings of −0.3, 0, 0.3
+/// rad) at the first three such cycles of a walk, each is taken (its plan the re-plan's, one
+/// window) or refused for the reach or a crossing before eq. 17.
+#[test]
+fn eq17_refuses_no_move_in_reach_of_the_next_swing_target_in_a_replan_cycle() {
+    let mut r = walking(ControlOp::Start, 12);
+    let (mut cycles, mut taken) = (0, 0);
+    for _ in 0..600 {
+        if r.n.gait().replans_next_tick() {
+            cycles += 1;
+            let (id, x, y) = queued(&r, 0);
+            for ix in -6..=12 {
+                for iy in -5..=5 {
+                    for yaw in [-0.3, 0.0, 0.3] {
+                        let (dx, dy) = (0.02 * f64::from(ix), 0.02 * f64::from(iy));
+                        let c = r.book.clone().modify(id, x + dx, y + dy, yaw).unwrap();
+                        let mut p = r.fork();
+                        let plans = p.n.gait().walk_plans();
+                        let a = p.ask(c);
+                        let planned = p.n.gait().walk_plans().wrapping_sub(plans);
+                        assert!(
+                            matches!(a, None | Some(Reason::Reach | Reason::Crossing)),
+                            "({dx}, {dy}, {yaw}): {a:?}"
+                        );
+                        assert_eq!(planned, 1, "({dx}, {dy}, {yaw}): {a:?}");
+                        taken += usize::from(a.is_none());
+                    }
+                }
+            }
+            if cycles == 3 {
+                break;
+            }
+        }
+        let hb = r.heartbeat();
+        r.bus.rx.push_back(hb.encode());
+        r.cycle();
+    }
+    assert_eq!(cycles, 3);
+    assert!(taken > 100, "{taken} moves taken");
 }

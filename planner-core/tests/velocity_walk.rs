@@ -630,3 +630,47 @@ fn a_zero_velocity_keeps_only_the_closing_step() {
     assert_eq!(velocity(&mut r, 0.1, 0.0, 0.0).reason, None);
     assert_eq!(r.n.next_step(), next - (queued as u16 - 1) + queued as u16);
 }
+
+/// With the start-up's step numbers all but spent, a drive's stop is still taken: a zero
+/// velocity appends no step (it keeps the closing one), while a change that needs a new step
+/// is refused `Exhausted` with nothing changed.
+#[test]
+fn a_stop_is_taken_when_the_step_numbers_are_spent() {
+    use planner_core::node::AHEAD;
+    use planner_core::wire::ControlOp;
+    let mut r = Rig::hrp2();
+    let first = r.n.next_step();
+    for _ in 0..255 {
+        assert_eq!(r.control(ControlOp::Reset), None);
+    }
+    let used = |r: &Rig| u32::from(r.n.next_step().wrapping_sub(first));
+    while used(&r) < 65_532 {
+        let k = (65_532 - used(&r)).min(14) as u16;
+        queue_walk(&mut r, k);
+        assert_eq!(r.control(ControlOp::StopNow), None);
+    }
+    // The last three numbers start a walk at 0.2 m/s; after its first lift-off two steps
+    // are queued and no number is left to make the queue up.
+    assert_eq!(velocity(&mut r, 0.2, 0.0, 0.0).reason, None);
+    assert_eq!(used(&r), 65_535);
+    for k in 0..400 {
+        if r.n.gait().queued() < AHEAD {
+            break;
+        }
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.2, 0.0, 0.0).reason, None);
+        } else {
+            r.cycle();
+        }
+    }
+    let queued = r.n.gait().queued();
+    assert!(queued < AHEAD);
+    let change = velocity(&mut r.fork(), 0.25, 0.0, 0.0);
+    assert_eq!(change.reason, Some(Reason::Exhausted), "{change:?}");
+    let stop = velocity(&mut r, 0.0, 0.0, 0.0);
+    assert_eq!(stop.reason, None, "{stop:?}");
+    assert!(r.n.gait().is_stopping());
+    assert!(r.n.gait().queued() <= queued, "no step appended");
+    r.until(2000, |n| n.gait().is_standing());
+    assert_eq!(r.n.state(), NodeState::Standing);
+}

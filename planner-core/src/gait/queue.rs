@@ -138,9 +138,12 @@ impl<T: Real, const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>> Gait<T, Q, G>
 
     /// Requests a stop: the queued steps are walked, then the robot settles between its feet.
     /// Steps that are not given are no longer padded with steps in place.
+    /// A stop already requested changes nothing (the plan stays valid).
     pub fn stop(&mut self) {
-        self.stop_requested = true;
-        self.gen = self.gen.wrapping_add(1);
+        if !self.stop_requested {
+            self.stop_requested = true;
+            self.gen = self.gen.wrapping_add(1);
+        }
     }
 
     /// Cancels a requested stop while it can still be undone: walking, with a step queued

@@ -260,6 +260,13 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             }
             ControlOp::Stop => {
                 if !standing {
+                    // A stop changes the plan the tick's re-plan takes: in a cycle whose tick
+                    // re-plans, once a command has planned, it waits for the next cycle
+                    // (`Busy`, nothing changed), so the cycle plans no second window.
+                    let planned = self.plans_left < self.cfg.max_plans;
+                    if !self.gait.is_stopping() && planned && self.gait.replans_next_tick() {
+                        return Err(Reason::Busy);
+                    }
                     // The controller's stop: a velocity or a goal does not cancel it.
                     self.gait.stop();
                     self.drive.own_stop = false;

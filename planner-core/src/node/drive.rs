@@ -21,7 +21,8 @@
 //!   the cycle's budget like any command: a command whose work does not fit is refused `Busy`
 //!   (nothing changed: it is sent again), a step of the queue that does not fit waits for the
 //!   next cycle (the queue holds two more). The cheap checks come first (the step numbers
-//!   left for the steps it appends: `Exhausted`); a command refused once its steps are generated (a step out of the
+//!   left for the steps it appends, `Exhausted`: walking, once the steps are known, so that
+//!   a stop, which appends none, is never refused for them); a command refused once its steps are generated (a step out of the
 //!   walking area, a re-plan eq. 17 refuses) is charged the generation (and the plan it
 //!   tried), so no burst of frames does more work in a cycle than the budget.
 //! * **Saturation.** A velocity the legs cannot take is walked at the nearest one they can; the
@@ -357,7 +358,9 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
         let work = generating + WORK_PLAN + appends as u32 * WORK_APPEND;
         self.plan()?;
         self.afford(work)?;
-        if self.appended.saturating_add(appends as u32) > STEP_NUMBERS {
+        // From standing every step is appended; walking, only those beyond the queue, which a
+        // stop (the steps up to the closing one) may not need: counted once they are known.
+        if standing && self.appended.saturating_add(appends as u32) > STEP_NUMBERS {
             return Err(Reason::Exhausted);
         }
         let (front, [support, same], _, from_rest) = self.drive_stance(&v);
@@ -374,6 +377,14 @@ impl<const Q: usize, G: Borrow<PreviewGains<T, PREVIEW>>, T: Real> Node<Q, G, T>
             return Err(Reason::OutOfRange);
         };
         let (steps, cut, stop, last_v, keep) = (p.steps, p.cut, p.stop, p.v, p.keep);
+        if self
+            .appended
+            .saturating_add(keep.saturating_sub(queued) as u32)
+            > STEP_NUMBERS
+        {
+            self.spend(generating);
+            return Err(Reason::Exhausted);
+        }
         if standing {
             for (i, s) in steps.iter().enumerate().take(keep) {
                 let gid = (self.appended as u16).wrapping_add(i as u16);

@@ -392,7 +392,8 @@ pub enum Reason {
     /// takes.
     Exhausted = 21,
     /// The cycle's planning budget is spent (one `Start` or modification of the next swing
-    /// target a cycle): send it again.
+    /// target a cycle), or a `Stop` would change the plan of a cycle whose re-plan a command
+    /// has already planned: send it again.
     Busy = 22,
 }
 
