@@ -2,7 +2,8 @@
 # The board image's flash and static RAM, from the build: the line firmware/README.md quotes.
 #
 #     bash firmware/size.sh           builds the board image (release) and prints the line
-#     bash firmware/size.sh --check   ... and fails if firmware/README.md (or the front page's headline row) does not quote it
+#     bash firmware/size.sh --check   ... and fails if firmware/README.md, the front page's headline row or the
+#                                     timing chapter (docs/src/timing.md) does not quote it
 #                                     (tests/run-all.sh runs this, so the figures cannot go stale)
 #
 # Either fails when the image is over its targets (flash 136 KB, static RAM 32 KB) or
@@ -83,4 +84,22 @@ if [ "${1:-}" = "--check" ]; then
         exit 1
     fi
     echo "README.md's headline row quotes them"
+    # The book's timing chapter, in KB to one decimal.
+    kb() { awk -v b="$1" 'BEGIN { printf "%.1f KB", b / 1000 }'; }
+    book="is $(kb "$flash") of flash (the target 136 KB"
+    if ! grep -qF -- "$book" ../docs/src/timing.md; then
+        echo "docs/src/timing.md does not say: $book" >&2
+        exit 1
+    fi
+    book="and $(kb "$ram") of static RAM"
+    if ! grep -qF -- "$book" ../docs/src/timing.md; then
+        echo "docs/src/timing.md does not say: $book" >&2
+        exit 1
+    fi
+    book="Of the flash, $(sep "$rodata") B are"
+    if ! grep -qF -- "$book" ../docs/src/timing.md; then
+        echo "docs/src/timing.md does not say: $book" >&2
+        exit 1
+    fi
+    echo "docs/src/timing.md quotes the flash, its read-only data and the static RAM"
 fi

@@ -571,3 +571,46 @@ fn eq17_refuses_no_move_in_reach_of_the_next_swing_target_in_a_replan_cycle() {
     assert_eq!(cycles, 3);
     assert!(taken > 100, "{taken} moves taken");
 }
+
+/// As for a modification, a drive command that eq. 17 refused in the cycle whose tick
+/// re-plans would leave that tick to plan afresh. With HRP-2's node no velocity is refused by
+/// eq. 17 there: over a grid of velocities (forward −0.3 to 0.5 m/s, sideways ±0.3 m/s,
+/// turning ±0.6 rad/s) sent in the re-plan cycles of a walk the node drives, each is taken
+/// (the cycle plans one window) or refused for a reason found before eq. 17.
+#[test]
+fn eq17_refuses_no_velocity_in_a_replan_cycle() {
+    let mut r = driven_after_a_replan();
+    let mut cycles = 0;
+    for k in 0..600 {
+        if r.n.gait().replans_next_tick() {
+            cycles += 1;
+            for vx in [-0.3, -0.1, 0.0, 0.1, 0.3, 0.5] {
+                for vy in [-0.3, -0.1, 0.0, 0.1, 0.3] {
+                    for wz in [-0.6, 0.0, 0.6] {
+                        let mut p = r.fork();
+                        let plans = p.n.gait().walk_plans();
+                        let a = velocity_of(&mut p, vx, vy, wz);
+                        let planned = p.n.gait().walk_plans().wrapping_sub(plans);
+                        assert_ne!(a, Some(Reason::Infeasible), "({vx}, {vy}, {wz})");
+                        assert_eq!(planned, 1, "({vx}, {vy}, {wz}): {a:?}");
+                    }
+                }
+            }
+            if cycles == 3 {
+                break;
+            }
+        }
+        if k % 10 == 0 {
+            assert_eq!(velocity(&mut r, 0.2), None);
+        } else {
+            r.cycle();
+        }
+    }
+    assert_eq!(cycles, 3);
+}
+
+/// The next `VELOCITY` `(vx, vy, wz)` alone in a cycle; its answer.
+fn velocity_of(r: &mut Rig, vx: f64, vy: f64, wz: f64) -> Option<Reason> {
+    r.seq += 1;
+    r.ask(Command::Velocity(WireVelocity::from_si(r.seq, vx, vy, wz)))
+}
