@@ -96,8 +96,10 @@ cd "$ROOT"
 
 TOOLCHAIN=nightly
 
+# Each section's header says when it starts, counted from the outermost script's start.
+export WALK_RUN_START="${WALK_RUN_START:-$(date +%s)}"
 section() {
-    printf '\n==== %s ====\n' "$*"
+    printf '\n==== %s ==== (at %d s)\n' "$*" "$(($(date +%s) - WALK_RUN_START))"
 }
 
 section "miri toolchain"
