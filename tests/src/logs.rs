@@ -137,37 +137,36 @@ pub fn cases() -> Vec<Case> {
         // (A start from standing by a drive command plans the start window, not a re-plan.)
         let start = matches!(path, WorstPath::VelocityStart | WorstPath::GoalStart);
         assert!((w.replanned || start) && !w.fallen, "{name}: {:?}", w.burst);
-        if path.drives() {
-            println!(
-                "{name}: burst of {} drive command accepted, {} drive commands refused \
-                 (repeated, stale, fresh ones over the cycle's plan), {} footstep frames, {} \
-                 others (heartbeat, measured state); {} refused, {} walking windows planned, \
-                 cut mask {:#x}, report cycle {}",
-                w.burst.0,
-                w.burst.1,
-                w.burst.2,
-                w.burst.3,
-                w.refused,
-                w.plans,
-                w.adjust_flags,
-                w.report
-            );
+        // What the burst held, then how the node answered it.
+        let (held, flags) = if path.drives() {
+            (
+                format!(
+                    "{} drive command accepted, {} drive commands refused (repeated, stale, \
+                     fresh ones over the cycle's plan), {} footstep frames, {} others \
+                     (heartbeat, measured state)",
+                    w.burst.0, w.burst.1, w.burst.2, w.burst.3
+                ),
+                format!("cut mask {:#x}", w.adjust_flags),
+            )
         } else {
-            println!(
-                "{name}: burst of {} modifications, {} newer versions, {} appends, {} measured; \
-                 {} refused, {} walking windows planned, step adjustment flags {}, report cycle \
-                 {}, from the measured state {}",
-                w.burst.0,
-                w.burst.1,
-                w.burst.2,
-                w.burst.3,
-                w.refused,
-                w.plans,
-                w.adjust_flags,
-                w.report,
-                w.from_measured
-            );
-        }
+            (
+                format!(
+                    "{} modifications, {} newer versions, {} appends, {} measured",
+                    w.burst.0, w.burst.1, w.burst.2, w.burst.3
+                ),
+                format!("step adjustment flags {}", w.adjust_flags),
+            )
+        };
+        let measured = if path.drives() {
+            String::new()
+        } else {
+            format!(", from the measured state {}", w.from_measured)
+        };
+        println!(
+            "{name}: burst of {held}; {} refused, {} walking windows planned, {flags}, report \
+             cycle {}{measured}",
+            w.refused, w.plans, w.report
+        );
         out.push(Case {
             name: name.to_string(),
             cfg: w.cfg,

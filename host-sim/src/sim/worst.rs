@@ -209,6 +209,29 @@ pub struct WorstRun {
     pub fallen: bool,
 }
 
+impl WorstRun {
+    /// A run of `path` with the node `cfg` and its burst at cycle `burst` (if any), before
+    /// anything is recorded.
+    fn new(path: Path, cfg: &NodeConfig, burst: Option<u64>) -> Self {
+        Self {
+            path,
+            cfg: *cfg,
+            can_log: Vec::new(),
+            burst_tick: burst.unwrap_or(0),
+            burst: (0, 0, 0, 0),
+            replanned: false,
+            from_measured: false,
+            plans: 0,
+            refused: 0,
+            received: 0,
+            report: false,
+            adjust_flags: 0,
+            adjust_attempts: 0,
+            fallen: false,
+        }
+    }
+}
+
 /// The generator of the module docs, for the path `path` with the node `base` (its
 /// configuration [`Path::config`]).
 pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
@@ -216,8 +239,15 @@ pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
     if path.drives() {
         return drive::worst_drive(cfg, path);
     }
-    // A first run without the burst: the cycles that re-plan at a start of single support
-    // (and the node's count of cycles then).
+    let (at, lead) = burst_cycle(cfg, path, run, path.report())?;
+    largest_burst(cfg, path, at, lead, run)
+}
+
+/// The cycle of the burst: the poll that re-plans at the start of single support
+/// [`BURST_SUPPORT`], found by a first run without the burst (and the node's count of cycles
+/// then); in a report cycle if `report`, the walk started as many cycles later (`lead`) as
+/// that takes. Returns the cycle and the lead.
+fn burst_cycle(cfg: &NodeConfig, path: Path, run: Run, report: bool) -> Result<(u64, u64), String> {
     let replan = |lead: u64| -> Result<(u64, u32), String> {
         let probe = run(cfg, path, None, 0, lead)?;
         probe
@@ -227,8 +257,7 @@ pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
             .ok_or_else(|| "the walk has too few single supports".into())
     };
     let (mut at, cycle) = replan(0)?;
-    // A report cycle: the walk started as many cycles later as that takes.
-    let lead = if path.report() {
+    let lead = if report {
         u64::from((21 - cycle % 20) % 20)
     } else {
         0
@@ -236,7 +265,7 @@ pub fn worst_cycle(base: &NodeConfig, path: Path) -> Result<WorstRun, String> {
     if lead > 0 {
         at = replan(lead)?.0;
     }
-    largest_burst(cfg, path, at, lead, run)
+    Ok((at, lead))
 }
 
 /// One run of a path: `burst` the cycle of the burst, `cap` its frames, `lead` the cycles by
@@ -313,22 +342,7 @@ fn run(
     };
     let p = cfg.params;
     let mut robot = Pendulum::at(node.gait().last());
-    let mut out = WorstRun {
-        path,
-        cfg: *cfg,
-        can_log: Vec::new(),
-        burst_tick: burst.unwrap_or(0),
-        burst: (0, 0, 0, 0),
-        replanned: false,
-        from_measured: false,
-        plans: 0,
-        refused: 0,
-        received: 0,
-        report: false,
-        adjust_flags: 0,
-        adjust_attempts: 0,
-        fallen: false,
-    };
+    let mut out = WorstRun::new(path, cfg, burst);
     let mut replans = Vec::new();
     let mut last_replan = None;
     let (mut swinging, mut liftoffs, mut push_at) = (None, 0u32, None);

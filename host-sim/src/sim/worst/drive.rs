@@ -157,20 +157,7 @@ pub(super) fn worst_drive(cfg: &NodeConfig, path: Path) -> Result<WorstRun, Stri
     let (at, lead) = if start {
         (19, 18)
     } else {
-        let replan = |lead: u64| -> Result<(u64, u32), String> {
-            let probe = run(cfg, path, None, 0, lead)?;
-            probe
-                .1
-                .get(BURST_SUPPORT.saturating_sub(1))
-                .copied()
-                .ok_or_else(|| "the walk has too few single supports".into())
-        };
-        let (mut at, cycle) = replan(0)?;
-        let lead = u64::from((21 - cycle % 20) % 20);
-        if lead > 0 {
-            at = replan(lead)?.0;
-        }
-        (at, lead)
+        super::burst_cycle(cfg, path, run, true)?
     };
     super::largest_burst(cfg, path, at, lead, run)
 }
@@ -190,22 +177,7 @@ fn run(
     let ms = 1_000_000u64;
     let mut c = crate::sim::handshake(&bus, &mut node, &mut ctl, &mut nport);
     let mut book = StepBook::new();
-    let mut out = WorstRun {
-        path,
-        cfg: *cfg,
-        can_log: Vec::new(),
-        burst_tick: burst.unwrap_or(0),
-        burst: (0, 0, 0, 0),
-        replanned: false,
-        from_measured: false,
-        plans: 0,
-        refused: 0,
-        received: 0,
-        report: false,
-        adjust_flags: 0,
-        adjust_attempts: 0,
-        fallen: false,
-    };
+    let mut out = WorstRun::new(path, cfg, burst);
     let mut replans = Vec::new();
     let mut last_replan = None;
     let mut v_now = WALK_V;
